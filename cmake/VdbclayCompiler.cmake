@@ -1,0 +1,13 @@
+# Compiler settings shared by every target: warnings, ccache, and a lean Release.
+find_program(VDBCLAY_CCACHE ccache)
+if(VDBCLAY_CCACHE)
+  set(CMAKE_CXX_COMPILER_LAUNCHER ${VDBCLAY_CCACHE})
+endif()
+
+add_library(vdbclay_warnings INTERFACE)
+target_compile_options(vdbclay_warnings INTERFACE -Wall -Wextra -Wno-unused-parameter)
+
+if(CMAKE_BUILD_TYPE STREQUAL "Release")
+  # -O2 keeps the OpenVDB-heavy translation units within the 2-core machine's budget.
+  set(CMAKE_CXX_FLAGS_RELEASE "-O2 -DNDEBUG")
+endif()

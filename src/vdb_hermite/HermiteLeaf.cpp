@@ -1,0 +1,132 @@
+#include "vdb_hermite/HermiteGrid.h"
+
+#include <openvdb/io/io.h>
+
+#include <mutex>
+#include <stdexcept>
+
+namespace vdbclay {
+
+void HermiteLeaf::rebuildPrefixAndMask()
+{
+    uint16_t running = 0;
+    for (int w = 0; w < kEdgeWords; ++w) {
+        prefix_[w] = running;
+        running = uint16_t(running + __builtin_popcountll(edgeBits_[w]));
+    }
+    auto& mask = this->getValueMask();
+    mask.setOff();
+    for (Index n = 0; n < Index(kLeafVoxels); ++n) {
+        const int bit = edgeBit(n, 0);
+        // The three bits of a voxel may straddle two words.
+        uint32_t bits = 0;
+        for (int a = 0; a < 3; ++a) bits |= uint32_t((edgeBits_[(bit + a) >> 6] >> ((bit + a) & 63)) & 1u);
+        if (bits) mask.setOn(n);
+    }
+}
+
+void HermiteLeaf::assign(HermiteLeafData&& data)
+{
+    std::size_t expected = 0;
+    for (uint64_t w : data.edgeBits) expected += std::size_t(__builtin_popcountll(w));
+    if (expected != data.samples.size())
+        throw std::invalid_argument("HermiteLeaf::assign: sample count does not match the edge mask");
+    auto& buffer = this->buffer();
+    for (Index n = 0; n < Index(kLeafVoxels); ++n) buffer.setValue(n, data.material[n]);
+    edgeBits_ = data.edgeBits;
+    samples_ = std::move(data.samples);
+    samples_.shrink_to_fit();
+    rebuildPrefixAndMask();
+}
+
+HermiteLeafData HermiteLeaf::extract() const
+{
+    HermiteLeafData data;
+    for (Index n = 0; n < Index(kLeafVoxels); ++n) data.material[n] = this->getValue(n);
+    data.edgeBits = edgeBits_;
+    data.samples = samples_;
+    return data;
+}
+
+void HermiteLeaf::writeBuffers(std::ostream& os, bool toHalf) const
+{
+    BaseLeaf::writeBuffers(os, toHalf);
+    os.write(reinterpret_cast<const char*>(edgeBits_.data()), sizeof(edgeBits_));
+    const uint32_t count = uint32_t(samples_.size());
+    os.write(reinterpret_cast<const char*>(&count), sizeof(count));
+    if (count > 0) {
+        openvdb::io::writeData<uint16_t>(os, reinterpret_cast<const uint16_t*>(samples_.data()), count * 3,
+                                         openvdb::io::getDataCompression(os));
+    }
+}
+
+void HermiteLeaf::readBuffers(std::istream& is, bool fromHalf)
+{
+    BaseLeaf::readBuffers(is, CoordBBox::inf(), fromHalf);
+    is.read(reinterpret_cast<char*>(edgeBits_.data()), sizeof(edgeBits_));
+    uint32_t count = 0;
+    is.read(reinterpret_cast<char*>(&count), sizeof(count));
+    if (!is) throw openvdb::IoError("truncated Hermite leaf");
+    std::size_t expected = 0;
+    for (uint64_t w : edgeBits_) expected += std::size_t(__builtin_popcountll(w));
+    if (count != expected) throw openvdb::IoError("corrupt Hermite leaf: sample count does not match edge mask");
+    samples_.assign(count, PackedSample{});
+    if (count > 0) {
+        openvdb::io::readData<uint16_t>(is, reinterpret_cast<uint16_t*>(samples_.data()), count * 3,
+                                        openvdb::io::getDataCompression(is));
+    }
+    if (!is) throw openvdb::IoError("truncated Hermite leaf");
+    const auto storedMask = this->getValueMask();
+    rebuildPrefixAndMask();
+    if (storedMask != this->getValueMask())
+        throw openvdb::IoError("corrupt Hermite leaf: active voxels do not match edge mask");
+}
+
+void HermiteLeaf::readBuffers(std::istream& is, const CoordBBox& clipBBox, bool fromHalf)
+{
+    readBuffers(is, fromHalf);
+    MaterialValue background{};
+    if (const void* bg = openvdb::io::getGridBackgroundValuePtr(is)) background = *static_cast<const MaterialValue*>(bg);
+    clip(clipBBox, background);
+}
+
+openvdb::Index64 HermiteLeaf::memUsage() const
+{
+    return BaseLeaf::memUsage() + sizeof(edgeBits_) + sizeof(prefix_) + sizeof(samples_) +
+           samples_.capacity() * sizeof(PackedSample);
+}
+
+void HermiteLeaf::clip(const CoordBBox& clipBBox, const ValueType& background)
+{
+    const CoordBBox nodeBBox = this->getNodeBoundingBox();
+    if (clipBBox.isInside(nodeBBox)) return;
+    HermiteLeafData data = extract();
+    HermiteLeafData clipped;
+    clipped.material = data.material;
+    std::size_t next = 0;
+    for (Index n = 0; n < Index(kLeafVoxels); ++n) {
+        const bool inside = clipBBox.isInside(this->offsetToGlobalCoord(n));
+        if (!inside) clipped.material[n] = background;
+        for (int a = 0; a < 3; ++a) {
+            const int bit = edgeBit(n, a);
+            if (!((data.edgeBits[bit >> 6] >> (bit & 63)) & 1u)) continue;
+            if (inside) {
+                clipped.edgeBits[bit >> 6] |= uint64_t(1) << (bit & 63);
+                clipped.samples.push_back(data.samples[next]);
+            }
+            ++next;
+        }
+    }
+    assign(std::move(clipped));
+}
+
+void initializeHermiteGrid()
+{
+    static std::once_flag once;
+    std::call_once(once, [] {
+        openvdb::initialize();
+        if (!HermiteGrid::isRegistered()) HermiteGrid::registerGrid();
+    });
+}
+
+} // namespace vdbclay

@@ -1,0 +1,77 @@
+#include "vdb_hermite/Quantize.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace vdbclay {
+
+uint16_t quantizeOffset(double t)
+{
+    if (!(t >= 0.0)) t = 0.0; // also maps NaN to 0
+    if (t > 1.0) t = 1.0;
+    return static_cast<uint16_t>(std::lround(t * 65535.0));
+}
+
+double dequantizeOffset(uint16_t q) { return q / 65535.0; }
+
+namespace {
+
+double signNotZero(double v) { return v >= 0.0 ? 1.0 : -1.0; }
+
+std::array<double, 3> decodeOctahedral(double u, double v)
+{
+    double x = u, y = v;
+    const double z = 1.0 - std::fabs(u) - std::fabs(v);
+    if (z < 0.0) {
+        x = (1.0 - std::fabs(v)) * signNotZero(u);
+        y = (1.0 - std::fabs(u)) * signNotZero(v);
+    }
+    const double len = std::sqrt(x * x + y * y + z * z);
+    return {x / len, y / len, z / len};
+}
+
+double codeToCoord(int q) { return q / double(kNormalMax) * 2.0 - 1.0; }
+
+} // namespace
+
+std::array<uint16_t, 2> quantizeNormal(const std::array<double, 3>& nIn)
+{
+    double len = std::sqrt(nIn[0] * nIn[0] + nIn[1] * nIn[1] + nIn[2] * nIn[2]);
+    std::array<double, 3> n = len > 0.0 && std::isfinite(len)
+                                  ? std::array<double, 3>{nIn[0] / len, nIn[1] / len, nIn[2] / len}
+                                  : std::array<double, 3>{0.0, 0.0, 1.0};
+    const double l1 = std::fabs(n[0]) + std::fabs(n[1]) + std::fabs(n[2]);
+    double u = n[0] / l1, v = n[1] / l1;
+    if (n[2] < 0.0) {
+        const double fu = (1.0 - std::fabs(v)) * signNotZero(u);
+        const double fv = (1.0 - std::fabs(u)) * signNotZero(v);
+        u = fu;
+        v = fv;
+    }
+    const int baseU = static_cast<int>(std::floor((u + 1.0) * 0.5 * kNormalMax));
+    const int baseV = static_cast<int>(std::floor((v + 1.0) * 0.5 * kNormalMax));
+    std::array<uint16_t, 2> best{0, 0};
+    double bestError = 1e300;
+    for (int du = 0; du <= 1; ++du) {
+        for (int dv = 0; dv <= 1; ++dv) {
+            const int qu = std::clamp(baseU + du, 0, int(kNormalMax));
+            const int qv = std::clamp(baseV + dv, 0, int(kNormalMax));
+            const auto d = decodeOctahedral(codeToCoord(qu), codeToCoord(qv));
+            const double err = std::max({std::fabs(d[0] - n[0]), std::fabs(d[1] - n[1]),
+                                         std::fabs(d[2] - n[2])});
+            if (err < bestError) {
+                bestError = err;
+                best = {uint16_t(qu), uint16_t(qv)};
+            }
+        }
+    }
+    return best;
+}
+
+std::array<float, 3> dequantizeNormal(uint16_t u, uint16_t v)
+{
+    const auto d = decodeOctahedral(codeToCoord(std::min(u, kNormalMax)), codeToCoord(std::min(v, kNormalMax)));
+    return {float(d[0]), float(d[1]), float(d[2])};
+}
+
+} // namespace vdbclay

@@ -1,0 +1,58 @@
+// A sculptable volume: the Hermite grid plus its materials table. Light header: the OpenVDB
+// templates stay behind detail::VolumeGrid (HermiteGrid.h) so most of the project compiles fast.
+#pragma once
+
+#include "vdb_hermite/Materials.h"
+
+#include <array>
+#include <cstdint>
+#include <memory>
+
+namespace vdbclay {
+
+namespace detail {
+struct VolumeGrid;
+}
+
+struct VolumeStats {
+    double voxelSize = 1.0;
+    uint64_t activeVoxels = 0; // voxels with at least one Hermite sample (surface voxels)
+    uint64_t samples = 0;      // Hermite samples (crossing edges)
+    uint64_t leafCount = 0;
+    uint64_t tileCount = 0;    // non-empty tiles
+    bool empty = true;
+    std::array<int32_t, 3> bboxMin{0, 0, 0}; // index space, solid voxels included
+    std::array<int32_t, 3> bboxMax{0, 0, 0};
+    uint64_t memoryBytes = 0;
+};
+
+class Volume {
+public:
+    explicit Volume(double voxelSize = 1.0); // throws std::invalid_argument unless voxelSize > 0
+    ~Volume();
+    Volume(Volume&&) noexcept;
+    Volume& operator=(Volume&&) noexcept;
+    Volume(const Volume&) = delete;
+    Volume& operator=(const Volume&) = delete;
+
+    Volume clone() const; // deep copy
+
+    double voxelSize() const;
+    MaterialTable& materials();
+    const MaterialTable& materials() const;
+    VolumeStats stats() const;
+    /// Material at an index-space voxel.
+    MaterialId materialAt(const std::array<int32_t, 3>& ijk) const;
+
+    detail::VolumeGrid& impl() { return *impl_; }
+    const detail::VolumeGrid& impl() const { return *impl_; }
+
+private:
+    explicit Volume(detail::VolumeGrid*); // an empty shell, filled by clone()
+    std::unique_ptr<detail::VolumeGrid> impl_;
+};
+
+/// Bit-exact comparison: same voxel size, materials table, tree topology, tiles, voxels and samples.
+bool identical(const Volume& a, const Volume& b);
+
+} // namespace vdbclay

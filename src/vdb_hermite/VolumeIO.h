@@ -1,0 +1,24 @@
+// Native .vdb files: the Hermite grid with its materials table and format version, Blosc-compressed.
+#pragma once
+
+#include "vdb_hermite/Volume.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace vdbclay {
+
+/// Every failure to read or write a volume file; what() is one line meant for the user.
+class VolumeIOError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Writes to a temporary file beside `path`, flushes it to disk, then renames it over `path`:
+/// a crash at any point leaves either the old file or the new one, never a torn file.
+void saveVolume(const Volume& volume, const std::string& path);
+
+/// Reads the first VDBClay Hermite grid of a .vdb file (the one named "hermite" if there are several).
+Volume loadVolume(const std::string& path);
+
+} // namespace vdbclay
