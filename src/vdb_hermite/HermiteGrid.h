@@ -21,6 +21,7 @@
 
 #include <array>
 #include <ostream>
+#include <type_traits>
 #include <vector>
 
 namespace vdbclay {
@@ -137,6 +138,28 @@ public:
     openvdb::Index64 memUsage() const;
     /// Voxels outside the box become background; their samples go with them.
     void clip(const CoordBBox& clipBBox, const ValueType& background);
+
+    // Tree traversal returns leaves through these; they must yield this type, not the base LeafNode.
+    HermiteLeaf* touchLeaf(const Coord&) { return this; }
+    template<typename AccessorT> HermiteLeaf* touchLeafAndCache(const Coord&, AccessorT&) { return this; }
+    HermiteLeaf* probeLeaf(const Coord&) { return this; }
+    const HermiteLeaf* probeLeaf(const Coord&) const { return this; }
+    const HermiteLeaf* probeConstLeaf(const Coord&) const { return this; }
+    template<typename AccessorT> HermiteLeaf* probeLeafAndCache(const Coord&, AccessorT&) { return this; }
+    template<typename AccessorT> const HermiteLeaf* probeLeafAndCache(const Coord&, AccessorT&) const { return this; }
+    template<typename AccessorT> const HermiteLeaf* probeConstLeafAndCache(const Coord&, AccessorT&) const { return this; }
+    template<typename NodeT, typename AccessorT> NodeT* probeNodeAndCache(const Coord&, AccessorT&)
+    {
+        if constexpr (std::is_same_v<NodeT, HermiteLeaf>) return this;
+        else return nullptr;
+    }
+    template<typename NodeT, typename AccessorT> const NodeT* probeConstNodeAndCache(const Coord&, AccessorT&) const
+    {
+        if constexpr (std::is_same_v<NodeT, HermiteLeaf>) return this;
+        else return nullptr;
+    }
+    void addLeaf(HermiteLeaf*) {}
+    template<typename AccessorT> void addLeafAndCache(HermiteLeaf*, AccessorT&) {}
 
     bool operator==(const HermiteLeaf& other) const
     {

@@ -1,0 +1,46 @@
+#include "mesher/Mesh.h"
+
+#include <unordered_map>
+
+namespace vdbclay {
+
+uint64_t edgeKey(int32_t i, int32_t j, int32_t k, int axis)
+{
+    // 20 bits per coordinate (offset by 2^19) and 2 bits of axis: unique for |coordinates| < 524288.
+    constexpr int64_t kBias = int64_t(1) << 19;
+    constexpr uint64_t kMask = (uint64_t(1) << 20) - 1;
+    const uint64_t x = uint64_t(int64_t(i) + kBias) & kMask;
+    const uint64_t y = uint64_t(int64_t(j) + kBias) & kMask;
+    const uint64_t z = uint64_t(int64_t(k) + kBias) & kMask;
+    return (x << 42) | (y << 22) | (z << 2) | uint64_t(axis);
+}
+
+Mesh weldChunks(const std::vector<MeshChunk>& chunks)
+{
+    Mesh out;
+    std::size_t vertices = 0, triangles = 0;
+    for (const auto& c : chunks) {
+        vertices += c.mesh.vertexCount();
+        triangles += c.mesh.triangleCount();
+    }
+    out.triangles.reserve(triangles);
+    std::unordered_map<uint64_t, uint32_t> index;
+    index.reserve(vertices);
+    std::vector<uint32_t> remap;
+    for (const auto& c : chunks) {
+        remap.resize(c.mesh.vertexCount());
+        for (std::size_t v = 0; v < c.mesh.vertexCount(); ++v) {
+            auto [it, inserted] = index.emplace(c.vertexKeys[v], uint32_t(out.positions.size()));
+            if (inserted) {
+                out.positions.push_back(c.mesh.positions[v]);
+                out.normals.push_back(c.mesh.normals[v]);
+                out.materials.push_back(c.mesh.materials[v]);
+            }
+            remap[v] = it->second;
+        }
+        for (const auto& t : c.mesh.triangles) out.triangles.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
+    }
+    return out;
+}
+
+} // namespace vdbclay

@@ -1,0 +1,31 @@
+// Meshing a Hermite volume. Cells are meshed per leaf with TBB; every cell is owned by exactly one leaf,
+// so chunks tile the surface without overlaps and weld into a watertight mesh.
+#pragma once
+
+#include "mesher/Mesh.h"
+#include "vdb_hermite/Volume.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace vdbclay {
+
+enum class MesherKind { MarchingCubes, CubicalMarchingSquares };
+
+const char* mesherName(MesherKind kind);          // "mc", "cms"
+MesherKind parseMesherKind(const std::string& s); // throws std::invalid_argument
+
+struct MeshOptions {
+    MesherKind kind = MesherKind::MarchingCubes;
+};
+
+/// Thrown for a mesher that this build does not provide yet (Cubical Marching Squares: issue 3).
+class MesherUnavailable : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions& options = {});
+Mesh meshVolume(const Volume& volume, const MeshOptions& options = {});
+
+} // namespace vdbclay

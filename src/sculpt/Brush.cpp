@@ -1,0 +1,352 @@
+#include "sculpt/Brush.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace vdbclay {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+struct ShapeNameEntry {
+    Shape shape;
+    const char* name;
+};
+constexpr ShapeNameEntry kShapeNames[] = {
+    {Shape::Sphere, "sphere"},   {Shape::Box, "box"},   {Shape::Cylinder, "cylinder"}, {Shape::Capsule, "capsule"},
+    {Shape::Torus, "torus"},     {Shape::Cone, "cone"}, {Shape::HalfSpace, "half-space"},
+};
+
+double length2(double x, double y) { return std::sqrt(x * x + y * y); }
+
+/// Polynomial smooth minimum; it lies at most k/4 below min(a, b).
+double smoothMin(double a, double b, double k)
+{
+    if (k <= 0.0) return std::min(a, b);
+    const double h = std::max(k - std::fabs(a - b), 0.0) / k;
+    return std::min(a, b) - h * h * k * 0.25;
+}
+
+Mat3d rotationFromEuler(const Vec3d& degrees)
+{
+    const Vec3d r = degrees * (kPi / 180.0);
+    const double cx = std::cos(r.x()), sx = std::sin(r.x());
+    const double cy = std::cos(r.y()), sy = std::sin(r.y());
+    const double cz = std::cos(r.z()), sz = std::sin(r.z());
+    const Mat3d rx(1.0, 0.0, 0.0, 0.0, cx, -sx, 0.0, sx, cx);
+    const Mat3d ry(cy, 0.0, sy, 0.0, 1.0, 0.0, -sy, 0.0, cy);
+    const Mat3d rz(cz, -sz, 0.0, sz, cz, 0.0, 0.0, 0.0, 1.0);
+    return rz * ry * rx; // column-vector convention: x first
+}
+
+Mat3d scaleMatrix(const Vec3d& s) { return Mat3d(s.x(), 0.0, 0.0, 0.0, s.y(), 0.0, 0.0, 0.0, s.z()); }
+
+void validatePlacement(const Placement& p)
+{
+    for (int i = 0; i < 3; ++i) {
+        if (!(p.scale[i] > 0.0) || !std::isfinite(p.scale[i])) throw std::invalid_argument("scale factors must be positive");
+        if (!std::isfinite(p.translation[i]) || !std::isfinite(p.rotationDegrees[i]))
+            throw std::invalid_argument("positions and rotations must be finite numbers");
+    }
+}
+
+/// Axis-aligned bounds of the primitive in its local frame (infinite for a half-space).
+WorldBounds primitiveBounds(const Primitive& p)
+{
+    Vec3d h;
+    switch (p.shape) {
+    case Shape::Sphere: h = Vec3d(p.radius); break;
+    case Shape::Box: h = p.size; break;
+    case Shape::Cylinder: h = Vec3d(p.radius, 0.5 * p.height, p.radius); break;
+    case Shape::Capsule: h = Vec3d(p.radius, 0.5 * p.length + p.radius, p.radius); break;
+    case Shape::Torus: h = Vec3d(p.radius + p.minorRadius, p.minorRadius, p.radius + p.minorRadius); break;
+    case Shape::Cone: h = Vec3d(p.radius, 0.5 * p.height, p.radius); break;
+    case Shape::HalfSpace: return WorldBounds{};
+    }
+    return WorldBounds{-h, h};
+}
+
+double primitiveInnerRadius(const Primitive& p)
+{
+    switch (p.shape) {
+    case Shape::Sphere: return p.radius;
+    case Shape::Box: return std::min({p.size.x(), p.size.y(), p.size.z()});
+    case Shape::Cylinder: return std::min(p.radius, 0.5 * p.height);
+    case Shape::Capsule: return p.radius;
+    case Shape::Torus: return p.minorRadius;
+    case Shape::Cone: return p.radius * p.height / (p.radius + std::sqrt(p.radius * p.radius + p.height * p.height));
+    case Shape::HalfSpace: return kInf;
+    }
+    return 0.0;
+}
+
+} // namespace
+
+const char* shapeName(Shape shape)
+{
+    for (const auto& e : kShapeNames) {
+        if (e.shape == shape) return e.name;
+    }
+    return "?";
+}
+
+Shape parseShape(const std::string& name)
+{
+    for (const auto& e : kShapeNames) {
+        if (name == e.name) return e.shape;
+    }
+    throw std::invalid_argument("unknown shape '" + name +
+                                "' (expected sphere, box, cylinder, capsule, torus, cone or half-space)");
+}
+
+bool WorldBounds::bounded() const
+{
+    for (int i = 0; i < 3; ++i) {
+        if (!std::isfinite(min[i]) || !std::isfinite(max[i])) return false;
+    }
+    return true;
+}
+
+void Primitive::validate() const
+{
+    auto positive = [](double v, const char* what) {
+        if (!(v > 0.0) || !std::isfinite(v)) throw std::invalid_argument(std::string(what) + " must be a positive number");
+    };
+    switch (shape) {
+    case Shape::Sphere: positive(radius, "radius"); break;
+    case Shape::Box:
+        positive(size.x(), "size");
+        positive(size.y(), "size");
+        positive(size.z(), "size");
+        if (!(rounding >= 0.0) || rounding > std::min({size.x(), size.y(), size.z()}))
+            throw std::invalid_argument("rounding must lie between 0 and the smallest half-extent");
+        break;
+    case Shape::Cylinder: positive(radius, "radius"); positive(height, "height"); break;
+    case Shape::Capsule:
+        positive(radius, "radius");
+        if (!(length >= 0.0) || !std::isfinite(length)) throw std::invalid_argument("length must be zero or positive");
+        break;
+    case Shape::Torus:
+        positive(radius, "radius");
+        positive(minorRadius, "minor_radius");
+        break;
+    case Shape::Cone: positive(radius, "radius"); positive(height, "height"); break;
+    case Shape::HalfSpace:
+        if (!(normal.length() > 0.0) || !std::isfinite(normal.length())) throw std::invalid_argument("normal must be a non-zero vector");
+        break;
+    }
+}
+
+double Primitive::distance(const Vec3d& p) const
+{
+    switch (shape) {
+    case Shape::Sphere: return p.length() - radius;
+    case Shape::Box: {
+        const Vec3d q(std::fabs(p.x()) - size.x() + rounding, std::fabs(p.y()) - size.y() + rounding,
+                      std::fabs(p.z()) - size.z() + rounding);
+        const Vec3d outside(std::max(q.x(), 0.0), std::max(q.y(), 0.0), std::max(q.z(), 0.0));
+        return outside.length() + std::min(std::max({q.x(), q.y(), q.z()}), 0.0) - rounding;
+    }
+    case Shape::Cylinder: {
+        const double dx = length2(p.x(), p.z()) - radius;
+        const double dy = std::fabs(p.y()) - 0.5 * height;
+        return std::min(std::max(dx, dy), 0.0) + length2(std::max(dx, 0.0), std::max(dy, 0.0));
+    }
+    case Shape::Capsule: {
+        const double half = 0.5 * length;
+        const double y = p.y() - std::clamp(p.y(), -half, half);
+        return std::sqrt(p.x() * p.x() + y * y + p.z() * p.z()) - radius;
+    }
+    case Shape::Torus: return length2(length2(p.x(), p.z()) - radius, p.y()) - minorRadius;
+    case Shape::Cone: {
+        // Cone with base radius `radius` at y = -h and apex at y = +h, h = height / 2: the distance to
+        // the 2D profile (radial distance q, height y) is the nearer of the cap and the slanted side.
+        const double h = 0.5 * height;
+        const double qx = length2(p.x(), p.z());
+        const double qy = p.y();
+        const double capX = qx - std::min(qx, qy < 0.0 ? radius : 0.0);
+        const double capY = std::fabs(qy) - h;
+        // Side segment from (radius, -h) to (0, h).
+        const double ex = -radius, ey = 2.0 * h;
+        const double t = std::clamp(((qx - radius) * ex + (qy + h) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
+        const double sideX = qx - radius - ex * t;
+        const double sideY = qy + h - ey * t;
+        const bool inside = sideX < 0.0 && capY < 0.0;
+        const double d2 = std::min(capX * capX + capY * capY, sideX * sideX + sideY * sideY);
+        return (inside ? -1.0 : 1.0) * std::sqrt(d2);
+    }
+    case Shape::HalfSpace: return normal.dot(p) / normal.length();
+    }
+    return kInf;
+}
+
+Brush::Brush(const Primitive& primitive, const Placement& placement)
+{
+    compile({BrushPart{primitive, Placement{}, PartOp::Add}}, placement);
+}
+
+Brush::Brush(std::vector<BrushPart> parts, double smoothness, const Placement& placement)
+{
+    if (parts.empty()) throw std::invalid_argument("a composite brush needs at least one part");
+    if (!(smoothness >= 0.0) || !std::isfinite(smoothness)) throw std::invalid_argument("smoothness must be zero or positive");
+    if (parts.front().op != PartOp::Add) throw std::invalid_argument("the first part of a composite brush must add");
+    smoothness_ = smoothness;
+    compile(parts, placement);
+}
+
+void Brush::compile(const std::vector<BrushPart>& parts, const Placement& placement)
+{
+    validatePlacement(placement);
+    translation_ = placement.translation;
+    const Mat3d brushLinear = rotationFromEuler(placement.rotationDegrees) * scaleMatrix(placement.scale);
+    const double brushMinScale = std::min({placement.scale.x(), placement.scale.y(), placement.scale.z()});
+
+    parts_.clear();
+    localBounds_ = WorldBounds{Vec3d(kInf), Vec3d(-kInf)};
+    innerRadius_ = 0.0;
+    bool unbounded = false;
+    for (const auto& part : parts) {
+        part.primitive.validate();
+        validatePlacement(part.placement);
+        const Mat3d partLinear = rotationFromEuler(part.placement.rotationDegrees) * scaleMatrix(part.placement.scale);
+        const Mat3d localToWorld = brushLinear * partLinear;
+        CompiledPart compiled;
+        compiled.primitive = part.primitive;
+        compiled.worldToLocal = localToWorld.inverse();
+        compiled.offset = brushLinear * part.placement.translation;
+        compiled.minScale =
+            brushMinScale * std::min({part.placement.scale.x(), part.placement.scale.y(), part.placement.scale.z()});
+        compiled.op = part.op;
+        parts_.push_back(compiled);
+        if (part.op != PartOp::Add) continue;
+
+        innerRadius_ = std::max(innerRadius_, primitiveInnerRadius(part.primitive) * compiled.minScale);
+        const WorldBounds local = primitiveBounds(part.primitive);
+        if (!local.bounded()) {
+            unbounded = true;
+            continue;
+        }
+        for (int corner = 0; corner < 8; ++corner) {
+            const Vec3d c((corner & 1) ? local.max.x() : local.min.x(), (corner & 2) ? local.max.y() : local.min.y(),
+                          (corner & 4) ? local.max.z() : local.min.z());
+            const Vec3d w = localToWorld * c + compiled.offset;
+            for (int i = 0; i < 3; ++i) {
+                localBounds_.min[i] = std::min(localBounds_.min[i], w[i]);
+                localBounds_.max[i] = std::max(localBounds_.max[i], w[i]);
+            }
+        }
+    }
+    if (unbounded) {
+        localBounds_ = WorldBounds{};
+    } else {
+        localBounds_.min -= Vec3d(0.25 * smoothness_);
+        localBounds_.max += Vec3d(0.25 * smoothness_);
+    }
+}
+
+double Brush::distanceAtOrigin(const Vec3d& relative) const
+{
+    double d = kInf;
+    for (const auto& part : parts_) {
+        const double dp = part.primitive.distance(part.worldToLocal * (relative - part.offset)) * part.minScale;
+        if (part.op == PartOp::Add) d = smoothMin(d, dp, smoothness_);
+        else d = -smoothMin(-d, dp, smoothness_);
+    }
+    return d;
+}
+
+WorldBounds Brush::bounds() const
+{
+    if (!localBounds_.bounded()) return localBounds_;
+    return WorldBounds{localBounds_.min + translation_, localBounds_.max + translation_};
+}
+
+double Brush::innerRadius() const { return innerRadius_; }
+
+double Brush::boundingRadius() const
+{
+    if (!localBounds_.bounded()) return kInf;
+    double r2 = 0.0;
+    for (int corner = 0; corner < 8; ++corner) {
+        const Vec3d c((corner & 1) ? localBounds_.max.x() : localBounds_.min.x(),
+                      (corner & 2) ? localBounds_.max.y() : localBounds_.min.y(),
+                      (corner & 4) ? localBounds_.max.z() : localBounds_.min.z());
+        r2 = std::max(r2, c.lengthSqr());
+    }
+    return std::sqrt(r2);
+}
+
+SweptBrush::SweptBrush(Brush brush, std::vector<Vec3d> path) : brush_(std::move(brush)), path_(std::move(path))
+{
+    if (path_.empty()) throw std::invalid_argument("a stroke path needs at least one point");
+    reach_ = brush_.boundingRadius();
+    if (!std::isfinite(reach_)) throw std::invalid_argument("an unbounded brush (half-space) cannot follow a path");
+    step_ = std::max(0.25 * brush_.innerRadius(), 1e-6);
+}
+
+double SweptBrush::distance(const Vec3d& x) const
+{
+    if (path_.size() == 1) return brush_.distanceAt(x, path_.front());
+    double best = kInf;
+    for (std::size_t i = 0; i + 1 < path_.size(); ++i) {
+        const Vec3d a = path_[i];
+        const Vec3d ab = path_[i + 1] - a;
+        const double len = ab.length();
+        if (len < 1e-12) {
+            best = std::min(best, brush_.distanceAt(x, a));
+            continue;
+        }
+        const Vec3d dir = ab / len;
+        const double along = std::clamp((x - a).dot(dir), 0.0, len);
+        const double lowerBound = (x - (a + dir * along)).length() - reach_;
+        if (lowerBound >= best) continue;
+        if (lowerBound > 0.0) {
+            best = lowerBound; // the brush cannot reach x from this segment: a safe, positive bound
+            continue;
+        }
+        // The brush can touch x only for origins within `reach_` of the closest point: sample that window
+        // on a fixed grid along the segment, then refine the best sample by golden-section search.
+        const double lo = std::max(0.0, along - reach_);
+        const double hi = std::min(len, along + reach_);
+        auto eval = [&](double s) { return brush_.distanceAt(x, a + dir * s); };
+        double bestS = lo, bestD = eval(lo);
+        for (double s = std::ceil(lo / step_) * step_; s < hi; s += step_) {
+            const double d = eval(s);
+            if (d < bestD) bestD = d, bestS = s;
+        }
+        if (const double d = eval(hi); d < bestD) bestD = d, bestS = hi;
+        double left = std::max(lo, bestS - step_), right = std::min(hi, bestS + step_);
+        constexpr double kGolden = 0.6180339887498949;
+        double m1 = right - kGolden * (right - left), m2 = left + kGolden * (right - left);
+        double f1 = eval(m1), f2 = eval(m2);
+        for (int it = 0; it < 24; ++it) {
+            if (f1 < f2) {
+                right = m2, m2 = m1, f2 = f1;
+                m1 = right - kGolden * (right - left), f1 = eval(m1);
+            } else {
+                left = m1, m1 = m2, f1 = f2;
+                m2 = left + kGolden * (right - left), f2 = eval(m2);
+            }
+        }
+        best = std::min({best, bestD, f1, f2});
+    }
+    return best;
+}
+
+WorldBounds SweptBrush::bounds() const
+{
+    WorldBounds b{Vec3d(kInf), Vec3d(-kInf)};
+    for (const auto& p : path_) {
+        const WorldBounds one = brush_.bounds();
+        for (int i = 0; i < 3; ++i) {
+            b.min[i] = std::min(b.min[i], one.min[i] - brush_.translation()[i] + p[i]);
+            b.max[i] = std::max(b.max[i], one.max[i] - brush_.translation()[i] + p[i]);
+        }
+    }
+    return b;
+}
+
+} // namespace vdbclay

@@ -1,0 +1,123 @@
+// Signed distance brushes: primitives with a full transform, composite (smoothly blended) brushes and
+// swept brushes for strokes. Distances are in world units, negative inside, and never overestimate
+// the true distance by more than the blend allows (they are Lipschitz-1 bounds), which the CSG kernel
+// relies on for block classification and for the adaptive crossing search.
+#pragma once
+
+#include <openvdb/math/Mat3.h>
+#include <openvdb/math/Vec3.h>
+
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace vdbclay {
+
+using Vec3d = openvdb::math::Vec3d;
+using Mat3d = openvdb::math::Mat3d;
+
+enum class Shape { Sphere, Box, Cylinder, Capsule, Torus, Cone, HalfSpace };
+
+/// Shape name as used in scripts and on the command line ("sphere", "box", "half-space", ...).
+const char* shapeName(Shape shape);
+/// Throws std::invalid_argument listing the valid names.
+Shape parseShape(const std::string& name);
+
+/// A primitive in its local frame. Cylinder, capsule, torus and cone have their axis along local Y.
+struct Primitive {
+    Shape shape = Shape::Sphere;
+    double radius = 1.0;      // sphere, cylinder, capsule, cone (base radius), torus (major radius)
+    Vec3d size{1.0, 1.0, 1.0}; // box half-extents
+    double rounding = 0.0;    // box edge/corner radius, inside the half-extents
+    double height = 2.0;      // cylinder and cone: full height
+    double length = 2.0;      // capsule: distance between the centres of its two caps
+    double minorRadius = 0.5; // torus: tube radius
+    Vec3d normal{0.0, 1.0, 0.0}; // half-space: solid where dot(normal, p) < 0
+
+    double distance(const Vec3d& p) const;
+    /// Throws std::invalid_argument on non-positive or inconsistent sizes.
+    void validate() const;
+};
+
+/// Translation, rotation (Euler degrees about world axes, x first: R = Rz*Ry*Rx) and per-axis scale.
+struct Placement {
+    Vec3d translation{0.0, 0.0, 0.0};
+    Vec3d rotationDegrees{0.0, 0.0, 0.0};
+    Vec3d scale{1.0, 1.0, 1.0};
+};
+
+struct WorldBounds {
+    Vec3d min{-std::numeric_limits<double>::infinity()};
+    Vec3d max{std::numeric_limits<double>::infinity()};
+    bool bounded() const;
+};
+
+/// Anything the CSG kernel can carve with.
+class SdfField {
+public:
+    virtual ~SdfField() = default;
+    virtual double distance(const Vec3d& world) const = 0;
+    virtual WorldBounds bounds() const = 0;
+    /// Depth of the deepest inside point (world units): erosion scales with it.
+    virtual double innerRadius() const = 0;
+};
+
+enum class PartOp { Add, Remove };
+
+struct BrushPart {
+    Primitive primitive;
+    Placement placement;
+    PartOp op = PartOp::Add;
+};
+
+/// One primitive, or several blended with smooth min/max (polynomial, radius `smoothness`).
+class Brush : public SdfField {
+public:
+    Brush() = default;
+    Brush(const Primitive& primitive, const Placement& placement);
+    Brush(std::vector<BrushPart> parts, double smoothness, const Placement& placement);
+
+    double distance(const Vec3d& world) const override { return distanceAtOrigin(world - translation_); }
+    WorldBounds bounds() const override;
+    double innerRadius() const override;
+
+    /// Distance with the brush's own translation replaced by `origin`.
+    double distanceAt(const Vec3d& world, const Vec3d& origin) const { return distanceAtOrigin(world - origin); }
+    const Vec3d& translation() const { return translation_; }
+    /// Radius of a sphere about the brush origin that holds the whole (bounded) brush.
+    double boundingRadius() const;
+
+private:
+    struct CompiledPart {
+        Primitive primitive;
+        Mat3d worldToLocal;  // inverse of (rotation * scale), brush and part combined
+        Vec3d offset;        // part origin relative to the brush origin, world frame
+        double minScale;     // rescales local distances into world (lower) bounds
+        PartOp op;
+    };
+    double distanceAtOrigin(const Vec3d& relative) const;
+    void compile(const std::vector<BrushPart>& parts, const Placement& placement);
+
+    std::vector<CompiledPart> parts_;
+    double smoothness_ = 0.0;
+    Vec3d translation_{0.0, 0.0, 0.0};
+    WorldBounds localBounds_; // relative to the brush origin
+    double innerRadius_ = 0.0;
+};
+
+/// A brush swept along a polyline of origins: the union of the brush at every point of the path.
+class SweptBrush : public SdfField {
+public:
+    SweptBrush(Brush brush, std::vector<Vec3d> path); // throws std::invalid_argument on an empty path
+    double distance(const Vec3d& world) const override;
+    WorldBounds bounds() const override;
+    double innerRadius() const override { return brush_.innerRadius(); }
+
+private:
+    Brush brush_;
+    std::vector<Vec3d> path_;
+    double reach_;  // bounding radius of the brush
+    double step_;   // sampling step along the path
+};
+
+} // namespace vdbclay

@@ -1,0 +1,521 @@
+#include "sculpt/Csg.h"
+
+#include "vdb_hermite/HermiteGrid.h"
+
+#include <openvdb/tree/ValueAccessor.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <stdexcept>
+
+namespace vdbclay {
+
+namespace {
+
+constexpr int kFoot = kLeafDim + 1; // a block plus the first layer of its +x/+y/+z neighbours
+constexpr int kFootVoxels = kFoot * kFoot * kFoot;
+constexpr int kLowerDim = 128;      // voxels per side of a HermiteLower node
+constexpr int kUpperDim = 4096;
+
+inline int footIndex(int i, int j, int k) { return (i * kFoot + j) * kFoot + k; }
+
+using ConstAccessor = openvdb::tree::ValueAccessor<const HermiteTree, /*IsSafe=*/false>;
+
+/// Everything a block task needs to know about the edit, read-only during the parallel phase.
+struct EditContext {
+    const SdfField& field;
+    CsgMode mode;
+    MaterialValue material;
+    double voxelSize;
+    std::vector<double> erodeOffset; // per material id; empty unless eroding
+    double maxErodeOffset = 0.0;
+
+    double offsetFor(MaterialValue m) const { return erodeOffset.empty() ? 0.0 : erodeOffset[m.id]; }
+    bool inside(double d, MaterialValue m) const { return d + offsetFor(m) < 0.0; }
+
+    MaterialValue apply(MaterialValue old, bool in) const
+    {
+        switch (mode) {
+        case CsgMode::Add: return in ? material : old;
+        case CsgMode::Remove: return in ? MaterialValue{} : old;
+        case CsgMode::Intersect: return in ? old : MaterialValue{};
+        case CsgMode::Paint: return in && old.solid() ? material : old;
+        case CsgMode::Erode: return in ? MaterialValue{} : old;
+        }
+        return old;
+    }
+
+    Vec3d world(const Coord& c) const { return Vec3d(c.x(), c.y(), c.z()) * voxelSize; }
+};
+
+enum class RegionClass { Outside, Inside, Mixed };
+
+/// Classifies the footprint [origin, origin + size]^3 (voxel centres) against the brush. The distance
+/// bound is Lipschitz-1, so a centre farther from the surface than the half-diagonal decides the region.
+RegionClass classifyRegion(const EditContext& ctx, const Coord& origin, int size)
+{
+    const double half = 0.5 * size;
+    const Vec3d centre = ctx.world(origin) + Vec3d(half * ctx.voxelSize);
+    const double radius = std::sqrt(3.0) * half * ctx.voxelSize * (1.0 + 1e-9) + 1e-12;
+    const double d = ctx.field.distance(centre);
+    if (d > radius) return RegionClass::Outside;
+    if (d + ctx.maxErodeOffset < -radius) return RegionClass::Inside;
+    return RegionClass::Mixed;
+}
+
+struct BlockTask {
+    Coord origin;
+    const HermiteLeaf* oldLeaf = nullptr;
+    MaterialValue tileValue{};
+};
+
+struct BlockResult {
+    bool uniform = false;
+    MaterialValue value{};
+    HermiteLeafData data;
+    uint64_t crossings = 0;
+};
+
+struct TileEdit {
+    Coord origin;
+    Index level; // 1: an 8^3 tile, 2: a 128^3 tile
+    MaterialValue value;
+};
+
+/// Finds the zero of f(t) = distance(p0 + t * edge) + offset on [lo, hi], where the signs differ at the
+/// ends. Steps by the distance values first (a distance bound never overshoots the surface, seed 004
+/// Fig 4.11) and falls back to plain bisection every third step, so a poor bound cannot stall it.
+double findCrossing(const EditContext& ctx, const Vec3d& p0, const Vec3d& edge, double lo, double hi, double flo,
+                    double fhi, double offset)
+{
+    const double len = ctx.voxelSize;
+    for (int it = 0; it < 48 && hi - lo > 1e-6; ++it) {
+        double t = std::fabs(flo) <= std::fabs(fhi) ? lo + std::fabs(flo) / len : hi - std::fabs(fhi) / len;
+        if (it % 3 == 2 || !(t > lo && t < hi)) t = 0.5 * (lo + hi);
+        const double ft = ctx.field.distance(p0 + edge * t) + offset;
+        if (std::fabs(ft) < 1e-9 * len) return t;
+        if ((ft < 0.0) == (flo < 0.0)) lo = t, flo = ft;
+        else hi = t, fhi = ft;
+    }
+    const double denom = flo - fhi;
+    return denom != 0.0 ? std::clamp(lo + (hi - lo) * flo / denom, lo, hi) : 0.5 * (lo + hi);
+}
+
+Vec3d brushGradient(const EditContext& ctx, const Vec3d& p, int axis)
+{
+    const double h = 1e-3 * ctx.voxelSize;
+    Vec3d g;
+    for (int i = 0; i < 3; ++i) {
+        Vec3d e(0.0);
+        e[i] = h;
+        g[i] = ctx.field.distance(p + e) - ctx.field.distance(p - e);
+    }
+    const double len = g.length();
+    if (!(len > 0.0) || !std::isfinite(len)) {
+        Vec3d fallback(0.0);
+        fallback[axis] = 1.0;
+        return fallback;
+    }
+    return g / len;
+}
+
+/// Re-computes the Hermite sample of one edge as 1D CSG: the old edge is one or two material runs,
+/// the brush splits each run where it crosses it, and the result's runs give the new sample. When more
+/// than one boundary remains, the one that changes occupancy wins, so a solid/empty crossing is never
+/// traded for a material boundary (paint keeps every surface crossing bit-exact).
+bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValue m0, MaterialValue m1,
+                 const PackedSample* old, double d0, double d1, PackedSample& out, uint64_t& crossings)
+{
+    Vec3d edge(0.0);
+    edge[axis] = ctx.voxelSize;
+
+    struct Segment { double ta, tb, fa, fb; MaterialValue m; };
+    Segment segs[2];
+    int segCount = 0;
+    double tOld = 0.5;
+    if (m0 == m1) {
+        segs[segCount++] = {0.0, 1.0, d0, d1, m0};
+    } else {
+        if (old) tOld = dequantizeOffset(old->offset);
+        const double dOld = ctx.field.distance(p0 + edge * tOld);
+        segs[segCount++] = {0.0, tOld, d0, dOld, m0};
+        segs[segCount++] = {tOld, 1.0, dOld, d1, m1};
+    }
+
+    enum class Kind { Start, Old, Brush };
+    struct Run { double t; MaterialValue m; Kind kind; bool insideBefore; };
+    Run runs[4];
+    int runCount = 0;
+    auto push = [&](const Run& r) {
+        if (runCount > 0 && runs[runCount - 1].m == r.m) return; // same material: no boundary
+        runs[runCount++] = r;
+    };
+    for (int s = 0; s < segCount; ++s) {
+        const Segment& seg = segs[s];
+        const double off = ctx.offsetFor(seg.m);
+        const bool inA = seg.fa + off < 0.0, inB = seg.fb + off < 0.0;
+        push({seg.ta, ctx.apply(seg.m, inA), s == 0 ? Kind::Start : Kind::Old, false});
+        if (inA != inB) {
+            const double tc = findCrossing(ctx, p0, edge, seg.ta, seg.tb, seg.fa + off, seg.fb + off, off);
+            ++crossings;
+            push({tc, ctx.apply(seg.m, inB), Kind::Brush, inA});
+        }
+    }
+    if (runCount < 2) return false;
+
+    int chosen = 1;
+    if (runs[0].m.solid() != runs[runCount - 1].m.solid()) {
+        while (chosen < runCount - 1 && runs[chosen - 1].m.solid() == runs[chosen].m.solid()) ++chosen;
+    }
+    const Run& b = runs[chosen];
+    if (b.kind == Kind::Old && old) {
+        out = *old;
+        return true;
+    }
+    double t = b.t;
+    Vec3d normal;
+    if (b.kind == Kind::Brush) {
+        normal = brushGradient(ctx, p0 + edge * t, axis); // points out of the brush
+        const MaterialValue insideMaterial = b.insideBefore ? runs[chosen - 1].m : b.m;
+        if (!insideMaterial.solid()) normal = -normal;    // surface normals point into empty space
+    } else {
+        // Old boundary without a stored sample (inconsistent input): a flat crossing mid-edge.
+        t = tOld;
+        normal = Vec3d(0.0);
+        normal[axis] = runs[chosen - 1].m.solid() ? 1.0 : -1.0;
+    }
+    out = packSample(t, {normal.x(), normal.y(), normal.z()});
+    return true;
+}
+
+BlockResult computeBlock(const EditContext& ctx, const BlockTask& task, ConstAccessor& acc)
+{
+    std::array<MaterialValue, kFootVoxels> oldMat;
+    std::array<MaterialValue, kFootVoxels> newMat;
+    std::array<double, kFootVoxels> dist;
+    const Coord& o = task.origin;
+    for (int i = 0; i < kFoot; ++i) {
+        for (int j = 0; j < kFoot; ++j) {
+            for (int k = 0; k < kFoot; ++k) {
+                const int f = footIndex(i, j, k);
+                const Coord c = o.offsetBy(i, j, k);
+                if (i < kLeafDim && j < kLeafDim && k < kLeafDim) {
+                    oldMat[f] = task.oldLeaf ? task.oldLeaf->getValue(HermiteLeaf::coordToOffset(c)) : task.tileValue;
+                } else {
+                    oldMat[f] = acc.getValue(c);
+                }
+                dist[f] = ctx.field.distance(ctx.world(c));
+                newMat[f] = ctx.apply(oldMat[f], ctx.inside(dist[f], oldMat[f]));
+            }
+        }
+    }
+
+    BlockResult result;
+    HermiteLeafData& data = result.data;
+    bool uniform = true;
+    const MaterialValue first = newMat[0];
+    for (int i = 0; i < kLeafDim; ++i) {
+        for (int j = 0; j < kLeafDim; ++j) {
+            for (int k = 0; k < kLeafDim; ++k) {
+                const Index n = Index((i << 6) | (j << 3) | k);
+                const int v = footIndex(i, j, k);
+                data.material[n] = newMat[v];
+                uniform = uniform && newMat[v] == first;
+                for (int a = 0; a < 3; ++a) {
+                    const int nb = footIndex(i + (a == 0), j + (a == 1), k + (a == 2));
+                    if (newMat[v] == newMat[nb]) continue;
+                    const PackedSample* old = task.oldLeaf ? task.oldLeaf->sample(n, a) : nullptr;
+                    const bool touched = dist[v] < 0.0 || dist[nb] < 0.0 || newMat[v] != oldMat[v] ||
+                                         newMat[nb] != oldMat[nb] || !old;
+                    PackedSample sample;
+                    if (!touched) {
+                        sample = *old;
+                    } else if (!resolveEdge(ctx, ctx.world(o.offsetBy(i, j, k)), a, oldMat[v], oldMat[nb], old,
+                                            dist[v], dist[nb], sample, result.crossings)) {
+                        continue;
+                    }
+                    const int bit = HermiteLeaf::edgeBit(n, a);
+                    data.edgeBits[bit >> 6] |= uint64_t(1) << (bit & 63);
+                    data.samples.push_back(sample);
+                }
+            }
+        }
+    }
+    result.uniform = uniform && data.samples.empty();
+    result.value = first;
+    return result;
+}
+
+/// Walks the touched region from 128^3 nodes down to leaf-sized blocks, settling whole regions as
+/// tiles where the brush covers or misses them, and queueing mixed blocks as tasks.
+class RegionWalker {
+public:
+    RegionWalker(const EditContext& ctx, HermiteTree& tree, const CoordBBox& region)
+        : ctx_(ctx), tree_(tree), acc_(tree), region_(region) {}
+
+    void walk()
+    {
+        const Coord lo = alignDown(region_.min(), kLowerDim), hi = region_.max();
+        for (int x = lo.x(); x <= hi.x(); x += kLowerDim)
+            for (int y = lo.y(); y <= hi.y(); y += kLowerDim)
+                for (int z = lo.z(); z <= hi.z(); z += kLowerDim) visitLower(Coord(x, y, z));
+    }
+
+    std::vector<BlockTask> tasks;
+    std::vector<TileEdit> edits;
+
+private:
+    static Coord alignDown(const Coord& c, int dim)
+    {
+        return Coord(c.x() & ~(dim - 1), c.y() & ~(dim - 1), c.z() & ~(dim - 1));
+    }
+
+    bool onlyRemovesSolid() const { return ctx_.mode != CsgMode::Add; }
+
+    /// What an op does to a region it covers entirely, given the region's uniform material; returns
+    /// false when the region must be looked at voxel by voxel.
+    bool coveredValue(MaterialValue old, MaterialValue& out) const
+    {
+        switch (ctx_.mode) {
+        case CsgMode::Add:
+        case CsgMode::Remove:
+        case CsgMode::Intersect:
+        case CsgMode::Paint:
+        case CsgMode::Erode: out = ctx_.apply(old, true); return true;
+        }
+        return false;
+    }
+
+    void visitLower(const Coord& origin)
+    {
+        const HermiteLower* node = acc_.template probeConstNode<HermiteLower>(origin);
+        const MaterialValue tile = node ? MaterialValue{} : acc_.getValue(origin);
+        if (!node && !tile.solid() && onlyRemovesSolid()) return;
+        const RegionClass cls = classifyRegion(ctx_, origin, kLowerDim);
+        if (cls == RegionClass::Outside) {
+            if (ctx_.mode == CsgMode::Intersect && (node || tile.solid())) edits.push_back({origin, 2, MaterialValue{}});
+            return;
+        }
+        if (cls == RegionClass::Inside) {
+            MaterialValue value;
+            if (!node) {
+                coveredValue(tile, value);
+                if (value != tile) edits.push_back({origin, 2, value});
+                return;
+            }
+            if (ctx_.mode == CsgMode::Intersect) return;
+            if (ctx_.mode == CsgMode::Add || ctx_.mode == CsgMode::Remove) {
+                edits.push_back({origin, 2, ctx_.apply(MaterialValue{}, true)});
+                return;
+            }
+        }
+        const CoordBBox nodeBox(origin, origin.offsetBy(kLowerDim - 1));
+        CoordBBox sub = nodeBox;
+        sub.intersect(region_);
+        const Coord lo = alignDown(sub.min(), kLeafDim);
+        for (int x = lo.x(); x <= sub.max().x(); x += kLeafDim)
+            for (int y = lo.y(); y <= sub.max().y(); y += kLeafDim)
+                for (int z = lo.z(); z <= sub.max().z(); z += kLeafDim) visitBlock(Coord(x, y, z), node, tile);
+    }
+
+    void visitBlock(const Coord& origin, const HermiteLower* node, MaterialValue nodeTile)
+    {
+        const HermiteLeaf* leaf = node ? node->probeConstLeaf(origin) : nullptr;
+        const MaterialValue tile = leaf ? MaterialValue{} : (node ? node->getValue(origin) : nodeTile);
+        if (!leaf && !tile.solid() && onlyRemovesSolid()) return;
+        const RegionClass cls = classifyRegion(ctx_, origin, kLeafDim);
+        if (cls == RegionClass::Outside) {
+            if (ctx_.mode == CsgMode::Intersect && (leaf || tile.solid())) edits.push_back({origin, 1, MaterialValue{}});
+            return;
+        }
+        if (cls == RegionClass::Inside && !leaf) {
+            MaterialValue value;
+            coveredValue(tile, value);
+            if (value != tile) edits.push_back({origin, 1, value});
+            return;
+        }
+        if (cls == RegionClass::Inside && (ctx_.mode == CsgMode::Add || ctx_.mode == CsgMode::Remove)) {
+            edits.push_back({origin, 1, ctx_.apply(MaterialValue{}, true)});
+            return;
+        }
+        if (cls == RegionClass::Inside && ctx_.mode == CsgMode::Intersect) return;
+        tasks.push_back({origin, leaf, tile});
+    }
+
+    const EditContext& ctx_;
+    HermiteTree& tree_;
+    openvdb::tree::ValueAccessor<HermiteTree> acc_;
+    CoordBBox region_;
+};
+
+CoordBBox solidBounds(const HermiteTree& tree)
+{
+    CoordBBox box;
+    for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) box.expand(leaf->getNodeBoundingBox());
+    for (auto it = tree.cbeginValueAll(); it; ++it) {
+        if (it.isVoxelValue() || !it.getValue().solid()) continue;
+        CoordBBox tile;
+        it.getBoundingBox(tile);
+        box.expand(tile);
+    }
+    return box;
+}
+
+/// Folds HermiteLower/HermiteUpper nodes that became uniform into tiles of their parents.
+void pruneTouched(openvdb::tree::ValueAccessor<HermiteTree>& acc, HermiteTree& tree, const std::set<Coord>& lowers)
+{
+    std::set<Coord> uppers;
+    for (const Coord& o : lowers) {
+        uppers.insert(Coord(o.x() & ~(kUpperDim - 1), o.y() & ~(kUpperDim - 1), o.z() & ~(kUpperDim - 1)));
+        const HermiteLower* node = acc.template probeConstNode<HermiteLower>(o);
+        MaterialValue value;
+        bool state = false;
+        if (node && node->isConstant(value, state, MaterialValue{}) && !state) acc.addTile(2, o, value, false);
+    }
+    bool erased = false;
+    for (const Coord& o : uppers) {
+        const HermiteUpper* node = acc.template probeConstNode<HermiteUpper>(o);
+        MaterialValue value;
+        bool state = false;
+        if (node && node->isConstant(value, state, MaterialValue{}) && !state) {
+            acc.addTile(3, o, value, false);
+            erased = erased || !value.solid();
+        }
+    }
+    if (erased) {
+        acc.clear();
+        tree.root().eraseBackgroundTiles();
+    }
+}
+
+} // namespace
+
+const char* csgModeName(CsgMode mode)
+{
+    switch (mode) {
+    case CsgMode::Add: return "add";
+    case CsgMode::Remove: return "remove";
+    case CsgMode::Intersect: return "intersect";
+    case CsgMode::Paint: return "paint";
+    case CsgMode::Erode: return "erode";
+    }
+    return "?";
+}
+
+CsgMode parseCsgMode(const std::string& name)
+{
+    for (CsgMode m : {CsgMode::Add, CsgMode::Remove, CsgMode::Intersect, CsgMode::Paint, CsgMode::Erode}) {
+        if (name == csgModeName(m)) return m;
+    }
+    throw std::invalid_argument("unknown mode '" + name + "' (expected add, remove, intersect, paint or erode)");
+}
+
+EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
+{
+    HermiteGrid& grid = *volume.impl().grid;
+    HermiteTree& tree = grid.tree();
+    const MaterialTable& materials = volume.materials();
+    const bool needsMaterial = op.mode == CsgMode::Add || op.mode == CsgMode::Paint;
+    if (needsMaterial && (op.material == kEmptyMaterial || op.material > materials.size()))
+        throw std::invalid_argument("material id " + std::to_string(op.material) + " is not in the volume's table");
+    if (op.mode == CsgMode::Erode && !(op.strength >= 0.0 && op.strength <= 1.0))
+        throw std::invalid_argument("erode strength must lie in [0,1]");
+
+    EditContext ctx{brush, op.mode, MaterialValue{op.material}, volume.voxelSize(), {}, 0.0};
+    if (op.mode == CsgMode::Erode) {
+        const double depth = op.erodeDepth ? *op.erodeDepth : brush.innerRadius();
+        if (!(depth > 0.0) || !std::isfinite(depth))
+            throw std::invalid_argument("erode needs a positive depth (an unbounded brush needs an explicit depth)");
+        ctx.erodeOffset.assign(materials.size() + 1, 0.0);
+        for (MaterialId id = 1; id <= materials.size(); ++id) {
+            ctx.erodeOffset[id] = (1.0 - op.strength * (1.0 - materials.at(id).toughness)) * depth;
+        }
+        ctx.maxErodeOffset = *std::max_element(ctx.erodeOffset.begin(), ctx.erodeOffset.end());
+    }
+
+    // Voxels the brush can change lie in [a, b]; edges starting one voxel lower reach into it.
+    CoordBBox region;
+    const WorldBounds wb = brush.bounds();
+    if (op.mode == CsgMode::Intersect || !wb.bounded()) {
+        if (op.mode == CsgMode::Add) throw std::invalid_argument("cannot add an unbounded brush (half-space)");
+        region = solidBounds(tree);
+        if (region.empty()) return {};
+        region.expand(1);
+    }
+    if (op.mode != CsgMode::Intersect && wb.bounded()) {
+        const double vs = ctx.voxelSize;
+        constexpr double kLimit = 1e9;
+        for (int i = 0; i < 3; ++i) {
+            if (std::fabs(wb.min[i] / vs) > kLimit || std::fabs(wb.max[i] / vs) > kLimit)
+                throw std::invalid_argument("the brush lies too far from the origin for this voxel size");
+        }
+        const CoordBBox brushBox(Coord(int(std::floor(wb.min.x() / vs)) - 1, int(std::floor(wb.min.y() / vs)) - 1,
+                                       int(std::floor(wb.min.z() / vs)) - 1),
+                                 Coord(int(std::ceil(wb.max.x() / vs)), int(std::ceil(wb.max.y() / vs)),
+                                       int(std::ceil(wb.max.z() / vs))));
+        if (region.empty()) region = brushBox;
+        else region.intersect(brushBox);
+    }
+    if (region.empty()) return {};
+    const double nodes = double(region.dim().x()) * region.dim().y() * region.dim().z() / double(kLowerDim * kLowerDim * kLowerDim);
+    if (nodes > 2e6) throw std::invalid_argument("the brush covers too many voxels for this voxel size");
+
+    RegionWalker walker(ctx, tree, region);
+    walker.walk();
+
+    std::vector<BlockResult> results(walker.tasks.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, walker.tasks.size(), 4), [&](const auto& range) {
+        ConstAccessor acc(tree);
+        for (std::size_t i = range.begin(); i != range.end(); ++i) results[i] = computeBlock(ctx, walker.tasks[i], acc);
+    });
+
+    EditStats stats;
+    std::set<Coord> lowers;
+    openvdb::tree::ValueAccessor<HermiteTree> acc(tree);
+    auto lowerOf = [](const Coord& c) {
+        return Coord(c.x() & ~(kLowerDim - 1), c.y() & ~(kLowerDim - 1), c.z() & ~(kLowerDim - 1));
+    };
+    for (const TileEdit& e : walker.edits) {
+        if (e.level == 2) {
+            if (const HermiteLower* node = acc.template probeConstNode<HermiteLower>(e.origin)) {
+                for (auto it = node->cbeginChildOn(); it; ++it) {
+                    const Coord c = it->origin();
+                    stats.dirtyBlocks.push_back({c.x(), c.y(), c.z()});
+                }
+            }
+        } else {
+            stats.dirtyBlocks.push_back({e.origin.x(), e.origin.y(), e.origin.z()});
+        }
+        acc.addTile(e.level, e.origin, e.value, false);
+        lowers.insert(lowerOf(e.origin));
+        ++stats.tilesWritten;
+    }
+    std::vector<std::pair<HermiteLeaf*, std::size_t>> writes;
+    for (std::size_t i = 0; i < walker.tasks.size(); ++i) {
+        const BlockTask& task = walker.tasks[i];
+        BlockResult& r = results[i];
+        stats.crossingsComputed += r.crossings;
+        ++stats.blocksComputed;
+        lowers.insert(lowerOf(task.origin));
+        if (r.uniform) {
+            ++stats.tilesWritten;
+            if (!task.oldLeaf && task.tileValue == r.value) continue;
+            acc.addTile(1, task.origin, r.value, false);
+        } else {
+            ++stats.leavesWritten;
+            writes.emplace_back(acc.touchLeaf(task.origin), i);
+        }
+        stats.dirtyBlocks.push_back({task.origin.x(), task.origin.y(), task.origin.z()});
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, writes.size(), 8), [&](const auto& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i)
+            writes[i].first->assign(std::move(results[writes[i].second].data));
+    });
+    pruneTouched(acc, tree, lowers);
+    return stats;
+}
+
+} // namespace vdbclay

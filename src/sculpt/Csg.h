@@ -1,0 +1,48 @@
+// CSG operators on a Hermite volume. Each touches only the tree nodes inside the brush's bounds (grown
+// by one voxel on the low side, whose positive edges reach into the brush), computes the new content of
+// every leaf-sized block there as one TBB task, then swaps the results in and prunes locally.
+//
+// Erosion rule: a voxel of material m is removed where  d(x) < -(1 - s * (1 - toughness(m))) * r,
+// with d the brush distance, s the strength in [0,1] and r the brush's inner radius (or the op's
+// explicit depth). A soft material (toughness 0) at full strength loses the whole brush volume; a
+// material of toughness t loses only the part deeper than t*r inside the brush, i.e. the brush bites
+// (1 - t) * s * r deep; toughness 1 never erodes.
+#pragma once
+
+#include "sculpt/Brush.h"
+#include "vdb_hermite/Volume.h"
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vdbclay {
+
+enum class CsgMode { Add, Remove, Intersect, Paint, Erode };
+
+const char* csgModeName(CsgMode mode);
+CsgMode parseCsgMode(const std::string& name); // throws std::invalid_argument
+
+struct CsgOp {
+    CsgMode mode = CsgMode::Add;
+    MaterialId material = 1;              // add, paint
+    double strength = 1.0;                // erode, in [0,1]
+    std::optional<double> erodeDepth;     // erode: world units; default is the brush's inner radius
+};
+
+struct EditStats {
+    uint64_t blocksComputed = 0;   // leaf-sized blocks recomputed voxel by voxel
+    uint64_t leavesWritten = 0;    // blocks that are (still) leaves afterwards
+    uint64_t tilesWritten = 0;     // blocks or nodes that became (or stayed) uniform tiles
+    uint64_t crossingsComputed = 0;
+    /// Origins of the leaf-sized blocks whose content may have changed (for re-meshing).
+    std::vector<std::array<int32_t, 3>> dirtyBlocks;
+};
+
+/// Throws std::invalid_argument for ops that make no sense (an unbounded add, a material id that is
+/// not in the volume's table, strength out of range).
+EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op);
+
+} // namespace vdbclay

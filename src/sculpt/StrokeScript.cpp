@@ -1,0 +1,291 @@
+#include "sculpt/StrokeScript.h"
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace vdbclay {
+
+namespace {
+
+using nlohmann::json;
+
+[[noreturn]] void fail(const std::string& where, const std::string& what) { throw ScriptError(where + ": " + what); }
+
+void checkKeys(const json& obj, const std::string& where, std::initializer_list<const char*> allowed)
+{
+    if (!obj.is_object()) fail(where, "must be a JSON object");
+    for (auto it = obj.begin(); it != obj.end(); ++it) {
+        bool ok = false;
+        for (const char* a : allowed) ok = ok || it.key() == a;
+        if (!ok) fail(where, "unknown key '" + it.key() + "'");
+    }
+}
+
+double number(const json& obj, const char* key, const std::string& where, std::optional<double> fallback = {})
+{
+    if (!obj.contains(key)) {
+        if (fallback) return *fallback;
+        fail(where, std::string("missing '") + key + "'");
+    }
+    const json& v = obj.at(key);
+    if (!v.is_number() || !std::isfinite(v.get<double>())) fail(where + "." + key, "must be a finite number");
+    return v.get<double>();
+}
+
+Vec3d vec3(const json& v, const std::string& where)
+{
+    if (!v.is_array() || v.size() != 3) fail(where, "must be an array of three numbers");
+    Vec3d out;
+    for (int i = 0; i < 3; ++i) {
+        if (!v[i].is_number() || !std::isfinite(v[i].get<double>())) fail(where, "must be an array of three numbers");
+        out[i] = v[i].get<double>();
+    }
+    return out;
+}
+
+Vec3d vec3Or(const json& obj, const char* key, const std::string& where, const Vec3d& fallback)
+{
+    return obj.contains(key) ? vec3(obj.at(key), where + "." + key) : fallback;
+}
+
+std::string text(const json& obj, const char* key, const std::string& where)
+{
+    if (!obj.contains(key)) fail(where, std::string("missing '") + key + "'");
+    if (!obj.at(key).is_string()) fail(where + "." + key, "must be a string");
+    return obj.at(key).get<std::string>();
+}
+
+Primitive parsePrimitive(const json& b, const std::string& where)
+{
+    Primitive p;
+    try {
+        p.shape = parseShape(text(b, "shape", where));
+    } catch (const std::invalid_argument& e) {
+        fail(where + ".shape", e.what());
+    }
+    switch (p.shape) {
+    case Shape::Sphere: p.radius = number(b, "radius", where); break;
+    case Shape::Box:
+        p.size = b.contains("size") ? vec3(b.at("size"), where + ".size") : Vec3d(number(b, "radius", where));
+        p.rounding = number(b, "rounding", where, 0.0);
+        break;
+    case Shape::Cylinder:
+        p.radius = number(b, "radius", where);
+        p.height = number(b, "height", where);
+        break;
+    case Shape::Capsule:
+        p.radius = number(b, "radius", where);
+        p.length = number(b, "length", where);
+        break;
+    case Shape::Torus:
+        p.radius = number(b, "radius", where);
+        p.minorRadius = number(b, "minor_radius", where);
+        break;
+    case Shape::Cone:
+        p.radius = number(b, "radius", where);
+        p.height = number(b, "height", where);
+        break;
+    case Shape::HalfSpace: p.normal = vec3Or(b, "normal", where, Vec3d(0.0, 1.0, 0.0)); break;
+    }
+    try {
+        p.validate();
+    } catch (const std::invalid_argument& e) {
+        fail(where, e.what());
+    }
+    return p;
+}
+
+constexpr std::initializer_list<const char*> kPrimitiveKeys = {"shape", "radius", "size", "rounding", "height",
+                                                               "length", "minor_radius", "normal"};
+
+Placement parsePlacement(const json& obj, const std::string& where, const Vec3d& at)
+{
+    Placement pl;
+    pl.translation = at;
+    pl.rotationDegrees = vec3Or(obj, "rotate", where, Vec3d(0.0));
+    pl.scale = vec3Or(obj, "scale", where, Vec3d(1.0));
+    for (int i = 0; i < 3; ++i) {
+        if (!(pl.scale[i] > 0.0)) fail(where + ".scale", "scale factors must be positive");
+    }
+    return pl;
+}
+
+Brush parseBrush(const json& b, const std::string& where, const Placement& placement)
+{
+    if (!b.is_object()) fail(where, "must be a JSON object");
+    if (b.contains("shape") && b.at("shape") == "blend") {
+        checkKeys(b, where, {"shape", "smoothness", "parts"});
+        const double smoothness = number(b, "smoothness", where, 0.0);
+        if (smoothness < 0.0) fail(where + ".smoothness", "must be zero or positive");
+        if (!b.contains("parts") || !b.at("parts").is_array() || b.at("parts").empty())
+            fail(where, "a blend brush needs a non-empty 'parts' array");
+        std::vector<BrushPart> parts;
+        for (std::size_t i = 0; i < b.at("parts").size(); ++i) {
+            const json& pj = b.at("parts")[i];
+            const std::string pw = where + ".parts[" + std::to_string(i) + "]";
+            std::vector<const char*> keys(kPrimitiveKeys);
+            if (!pj.is_object()) fail(pw, "must be a JSON object");
+            for (auto it = pj.begin(); it != pj.end(); ++it) {
+                const std::string& k = it.key();
+                const bool known = k == "at" || k == "rotate" || k == "scale" || k == "op" ||
+                                   std::find_if(keys.begin(), keys.end(), [&](const char* s) { return k == s; }) != keys.end();
+                if (!known) fail(pw, "unknown key '" + k + "'");
+            }
+            BrushPart part;
+            part.primitive = parsePrimitive(pj, pw);
+            part.placement = parsePlacement(pj, pw, vec3Or(pj, "at", pw, Vec3d(0.0)));
+            const std::string op = pj.contains("op") ? text(pj, "op", pw) : "add";
+            if (op == "add") part.op = PartOp::Add;
+            else if (op == "remove") part.op = PartOp::Remove;
+            else fail(pw + ".op", "must be \"add\" or \"remove\"");
+            if (i == 0 && part.op != PartOp::Add) fail(pw + ".op", "the first part must add");
+            if (part.primitive.shape == Shape::HalfSpace && part.op == PartOp::Add)
+                fail(pw, "a half-space part can only remove");
+            parts.push_back(part);
+        }
+        try {
+            return Brush(std::move(parts), smoothness, placement);
+        } catch (const std::invalid_argument& e) {
+            fail(where, e.what());
+        }
+    }
+    checkKeys(b, where, kPrimitiveKeys);
+    const Primitive prim = parsePrimitive(b, where);
+    try {
+        return Brush(prim, placement);
+    } catch (const std::invalid_argument& e) {
+        fail(where, e.what());
+    }
+}
+
+ScriptOp parseOp(const json& o, const std::string& where)
+{
+    checkKeys(o, where, {"mode", "brush", "at", "path", "rotate", "scale", "material", "strength", "depth"});
+    ScriptOp op;
+    try {
+        op.mode = parseCsgMode(text(o, "mode", where));
+    } catch (const std::invalid_argument& e) {
+        fail(where + ".mode", e.what());
+    }
+    if (o.contains("at") && o.contains("path")) fail(where, "give either 'at' or 'path', not both");
+    if (o.contains("path")) {
+        const json& p = o.at("path");
+        if (!p.is_array() || p.empty()) fail(where + ".path", "must be a non-empty array of points");
+        for (std::size_t i = 0; i < p.size(); ++i) op.path.push_back(vec3(p[i], where + ".path[" + std::to_string(i) + "]"));
+    }
+    const Vec3d at = op.path.empty() ? vec3Or(o, "at", where, Vec3d(0.0)) : op.path.front();
+    if (!o.contains("brush")) fail(where, "missing 'brush'");
+    op.brush = parseBrush(o.at("brush"), where + ".brush", parsePlacement(o, where, at));
+    if (o.contains("material")) op.material = text(o, "material", where);
+    if (op.mode == CsgMode::Paint && op.material.empty()) fail(where, "paint needs a 'material'");
+    op.strength = number(o, "strength", where, 1.0);
+    if (op.strength < 0.0 || op.strength > 1.0) fail(where + ".strength", "must lie in [0,1]");
+    if (o.contains("depth")) {
+        op.depth = number(o, "depth", where);
+        if (!(*op.depth > 0.0)) fail(where + ".depth", "must be positive");
+    }
+    if (op.path.size() > 1 && !std::isfinite(op.brush.boundingRadius()))
+        fail(where + ".path", "an unbounded brush (half-space) cannot follow a path");
+    if (op.mode == CsgMode::Add && !op.brush.bounds().bounded()) fail(where, "cannot add an unbounded brush (half-space)");
+    return op;
+}
+
+} // namespace
+
+StrokeScript parseStrokeScript(const std::string& jsonText)
+{
+    json root;
+    try {
+        root = json::parse(jsonText);
+    } catch (const json::parse_error& e) {
+        throw ScriptError(std::string("script is not valid JSON: ") + e.what());
+    }
+    checkKeys(root, "script", {"materials", "ops"});
+    StrokeScript script;
+    if (root.contains("materials")) {
+        const json& ms = root.at("materials");
+        if (!ms.is_array()) fail("materials", "must be an array");
+        std::set<std::string> seen;
+        for (std::size_t i = 0; i < ms.size(); ++i) {
+            const std::string where = "materials[" + std::to_string(i) + "]";
+            checkKeys(ms[i], where, {"name", "color", "toughness"});
+            Material m;
+            m.name = text(ms[i], "name", where);
+            if (m.name.empty()) fail(where + ".name", "must not be empty");
+            if (!seen.insert(m.name).second) fail(where + ".name", "duplicate material '" + m.name + "'");
+            if (ms[i].contains("color")) {
+                const json& c = ms[i].at("color");
+                if (!c.is_array() || (c.size() != 3 && c.size() != 4)) fail(where + ".color", "must be [r,g,b] or [r,g,b,a]");
+                for (std::size_t k = 0; k < c.size(); ++k) {
+                    if (!c[k].is_number() || c[k].get<double>() < 0.0 || c[k].get<double>() > 1.0)
+                        fail(where + ".color", "components must be numbers in [0,1]");
+                    m.color[k] = c[k].get<float>();
+                }
+            }
+            m.toughness = float(number(ms[i], "toughness", where, 0.5));
+            if (m.toughness < 0.0f || m.toughness > 1.0f) fail(where + ".toughness", "must lie in [0,1]");
+            script.materials.push_back(m);
+        }
+    }
+    if (!root.contains("ops") || !root.at("ops").is_array()) fail("script", "needs an 'ops' array");
+    const json& ops = root.at("ops");
+    for (std::size_t i = 0; i < ops.size(); ++i) script.ops.push_back(parseOp(ops[i], "ops[" + std::to_string(i) + "]"));
+    return script;
+}
+
+StrokeScript loadStrokeScript(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw ScriptError("cannot open script '" + path + "'");
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (in.bad()) throw ScriptError("cannot read script '" + path + "'");
+    return parseStrokeScript(text.str());
+}
+
+std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& script,
+                                            const std::function<void(const ScriptOpReport&)>& onOp)
+{
+    MaterialTable table = volume.materials();
+    for (const Material& m : script.materials) table.define(m);
+    std::vector<CsgOp> csgOps;
+    for (std::size_t i = 0; i < script.ops.size(); ++i) {
+        const ScriptOp& s = script.ops[i];
+        CsgOp op;
+        op.mode = s.mode;
+        op.strength = s.strength;
+        op.erodeDepth = s.depth;
+        if (!s.material.empty()) {
+            const auto id = table.find(s.material);
+            if (!id) {
+                throw ScriptError("ops[" + std::to_string(i) + "].material: '" + s.material +
+                                  "' is neither in the volume nor in the script's materials");
+            }
+            op.material = *id;
+        }
+        csgOps.push_back(op);
+    }
+    volume.materials() = table;
+
+    std::vector<ScriptOpReport> reports;
+    for (std::size_t i = 0; i < script.ops.size(); ++i) {
+        const ScriptOp& s = script.ops[i];
+        const auto start = std::chrono::steady_clock::now();
+        ScriptOpReport report;
+        report.index = i;
+        report.mode = s.mode;
+        if (s.path.size() > 1) report.stats = applyCsg(volume, SweptBrush(s.brush, s.path), csgOps[i]);
+        else report.stats = applyCsg(volume, s.brush, csgOps[i]);
+        report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (onOp) onOp(report);
+        reports.push_back(std::move(report));
+    }
+    return reports;
+}
+
+} // namespace vdbclay
