@@ -215,7 +215,9 @@ void Brush::compile(const std::vector<BrushPart>& parts, const Placement& placem
         const Mat3d localToWorld = brushLinear * partLinear;
         CompiledPart compiled;
         compiled.primitive = part.primitive;
-        compiled.worldToLocal = localToWorld.inverse();
+        const Mat3d inverse = localToWorld.inverse();
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) compiled.worldToLocal[r * 3 + c] = inverse(r, c);
         compiled.offset = brushLinear * part.placement.translation;
         compiled.minScale =
             brushMinScale * std::min({part.placement.scale.x(), part.placement.scale.y(), part.placement.scale.z()});
@@ -239,6 +241,7 @@ void Brush::compile(const std::vector<BrushPart>& parts, const Placement& placem
             }
         }
     }
+    singlePart_ = parts_.size() == 1;
     if (unbounded) {
         localBounds_ = WorldBounds{};
     } else {
@@ -249,9 +252,18 @@ void Brush::compile(const std::vector<BrushPart>& parts, const Placement& placem
 
 double Brush::distanceAtOrigin(const Vec3d& relative) const
 {
+    auto partDistance = [&relative](const CompiledPart& part) {
+        const double* m = part.worldToLocal;
+        const double x = relative.x() - part.offset.x(), y = relative.y() - part.offset.y(),
+                     z = relative.z() - part.offset.z();
+        const Vec3d local(m[0] * x + m[1] * y + m[2] * z, m[3] * x + m[4] * y + m[5] * z,
+                          m[6] * x + m[7] * y + m[8] * z);
+        return part.primitive.distance(local) * part.minScale;
+    };
+    if (singlePart_) return partDistance(parts_.front());
     double d = kInf;
     for (const auto& part : parts_) {
-        const double dp = part.primitive.distance(part.worldToLocal * (relative - part.offset)) * part.minScale;
+        const double dp = partDistance(part);
         if (part.op == PartOp::Add) d = smoothMin(d, dp, smoothness_);
         else d = -smoothMin(-d, dp, smoothness_);
     }

@@ -90,7 +90,7 @@ public:
 private:
     struct CompiledPart {
         Primitive primitive;
-        Mat3d worldToLocal;  // inverse of (rotation * scale), brush and part combined
+        double worldToLocal[9]; // inverse of (rotation * scale), brush and part combined, row-major
         Vec3d offset;        // part origin relative to the brush origin, world frame
         double minScale;     // rescales local distances into world (lower) bounds
         PartOp op;
@@ -99,6 +99,7 @@ private:
     void compile(const std::vector<BrushPart>& parts, const Placement& placement);
 
     std::vector<CompiledPart> parts_;
+    bool singlePart_ = false;
     double smoothness_ = 0.0;
     Vec3d translation_{0.0, 0.0, 0.0};
     WorldBounds localBounds_; // relative to the brush origin

@@ -21,6 +21,7 @@ constexpr int kLowerDim = 128;      // voxels per side of a HermiteLower node
 constexpr int kUpperDim = 4096;
 
 inline int footIndex(int i, int j, int k) { return (i * kFoot + j) * kFoot + k; }
+constexpr int kFootStride[3] = {kFoot * kFoot, kFoot, 1}; // +x, +y, +z neighbours in the footprint
 
 using ConstAccessor = openvdb::tree::ValueAccessor<const HermiteTree, /*IsSafe=*/false>;
 
@@ -86,33 +87,41 @@ struct TileEdit {
 };
 
 /// Finds the zero of f(t) = distance(p0 + t * edge) + offset on [lo, hi], where the signs differ at the
-/// ends. Steps by the distance values first (a distance bound never overshoots the surface, seed 004
-/// Fig 4.11) and falls back to plain bisection every third step, so a poor bound cannot stall it.
+/// ends. Each step first narrows the bracket by the distance values (a distance bound never overshoots
+/// the surface, seed 004 Fig 4.11: a plane crossing the edge is found in one step), then tries the secant
+/// point inside what is left; when that fails to halve the bracket, it bisects instead.
 double findCrossing(const EditContext& ctx, const Vec3d& p0, const Vec3d& edge, double lo, double hi, double flo,
                     double fhi, double offset)
 {
     const double len = ctx.voxelSize;
-    for (int it = 0; it < 48 && hi - lo > 1e-6; ++it) {
-        double t = std::fabs(flo) <= std::fabs(fhi) ? lo + std::fabs(flo) / len : hi - std::fabs(fhi) / len;
-        if (it % 3 == 2 || !(t > lo && t < hi)) t = 0.5 * (lo + hi);
+    bool bisectNext = false;
+    for (int it = 0; it < 64 && hi - lo > 4e-6; ++it) { // offsets are stored to 1/65535 of an edge
+        const double width = hi - lo;
+        const double a = std::min(hi, lo + std::fabs(flo) / len);
+        const double b = std::max(lo, hi - std::fabs(fhi) / len);
+        double t;
+        if (a >= b) t = 0.5 * (a + b);
+        else if (bisectNext) t = 0.5 * (a + b);
+        else t = std::clamp(lo + (hi - lo) * flo / (flo - fhi), a, b);
         const double ft = ctx.field.distance(p0 + edge * t) + offset;
-        if (std::fabs(ft) < 1e-9 * len) return t;
+        if (std::fabs(ft) < 1e-6 * len) return t;
         if ((ft < 0.0) == (flo < 0.0)) lo = t, flo = ft;
         else hi = t, fhi = ft;
+        bisectNext = !bisectNext && hi - lo > 0.5 * width;
     }
     const double denom = flo - fhi;
     return denom != 0.0 ? std::clamp(lo + (hi - lo) * flo / denom, lo, hi) : 0.5 * (lo + hi);
 }
 
+/// Gradient of the brush distance by the four-point tetrahedral stencil (second-order accurate).
 Vec3d brushGradient(const EditContext& ctx, const Vec3d& p, int axis)
 {
     const double h = 1e-3 * ctx.voxelSize;
-    Vec3d g;
-    for (int i = 0; i < 3; ++i) {
-        Vec3d e(0.0);
-        e[i] = h;
-        g[i] = ctx.field.distance(p + e) - ctx.field.distance(p - e);
-    }
+    const double a = ctx.field.distance(p + Vec3d(h, -h, -h));
+    const double b = ctx.field.distance(p + Vec3d(-h, -h, h));
+    const double c = ctx.field.distance(p + Vec3d(-h, h, -h));
+    const double d = ctx.field.distance(p + Vec3d(h, h, h));
+    const Vec3d g(a - b - c + d, -a - b + c + d, -a + b - c + d);
     const double len = g.length();
     if (!(len > 0.0) || !std::isfinite(len)) {
         Vec3d fallback(0.0);
@@ -157,11 +166,12 @@ bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValu
         const Segment& seg = segs[s];
         const double off = ctx.offsetFor(seg.m);
         const bool inA = seg.fa + off < 0.0, inB = seg.fb + off < 0.0;
-        push({seg.ta, ctx.apply(seg.m, inA), s == 0 ? Kind::Start : Kind::Old, false});
-        if (inA != inB) {
+        const MaterialValue before = ctx.apply(seg.m, inA), after = ctx.apply(seg.m, inB);
+        push({seg.ta, before, s == 0 ? Kind::Start : Kind::Old, false});
+        if (before != after) {
             const double tc = findCrossing(ctx, p0, edge, seg.ta, seg.tb, seg.fa + off, seg.fb + off, off);
             ++crossings;
-            push({tc, ctx.apply(seg.m, inB), Kind::Brush, inA});
+            push({tc, after, Kind::Brush, inA});
         }
     }
     if (runCount < 2) return false;
@@ -171,7 +181,10 @@ bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValu
         while (chosen < runCount - 1 && runs[chosen - 1].m.solid() == runs[chosen].m.solid()) ++chosen;
     }
     const Run& b = runs[chosen];
-    if (b.kind == Kind::Old && old) {
+    // A brush crossing that coincides with the old one (the brush surface runs through the old surface
+    // point, as in A union A) keeps the stored sample, so re-applying an edit changes nothing.
+    constexpr double kSameCrossing = 1e-4;
+    if (old && (b.kind == Kind::Old || (b.kind == Kind::Brush && std::fabs(b.t - tOld) < kSameCrossing))) {
         out = *old;
         return true;
     }
@@ -191,24 +204,69 @@ bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValu
     return true;
 }
 
+/// Material lookups for a block's footprint: its own voxels and the first layer of the seven leaves
+/// or tiles above it, fetched once.
+class FootprintMaterials {
+public:
+    FootprintMaterials(const BlockTask& task, ConstAccessor& acc) : task_(task)
+    {
+        for (int n = 1; n < 8; ++n) {
+            const Coord o = task.origin.offsetBy((n & 1) * kLeafDim, ((n >> 1) & 1) * kLeafDim, ((n >> 2) & 1) * kLeafDim);
+            leaves_[n] = acc.probeConstLeaf(o);
+            tiles_[n] = leaves_[n] ? MaterialValue{} : acc.getValue(o);
+        }
+    }
+    MaterialValue at(int i, int j, int k) const
+    {
+        const int n = (i >> 3) | ((j >> 3) << 1) | ((k >> 3) << 2);
+        const Index offset = Index(((i & 7) << 6) | ((j & 7) << 3) | (k & 7));
+        if (n == 0) return task_.oldLeaf ? task_.oldLeaf->getValue(offset) : task_.tileValue;
+        return leaves_[n] ? leaves_[n]->getValue(offset) : tiles_[n];
+    }
+
+private:
+    const BlockTask& task_;
+    const HermiteLeaf* leaves_[8] = {};
+    MaterialValue tiles_[8];
+};
+
 BlockResult computeBlock(const EditContext& ctx, const BlockTask& task, ConstAccessor& acc)
 {
     std::array<MaterialValue, kFootVoxels> oldMat;
     std::array<MaterialValue, kFootVoxels> newMat;
     std::array<double, kFootVoxels> dist;
     const Coord& o = task.origin;
-    for (int i = 0; i < kFoot; ++i) {
-        for (int j = 0; j < kFoot; ++j) {
-            for (int k = 0; k < kFoot; ++k) {
-                const int f = footIndex(i, j, k);
-                const Coord c = o.offsetBy(i, j, k);
-                if (i < kLeafDim && j < kLeafDim && k < kLeafDim) {
-                    oldMat[f] = task.oldLeaf ? task.oldLeaf->getValue(HermiteLeaf::coordToOffset(c)) : task.tileValue;
-                } else {
-                    oldMat[f] = acc.getValue(c);
+    const FootprintMaterials materials(task, acc);
+    // The footprint is 3x3x3 cubes of 3^3 voxels. A cube whose centre lies farther from the surface than
+    // its half-diagonal is on one side of it: its voxels get a sign-correct bound |d(c)| - |p - c| instead
+    // of an exact distance, which is all the inside tests and the crossing search need from them.
+    const double vs = ctx.voxelSize;
+    const double cubeReach = std::sqrt(3.0) * vs * (1.0 + 1e-9);
+    double offsetLength[27]; // distance of each voxel of a cube from the cube's centre
+    for (int n = 0; n < 27; ++n) {
+        const int di = n / 9 - 1, dj = (n / 3) % 3 - 1, dk = n % 3 - 1;
+        offsetLength[n] = vs * std::sqrt(double(di * di + dj * dj + dk * dk));
+    }
+    for (int ci = 0; ci < kFoot; ci += 3) {
+        for (int cj = 0; cj < kFoot; cj += 3) {
+            for (int ck = 0; ck < kFoot; ck += 3) {
+                const double dc = ctx.field.distance(ctx.world(o.offsetBy(ci + 1, cj + 1, ck + 1)));
+                const bool settled = dc > cubeReach || dc + ctx.maxErodeOffset < -cubeReach;
+                for (int i = ci; i < ci + 3; ++i) {
+                    for (int j = cj; j < cj + 3; ++j) {
+                        for (int k = ck; k < ck + 3; ++k) {
+                            const int f = footIndex(i, j, k);
+                            if (settled) {
+                                const double r = offsetLength[(i - ci) * 9 + (j - cj) * 3 + (k - ck)];
+                                dist[f] = dc > 0.0 ? dc - r : dc + r;
+                            } else {
+                                dist[f] = ctx.field.distance(ctx.world(o.offsetBy(i, j, k)));
+                            }
+                            oldMat[f] = materials.at(i, j, k);
+                            newMat[f] = ctx.apply(oldMat[f], ctx.inside(dist[f], oldMat[f]));
+                        }
+                    }
                 }
-                dist[f] = ctx.field.distance(ctx.world(c));
-                newMat[f] = ctx.apply(oldMat[f], ctx.inside(dist[f], oldMat[f]));
             }
         }
     }
@@ -225,7 +283,7 @@ BlockResult computeBlock(const EditContext& ctx, const BlockTask& task, ConstAcc
                 data.material[n] = newMat[v];
                 uniform = uniform && newMat[v] == first;
                 for (int a = 0; a < 3; ++a) {
-                    const int nb = footIndex(i + (a == 0), j + (a == 1), k + (a == 2));
+                    const int nb = v + kFootStride[a];
                     if (newMat[v] == newMat[nb]) continue;
                     const PackedSample* old = task.oldLeaf ? task.oldLeaf->sample(n, a) : nullptr;
                     const bool touched = dist[v] < 0.0 || dist[nb] < 0.0 || newMat[v] != oldMat[v] ||

@@ -16,12 +16,10 @@ void HermiteLeaf::rebuildPrefixAndMask()
     }
     auto& mask = this->getValueMask();
     mask.setOff();
-    for (Index n = 0; n < Index(kLeafVoxels); ++n) {
-        const int bit = edgeBit(n, 0);
-        // The three bits of a voxel may straddle two words.
-        uint32_t bits = 0;
-        for (int a = 0; a < 3; ++a) bits |= uint32_t((edgeBits_[(bit + a) >> 6] >> ((bit + a) & 63)) & 1u);
-        if (bits) mask.setOn(n);
+    for (int w = 0; w < kEdgeWords; ++w) {
+        for (uint64_t bits = edgeBits_[w]; bits; bits &= bits - 1) {
+            mask.setOn(Index((w * 64 + __builtin_ctzll(bits)) / 3));
+        }
     }
 }
 
