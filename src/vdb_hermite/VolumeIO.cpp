@@ -3,11 +3,14 @@
 #include "vdb_hermite/HermiteGrid.h"
 
 #include <openvdb/io/File.h>
+#include <zlib.h>
 
+#include <array>
 #include <cerrno>
 #include <cstring>
 #include <fcntl.h>
 #include <filesystem>
+#include <fstream>
 #include <unistd.h>
 
 namespace vdbclay {
@@ -27,6 +30,77 @@ void syncPath(const std::string& path, bool directory)
     const int err = errno;
     ::close(fd);
     if (rc != 0 && !directory) throw VolumeIOError("cannot flush '" + path + "' to disk: " + std::strerror(err));
+}
+
+// OpenVDB trusts the sizes it reads, so a damaged file can corrupt memory while it is parsed. Every
+// file we write therefore ends with a trailer holding the size and CRC-32 of everything before it,
+// and a file is handed to OpenVDB only once both match. OpenVDB ignores bytes after the last grid.
+constexpr std::array<char, 8> kTrailerMagic{'V', 'D', 'B', 'C', 'L', 'A', 'Y', '\0'};
+constexpr uint32_t kTrailerVersion = 1;
+struct Trailer {
+    std::array<char, 8> magic;
+    uint64_t payloadBytes;
+    uint32_t crc;
+    uint32_t version;
+};
+static_assert(sizeof(Trailer) == 24, "the trailer is part of the file format");
+
+/// CRC-32 of the first `bytes` bytes of a file.
+uint32_t crcOfFile(const std::string& path, uint64_t bytes)
+{
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw VolumeIOError("cannot open '" + path + "': " + std::strerror(errno));
+    std::vector<char> buffer(1 << 20);
+    uLong crc = crc32(0L, Z_NULL, 0);
+    while (bytes > 0) {
+        const std::size_t chunk = std::size_t(std::min<uint64_t>(bytes, buffer.size()));
+        in.read(buffer.data(), std::streamsize(chunk));
+        if (std::size_t(in.gcount()) != chunk) throw VolumeIOError("cannot read '" + path + "'");
+        crc = crc32(crc, reinterpret_cast<const Bytef*>(buffer.data()), uInt(chunk));
+        bytes -= chunk;
+    }
+    return uint32_t(crc);
+}
+
+void appendTrailer(const std::string& path)
+{
+    const uint64_t size = std::filesystem::file_size(path);
+    const Trailer trailer{kTrailerMagic, size, crcOfFile(path, size), kTrailerVersion};
+    std::ofstream out(path, std::ios::binary | std::ios::app);
+    out.write(reinterpret_cast<const char*>(&trailer), sizeof(trailer));
+    out.flush();
+    if (!out) throw VolumeIOError("cannot write '" + path + "' (disk full?)");
+}
+
+enum class Integrity { Verified, NoTrailer };
+
+/// Checks the trailer. Throws for a trailer that does not match its file; reports files without one.
+Integrity checkIntegrity(const std::string& path)
+{
+    const uint64_t size = std::filesystem::file_size(path);
+    if (size < sizeof(Trailer)) return Integrity::NoTrailer;
+    Trailer trailer{};
+    {
+        std::ifstream in(path, std::ios::binary);
+        in.seekg(std::streamoff(size - sizeof(Trailer)));
+        in.read(reinterpret_cast<char*>(&trailer), sizeof(trailer));
+        if (!in) throw VolumeIOError("cannot read '" + path + "'");
+    }
+    if (trailer.magic != kTrailerMagic) return Integrity::NoTrailer;
+    if (trailer.version > kTrailerVersion)
+        throw VolumeIOError("'" + path + "' was written by a newer VDBClay (file trailer version " +
+                            std::to_string(trailer.version) + ")");
+    if (trailer.payloadBytes != size - sizeof(Trailer) || crcOfFile(path, trailer.payloadBytes) != trailer.crc)
+        throw VolumeIOError("'" + path + "' is damaged (its checksum does not match its content)");
+    return Integrity::Verified;
+}
+
+bool hasVdbMagic(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    int32_t magic = 0;
+    in.read(reinterpret_cast<char*>(&magic), sizeof(magic));
+    return in && magic == openvdb::OPENVDB_MAGIC;
 }
 
 } // namespace
@@ -50,6 +124,7 @@ void saveVolume(const Volume& volume, const std::string& path)
         file.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
         file.write(openvdb::GridCPtrVec{out});
         file.close();
+        appendTrailer(temp);
         syncPath(temp, false);
         fs::rename(temp, target);
     } catch (const VolumeIOError&) {
@@ -72,6 +147,8 @@ Volume loadVolume(const std::string& path)
     if (!fs::is_regular_file(path, ec)) throw VolumeIOError("'" + path + "' is not a regular file");
 
     try {
+        if (!hasVdbMagic(path)) throw VolumeIOError("'" + path + "' is not a .vdb file");
+        const Integrity integrity = checkIntegrity(path);
         openvdb::io::File file(path);
         file.setCopyMaxBytes(0);
         file.open(/*delayLoad=*/false);
@@ -91,6 +168,8 @@ Volume loadVolume(const std::string& path)
             throw VolumeIOError("'" + path + "' is a .vdb file without a VDBClay Hermite grid" +
                                 (found.empty() ? std::string() : "; it holds: " + found));
         }
+        if (integrity != Integrity::Verified)
+            throw VolumeIOError("'" + path + "' is truncated or damaged (its VDBClay checksum trailer is missing)");
         const auto version = meta->metaValue<int32_t>(kFormatVersionKey);
         if (version > kFormatVersion || version < 1) {
             throw VolumeIOError("'" + path + "' has VDBClay format version " + std::to_string(version) +
