@@ -270,6 +270,37 @@ double Brush::distanceAtOrigin(const Vec3d& relative) const
     return d;
 }
 
+void Brush::distances(const Vec3d* points, double* out, std::size_t count) const
+{
+    for (std::size_t i = 0; i < count; ++i) out[i] = distanceAtOrigin(points[i] - translation_);
+}
+
+Vec3d SdfField::gradient(const Vec3d& p, double h) const
+{
+    const Vec3d points[4] = {p + Vec3d(h, -h, -h), p + Vec3d(-h, -h, h), p + Vec3d(-h, h, -h), p + Vec3d(h, h, h)};
+    double d[4];
+    distances(points, d, 4);
+    const Vec3d g(d[0] - d[1] - d[2] + d[3], -d[0] - d[1] + d[2] + d[3], -d[0] + d[1] - d[2] + d[3]);
+    const double len = g.length();
+    return len > 0.0 && std::isfinite(len) ? g / len : Vec3d(0.0);
+}
+
+Vec3d Brush::gradient(const Vec3d& world, double step) const
+{
+    if (!singlePart_ || parts_.front().primitive.shape != Shape::Sphere) return SdfField::gradient(world, step);
+    // A sphere's gradient is radial in its local frame; the chain rule carries it back to world space.
+    const CompiledPart& part = parts_.front();
+    const Vec3d r = world - translation_ - part.offset;
+    const double* m = part.worldToLocal;
+    const Vec3d local(m[0] * r.x() + m[1] * r.y() + m[2] * r.z(), m[3] * r.x() + m[4] * r.y() + m[5] * r.z(),
+                      m[6] * r.x() + m[7] * r.y() + m[8] * r.z());
+    const Vec3d g(m[0] * local.x() + m[3] * local.y() + m[6] * local.z(),
+                  m[1] * local.x() + m[4] * local.y() + m[7] * local.z(),
+                  m[2] * local.x() + m[5] * local.y() + m[8] * local.z());
+    const double len = g.length();
+    return len > 0.0 && std::isfinite(len) ? g / len : Vec3d(0.0);
+}
+
 WorldBounds Brush::bounds() const
 {
     if (!localBounds_.bounded()) return localBounds_;

@@ -57,6 +57,14 @@ class SdfField {
 public:
     virtual ~SdfField() = default;
     virtual double distance(const Vec3d& world) const = 0;
+    /// Distances at many points with one virtual call; brushes evaluate them in a tight loop.
+    virtual void distances(const Vec3d* points, double* out, std::size_t count) const
+    {
+        for (std::size_t i = 0; i < count; ++i) out[i] = distance(points[i]);
+    }
+    /// Unit gradient of the distance (pointing out of the brush), or zero where it is undefined.
+    /// The default is a second-order tetrahedral finite difference with the given step.
+    virtual Vec3d gradient(const Vec3d& world, double step) const;
     virtual WorldBounds bounds() const = 0;
     /// Depth of the deepest inside point (world units): erosion scales with it.
     virtual double innerRadius() const = 0;
@@ -78,6 +86,8 @@ public:
     Brush(std::vector<BrushPart> parts, double smoothness, const Placement& placement);
 
     double distance(const Vec3d& world) const override { return distanceAtOrigin(world - translation_); }
+    void distances(const Vec3d* points, double* out, std::size_t count) const override;
+    Vec3d gradient(const Vec3d& world, double step) const override;
     WorldBounds bounds() const override;
     double innerRadius() const override;
 

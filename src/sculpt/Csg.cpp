@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <set>
 #include <stdexcept>
 
@@ -22,6 +23,12 @@ constexpr int kUpperDim = 4096;
 
 inline int footIndex(int i, int j, int k) { return (i * kFoot + j) * kFoot + k; }
 constexpr int kFootStride[3] = {kFoot * kFoot, kFoot, 1}; // +x, +y, +z neighbours in the footprint
+/// Footprint offsets of the voxels of a 3^3 cube from its first voxel, in cube order (x slowest).
+constexpr std::array<int, 27> kCubeOffset = [] {
+    std::array<int, 27> out{};
+    for (int n = 0; n < 27; ++n) out[n] = (n / 9) * kFoot * kFoot + ((n / 3) % 3) * kFoot + n % 3;
+    return out;
+}();
 
 using ConstAccessor = openvdb::tree::ValueAccessor<const HermiteTree, /*IsSafe=*/false>;
 
@@ -113,22 +120,13 @@ double findCrossing(const EditContext& ctx, const Vec3d& p0, const Vec3d& edge, 
     return denom != 0.0 ? std::clamp(lo + (hi - lo) * flo / denom, lo, hi) : 0.5 * (lo + hi);
 }
 
-/// Gradient of the brush distance by the four-point tetrahedral stencil (second-order accurate).
 Vec3d brushGradient(const EditContext& ctx, const Vec3d& p, int axis)
 {
-    const double h = 1e-3 * ctx.voxelSize;
-    const double a = ctx.field.distance(p + Vec3d(h, -h, -h));
-    const double b = ctx.field.distance(p + Vec3d(-h, -h, h));
-    const double c = ctx.field.distance(p + Vec3d(-h, h, -h));
-    const double d = ctx.field.distance(p + Vec3d(h, h, h));
-    const Vec3d g(a - b - c + d, -a - b + c + d, -a + b - c + d);
-    const double len = g.length();
-    if (!(len > 0.0) || !std::isfinite(len)) {
-        Vec3d fallback(0.0);
-        fallback[axis] = 1.0;
-        return fallback;
-    }
-    return g / len;
+    const Vec3d g = ctx.field.gradient(p, 1e-3 * ctx.voxelSize);
+    if (g.lengthSqr() > 0.0) return g;
+    Vec3d fallback(0.0);
+    fallback[axis] = 1.0;
+    return fallback;
 }
 
 /// Re-computes the Hermite sample of one edge as 1D CSG: the old edge is one or two material runs,
@@ -204,39 +202,65 @@ bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValu
     return true;
 }
 
-/// Material lookups for a block's footprint: its own voxels and the first layer of the seven leaves
-/// or tiles above it, fetched once.
-class FootprintMaterials {
-public:
-    FootprintMaterials(const BlockTask& task, ConstAccessor& acc) : task_(task)
-    {
-        for (int n = 1; n < 8; ++n) {
+/// Old materials of a block's footprint: its own voxels and the first layer of the seven leaves or tiles
+/// above it, copied row by row from their buffers.
+void gatherFootprint(const BlockTask& task, ConstAccessor& acc, std::array<MaterialValue, kFootVoxels>& out)
+{
+    const MaterialValue* values[8];
+    MaterialValue tiles[8];
+    for (int n = 0; n < 8; ++n) {
+        const HermiteLeaf* leaf = task.oldLeaf;
+        tiles[n] = task.tileValue;
+        if (n > 0) {
             const Coord o = task.origin.offsetBy((n & 1) * kLeafDim, ((n >> 1) & 1) * kLeafDim, ((n >> 2) & 1) * kLeafDim);
-            leaves_[n] = acc.probeConstLeaf(o);
-            tiles_[n] = leaves_[n] ? MaterialValue{} : acc.getValue(o);
+            leaf = acc.probeConstLeaf(o);
+            if (!leaf) tiles[n] = acc.getValue(o);
+        }
+        values[n] = leaf ? leaf->buffer().data() : nullptr;
+    }
+    for (int i = 0; i < kFoot; ++i) {
+        for (int j = 0; j < kFoot; ++j) {
+            const int n = (i >> 3) | ((j >> 3) << 1);
+            MaterialValue* row = &out[footIndex(i, j, 0)];
+            const Index rowOffset = Index(((i & 7) << 6) | ((j & 7) << 3));
+            if (values[n]) std::copy_n(values[n] + rowOffset, kLeafDim, row);
+            else std::fill_n(row, kLeafDim, tiles[n]);
+            row[kLeafDim] = values[n | 4] ? values[n | 4][rowOffset] : tiles[n | 4];
         }
     }
-    MaterialValue at(int i, int j, int k) const
-    {
-        const int n = (i >> 3) | ((j >> 3) << 1) | ((k >> 3) << 2);
-        const Index offset = Index(((i & 7) << 6) | ((j & 7) << 3) | (k & 7));
-        if (n == 0) return task_.oldLeaf ? task_.oldLeaf->getValue(offset) : task_.tileValue;
-        return leaves_[n] ? leaves_[n]->getValue(offset) : tiles_[n];
-    }
+}
 
-private:
-    const BlockTask& task_;
-    const HermiteLeaf* leaves_[8] = {};
-    MaterialValue tiles_[8];
+/// Whether two runs of eight materials are equal (one compare instead of eight).
+inline bool sameRow(const MaterialValue* a, const MaterialValue* b)
+{
+    return std::memcmp(a, b, kLeafDim * sizeof(MaterialValue)) == 0;
+}
+
+template<CsgMode Mode>
+struct ModeOps {
+    static MaterialValue apply(const EditContext& ctx, MaterialValue old, bool in)
+    {
+        if constexpr (Mode == CsgMode::Add) return in ? ctx.material : old;
+        else if constexpr (Mode == CsgMode::Remove || Mode == CsgMode::Erode) return in ? MaterialValue{} : old;
+        else if constexpr (Mode == CsgMode::Intersect) return in ? old : MaterialValue{};
+        else return in && old.solid() ? ctx.material : old;
+    }
+    static bool inside(const EditContext& ctx, double d, MaterialValue m)
+    {
+        if constexpr (Mode == CsgMode::Erode) return d + ctx.erodeOffset[m.id] < 0.0;
+        else return d < 0.0;
+    }
 };
 
-BlockResult computeBlock(const EditContext& ctx, const BlockTask& task, ConstAccessor& acc)
+template<CsgMode Mode>
+BlockResult computeBlockFor(const EditContext& ctx, const BlockTask& task, ConstAccessor& acc)
 {
+    using Ops = ModeOps<Mode>;
     std::array<MaterialValue, kFootVoxels> oldMat;
     std::array<MaterialValue, kFootVoxels> newMat;
     std::array<double, kFootVoxels> dist;
     const Coord& o = task.origin;
-    const FootprintMaterials materials(task, acc);
+    gatherFootprint(task, acc, oldMat);
     // The footprint is 3x3x3 cubes of 3^3 voxels. A cube whose centre lies farther from the surface than
     // its half-diagonal is on one side of it: its voxels get a sign-correct bound |d(c)| - |p - c| instead
     // of an exact distance, which is all the inside tests and the crossing search need from them.
@@ -247,27 +271,26 @@ BlockResult computeBlock(const EditContext& ctx, const BlockTask& task, ConstAcc
         const int di = n / 9 - 1, dj = (n / 3) % 3 - 1, dk = n % 3 - 1;
         offsetLength[n] = vs * std::sqrt(double(di * di + dj * dj + dk * dk));
     }
-    for (int ci = 0; ci < kFoot; ci += 3) {
-        for (int cj = 0; cj < kFoot; cj += 3) {
-            for (int ck = 0; ck < kFoot; ck += 3) {
-                const double dc = ctx.field.distance(ctx.world(o.offsetBy(ci + 1, cj + 1, ck + 1)));
-                const bool settled = dc > cubeReach || dc + ctx.maxErodeOffset < -cubeReach;
-                for (int i = ci; i < ci + 3; ++i) {
-                    for (int j = cj; j < cj + 3; ++j) {
-                        for (int k = ck; k < ck + 3; ++k) {
-                            const int f = footIndex(i, j, k);
-                            if (settled) {
-                                const double r = offsetLength[(i - ci) * 9 + (j - cj) * 3 + (k - ck)];
-                                dist[f] = dc > 0.0 ? dc - r : dc + r;
-                            } else {
-                                dist[f] = ctx.field.distance(ctx.world(o.offsetBy(i, j, k)));
-                            }
-                            oldMat[f] = materials.at(i, j, k);
-                            newMat[f] = ctx.apply(oldMat[f], ctx.inside(dist[f], oldMat[f]));
-                        }
-                    }
-                }
-            }
+    Vec3d points[27];
+    double values[27];
+    for (int n = 0; n < 27; ++n) points[n] = ctx.world(o.offsetBy(n / 9 * 3 + 1, (n / 3) % 3 * 3 + 1, n % 3 * 3 + 1));
+    double cubeCentre[27];
+    ctx.field.distances(points, cubeCentre, 27);
+    for (int c = 0; c < 27; ++c) {
+        const int ci = c / 9 * 3, cj = (c / 3) % 3 * 3, ck = c % 3 * 3;
+        const double dc = cubeCentre[c];
+        const bool settled = dc > cubeReach || dc + ctx.maxErodeOffset < -cubeReach;
+        if (settled) {
+            for (int n = 0; n < 27; ++n) values[n] = dc > 0.0 ? dc - offsetLength[n] : dc + offsetLength[n];
+        } else {
+            for (int n = 0; n < 27; ++n) points[n] = ctx.world(o.offsetBy(ci + n / 9, cj + (n / 3) % 3, ck + n % 3));
+            ctx.field.distances(points, values, 27);
+        }
+        const int cubeBase = footIndex(ci, cj, ck);
+        for (int n = 0; n < 27; ++n) {
+            const int f = cubeBase + kCubeOffset[n];
+            dist[f] = values[n];
+            newMat[f] = Ops::apply(ctx, oldMat[f], Ops::inside(ctx, values[n], oldMat[f]));
         }
     }
 
@@ -277,11 +300,17 @@ BlockResult computeBlock(const EditContext& ctx, const BlockTask& task, ConstAcc
     const MaterialValue first = newMat[0];
     for (int i = 0; i < kLeafDim; ++i) {
         for (int j = 0; j < kLeafDim; ++j) {
+            const int rowStart = footIndex(i, j, 0);
+            const MaterialValue* row = &newMat[rowStart];
+            std::copy_n(row, kLeafDim, &data.material[Index((i << 6) | (j << 3))]);
+            const bool crossX = !sameRow(row, row + kFootStride[0]);
+            const bool crossY = !sameRow(row, row + kFootStride[1]);
+            const bool crossZ = !sameRow(row, row + 1);
+            uniform = uniform && !crossZ && row[0] == first;
+            if (!crossX && !crossY && !crossZ) continue;
             for (int k = 0; k < kLeafDim; ++k) {
                 const Index n = Index((i << 6) | (j << 3) | k);
-                const int v = footIndex(i, j, k);
-                data.material[n] = newMat[v];
-                uniform = uniform && newMat[v] == first;
+                const int v = rowStart + k;
                 for (int a = 0; a < 3; ++a) {
                     const int nb = v + kFootStride[a];
                     if (newMat[v] == newMat[nb]) continue;
@@ -305,6 +334,18 @@ BlockResult computeBlock(const EditContext& ctx, const BlockTask& task, ConstAcc
     result.uniform = uniform && data.samples.empty();
     result.value = first;
     return result;
+}
+
+BlockResult computeBlock(const EditContext& ctx, const BlockTask& task, ConstAccessor& acc)
+{
+    switch (ctx.mode) {
+    case CsgMode::Add: return computeBlockFor<CsgMode::Add>(ctx, task, acc);
+    case CsgMode::Remove: return computeBlockFor<CsgMode::Remove>(ctx, task, acc);
+    case CsgMode::Intersect: return computeBlockFor<CsgMode::Intersect>(ctx, task, acc);
+    case CsgMode::Paint: return computeBlockFor<CsgMode::Paint>(ctx, task, acc);
+    case CsgMode::Erode: return computeBlockFor<CsgMode::Erode>(ctx, task, acc);
+    }
+    return {};
 }
 
 /// Walks the touched region from 128^3 nodes down to leaf-sized blocks, settling whole regions as
