@@ -1,0 +1,106 @@
+// Shared pieces of the `vdbclay` command: option structs of every subcommand, the functions that run
+// them, errors mapped to exit codes, and small output helpers. Light header: no OpenVDB trees here.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace CLI {
+class App;
+}
+
+namespace vdbclay::cli {
+
+/// Bad command-line input detected after parsing (unknown shape, negative size, ...): exit code 2.
+class UsageError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+constexpr int kExitOk = 0;
+constexpr int kExitFailure = 1; // the command ran and failed (unreadable file, bad script, ...)
+constexpr int kExitUsage = 2;   // the command line itself is wrong
+
+/// Writes "vdbclay: error: <message>" as one line to stderr.
+void printError(const std::string& message);
+
+/// Prints one compact JSON object and a newline on stdout.
+void printJson(const nlohmann::json& object);
+
+/// Prints "key: value" lines with the values aligned in one column, each indented by `indent`.
+void printFields(const std::vector<std::pair<std::string, std::string>>& fields, std::size_t indent = 2);
+
+/// Short human-readable forms.
+std::string formatSeconds(double seconds); // "812 ms", "3.42 s"
+std::string formatBytes(double bytes);     // "12.3 MiB"
+std::string formatNumber(double value);    // shortest form that round-trips reasonably ("0.5", "24")
+
+/// Lower-cased extension of a path including the dot (".obj"), or "" when it has none.
+std::string lowerExtension(const std::string& path);
+/// Throws UsageError unless `path` ends in .obj or .ply (any case).
+void requireMeshExtension(const std::string& path, const char* optionName);
+
+/// Adds "--threads N" (worker threads for TBB; 0 or absent: all cores) to a subcommand.
+void addThreadsOption(CLI::App& command, int& threads);
+
+// --- subcommands -------------------------------------------------------------------------------
+
+struct NewOptions {
+    std::string output;
+    std::string shape;
+    double size = 0.0;
+    double voxelSize = 1.0;
+    std::string material;
+    bool json = false;
+};
+CLI::App* addNewCommand(CLI::App& parent, NewOptions& options);
+int runNew(const NewOptions& options);
+
+struct SculptOptions {
+    std::string input;
+    std::string script;
+    std::string output;
+    bool json = false;
+};
+CLI::App* addSculptCommand(CLI::App& parent, SculptOptions& options);
+int runSculpt(const SculptOptions& options);
+
+struct MeshCommandOptions {
+    std::string input;
+    std::string output;
+    std::string mesher = "mc";
+    bool json = false;
+};
+CLI::App* addMeshCommand(CLI::App& parent, MeshCommandOptions& options);
+int runMesh(const MeshCommandOptions& options);
+
+struct InfoOptions {
+    std::string input;
+    bool json = false;
+};
+CLI::App* addInfoCommand(CLI::App& parent, InfoOptions& options);
+int runInfo(const InfoOptions& options);
+/// The volume file format version this build writes (kFormatVersion; kept in its own TU).
+int formatVersion();
+
+struct DemoOptions {
+    std::string outDir = "demo-out";
+    bool json = false;
+};
+CLI::App* addDemoCommand(CLI::App& parent, DemoOptions& options);
+int runDemo(const DemoOptions& options);
+
+struct BenchCommandOptions {
+    std::string which;
+    bool json = false;
+    bool quick = false;
+};
+CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& options);
+int runBenchCommand(const BenchCommandOptions& options);
+
+} // namespace vdbclay::cli

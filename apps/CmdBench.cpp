@@ -1,0 +1,34 @@
+// vdbclay bench: the benchmarks of bench/ (ours next to the OpenVDB baseline, same data, same run).
+#include "Cli.h"
+
+#include "Bench.h"
+
+#include <CLI/CLI.hpp>
+
+namespace vdbclay::cli {
+
+CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& o)
+{
+    CLI::App* cmd = parent.add_subcommand("bench", "Benchmark against OpenVDB's level-set baseline");
+    std::string names;
+    for (const auto& n : bench::benchNames()) names += (names.empty() ? "" : ", ") + n;
+    cmd->add_option("name", o.which, "Which benchmark: " + names)->required()->type_name("NAME");
+    cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of a table");
+    cmd->add_flag("--quick", o.quick, "Small sizes (seconds, for CI); the default runs the full sizes");
+    cmd->footer("csg     sphere creation, then median time of remove-sphere stamps on its surface\n"
+                "        vs createLevelSetSphere + csgDifference on a FloatGrid level set\n"
+                "memory  bytes per surface voxel of a sphere and a box vs a narrow-band level set\n"
+                "io      save/load time and file size vs a Blosc-compressed FloatGrid level set\n"
+                "Build in Release for meaningful figures; docs/BENCHMARKS.md has measured tables.");
+    return cmd;
+}
+
+int runBenchCommand(const BenchCommandOptions& o)
+{
+    bool known = false;
+    for (const auto& n : bench::benchNames()) known = known || n == o.which;
+    if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory or io)");
+    return bench::runBench(o.which, o.json, o.quick);
+}
+
+} // namespace vdbclay::cli

@@ -1,0 +1,89 @@
+#include "Cli.h"
+
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+namespace vdbclay::cli {
+
+void printError(const std::string& message)
+{
+    // One line: fold any embedded newlines (OpenVDB and JSON messages sometimes carry them).
+    std::string line = message;
+    std::replace(line.begin(), line.end(), '\n', ' ');
+    std::cerr << "vdbclay: error: " << line << std::endl;
+}
+
+void printJson(const nlohmann::json& object)
+{
+    // Invalid UTF-8 in a user-supplied name must not throw here: replace it.
+    std::cout << object.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << std::endl;
+}
+
+void printFields(const std::vector<std::pair<std::string, std::string>>& fields, std::size_t indent)
+{
+    std::size_t width = 0;
+    for (const auto& f : fields) width = std::max(width, f.first.size());
+    for (const auto& f : fields) {
+        std::cout << std::string(indent, ' ') << f.first << ':' << std::string(width - f.first.size() + 1, ' ')
+                  << f.second << '\n';
+    }
+    std::cout.flush();
+}
+
+std::string formatSeconds(double seconds)
+{
+    char buf[64];
+    if (seconds < 1e-3) std::snprintf(buf, sizeof buf, "%.3f ms", seconds * 1e3);
+    else if (seconds < 1.0) std::snprintf(buf, sizeof buf, "%.1f ms", seconds * 1e3);
+    else std::snprintf(buf, sizeof buf, "%.2f s", seconds);
+    return buf;
+}
+
+std::string formatBytes(double bytes)
+{
+    char buf[64];
+    if (bytes < 1024.0) std::snprintf(buf, sizeof buf, "%.0f B", bytes);
+    else if (bytes < 1024.0 * 1024.0) std::snprintf(buf, sizeof buf, "%.1f KiB", bytes / 1024.0);
+    else if (bytes < 1024.0 * 1024.0 * 1024.0) std::snprintf(buf, sizeof buf, "%.1f MiB", bytes / (1024.0 * 1024.0));
+    else std::snprintf(buf, sizeof buf, "%.2f GiB", bytes / (1024.0 * 1024.0 * 1024.0));
+    return buf;
+}
+
+std::string formatNumber(double value)
+{
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.6g", value);
+    return buf;
+}
+
+std::string lowerExtension(const std::string& path)
+{
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext;
+}
+
+void requireMeshExtension(const std::string& path, const char* optionName)
+{
+    const std::string ext = lowerExtension(path);
+    if (ext != ".obj" && ext != ".ply") {
+        throw UsageError(std::string(optionName) + ": '" + path +
+                         "' has an unknown mesh format; the file name must end in .obj or .ply");
+    }
+}
+
+void addThreadsOption(CLI::App& command, int& threads)
+{
+    command.add_option("--threads", threads, "Worker threads (default: all cores)")
+        ->check(CLI::Range(1, 4096).description(""))
+        ->type_name("N");
+}
+
+} // namespace vdbclay::cli

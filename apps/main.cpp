@@ -1,0 +1,102 @@
+// vdbclay: the command-line front end. Parses the command line with CLI11, runs one subcommand, and
+// turns every failure into one "vdbclay: error: ..." line on stderr and a non-zero exit code:
+// 2 for a wrong command line, 1 for a command that ran and failed.
+#include "Cli.h"
+
+#include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
+
+#include <exception>
+#include <iostream>
+#include <memory>
+#include <new>
+
+#ifndef VDBCLAY_VERSION
+#define VDBCLAY_VERSION "unknown"
+#endif
+
+namespace {
+
+using namespace vdbclay::cli;
+
+int run(int argc, char** argv)
+{
+    CLI::App app{"VDBClay: sparse volume sculpting on OpenVDB (Hermite data, materials, CSG brushes).", "vdbclay"};
+    app.set_version_flag("--version", std::string("vdbclay ") + VDBCLAY_VERSION);
+    app.require_subcommand(1);
+
+    int threads = 0;
+    NewOptions newOptions;
+    SculptOptions sculptOptions;
+    MeshCommandOptions meshOptions;
+    InfoOptions infoOptions;
+    DemoOptions demoOptions;
+    BenchCommandOptions benchOptions;
+
+    CLI::App* newCmd = addNewCommand(app, newOptions);
+    CLI::App* sculptCmd = addSculptCommand(app, sculptOptions);
+    CLI::App* meshCmd = addMeshCommand(app, meshOptions);
+    CLI::App* infoCmd = addInfoCommand(app, infoOptions);
+    CLI::App* demoCmd = addDemoCommand(app, demoOptions);
+    CLI::App* benchCmd = addBenchCommand(app, benchOptions);
+    for (CLI::App* cmd : {newCmd, sculptCmd, meshCmd, demoCmd, benchCmd}) addThreadsOption(*cmd, threads);
+    // Set after the subcommands exist: CLI11 copies the parent's footer into subcommands created later.
+    app.footer("Run 'vdbclay COMMAND --help' for the options of one command.\n"
+               "Exit codes: 0 success, 1 the command failed, 2 wrong command line.");
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-') {
+            printError(std::string("unknown command '") + argv[1] +
+                       "' (expected new, sculpt, mesh, info, demo or bench; see 'vdbclay --help')");
+            return kExitUsage;
+        }
+        std::string hint = "vdbclay --help";
+        for (CLI::App* sub : app.get_subcommands()) hint = "vdbclay " + sub->get_name() + " --help";
+        printError(std::string(e.what()) + " (see '" + hint + "')");
+        return kExitUsage;
+    }
+
+    std::unique_ptr<tbb::global_control> threadLimit;
+    if (threads > 0) {
+        threadLimit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                            static_cast<std::size_t>(threads));
+    }
+
+    if (*newCmd) return runNew(newOptions);
+    if (*sculptCmd) return runSculpt(sculptOptions);
+    if (*meshCmd) return runMesh(meshOptions);
+    if (*infoCmd) return runInfo(infoOptions);
+    if (*demoCmd) return runDemo(demoOptions);
+    if (*benchCmd) return runBenchCommand(benchOptions);
+    printError("no command given (see 'vdbclay --help')");
+    return kExitUsage;
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    try {
+        return run(argc, argv);
+    } catch (const UsageError& e) {
+        printError(e.what());
+        return kExitUsage;
+    } catch (const std::bad_alloc&) {
+        printError("out of memory");
+        return kExitFailure;
+    } catch (const std::exception& e) {
+        printError(e.what());
+        return kExitFailure;
+    } catch (...) {
+        printError("unexpected internal failure");
+        return kExitFailure;
+    }
+}

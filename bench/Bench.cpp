@@ -1,0 +1,22 @@
+#include "Bench.h"
+
+#include "BenchSuites.h"
+
+#include <openvdb/openvdb.h>
+
+#include <stdexcept>
+
+namespace vdbclay::bench {
+
+std::vector<std::string> benchNames() { return {"csg", "memory", "io"}; }
+
+int runBench(const std::string& which, bool json, bool quick)
+{
+    openvdb::initialize(); // the FloatGrid baselines need the standard grid types registered
+    if (which == "csg") return benchCsg(json, quick);
+    if (which == "memory") return benchMemory(json, quick);
+    if (which == "io") return benchIo(json, quick);
+    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory or io)");
+}
+
+} // namespace vdbclay::bench

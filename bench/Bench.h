@@ -1,0 +1,17 @@
+// Benchmarks behind `vdbclay bench`: each runs our implementation and the OpenVDB baseline on the same
+// data in the same process and prints both side by side (a Markdown table, or one JSON object).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace vdbclay::bench {
+
+/// "csg", "memory", "io".
+std::vector<std::string> benchNames();
+
+/// Runs one benchmark; `quick` picks the small sizes used in CI. Prints to stdout and returns the exit
+/// code (0). Throws std::invalid_argument for an unknown name and std::runtime_error on failures.
+int runBench(const std::string& which, bool json, bool quick);
+
+} // namespace vdbclay::bench

@@ -1,0 +1,10 @@
+// The individual benchmarks (one translation unit each); see Bench.h.
+#pragma once
+
+namespace vdbclay::bench {
+
+int benchCsg(bool json, bool quick);
+int benchMemory(bool json, bool quick);
+int benchIo(bool json, bool quick);
+
+} // namespace vdbclay::bench

@@ -1,0 +1,76 @@
+#include "BenchUtil.h"
+
+#include <openvdb/version.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cstdio>
+
+namespace vdbclay::bench {
+
+double median(std::vector<double> values)
+{
+    if (values.empty()) return 0.0;
+    std::sort(values.begin(), values.end());
+    const std::size_t n = values.size();
+    return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+double maximum(const std::vector<double>& values)
+{
+    return values.empty() ? 0.0 : *std::max_element(values.begin(), values.end());
+}
+
+int threadCount()
+{
+    return int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+}
+
+std::string openvdbVersion() { return OPENVDB_LIBRARY_VERSION_STRING; }
+
+std::string fixed(double value, int decimals)
+{
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*f", decimals, value);
+    return buf;
+}
+
+std::string megabytes(double bytes) { return fixed(bytes / 1e6, 2) + " MB"; }
+
+void Table::print(std::ostream& os) const
+{
+    std::vector<std::size_t> width(header.size(), 3);
+    for (std::size_t c = 0; c < header.size(); ++c) width[c] = std::max(width[c], header[c].size());
+    for (const auto& row : rows) {
+        for (std::size_t c = 0; c < row.size() && c < width.size(); ++c) width[c] = std::max(width[c], row[c].size());
+    }
+    auto line = [&](const std::vector<std::string>& cells, bool leftFirst) {
+        os << '|';
+        for (std::size_t c = 0; c < width.size(); ++c) {
+            const std::string cell = c < cells.size() ? cells[c] : "";
+            const std::string pad(width[c] - cell.size(), ' ');
+            // First column left-aligned (labels), the others right-aligned (figures).
+            os << ' ' << (c == 0 && leftFirst ? cell + pad : pad + cell) << " |";
+        }
+        os << '\n';
+    };
+    line(header, true);
+    os << '|';
+    for (std::size_t c = 0; c < width.size(); ++c) os << (c == 0 ? ' ' + std::string(width[c], '-') + " |" : ' ' + std::string(width[c] - 1, '-') + ": |");
+    os << '\n';
+    for (const auto& row : rows) line(row, true);
+}
+
+void printPreamble(std::ostream& os, const std::string& name, bool quick)
+{
+    const int threads = threadCount();
+    os << "vdbclay bench " << name << " (" << (quick ? "quick" : "full") << " sizes, " << threads
+       << (threads == 1 ? " thread" : " threads") << ", OpenVDB " << openvdbVersion() << ")\n\n";
+}
+
+nlohmann::json jsonPreamble(const std::string& name, bool quick)
+{
+    return {{"bench", name}, {"quick", quick}, {"threads", threadCount()}, {"openvdb_version", openvdbVersion()}};
+}
+
+} // namespace vdbclay::bench

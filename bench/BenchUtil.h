@@ -1,0 +1,54 @@
+// Helpers shared by the benchmarks: timing, medians, thread count, Markdown tables.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace vdbclay::bench {
+
+using Clock = std::chrono::steady_clock;
+
+inline double millisecondsSince(Clock::time_point start)
+{
+    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+/// Times one call of `f` in milliseconds.
+template<typename F>
+double timeMs(F&& f)
+{
+    const auto start = Clock::now();
+    f();
+    return millisecondsSince(start);
+}
+
+double median(std::vector<double> values);
+double maximum(const std::vector<double>& values);
+
+/// Worker threads TBB uses now (default concurrency, or the --threads limit).
+int threadCount();
+
+/// "10.0.1"
+std::string openvdbVersion();
+
+std::string fixed(double value, int decimals);
+std::string megabytes(double bytes); // "12.34 MB" (10^6 bytes)
+
+/// A table printed in Markdown, so a run can be pasted into docs/BENCHMARKS.md.
+struct Table {
+    std::vector<std::string> header;
+    std::vector<std::vector<std::string>> rows;
+    void print(std::ostream& os) const;
+};
+
+/// First line of every human-readable report: benchmark, sizes, threads, OpenVDB version.
+void printPreamble(std::ostream& os, const std::string& name, bool quick);
+/// Fields every JSON report starts with.
+nlohmann::json jsonPreamble(const std::string& name, bool quick);
+
+} // namespace vdbclay::bench

@@ -1,0 +1,89 @@
+#!/usr/bin/env bash
+# VDBClay front door: installs the Debian 12 packages the build needs (only those missing), configures
+# and builds build/ in Release with Ninja, then runs the demo or the test suite.
+#
+#   bash scripts/bootstrap.sh demo    # writes demo-out/ (volume, meshes, the script it ran)
+#   bash scripts/bootstrap.sh test    # runs the Catch2 suite through ctest
+#
+# Safe to run again: packages, configure and build are each skipped when already done.
+set -euo pipefail
+
+usage() {
+    cat <<'USAGE'
+Usage: bash scripts/bootstrap.sh demo|test
+       bash scripts/bootstrap.sh --help
+
+  demo   install missing packages, build, then run `build/bin/vdbclay demo --out demo-out`
+  test   install missing packages, build, then run the tests (`ctest --test-dir build`)
+
+Every step is skipped when it is already done, so a second run only rebuilds what changed.
+Environment: BUILD_JOBS (default 2) sets the parallel build and test jobs.
+USAGE
+}
+
+step() { printf '==> %s\n' "$*"; }
+die() { printf 'bootstrap: error: %s\n' "$*" >&2; exit 1; }
+
+if [[ $# -ne 1 ]]; then
+    usage >&2
+    exit 2
+fi
+case "$1" in
+    demo | test) action="$1" ;;
+    -h | --help) usage; exit 0 ;;
+    *) printf 'bootstrap: unknown argument: %s\n\n' "$1" >&2; usage >&2; exit 2 ;;
+esac
+
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$repo"
+jobs="${BUILD_JOBS:-2}"
+
+# --- packages (Debian 12 bookworm; see docs/ARCHITECTURE.md and /work/shared/docs/PLATFORM.md) -----
+packages=(
+    cmake ninja-build g++ ccache
+    libopenvdb-dev libtbb-dev libblosc-dev libboost-iostreams-dev libimath-dev zlib1g-dev
+    libeigen3-dev catch2 nlohmann-json3-dev libcli11-dev
+)
+
+installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q 'install ok installed'; }
+
+command -v dpkg-query >/dev/null 2>&1 || die "dpkg-query not found: this script expects Debian 12 (bookworm)"
+missing=()
+for p in "${packages[@]}"; do
+    installed "$p" || missing+=("$p")
+done
+if [[ ${#missing[@]} -eq 0 ]]; then
+    step "packages: all ${#packages[@]} installed"
+else
+    if [[ "$(id -u)" -ne 0 ]]; then
+        die "missing packages: ${missing[*]}
+  run as root, or install them first:  apt-get install --no-install-recommends ${missing[*]}"
+    fi
+    step "packages: installing ${missing[*]}"
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update
+    apt-get install -y --no-install-recommends "${missing[@]}"
+fi
+
+# --- configure and build ----------------------------------------------------------------------------
+if [[ -f build/build.ninja ]]; then
+    step "configure: build/ already configured"
+else
+    step "configure: build/ (Release, Ninja)"
+    cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release
+fi
+step "build: ninja -C build -j${jobs}"
+ninja -C build -j"${jobs}"
+
+# --- run --------------------------------------------------------------------------------------------
+case "$action" in
+    demo)
+        step "demo: build/bin/vdbclay demo --out demo-out"
+        build/bin/vdbclay demo --out demo-out
+        step "demo: results in ${repo}/demo-out"
+        ;;
+    test)
+        step "test: ctest --test-dir build --output-on-failure -j${jobs}"
+        ctest --test-dir build --output-on-failure -j"${jobs}"
+        ;;
+esac

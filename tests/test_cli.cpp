@@ -1,0 +1,255 @@
+// The `vdbclay` command, run as a separate process in a temporary directory. Its results are checked
+// against the library run in-process on the same input. Registered only when the build has the CLI
+// (tests/CMakeLists.txt passes its path as VDBCLAY_CLI).
+#include "mesher/MeshMetrics.h"
+#include "mesher/Mesher.h"
+#include "sculpt/StrokeScript.h"
+#include "support/ExampleScript.h"
+#include "support/TestUtil.h"
+#include "vdb_hermite/VolumeIO.h"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <random>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+
+using namespace vdbclay;
+using namespace vdbclay::test;
+using nlohmann::json;
+
+namespace {
+
+#ifdef VDBCLAY_CLI
+constexpr const char* kCli = VDBCLAY_CLI;
+#else
+constexpr const char* kCli = "";
+#endif
+
+struct CommandResult {
+    int exitCode = -1;   // exit status; 128 + signal when the command was killed by a signal
+    std::string out;
+    std::string err;
+};
+
+[[maybe_unused]] std::string quote(const std::string& s)
+{
+    std::string q = "'";
+    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+/// Runs `vdbclay ARGS` with `dir` as the working directory, capturing stdout and stderr.
+[[maybe_unused]] CommandResult runCli(const TempDir& dir, const std::string& args)
+{
+    const std::string outPath = dir.file(".stdout"), errPath = dir.file(".stderr");
+    const std::string command = "cd " + quote(dir.path().string()) + " && " + quote(kCli) + " " + args + " >" +
+                                quote(outPath) + " 2>" + quote(errPath);
+    const int status = std::system(command.c_str());
+    CommandResult r;
+    if (status != -1 && WIFEXITED(status)) r.exitCode = WEXITSTATUS(status);
+    else if (status != -1 && WIFSIGNALED(status)) r.exitCode = 128 + WTERMSIG(status);
+    const auto out = readBytes(outPath), err = readBytes(errPath);
+    r.out.assign(out.begin(), out.end());
+    r.err.assign(err.begin(), err.end());
+    std::filesystem::remove(outPath);
+    std::filesystem::remove(errPath);
+    return r;
+}
+
+/// The command failed cleanly: a small non-zero exit code (no signal) and one error line on stderr.
+[[maybe_unused]] void checkCleanFailure(const CommandResult& r)
+{
+    INFO("exit " << r.exitCode << ", stderr: " << r.err);
+    CHECK(r.exitCode > 0);
+    CHECK(r.exitCode < 128);
+    CHECK(r.err.find("vdbclay: error: ") != std::string::npos);
+}
+
+[[maybe_unused]] json parseJsonOutput(const CommandResult& r)
+{
+    INFO("stdout: " << r.out);
+    INFO("stderr: " << r.err);
+    REQUIRE(r.exitCode == 0);
+    json j;
+    REQUIRE_NOTHROW(j = json::parse(r.out));
+    REQUIRE(j.is_object());
+    return j;
+}
+
+} // namespace
+
+#ifdef VDBCLAY_CLI
+
+TEST_CASE("cli: new, then info --json describes the volume", "[cli]")
+{
+    TempDir dir;
+    const CommandResult made = runCli(dir, "new vol.vdb --shape sphere --size 6 --voxel-size 0.5 --material stone");
+    INFO("stderr: " << made.err);
+    REQUIRE(made.exitCode == 0);
+    REQUIRE(std::filesystem::exists(dir.path() / "vol.vdb"));
+
+    const json info = parseJsonOutput(runCli(dir, "info vol.vdb --json"));
+    for (const char* key : {"voxel_size", "active_voxels", "leaf_count", "bbox_min", "bbox_max", "materials",
+                            "memory_bytes", "format_version"}) {
+        INFO("key " << key);
+        CHECK(info.contains(key));
+    }
+    const Volume v = loadVolume(dir.file("vol.vdb"));
+    const VolumeStats s = v.stats();
+    CHECK(info["voxel_size"].get<double>() == 0.5);
+    CHECK(info["active_voxels"].get<uint64_t>() == s.activeVoxels);
+    CHECK(info["leaf_count"].get<uint64_t>() == s.leafCount);
+    CHECK(info["memory_bytes"].get<uint64_t>() == s.memoryBytes);
+    CHECK(info["bbox_min"].get<std::array<int32_t, 3>>() == s.bboxMin);
+    CHECK(info["bbox_max"].get<std::array<int32_t, 3>>() == s.bboxMax);
+    CHECK(info["format_version"].get<int>() == 1);
+    CHECK(info["materials"] == json::array({"default", "stone"}));
+    // A sphere of radius 6 world units is 12 voxels: the box spans about 24 voxels per axis.
+    for (int a = 0; a < 3; ++a) {
+        CHECK(s.bboxMin[a] >= -13);
+        CHECK(s.bboxMin[a] <= -11);
+        CHECK(s.bboxMax[a] >= 11);
+        CHECK(s.bboxMax[a] <= 13);
+    }
+    CHECK(v.materialAt({0, 0, 0}) == 2);
+
+    // Without --json the same facts come as text.
+    const CommandResult text = runCli(dir, "info vol.vdb");
+    CHECK(text.exitCode == 0);
+    CHECK(text.out.find("active_voxels") != std::string::npos);
+}
+
+TEST_CASE("cli: sculpt runs a script exactly like the library", "[cli]")
+{
+    TempDir dir;
+    REQUIRE(runCli(dir, "new base.vdb --shape box --size 4").exitCode == 0);
+    writeText(dir.file("script.json"), kExampleScript);
+    const json result = parseJsonOutput(runCli(dir, "sculpt base.vdb script.json -o out.vdb --json"));
+    CHECK(result["ops"].get<int>() == 5);
+
+    Volume expected = loadVolume(dir.file("base.vdb"));
+    runStrokeScript(expected, parseStrokeScript(kExampleScript));
+    const Volume got = loadVolume(dir.file("out.vdb"));
+    CHECK(identical(expected, got));
+    CHECK(result["active_voxels"].get<uint64_t>() == got.stats().activeVoxels);
+
+    // In place, with progress lines on stderr.
+    const CommandResult inPlace = runCli(dir, "sculpt out.vdb script.json -o out.vdb");
+    INFO("stderr: " << inPlace.err);
+    CHECK(inPlace.exitCode == 0);
+    CHECK(inPlace.err.find("op 5/5") != std::string::npos);
+    runStrokeScript(expected, parseStrokeScript(kExampleScript));
+    CHECK(identical(expected, loadVolume(dir.file("out.vdb"))));
+}
+
+TEST_CASE("cli: mesh --json reports a watertight mesh and writes it", "[cli]")
+{
+    TempDir dir;
+    REQUIRE(runCli(dir, "new vol.vdb --shape torus --size 10").exitCode == 0);
+    const json obj = parseJsonOutput(runCli(dir, "mesh vol.vdb -o vol.obj --json"));
+    CHECK(obj["watertight"] == true);
+    CHECK(obj["mesher"] == "mc");
+    const Mesh mesh = meshVolume(loadVolume(dir.file("vol.vdb")));
+    CHECK(obj["triangles"].get<std::size_t>() == mesh.triangleCount());
+    CHECK(obj["vertices"].get<std::size_t>() == mesh.vertexCount());
+
+    // The OBJ holds that many vertices and faces.
+    const auto objBytes = readBytes(dir.file("vol.obj"));
+    std::istringstream lines(std::string(objBytes.begin(), objBytes.end()));
+    std::size_t v = 0, f = 0;
+    for (std::string line; std::getline(lines, line);) {
+        if (line.rfind("v ", 0) == 0) ++v;
+        if (line.rfind("f ", 0) == 0) ++f;
+    }
+    CHECK(v == mesh.vertexCount());
+    CHECK(f == mesh.triangleCount());
+
+    const json ply = parseJsonOutput(runCli(dir, "mesh vol.vdb -o vol.ply --json"));
+    CHECK(ply["watertight"] == true);
+    const auto plyBytes = readBytes(dir.file("vol.ply"));
+    CHECK(std::string(plyBytes.begin(), plyBytes.begin() + 3) == "ply");
+}
+
+TEST_CASE("cli: bench memory --quick --json prints one JSON object", "[cli]")
+{
+    TempDir dir;
+    const json j = parseJsonOutput(runCli(dir, "bench memory --quick --json"));
+    CHECK_FALSE(j.empty());
+}
+
+TEST_CASE("cli: demo writes a volume, meshes and the script it ran", "[cli]")
+{
+    TempDir dir;
+    const json j = parseJsonOutput(runCli(dir, "demo --out demo-out --json"));
+    CHECK(j["watertight"] == true);
+    for (const char* name : {"scene.vdb", "scene.obj", "scene.ply", "script.json"}) {
+        INFO(name);
+        CHECK(std::filesystem::file_size(dir.path() / "demo-out" / name) > 0);
+    }
+    // Replaying the written script on a fresh volume of the demo's voxel size gives the written volume.
+    const Volume scene = loadVolume((dir.path() / "demo-out" / "scene.vdb").string());
+    Volume replay(scene.voxelSize());
+    runStrokeScript(replay, loadStrokeScript((dir.path() / "demo-out" / "script.json").string()));
+    CHECK(identical(scene, replay));
+}
+
+TEST_CASE("cli: bad input fails cleanly with a message", "[cli]")
+{
+    TempDir dir;
+    SECTION("info on random bytes")
+    {
+        std::mt19937_64 rng(0x5eed0201);
+        std::vector<char> junk(4096);
+        for (char& c : junk) c = char(rng() & 0xff);
+        writeBytes(dir.file("junk.vdb"), junk.data(), junk.size());
+        checkCleanFailure(runCli(dir, "info junk.vdb"));
+        checkCleanFailure(runCli(dir, "info junk.vdb --json"));
+        checkCleanFailure(runCli(dir, "mesh junk.vdb -o junk.obj"));
+        CHECK_FALSE(std::filesystem::exists(dir.path() / "junk.obj"));
+    }
+    SECTION("a missing file")
+    {
+        checkCleanFailure(runCli(dir, "info missing.vdb"));
+        writeText(dir.file("script.json"), kExampleScript);
+        checkCleanFailure(runCli(dir, "sculpt missing.vdb script.json -o out.vdb"));
+        CHECK_FALSE(std::filesystem::exists(dir.path() / "out.vdb"));
+    }
+    SECTION("bad scripts leave the volume alone")
+    {
+        REQUIRE(runCli(dir, "new vol.vdb --shape sphere --size 5").exitCode == 0);
+        const auto before = readBytes(dir.file("vol.vdb"));
+        writeText(dir.file("broken.json"), "{ \"ops\": [ ");
+        checkCleanFailure(runCli(dir, "sculpt vol.vdb broken.json -o vol.vdb"));
+        json j = json::parse(kExampleScript);
+        j["ops"][1]["mode"] = "smash";
+        writeText(dir.file("mode.json"), j.dump());
+        const CommandResult mode = runCli(dir, "sculpt vol.vdb mode.json -o vol.vdb");
+        checkCleanFailure(mode);
+        CHECK(mode.err.find("ops[1]") != std::string::npos);
+        j = json::parse(kExampleScript);
+        j["ops"][2]["material"] = "unobtainium";
+        writeText(dir.file("material.json"), j.dump());
+        const CommandResult material = runCli(dir, "sculpt vol.vdb material.json -o vol.vdb");
+        checkCleanFailure(material);
+        CHECK(material.err.find("unobtainium") != std::string::npos);
+        checkCleanFailure(runCli(dir, "sculpt vol.vdb missing.json -o vol.vdb"));
+        CHECK(readBytes(dir.file("vol.vdb")) == before);
+    }
+    SECTION("a wrong command line")
+    {
+        const CommandResult unknown = runCli(dir, "frobnicate");
+        checkCleanFailure(unknown);
+        CHECK(unknown.exitCode == 2);
+        const CommandResult negative = runCli(dir, "new v.vdb --shape sphere --size -3");
+        checkCleanFailure(negative);
+        CHECK(negative.exitCode == 2);
+        checkCleanFailure(runCli(dir, "new v.vdb --shape pyramid --size 3"));
+        checkCleanFailure(runCli(dir, "bench nothing --quick"));
+        CHECK_FALSE(std::filesystem::exists(dir.path() / "v.vdb"));
+    }
+}
+
+#endif // VDBCLAY_CLI

@@ -1,0 +1,236 @@
+// Stroke scripts: parsing the issue's example, rejecting malformed scripts with a message that names
+// the place, and running scripts (unknown materials leave the volume untouched).
+#include "sculpt/StrokeScript.h"
+#include "support/ExampleScript.h"
+#include "support/Sculpt.h"
+#include "support/TestUtil.h"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <string>
+
+using namespace vdbclay;
+using namespace vdbclay::test;
+using nlohmann::json;
+
+namespace {
+
+/// The message of the ScriptError that parsing `text` throws ("" when it parses, which fails the caller).
+std::string parseError(const std::string& text)
+{
+    try {
+        (void)parseStrokeScript(text);
+    } catch (const ScriptError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+/// The example with one change applied to its JSON.
+template<typename Edit>
+std::string editedExample(Edit edit)
+{
+    json j = json::parse(kExampleScript);
+    edit(j);
+    return j.dump();
+}
+
+void checkRejected(const std::string& text, std::initializer_list<const char*> mustContain)
+{
+    const std::string message = parseError(text);
+    INFO("script: " << text.substr(0, 300));
+    INFO("message: " << message);
+    REQUIRE_FALSE(message.empty());
+    for (const char* part : mustContain) CHECK(message.find(part) != std::string::npos);
+}
+
+} // namespace
+
+TEST_CASE("the issue's example script parses", "[script]")
+{
+    const StrokeScript s = parseStrokeScript(kExampleScript);
+    REQUIRE(s.materials.size() == 1);
+    CHECK(s.materials[0].name == "stone");
+    CHECK(s.materials[0].toughness == Approx(0.9f));
+    CHECK(s.materials[0].color == std::array<float, 4>{0.6f, 0.6f, 0.6f, 1.0f});
+    REQUIRE(s.ops.size() == 5);
+
+    CHECK(s.ops[0].mode == CsgMode::Add);
+    CHECK(s.ops[0].material == "stone");
+    CHECK(s.ops[0].path.empty());
+    CHECK(s.ops[0].brush.distance(Vec3d(0.0)) == Approx(-20.0));
+    CHECK(s.ops[0].brush.distance(Vec3d(25.0, 0.0, 0.0)) == Approx(5.0));
+
+    // Box with half-extents 8,8,30 (rounding 1) at (10,0,0), turned 30 degrees about z.
+    CHECK(s.ops[1].mode == CsgMode::Remove);
+    CHECK(s.ops[1].material.empty());
+    CHECK(s.ops[1].brush.distance(Vec3d(10.0, 0.0, 0.0)) == Approx(-8.0));
+    CHECK(s.ops[1].brush.distance(Vec3d(10.0, 0.0, 29.5)) < 0.0);
+    CHECK(s.ops[1].brush.distance(Vec3d(10.0, 0.0, 31.0)) > 0.0);
+    // The +x face normal turned by +30 degrees about z points to (cos 30, sin 30, 0).
+    const Vec3d faceDir(std::cos(kPi / 6.0), std::sin(kPi / 6.0), 0.0);
+    CHECK(s.ops[1].brush.distance(Vec3d(10.0, 0.0, 0.0) + faceDir * 9.0) == Approx(1.0).margin(1e-9));
+
+    CHECK(s.ops[2].mode == CsgMode::Paint);
+    CHECK(s.ops[2].material == "default");
+    REQUIRE(s.ops[2].path.size() == 2);
+    CHECK(s.ops[2].path[1] == Vec3d(15.0, 0.0, 15.0));
+    CHECK(s.ops[2].brush.distance(Vec3d(0.0, 0.0, 20.0)) == Approx(-6.0)); // placed at the first point
+
+    CHECK(s.ops[3].mode == CsgMode::Erode);
+    CHECK(s.ops[3].strength == 1.0);
+    CHECK_FALSE(s.ops[3].depth.has_value());
+    CHECK(s.ops[3].brush.innerRadius() == Approx(4.0));
+    CHECK(s.ops[3].brush.distance(Vec3d(0.0, 18.0 + 5.0 + 4.0 - 0.5, 0.0)) < 0.0); // capsule along local Y
+
+    CHECK(s.ops[4].mode == CsgMode::Add);
+    CHECK(s.ops[4].brush.distance(Vec3d(0.0, -25.0, 0.0)) < 0.0);
+    CHECK(s.ops[4].brush.distance(Vec3d(0.0, -25.0 + 9.0, 0.0)) < 0.0); // scaled by 2 along y
+    CHECK(s.ops[4].brush.distance(Vec3d(0.0, -25.0 + 11.0, 0.0)) > 0.0);
+    CHECK(s.ops[4].brush.distance(Vec3d(4.0, -25.0, 0.0)) > 0.0); // the removed box
+}
+
+TEST_CASE("defaults: strength 1, toughness 0.5, position at the origin", "[script]")
+{
+    const StrokeScript s = parseStrokeScript(
+        R"({"materials": [{"name": "wax"}], "ops": [{"mode": "erode", "brush": {"shape": "sphere", "radius": 2}, "depth": 1.5}]})");
+    REQUIRE(s.materials.size() == 1);
+    CHECK(s.materials[0].toughness == Approx(0.5f));
+    REQUIRE(s.ops.size() == 1);
+    CHECK(s.ops[0].strength == 1.0);
+    REQUIRE(s.ops[0].depth.has_value());
+    CHECK(*s.ops[0].depth == 1.5);
+    CHECK(s.ops[0].brush.distance(Vec3d(0.0)) == Approx(-2.0));
+    CHECK(parseStrokeScript(R"({"ops": []})").ops.empty());
+}
+
+TEST_CASE("malformed scripts are rejected with the place named", "[script]")
+{
+    SECTION("bad JSON")
+    {
+        checkRejected(R"({"ops": [ {"mode": "add", )", {"JSON"});
+        checkRejected("", {"JSON"});
+    }
+    SECTION("unknown mode")
+    {
+        checkRejected(editedExample([](json& j) { j["ops"][1]["mode"] = "smash"; }), {"ops[1]", "mode", "smash"});
+    }
+    SECTION("unknown shape")
+    {
+        checkRejected(editedExample([](json& j) { j["ops"][1]["brush"]["shape"] = "pyramid"; }),
+                      {"ops[1].brush", "pyramid"});
+        checkRejected(editedExample([](json& j) { j["ops"][4]["brush"]["parts"][1]["shape"] = "blob"; }),
+                      {"ops[4].brush.parts[1]", "blob"});
+    }
+    SECTION("unknown key")
+    {
+        checkRejected(editedExample([](json& j) { j["ops"][1]["colour"] = "red"; }), {"ops[1]", "colour"});
+        checkRejected(editedExample([](json& j) { j["ops"][0]["brush"]["radiuss"] = 3; }), {"ops[0].brush", "radiuss"});
+        checkRejected(editedExample([](json& j) { j["materials"][0]["hardness"] = 1; }), {"materials[0]", "hardness"});
+        checkRejected(editedExample([](json& j) { j["version"] = 2; }), {"version"});
+    }
+    SECTION("negative or missing sizes")
+    {
+        checkRejected(editedExample([](json& j) { j["ops"][1]["brush"] = {{"shape", "sphere"}, {"radius", -3}}; }),
+                      {"ops[1].brush", "radius"});
+        checkRejected(editedExample([](json& j) { j["ops"][0]["brush"]["radius"] = 0; }), {"ops[0].brush", "radius"});
+        checkRejected(editedExample([](json& j) { j["ops"][3]["brush"].erase("length"); }), {"ops[3].brush", "length"});
+        checkRejected(editedExample([](json& j) { j["ops"][1]["brush"]["rounding"] = 9; }), {"ops[1].brush", "rounding"});
+        checkRejected(editedExample([](json& j) { j["ops"][0]["brush"]["radius"] = "big"; }), {"ops[0].brush.radius"});
+    }
+    SECTION("missing brush")
+    {
+        checkRejected(editedExample([](json& j) { j["ops"][1].erase("brush"); }), {"ops[1]", "brush"});
+    }
+    SECTION("paint without material")
+    {
+        checkRejected(editedExample([](json& j) { j["ops"][2].erase("material"); }), {"ops[2]", "material"});
+    }
+    SECTION("other bad values")
+    {
+        checkRejected(editedExample([](json& j) { j["ops"][3]["strength"] = 1.5; }), {"ops[3].strength"});
+        checkRejected(editedExample([](json& j) { j["ops"][0]["at"] = {1, 2}; }), {"ops[0].at"});
+        checkRejected(editedExample([](json& j) { j["ops"][2]["at"] = {0, 0, 0}; }), {"ops[2]", "path"});
+        checkRejected(editedExample([](json& j) { j["ops"][0]["scale"] = {1, -1, 1}; }), {"ops[0].scale"});
+        checkRejected(editedExample([](json& j) { j["materials"][0]["toughness"] = 2; }), {"materials[0].toughness"});
+        checkRejected(editedExample([](json& j) { j["materials"].push_back(j["materials"][0]); }),
+                      {"materials[1].name", "duplicate"});
+        checkRejected(editedExample([](json& j) { j["ops"][0]["brush"] = {{"shape", "half-space"}}; }), {"ops[0]"});
+        checkRejected(editedExample([](json& j) { j["ops"][4]["brush"]["parts"][0]["op"] = "remove"; }),
+                      {"ops[4].brush.parts[0].op"});
+        checkRejected(editedExample([](json& j) { j.erase("ops"); }), {"ops"});
+        checkRejected("[1, 2, 3]", {"script"});
+    }
+}
+
+TEST_CASE("loadStrokeScript reports unreadable files as ScriptError", "[script]")
+{
+    TempDir dir;
+    CHECK_THROWS_AS(loadStrokeScript(dir.file("missing.json")), ScriptError);
+    writeText(dir.file("example.json"), kExampleScript);
+    CHECK(loadStrokeScript(dir.file("example.json")).ops.size() == 5);
+    writeText(dir.file("bad.json"), "{ \"ops\": [ { \"mode\": ");
+    CHECK_THROWS_AS(loadStrokeScript(dir.file("bad.json")), ScriptError);
+}
+
+TEST_CASE("running the example script sculpts the volume", "[script]")
+{
+    Volume v(1.0);
+    std::vector<std::size_t> seen;
+    const auto reports =
+        runStrokeScript(v, parseStrokeScript(kExampleScript), [&](const ScriptOpReport& r) { seen.push_back(r.index); });
+    REQUIRE(reports.size() == 5);
+    CHECK(seen == std::vector<std::size_t>{0, 1, 2, 3, 4});
+    const auto stone = v.materials().find("stone");
+    REQUIRE(stone.has_value());
+    CHECK(*stone == 2);
+    CHECK(v.materialAt({0, 0, 0}) == *stone);  // inside the sphere
+    CHECK(v.materialAt({10, 0, 0}) == kEmptyMaterial); // the box removed it
+    CHECK(v.materialAt({-2, 0, 18}) == 1);     // painted "default" near the first path point
+    CHECK(v.materialAt({0, 18, 0}) == kEmptyMaterial); // eroded (stone: bites 0.1 * 4 deep at the centre)
+    CHECK(v.materialAt({0, -25, 0}) == 1);     // the blend brush adds the volume's first material
+    CHECK(v.materialAt({0, -33, 0}) == 1);     // ... stretched along y
+}
+
+TEST_CASE("runStrokeScript rejects unknown materials before touching the volume", "[script]")
+{
+    Volume v(1.0);
+    defineMaterial(v, "clay", 0.2f);
+    apply(v, CsgMode::Add, sphere(8.0), at({0.2, 0.1, 0.0}), 2);
+    const Volume before = v.clone();
+
+    SECTION("a material that is neither in the volume nor in the script")
+    {
+        const StrokeScript s = parseStrokeScript(editedExample([](json& j) { j["ops"][1]["material"] = "unobtainium"; }));
+        try {
+            runStrokeScript(v, s);
+            FAIL("runStrokeScript accepted an unknown material");
+        } catch (const ScriptError& e) {
+            const std::string message = e.what();
+            INFO(message);
+            CHECK(message.find("ops[1]") != std::string::npos);
+            CHECK(message.find("unobtainium") != std::string::npos);
+        }
+        // Neither the ops before it nor the script's own materials were applied.
+        CHECK(identical(before, v));
+        CHECK_FALSE(v.materials().find("stone").has_value());
+    }
+    SECTION("a material the volume already has")
+    {
+        const StrokeScript s = parseStrokeScript(
+            R"({"ops": [{"mode": "add", "brush": {"shape": "sphere", "radius": 3}, "at": [12, 0, 0], "material": "clay"}]})");
+        runStrokeScript(v, s);
+        CHECK(v.materialAt({12, 0, 0}) == 2);
+        CHECK(v.materials().size() == 2);
+    }
+    SECTION("a script material updates the one with the same name")
+    {
+        const StrokeScript s = parseStrokeScript(
+            R"({"materials": [{"name": "clay", "toughness": 0.7}], "ops": []})");
+        runStrokeScript(v, s);
+        REQUIRE(v.materials().find("clay").has_value());
+        CHECK(*v.materials().find("clay") == 2);
+        CHECK(v.materials().at(2).toughness == Approx(0.7f));
+    }
+}
