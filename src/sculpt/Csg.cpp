@@ -463,31 +463,29 @@ CoordBBox solidBounds(const HermiteTree& tree)
     return box;
 }
 
-/// Folds HermiteLower/HermiteUpper nodes that became uniform into tiles of their parents.
-void pruneTouched(openvdb::tree::ValueAccessor<HermiteTree>& acc, HermiteTree& tree, const std::set<Coord>& lowers)
+/// Folds HermiteLower/HermiteUpper nodes that became uniform into tiles of their parents. Works on the
+/// tree directly: OpenVDB 10's ValueAccessor::addTile ignores levels above the node it has cached.
+void pruneTouched(HermiteTree& tree, const std::set<Coord>& lowers)
 {
     std::set<Coord> uppers;
     for (const Coord& o : lowers) {
         uppers.insert(Coord(o.x() & ~(kUpperDim - 1), o.y() & ~(kUpperDim - 1), o.z() & ~(kUpperDim - 1)));
-        const HermiteLower* node = acc.template probeConstNode<HermiteLower>(o);
+        const HermiteLower* node = tree.probeConstNode<HermiteLower>(o);
         MaterialValue value;
         bool state = false;
-        if (node && node->isConstant(value, state, MaterialValue{}) && !state) acc.addTile(2, o, value, false);
+        if (node && node->isConstant(value, state, MaterialValue{}) && !state) tree.addTile(2, o, value, false);
     }
     bool erased = false;
     for (const Coord& o : uppers) {
-        const HermiteUpper* node = acc.template probeConstNode<HermiteUpper>(o);
+        const HermiteUpper* node = tree.probeConstNode<HermiteUpper>(o);
         MaterialValue value;
         bool state = false;
         if (node && node->isConstant(value, state, MaterialValue{}) && !state) {
-            acc.addTile(3, o, value, false);
+            tree.addTile(3, o, value, false);
             erased = erased || !value.solid();
         }
     }
-    if (erased) {
-        acc.clear();
-        tree.root().eraseBackgroundTiles();
-    }
+    if (erased) tree.root().eraseBackgroundTiles();
 }
 
 } // namespace
@@ -573,13 +571,13 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
 
     EditStats stats;
     std::set<Coord> lowers;
-    openvdb::tree::ValueAccessor<HermiteTree> acc(tree);
     auto lowerOf = [](const Coord& c) {
         return Coord(c.x() & ~(kLowerDim - 1), c.y() & ~(kLowerDim - 1), c.z() & ~(kLowerDim - 1));
     };
+    // Tiles go through the tree itself (see pruneTouched); leaves through an accessor made afterwards.
     for (const TileEdit& e : walker.edits) {
         if (e.level == 2) {
-            if (const HermiteLower* node = acc.template probeConstNode<HermiteLower>(e.origin)) {
+            if (const HermiteLower* node = tree.probeConstNode<HermiteLower>(e.origin)) {
                 for (auto it = node->cbeginChildOn(); it; ++it) {
                     const Coord c = it->origin();
                     stats.dirtyBlocks.push_back({c.x(), c.y(), c.z()});
@@ -588,7 +586,7 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
         } else {
             stats.dirtyBlocks.push_back({e.origin.x(), e.origin.y(), e.origin.z()});
         }
-        acc.addTile(e.level, e.origin, e.value, false);
+        tree.addTile(e.level, e.origin, e.value, false);
         lowers.insert(lowerOf(e.origin));
         ++stats.tilesWritten;
     }
@@ -602,10 +600,10 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
         if (r.uniform) {
             ++stats.tilesWritten;
             if (!task.oldLeaf && task.tileValue == r.value) continue;
-            acc.addTile(1, task.origin, r.value, false);
+            tree.addTile(1, task.origin, r.value, false);
         } else {
             ++stats.leavesWritten;
-            writes.emplace_back(acc.touchLeaf(task.origin), i);
+            writes.emplace_back(tree.touchLeaf(task.origin), i);
         }
         stats.dirtyBlocks.push_back({task.origin.x(), task.origin.y(), task.origin.z()});
     }
@@ -613,7 +611,7 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             writes[i].first->assign(std::move(results[writes[i].second].data));
     });
-    pruneTouched(acc, tree, lowers);
+    pruneTouched(tree, lowers);
     return stats;
 }
 

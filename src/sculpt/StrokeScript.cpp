@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -189,6 +190,8 @@ ScriptOp parseOp(const json& o, const std::string& where)
         op.depth = number(o, "depth", where);
         if (!(*op.depth > 0.0)) fail(where + ".depth", "must be positive");
     }
+    if (op.mode == CsgMode::Erode && !op.depth && !std::isfinite(op.brush.innerRadius()))
+        fail(where, "eroding with an unbounded brush (half-space) needs a 'depth'");
     if (op.path.size() > 1 && !std::isfinite(op.brush.boundingRadius()))
         fail(where + ".path", "an unbounded brush (half-space) cannot follow a path");
     if (op.mode == CsgMode::Add && !op.brush.bounds().bounded()) fail(where, "cannot add an unbounded brush (half-space)");

@@ -3,6 +3,7 @@
 #include "vdb_hermite/HermiteGrid.h"
 
 #include <openvdb/io/File.h>
+#include <openvdb/io/Stream.h>
 #include <zlib.h>
 
 #include <array>
@@ -44,6 +45,7 @@ struct Trailer {
     uint32_t version;
 };
 static_assert(sizeof(Trailer) == 24, "the trailer is part of the file format");
+constexpr uint64_t kTrailerBytes = sizeof(Trailer);
 
 /// CRC-32 of the first `bytes` bytes of a file.
 uint32_t crcOfFile(const std::string& path, uint64_t bytes)
@@ -62,10 +64,11 @@ uint32_t crcOfFile(const std::string& path, uint64_t bytes)
     return uint32_t(crc);
 }
 
-void appendTrailer(const std::string& path)
+void appendTrailer(const std::string& path, uint64_t payloadBytes)
 {
-    const uint64_t size = std::filesystem::file_size(path);
-    const Trailer trailer{kTrailerMagic, size, crcOfFile(path, size), kTrailerVersion};
+    if (std::filesystem::file_size(path) != payloadBytes)
+        throw VolumeIOError("cannot write '" + path + "' completely (disk full?)");
+    const Trailer trailer{kTrailerMagic, payloadBytes, crcOfFile(path, payloadBytes), kTrailerVersion};
     std::ofstream out(path, std::ios::binary | std::ios::app);
     out.write(reinterpret_cast<const char*>(&trailer), sizeof(trailer));
     out.flush();
@@ -120,11 +123,18 @@ void saveVolume(const Volume& volume, const std::string& path)
 
     const std::string temp = (dir / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()))).string();
     try {
-        openvdb::io::File file(temp);
-        file.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
-        file.write(openvdb::GridCPtrVec{out});
-        file.close();
-        appendTrailer(temp);
+        // Written through a stream we own: OpenVDB's File does not check its writes, so a full disk
+        // would otherwise go unnoticed.
+        std::ofstream os(temp, std::ios::binary | std::ios::trunc);
+        if (!os) throw VolumeIOError("cannot create '" + temp + "': " + std::strerror(errno));
+        openvdb::io::Stream stream(os);
+        stream.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
+        stream.write(openvdb::GridCPtrVec{out});
+        os.flush();
+        const std::streamoff written = os.tellp();
+        if (!os || written <= 0) throw VolumeIOError("cannot write '" + path + "' (disk full?)");
+        os.close();
+        appendTrailer(temp, uint64_t(written));
         syncPath(temp, false);
         fs::rename(temp, target);
     } catch (const VolumeIOError&) {
@@ -148,7 +158,12 @@ Volume loadVolume(const std::string& path)
 
     try {
         if (!hasVdbMagic(path)) throw VolumeIOError("'" + path + "' is not a .vdb file");
-        const Integrity integrity = checkIntegrity(path);
+        // Without a trailer the file is foreign or damaged; it never reaches OpenVDB's parser, which
+        // trusts the sizes it reads (junk can make it allocate gigabytes or corrupt memory).
+        if (checkIntegrity(path) != Integrity::Verified) {
+            throw VolumeIOError("'" + path + "' is not a VDBClay volume: it has no VDBClay checksum trailer "
+                                "(a .vdb from another tool, or a truncated or damaged VDBClay file)");
+        }
         openvdb::io::File file(path);
         file.setCopyMaxBytes(0);
         file.open(/*delayLoad=*/false);
@@ -168,8 +183,6 @@ Volume loadVolume(const std::string& path)
             throw VolumeIOError("'" + path + "' is a .vdb file without a VDBClay Hermite grid" +
                                 (found.empty() ? std::string() : "; it holds: " + found));
         }
-        if (integrity != Integrity::Verified)
-            throw VolumeIOError("'" + path + "' is truncated or damaged (its VDBClay checksum trailer is missing)");
         const auto version = meta->metaValue<int32_t>(kFormatVersionKey);
         if (version > kFormatVersion || version < 1) {
             throw VolumeIOError("'" + path + "' has VDBClay format version " + std::to_string(version) +
@@ -177,18 +190,27 @@ Volume loadVolume(const std::string& path)
         }
         MaterialTable materials = MaterialTable::fromJson(meta->metaValue<std::string>(kMaterialsKey));
 
-        auto grid = openvdb::gridPtrCast<HermiteGrid>(file.readGrid(name));
         file.close();
+
+        // The grids are parsed from a stream we own, so a read past the end (a payload that is shorter
+        // than its structure says) shows up as a failed stream or a wrong end position.
+        std::ifstream is(path, std::ios::binary);
+        openvdb::io::Stream stream(is, /*delayLoad=*/false);
+        const auto payloadEnd = std::streamoff(fs::file_size(path) - kTrailerBytes);
+        if (is.fail() || is.tellg() != payloadEnd)
+            throw VolumeIOError("'" + path + "' is damaged: its grids do not end where its checksum says");
+        HermiteGrid::Ptr grid;
+        for (const auto& g : *stream.getGrids()) {
+            if (g->getName() == name && g->type() == HermiteGrid::gridType()) grid = openvdb::gridPtrCast<HermiteGrid>(g);
+        }
         if (!grid) throw VolumeIOError("'" + path + "': grid '" + name + "' could not be read");
         if (!grid->hasUniformVoxels() || !grid->transform().isLinear())
             throw VolumeIOError("'" + path + "': the Hermite grid needs a linear transform with cubic voxels");
         if (grid->background().id != kEmptyMaterial)
             throw VolumeIOError("'" + path + "': the Hermite grid's background must be empty");
-        for (auto leaf = grid->constTree().cbeginLeaf(); leaf; ++leaf) {
-            for (Index n = 0; n < Index(kLeafVoxels); ++n) {
-                if (leaf->getValue(n).id > materials.size())
-                    throw VolumeIOError("'" + path + "' is corrupt: a voxel uses an undefined material id");
-            }
+        for (auto it = grid->constTree().cbeginValueAll(); it; ++it) {
+            if (it.getValue().id > materials.size())
+                throw VolumeIOError("'" + path + "' is corrupt: a voxel uses an undefined material id");
         }
         grid->removeMeta(kFormatVersionKey);
         grid->removeMeta(kMaterialsKey);
