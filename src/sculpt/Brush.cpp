@@ -272,6 +272,20 @@ double Brush::distanceAtOrigin(const Vec3d& relative) const
 
 void Brush::distances(const Vec3d* points, double* out, std::size_t count) const
 {
+    if (singlePart_ && parts_.front().primitive.shape == Shape::Sphere) {
+        // The common stamp: one loop without per-point dispatch.
+        const CompiledPart& part = parts_.front();
+        const double* m = part.worldToLocal;
+        const Vec3d origin = translation_ + part.offset;
+        const double radius = part.primitive.radius, scale = part.minScale;
+        for (std::size_t i = 0; i < count; ++i) {
+            const double x = points[i].x() - origin.x(), y = points[i].y() - origin.y(), z = points[i].z() - origin.z();
+            const double lx = m[0] * x + m[1] * y + m[2] * z, ly = m[3] * x + m[4] * y + m[5] * z,
+                         lz = m[6] * x + m[7] * y + m[8] * z;
+            out[i] = (std::sqrt(lx * lx + ly * ly + lz * lz) - radius) * scale;
+        }
+        return;
+    }
     for (std::size_t i = 0; i < count; ++i) out[i] = distanceAtOrigin(points[i] - translation_);
 }
 

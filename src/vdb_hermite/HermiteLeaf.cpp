@@ -2,6 +2,7 @@
 
 #include <openvdb/io/io.h>
 
+#include <algorithm>
 #include <mutex>
 #include <stdexcept>
 
@@ -29,8 +30,7 @@ void HermiteLeaf::assign(HermiteLeafData&& data)
     for (uint64_t w : data.edgeBits) expected += std::size_t(__builtin_popcountll(w));
     if (expected != data.samples.size())
         throw std::invalid_argument("HermiteLeaf::assign: sample count does not match the edge mask");
-    auto& buffer = this->buffer();
-    for (Index n = 0; n < Index(kLeafVoxels); ++n) buffer.setValue(n, data.material[n]);
+    std::copy(data.material.begin(), data.material.end(), this->buffer().data());
     edgeBits_ = data.edgeBits;
     samples_ = std::move(data.samples);
     samples_.shrink_to_fit();

@@ -48,17 +48,26 @@ std::array<uint16_t, 2> quantizeNormal(const std::array<double, 3>& nIn)
         u = fu;
         v = fv;
     }
-    const int baseU = static_cast<int>(std::floor((u + 1.0) * 0.5 * kNormalMax));
-    const int baseV = static_cast<int>(std::floor((v + 1.0) * 0.5 * kNormalMax));
-    std::array<uint16_t, 2> best{0, 0};
-    double bestError = 1e300;
+    // The nearest code is almost always good enough; only when it is not are its neighbours searched
+    // for the code with the smallest worst component error (which bounds the error by 1/1782).
+    auto errorOf = [&n](int qu, int qv) {
+        const auto d = decodeOctahedral(codeToCoord(qu), codeToCoord(qv));
+        return std::max({std::fabs(d[0] - n[0]), std::fabs(d[1] - n[1]), std::fabs(d[2] - n[2])});
+    };
+    const double fu = (u + 1.0) * 0.5 * kNormalMax, fv = (v + 1.0) * 0.5 * kNormalMax;
+    const int nearU = std::clamp(int(std::lround(fu)), 0, int(kNormalMax));
+    const int nearV = std::clamp(int(std::lround(fv)), 0, int(kNormalMax));
+    double bestError = errorOf(nearU, nearV);
+    std::array<uint16_t, 2> best{uint16_t(nearU), uint16_t(nearV)};
+    constexpr double kGoodEnough = 0.5e-3;
+    if (bestError <= kGoodEnough) return best;
+    const int baseU = static_cast<int>(std::floor(fu));
+    const int baseV = static_cast<int>(std::floor(fv));
     for (int du = 0; du <= 1; ++du) {
         for (int dv = 0; dv <= 1; ++dv) {
             const int qu = std::clamp(baseU + du, 0, int(kNormalMax));
             const int qv = std::clamp(baseV + dv, 0, int(kNormalMax));
-            const auto d = decodeOctahedral(codeToCoord(qu), codeToCoord(qv));
-            const double err = std::max({std::fabs(d[0] - n[0]), std::fabs(d[1] - n[1]),
-                                         std::fabs(d[2] - n[2])});
+            const double err = errorOf(qu, qv);
             if (err < bestError) {
                 bestError = err;
                 best = {uint16_t(qu), uint16_t(qv)};
