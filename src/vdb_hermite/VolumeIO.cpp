@@ -6,6 +6,7 @@
 #include <openvdb/io/Stream.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstring>
@@ -208,10 +209,16 @@ Volume loadVolume(const std::string& path)
             throw VolumeIOError("'" + path + "': the Hermite grid needs a linear transform with cubic voxels");
         if (grid->background().id != kEmptyMaterial)
             throw VolumeIOError("'" + path + "': the Hermite grid's background must be empty");
-        for (auto it = grid->constTree().cbeginValueAll(); it; ++it) {
-            if (it.getValue().id > materials.size())
-                throw VolumeIOError("'" + path + "' is corrupt: a voxel uses an undefined material id");
+        const auto undefinedMaterial = [&](MaterialValue v) { return v.id > materials.size(); };
+        bool corrupt = false;
+        for (auto leaf = grid->constTree().cbeginLeaf(); leaf && !corrupt; ++leaf) {
+            const MaterialValue* values = leaf->buffer().data();
+            corrupt = std::any_of(values, values + kLeafVoxels, undefinedMaterial);
         }
+        auto tiles = grid->constTree().cbeginValueAll();
+        tiles.setMaxDepth(HermiteTree::ValueAllCIter::LEAF_DEPTH - 1); // tiles only, not voxels
+        for (; tiles && !corrupt; ++tiles) corrupt = undefinedMaterial(*tiles);
+        if (corrupt) throw VolumeIOError("'" + path + "' is corrupt: a voxel uses an undefined material id");
         grid->removeMeta(kFormatVersionKey);
         grid->removeMeta(kMaterialsKey);
         Volume volume(grid->voxelSize()[0]);
