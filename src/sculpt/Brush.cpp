@@ -242,12 +242,22 @@ void Brush::compile(const std::vector<BrushPart>& parts, const Placement& placem
         }
     }
     singlePart_ = parts_.size() == 1;
+    singleSphere_ = singlePart_ && parts_.front().primitive.shape == Shape::Sphere;
     if (unbounded) {
         localBounds_ = WorldBounds{};
     } else {
         localBounds_.min -= Vec3d(0.25 * smoothness_);
         localBounds_.max += Vec3d(0.25 * smoothness_);
     }
+}
+
+double Brush::sphereDistance(const CompiledPart& part, const Vec3d& relative)
+{
+    const double* m = part.worldToLocal;
+    const double x = relative.x() - part.offset.x(), y = relative.y() - part.offset.y(), z = relative.z() - part.offset.z();
+    const double lx = m[0] * x + m[1] * y + m[2] * z, ly = m[3] * x + m[4] * y + m[5] * z,
+                 lz = m[6] * x + m[7] * y + m[8] * z;
+    return (std::sqrt(lx * lx + ly * ly + lz * lz) - part.primitive.radius) * part.minScale;
 }
 
 double Brush::distanceAtOrigin(const Vec3d& relative) const
@@ -260,6 +270,7 @@ double Brush::distanceAtOrigin(const Vec3d& relative) const
                           m[6] * x + m[7] * y + m[8] * z);
         return part.primitive.distance(local) * part.minScale;
     };
+    if (singleSphere_) return sphereDistance(parts_.front(), relative);
     if (singlePart_) return partDistance(parts_.front());
     double d = kInf;
     for (const auto& part : parts_) {
@@ -272,18 +283,8 @@ double Brush::distanceAtOrigin(const Vec3d& relative) const
 
 void Brush::distances(const Vec3d* points, double* out, std::size_t count) const
 {
-    if (singlePart_ && parts_.front().primitive.shape == Shape::Sphere) {
-        // The common stamp: one loop without per-point dispatch.
-        const CompiledPart& part = parts_.front();
-        const double* m = part.worldToLocal;
-        const Vec3d origin = translation_ + part.offset;
-        const double radius = part.primitive.radius, scale = part.minScale;
-        for (std::size_t i = 0; i < count; ++i) {
-            const double x = points[i].x() - origin.x(), y = points[i].y() - origin.y(), z = points[i].z() - origin.z();
-            const double lx = m[0] * x + m[1] * y + m[2] * z, ly = m[3] * x + m[4] * y + m[5] * z,
-                         lz = m[6] * x + m[7] * y + m[8] * z;
-            out[i] = (std::sqrt(lx * lx + ly * ly + lz * lz) - radius) * scale;
-        }
+    if (singleSphere_) {
+        for (std::size_t i = 0; i < count; ++i) out[i] = sphereDistance(parts_.front(), points[i] - translation_);
         return;
     }
     for (std::size_t i = 0; i < count; ++i) out[i] = distanceAtOrigin(points[i] - translation_);
@@ -301,7 +302,7 @@ Vec3d SdfField::gradient(const Vec3d& p, double h) const
 
 Vec3d Brush::gradient(const Vec3d& world, double step) const
 {
-    if (!singlePart_ || parts_.front().primitive.shape != Shape::Sphere) return SdfField::gradient(world, step);
+    if (!singleSphere_) return SdfField::gradient(world, step);
     // A sphere's gradient is radial in its local frame; the chain rule carries it back to world space.
     const CompiledPart& part = parts_.front();
     const Vec3d r = world - translation_ - part.offset;

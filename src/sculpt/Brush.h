@@ -106,10 +106,13 @@ private:
         PartOp op;
     };
     double distanceAtOrigin(const Vec3d& relative) const;
+    /// The most common brush, a lone sphere, evaluated without the per-shape dispatch.
+    static double sphereDistance(const CompiledPart& part, const Vec3d& relative);
     void compile(const std::vector<BrushPart>& parts, const Placement& placement);
 
     std::vector<CompiledPart> parts_;
     bool singlePart_ = false;
+    bool singleSphere_ = false;
     double smoothness_ = 0.0;
     Vec3d translation_{0.0, 0.0, 0.0};
     WorldBounds localBounds_; // relative to the brush origin

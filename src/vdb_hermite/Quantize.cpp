@@ -9,7 +9,7 @@ uint16_t quantizeOffset(double t)
 {
     if (!(t >= 0.0)) t = 0.0; // also maps NaN to 0
     if (t > 1.0) t = 1.0;
-    return static_cast<uint16_t>(std::lround(t * 65535.0));
+    return static_cast<uint16_t>(t * 65535.0 + 0.5); // t is in [0,1]: truncation rounds to nearest
 }
 
 double dequantizeOffset(uint16_t q) { return q / 65535.0; }
