@@ -42,16 +42,31 @@ struct EditContext {
     double maxErodeOffset = 0.0;
 
     double offsetFor(MaterialValue m) const { return erodeOffset.empty() ? 0.0 : erodeOffset[m.id]; }
-    bool inside(double d, MaterialValue m) const { return d + offsetFor(m) < 0.0; }
 
+    /// The new material of a point of material `old`, inside the brush or not. The per-mode versions
+    /// let the block kernel drop the dispatch from its inner loops.
+    template<CsgMode Mode>
+    MaterialValue applyMode(MaterialValue old, bool in) const
+    {
+        if constexpr (Mode == CsgMode::Add) return in ? material : old;
+        else if constexpr (Mode == CsgMode::Remove || Mode == CsgMode::Erode) return in ? MaterialValue{} : old;
+        else if constexpr (Mode == CsgMode::Intersect) return in ? old : MaterialValue{};
+        else return in && old.solid() ? material : old;
+    }
+    template<CsgMode Mode>
+    bool insideMode(double d, MaterialValue m) const
+    {
+        if constexpr (Mode == CsgMode::Erode) return d + erodeOffset[m.id] < 0.0;
+        else return d < 0.0;
+    }
     MaterialValue apply(MaterialValue old, bool in) const
     {
         switch (mode) {
-        case CsgMode::Add: return in ? material : old;
-        case CsgMode::Remove: return in ? MaterialValue{} : old;
-        case CsgMode::Intersect: return in ? old : MaterialValue{};
-        case CsgMode::Paint: return in && old.solid() ? material : old;
-        case CsgMode::Erode: return in ? MaterialValue{} : old;
+        case CsgMode::Add: return applyMode<CsgMode::Add>(old, in);
+        case CsgMode::Remove: return applyMode<CsgMode::Remove>(old, in);
+        case CsgMode::Intersect: return applyMode<CsgMode::Intersect>(old, in);
+        case CsgMode::Paint: return applyMode<CsgMode::Paint>(old, in);
+        case CsgMode::Erode: return applyMode<CsgMode::Erode>(old, in);
         }
         return old;
     }
@@ -237,25 +252,8 @@ inline bool sameRow(const MaterialValue* a, const MaterialValue* b)
 }
 
 template<CsgMode Mode>
-struct ModeOps {
-    static MaterialValue apply(const EditContext& ctx, MaterialValue old, bool in)
-    {
-        if constexpr (Mode == CsgMode::Add) return in ? ctx.material : old;
-        else if constexpr (Mode == CsgMode::Remove || Mode == CsgMode::Erode) return in ? MaterialValue{} : old;
-        else if constexpr (Mode == CsgMode::Intersect) return in ? old : MaterialValue{};
-        else return in && old.solid() ? ctx.material : old;
-    }
-    static bool inside(const EditContext& ctx, double d, MaterialValue m)
-    {
-        if constexpr (Mode == CsgMode::Erode) return d + ctx.erodeOffset[m.id] < 0.0;
-        else return d < 0.0;
-    }
-};
-
-template<CsgMode Mode>
 BlockResult computeBlockFor(const EditContext& ctx, const BlockTask& task, ConstAccessor& acc)
 {
-    using Ops = ModeOps<Mode>;
     std::array<MaterialValue, kFootVoxels> oldMat;
     std::array<MaterialValue, kFootVoxels> newMat;
     std::array<double, kFootVoxels> dist;
@@ -290,7 +288,7 @@ BlockResult computeBlockFor(const EditContext& ctx, const BlockTask& task, Const
         for (int n = 0; n < 27; ++n) {
             const int f = cubeBase + kCubeOffset[n];
             dist[f] = values[n];
-            newMat[f] = Ops::apply(ctx, oldMat[f], Ops::inside(ctx, values[n], oldMat[f]));
+            newMat[f] = ctx.applyMode<Mode>(oldMat[f], ctx.insideMode<Mode>(values[n], oldMat[f]));
         }
     }
 
@@ -353,7 +351,7 @@ BlockResult computeBlock(const EditContext& ctx, const BlockTask& task, ConstAcc
 class RegionWalker {
 public:
     RegionWalker(const EditContext& ctx, HermiteTree& tree, const CoordBBox& region)
-        : ctx_(ctx), tree_(tree), acc_(tree), region_(region) {}
+        : ctx_(ctx), acc_(tree), region_(region) {}
 
     void walk()
     {
@@ -372,18 +370,32 @@ private:
         return Coord(c.x() & ~(dim - 1), c.y() & ~(dim - 1), c.z() & ~(dim - 1));
     }
 
-    bool onlyRemovesSolid() const { return ctx_.mode != CsgMode::Add; }
-
-    /// What an op does to a region it covers entirely, given the region's uniform material; returns
-    /// false when the region must be looked at voxel by voxel.
-    bool coveredValue(MaterialValue old, MaterialValue& out) const
+    /// Empty space stays empty under every op but add.
+    bool untouched(bool hasChildren, MaterialValue tile) const
     {
+        return !hasChildren && !tile.solid() && ctx_.mode != CsgMode::Add;
+    }
+
+    /// Settles a region the brush misses or covers entirely, with a tile edit where its content
+    /// changes. Returns false when the region must be looked at more closely.
+    bool settle(const Coord& origin, Index level, bool hasChildren, MaterialValue tile, RegionClass cls)
+    {
+        if (cls == RegionClass::Mixed) return false;
+        if (cls == RegionClass::Outside) {
+            if (ctx_.mode == CsgMode::Intersect && (hasChildren || tile.solid())) edits.push_back({origin, level, {}});
+            return true;
+        }
+        if (!hasChildren) {
+            const MaterialValue value = ctx_.apply(tile, true);
+            if (value != tile) edits.push_back({origin, level, value});
+            return true;
+        }
         switch (ctx_.mode) {
         case CsgMode::Add:
-        case CsgMode::Remove:
-        case CsgMode::Intersect:
+        case CsgMode::Remove: edits.push_back({origin, level, ctx_.apply(MaterialValue{}, true)}); return true;
+        case CsgMode::Intersect: return true;
         case CsgMode::Paint:
-        case CsgMode::Erode: out = ctx_.apply(old, true); return true;
+        case CsgMode::Erode: return false; // the outcome depends on each voxel's material
         }
         return false;
     }
@@ -392,27 +404,8 @@ private:
     {
         const HermiteLower* node = acc_.template probeConstNode<HermiteLower>(origin);
         const MaterialValue tile = node ? MaterialValue{} : acc_.getValue(origin);
-        if (!node && !tile.solid() && onlyRemovesSolid()) return;
-        const RegionClass cls = classifyRegion(ctx_, origin, kLowerDim);
-        if (cls == RegionClass::Outside) {
-            if (ctx_.mode == CsgMode::Intersect && (node || tile.solid())) edits.push_back({origin, 2, MaterialValue{}});
-            return;
-        }
-        if (cls == RegionClass::Inside) {
-            MaterialValue value;
-            if (!node) {
-                coveredValue(tile, value);
-                if (value != tile) edits.push_back({origin, 2, value});
-                return;
-            }
-            if (ctx_.mode == CsgMode::Intersect) return;
-            if (ctx_.mode == CsgMode::Add || ctx_.mode == CsgMode::Remove) {
-                edits.push_back({origin, 2, ctx_.apply(MaterialValue{}, true)});
-                return;
-            }
-        }
-        const CoordBBox nodeBox(origin, origin.offsetBy(kLowerDim - 1));
-        CoordBBox sub = nodeBox;
+        if (untouched(node, tile) || settle(origin, 2, node, tile, classifyRegion(ctx_, origin, kLowerDim))) return;
+        CoordBBox sub(origin, origin.offsetBy(kLowerDim - 1));
         sub.intersect(region_);
         const Coord lo = alignDown(sub.min(), kLeafDim);
         for (int x = lo.x(); x <= sub.max().x(); x += kLeafDim)
@@ -424,28 +417,11 @@ private:
     {
         const HermiteLeaf* leaf = node ? node->probeConstLeaf(origin) : nullptr;
         const MaterialValue tile = leaf ? MaterialValue{} : (node ? node->getValue(origin) : nodeTile);
-        if (!leaf && !tile.solid() && onlyRemovesSolid()) return;
-        const RegionClass cls = classifyRegion(ctx_, origin, kLeafDim);
-        if (cls == RegionClass::Outside) {
-            if (ctx_.mode == CsgMode::Intersect && (leaf || tile.solid())) edits.push_back({origin, 1, MaterialValue{}});
-            return;
-        }
-        if (cls == RegionClass::Inside && !leaf) {
-            MaterialValue value;
-            coveredValue(tile, value);
-            if (value != tile) edits.push_back({origin, 1, value});
-            return;
-        }
-        if (cls == RegionClass::Inside && (ctx_.mode == CsgMode::Add || ctx_.mode == CsgMode::Remove)) {
-            edits.push_back({origin, 1, ctx_.apply(MaterialValue{}, true)});
-            return;
-        }
-        if (cls == RegionClass::Inside && ctx_.mode == CsgMode::Intersect) return;
+        if (untouched(leaf, tile) || settle(origin, 1, leaf, tile, classifyRegion(ctx_, origin, kLeafDim))) return;
         tasks.push_back({origin, leaf, tile});
     }
 
     const EditContext& ctx_;
-    HermiteTree& tree_;
     openvdb::tree::ValueAccessor<HermiteTree> acc_;
     CoordBBox region_;
 };
