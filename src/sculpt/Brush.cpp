@@ -337,12 +337,31 @@ double Brush::boundingRadius() const
     return std::sqrt(r2);
 }
 
+double Brush::roundSphereRadius() const
+{
+    if (!singleSphere_) return 0.0;
+    const CompiledPart& part = parts_.front();
+    const double* m = part.worldToLocal;
+    // Uniform scale: the rows of worldToLocal are orthogonal with equal lengths.
+    const double r0 = m[0] * m[0] + m[1] * m[1] + m[2] * m[2];
+    const double r1 = m[3] * m[3] + m[4] * m[4] + m[5] * m[5];
+    const double r2 = m[6] * m[6] + m[7] * m[7] + m[8] * m[8];
+    const double d01 = m[0] * m[3] + m[1] * m[4] + m[2] * m[5];
+    const double d02 = m[0] * m[6] + m[1] * m[7] + m[2] * m[8];
+    const double d12 = m[3] * m[6] + m[4] * m[7] + m[5] * m[8];
+    const double tol = 1e-12 * r0;
+    const bool round = part.offset.lengthSqr() == 0.0 && std::fabs(r1 - r0) < tol && std::fabs(r2 - r0) < tol &&
+                       std::fabs(d01) < tol && std::fabs(d02) < tol && std::fabs(d12) < tol;
+    return round ? part.primitive.radius * part.minScale : 0.0;
+}
+
 SweptBrush::SweptBrush(Brush brush, std::vector<Vec3d> path) : brush_(std::move(brush)), path_(std::move(path))
 {
     if (path_.empty()) throw std::invalid_argument("a stroke path needs at least one point");
     reach_ = brush_.boundingRadius();
     if (!std::isfinite(reach_)) throw std::invalid_argument("an unbounded brush (half-space) cannot follow a path");
     step_ = std::max(0.25 * brush_.innerRadius(), 1e-6);
+    capsuleRadius_ = brush_.roundSphereRadius();
 }
 
 double SweptBrush::distance(const Vec3d& x) const
@@ -359,7 +378,12 @@ double SweptBrush::distance(const Vec3d& x) const
         }
         const Vec3d dir = ab / len;
         const double along = std::clamp((x - a).dot(dir), 0.0, len);
-        const double lowerBound = (x - (a + dir * along)).length() - reach_;
+        const double toSegment = (x - (a + dir * along)).length();
+        if (capsuleRadius_ > 0.0) { // a swept round sphere is a capsule
+            best = std::min(best, toSegment - capsuleRadius_);
+            continue;
+        }
+        const double lowerBound = toSegment - reach_;
         if (lowerBound >= best) continue;
         if (lowerBound > 0.0) {
             best = lowerBound; // the brush cannot reach x from this segment: a safe, positive bound

@@ -96,6 +96,9 @@ public:
     const Vec3d& translation() const { return translation_; }
     /// Radius of a sphere about the brush origin that holds the whole (bounded) brush.
     double boundingRadius() const;
+    /// World radius of a lone sphere centred on the brush origin with a uniform scale, or 0 for any
+    /// other brush: sweeping such a sphere has a closed form.
+    double roundSphereRadius() const;
 
 private:
     struct CompiledPart {
@@ -132,6 +135,7 @@ private:
     std::vector<Vec3d> path_;
     double reach_;  // bounding radius of the brush
     double step_;   // sampling step along the path
+    double capsuleRadius_; // > 0: a round sphere swept along segments, exact capsule distances
 };
 
 } // namespace vdbclay
