@@ -85,8 +85,6 @@ struct InfoOptions {
 };
 CLI::App* addInfoCommand(CLI::App& parent, InfoOptions& options);
 int runInfo(const InfoOptions& options);
-/// The volume file format version this build writes (kFormatVersion; kept in its own TU).
-int formatVersion();
 
 struct DemoOptions {
     std::string outDir = "demo-out";

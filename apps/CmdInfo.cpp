@@ -40,7 +40,7 @@ int runInfo(const InfoOptions& o)
                    {"bbox_max", s.bboxMax},
                    {"materials", materials},
                    {"memory_bytes", s.memoryBytes},
-                   {"format_version", formatVersion()}});
+                   {"format_version", volume.formatVersion()}});
         return kExitOk;
     }
     std::string names;
@@ -53,7 +53,7 @@ int runInfo(const InfoOptions& o)
                  {"bbox_max", s.empty ? "(empty)" : coordText(s.bboxMax)},
                  {"materials", std::to_string(materials.size()) + ": " + names},
                  {"memory_bytes", std::to_string(s.memoryBytes) + " (" + formatBytes(double(s.memoryBytes)) + ")"},
-                 {"format_version", std::to_string(formatVersion())}},
+                 {"format_version", std::to_string(volume.formatVersion())}},
                 0);
     return kExitOk;
 }

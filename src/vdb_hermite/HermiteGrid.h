@@ -230,6 +230,7 @@ namespace detail {
 struct VolumeGrid {
     HermiteGrid::Ptr grid;
     MaterialTable materials;
+    int formatVersion = kFormatVersion;
 };
 } // namespace detail
 

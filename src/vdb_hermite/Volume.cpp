@@ -29,8 +29,11 @@ Volume Volume::clone() const
     Volume copy(nullptr);
     copy.impl_->grid = impl_->grid->deepCopy();
     copy.impl_->materials = impl_->materials;
+    copy.impl_->formatVersion = impl_->formatVersion;
     return copy;
 }
+
+int Volume::formatVersion() const { return impl_->formatVersion; }
 
 double Volume::voxelSize() const { return impl_->grid->voxelSize()[0]; }
 MaterialTable& Volume::materials() { return impl_->materials; }

@@ -41,6 +41,8 @@ public:
     MaterialTable& materials();
     const MaterialTable& materials() const;
     VolumeStats stats() const;
+    /// Format version of the file this volume was loaded from; the version saves write for a new one.
+    int formatVersion() const;
     /// Material at an index-space voxel.
     MaterialId materialAt(const std::array<int32_t, 3>& ijk) const;
 

@@ -224,6 +224,7 @@ Volume loadVolume(const std::string& path)
         Volume volume(grid->voxelSize()[0]);
         volume.impl().grid = grid;
         volume.materials() = std::move(materials);
+        volume.impl().formatVersion = version;
         return volume;
     } catch (const VolumeIOError&) {
         throw;
