@@ -154,18 +154,26 @@ bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValu
     Vec3d edge(0.0);
     edge[axis] = ctx.voxelSize;
 
-    struct Segment { double ta, tb, fa, fb; MaterialValue m; };
-    Segment segs[2];
-    int segCount = 0;
-    double tOld = 0.5;
+    // One material along the whole edge: at most one boundary, where the brush crosses it.
     if (m0 == m1) {
-        segs[segCount++] = {0.0, 1.0, d0, d1, m0};
-    } else {
-        if (old) tOld = dequantizeOffset(old->offset);
-        const double dOld = ctx.field.distance(p0 + edge * tOld);
-        segs[segCount++] = {0.0, tOld, d0, dOld, m0};
-        segs[segCount++] = {tOld, 1.0, dOld, d1, m1};
+        const double off = ctx.offsetFor(m0);
+        const bool inA = d0 + off < 0.0, inB = d1 + off < 0.0;
+        const MaterialValue before = ctx.apply(m0, inA), after = ctx.apply(m0, inB);
+        if (before == after) return false;
+        const double t = findCrossing(ctx, p0, edge, 0.0, 1.0, d0 + off, d1 + off, off);
+        ++crossings;
+        Vec3d normal = brushGradient(ctx, p0 + edge * t, axis); // points out of the brush
+        if (!(inA ? before : after).solid()) normal = -normal; // surface normals point into empty space
+        out = packSample(t, {normal.x(), normal.y(), normal.z()});
+        return true;
     }
+
+    // Two materials: two runs meeting at the old crossing, each of which the brush may split.
+    struct Segment { double ta, tb, fa, fb; MaterialValue m; };
+    const double tOld = old ? dequantizeOffset(old->offset) : 0.5;
+    const double dOld = ctx.field.distance(p0 + edge * tOld);
+    const Segment segs[2] = {{0.0, tOld, d0, dOld, m0}, {tOld, 1.0, dOld, d1, m1}};
+    constexpr int segCount = 2;
 
     enum class Kind { Start, Old, Brush };
     struct Run { double t; MaterialValue m; Kind kind; bool insideBefore; };
