@@ -2,7 +2,6 @@
 
 #include "vdb_hermite/HermiteGrid.h"
 
-#include <openvdb/io/File.h>
 #include <openvdb/io/Stream.h>
 #include <zlib.h>
 
@@ -38,12 +37,11 @@ void syncPath(const std::string& path, bool directory)
 // file we write therefore ends with a trailer holding the size and CRC-32 of everything before it,
 // and a file is handed to OpenVDB only once both match. OpenVDB ignores bytes after the last grid.
 constexpr std::array<char, 8> kTrailerMagic{'V', 'D', 'B', 'C', 'L', 'A', 'Y', '\0'};
-constexpr uint32_t kTrailerVersion = 1;
 struct Trailer {
     std::array<char, 8> magic;
     uint64_t payloadBytes;
     uint32_t crc;
-    uint32_t version;
+    uint32_t formatVersion; // the same as the grid's metadata, readable before anything is parsed
 };
 static_assert(sizeof(Trailer) == 24, "the trailer is part of the file format");
 constexpr uint64_t kTrailerBytes = sizeof(Trailer);
@@ -69,7 +67,7 @@ void appendTrailer(const std::string& path, uint64_t payloadBytes)
 {
     if (std::filesystem::file_size(path) != payloadBytes)
         throw VolumeIOError("cannot write '" + path + "' completely (disk full?)");
-    const Trailer trailer{kTrailerMagic, payloadBytes, crcOfFile(path, payloadBytes), kTrailerVersion};
+    const Trailer trailer{kTrailerMagic, payloadBytes, crcOfFile(path, payloadBytes), uint32_t(kFormatVersion)};
     std::ofstream out(path, std::ios::binary | std::ios::app);
     out.write(reinterpret_cast<const char*>(&trailer), sizeof(trailer));
     out.flush();
@@ -91,9 +89,9 @@ Integrity checkIntegrity(const std::string& path)
         if (!in) throw VolumeIOError("cannot read '" + path + "'");
     }
     if (trailer.magic != kTrailerMagic) return Integrity::NoTrailer;
-    if (trailer.version > kTrailerVersion)
-        throw VolumeIOError("'" + path + "' was written by a newer VDBClay (file trailer version " +
-                            std::to_string(trailer.version) + ")");
+    if (trailer.formatVersion > uint32_t(kFormatVersion))
+        throw VolumeIOError("'" + path + "' has VDBClay format version " + std::to_string(trailer.formatVersion) +
+                            "; this build reads versions 1 to " + std::to_string(kFormatVersion));
     if (trailer.payloadBytes != size - sizeof(Trailer) || crcOfFile(path, trailer.payloadBytes) != trailer.crc)
         throw VolumeIOError("'" + path + "' is damaged (its checksum does not match its content)");
     return Integrity::Verified;
@@ -165,46 +163,30 @@ Volume loadVolume(const std::string& path)
             throw VolumeIOError("'" + path + "' is not a VDBClay volume: it has no VDBClay checksum trailer "
                                 "(a .vdb from another tool, or a truncated or damaged VDBClay file)");
         }
-        openvdb::io::File file(path);
-        file.setCopyMaxBytes(0);
-        file.open(/*delayLoad=*/false);
-        std::string name;
-        openvdb::GridBase::Ptr meta;
-        openvdb::GridPtrVecPtr all = file.readAllGridMetadata();
-        for (const auto& g : *all) {
-            if (g->type() != HermiteGrid::gridType()) continue;
-            if (!meta || g->getName() == "hermite") {
-                meta = g;
-                name = g->getName();
-            }
-        }
-        if (!meta) {
-            std::string found;
-            for (const auto& g : *all) found += (found.empty() ? "" : ", ") + g->getName() + " (" + g->type() + ")";
-            throw VolumeIOError("'" + path + "' is a .vdb file without a VDBClay Hermite grid" +
-                                (found.empty() ? std::string() : "; it holds: " + found));
-        }
-        const auto version = meta->metaValue<int32_t>(kFormatVersionKey);
-        if (version > kFormatVersion || version < 1) {
-            throw VolumeIOError("'" + path + "' has VDBClay format version " + std::to_string(version) +
-                                "; this build reads versions 1 to " + std::to_string(kFormatVersion));
-        }
-        MaterialTable materials = MaterialTable::fromJson(meta->metaValue<std::string>(kMaterialsKey));
-
-        file.close();
-
-        // The grids are parsed from a stream we own, so a read past the end (a payload that is shorter
-        // than its structure says) shows up as a failed stream or a wrong end position.
+        // Parsed from a stream we own, so a read past the end (a payload that is shorter than its
+        // structure says) shows up as a failed stream or a wrong end position.
         std::ifstream is(path, std::ios::binary);
         openvdb::io::Stream stream(is, /*delayLoad=*/false);
         const auto payloadEnd = std::streamoff(fs::file_size(path) - kTrailerBytes);
         if (is.fail() || is.tellg() != payloadEnd)
             throw VolumeIOError("'" + path + "' is damaged: its grids do not end where its checksum says");
         HermiteGrid::Ptr grid;
+        std::string found;
         for (const auto& g : *stream.getGrids()) {
-            if (g->getName() == name && g->type() == HermiteGrid::gridType()) grid = openvdb::gridPtrCast<HermiteGrid>(g);
+            found += (found.empty() ? "" : ", ") + g->getName() + " (" + g->type() + ")";
+            if (g->type() != HermiteGrid::gridType() || (grid && grid->getName() == "hermite")) continue;
+            grid = openvdb::gridPtrCast<HermiteGrid>(g);
         }
-        if (!grid) throw VolumeIOError("'" + path + "': grid '" + name + "' could not be read");
+        if (!grid) {
+            throw VolumeIOError("'" + path + "' is a .vdb file without a VDBClay Hermite grid" +
+                                (found.empty() ? std::string() : "; it holds: " + found));
+        }
+        const auto version = grid->metaValue<int32_t>(kFormatVersionKey);
+        if (version > kFormatVersion || version < 1) {
+            throw VolumeIOError("'" + path + "' has VDBClay format version " + std::to_string(version) +
+                                "; this build reads versions 1 to " + std::to_string(kFormatVersion));
+        }
+        MaterialTable materials = MaterialTable::fromJson(grid->metaValue<std::string>(kMaterialsKey));
         if (!grid->hasUniformVoxels() || !grid->transform().isLinear())
             throw VolumeIOError("'" + path + "': the Hermite grid needs a linear transform with cubic voxels");
         if (grid->background().id != kEmptyMaterial)

@@ -42,7 +42,7 @@ void writeHermiteFile(const Volume& volume, const std::string& path, std::option
                       std::optional<std::string> materialsJson, bool trailer = true);
 
 /// Appends the 24-byte trailer that saveVolume writes after OpenVDB's data (VolumeIO.cpp): the magic
-/// "VDBCLAY\0", the payload size (uint64), the CRC-32 of the payload (uint32) and the trailer version 1
+/// "VDBCLAY\0", the payload size (uint64), the CRC-32 of the payload (uint32) and the format version 1
 /// (uint32), little-endian. Lets a test hand-craft files that pass the integrity check.
 void appendIntegrityTrailer(const std::string& path);
 /// The format version this build writes (kFormatVersion).
