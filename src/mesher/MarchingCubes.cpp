@@ -10,6 +10,9 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <cstdlib>
+#include <stdexcept>
 #include <unordered_map>
 
 namespace vdbclay {
@@ -218,7 +221,12 @@ std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions&
     const HermiteTree& tree = volume.impl().grid->constTree();
     std::vector<const HermiteLeaf*> leaves;
     leaves.reserve(tree.leafCount());
-    for (auto it = tree.cbeginLeaf(); it; ++it) leaves.push_back(it.getLeaf());
+    for (auto it = tree.cbeginLeaf(); it; ++it) {
+        const Coord& o = it->origin();
+        if (std::max({std::abs(o.x()), std::abs(o.y()), std::abs(o.z())}) >= kMaxEdgeKeyCoordinate - kLeafDim)
+            throw std::runtime_error("the volume reaches beyond the mesher's range of +-524,288 voxels from the origin");
+        leaves.push_back(it.getLeaf());
+    }
     std::vector<MeshChunk> chunks(leaves.size());
     const double voxelSize = volume.voxelSize();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 8), [&](const auto& range) {

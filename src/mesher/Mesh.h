@@ -28,8 +28,10 @@ struct MeshChunk {
     std::vector<uint64_t> vertexKeys; // one per vertex
 };
 
-/// Key of the grid edge that starts at voxel (i,j,k) and runs along `axis` (0,1,2).
+/// Key of the grid edge that starts at voxel (i,j,k) and runs along `axis` (0,1,2); unique for
+/// coordinates within +-kMaxEdgeKeyCoordinate.
 uint64_t edgeKey(int32_t i, int32_t j, int32_t k, int axis);
+constexpr int32_t kMaxEdgeKeyCoordinate = 1 << 19;
 
 /// Joins chunks, merging vertices with the same edge key.
 Mesh weldChunks(const std::vector<MeshChunk>& chunks);

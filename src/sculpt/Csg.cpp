@@ -76,13 +76,17 @@ struct EditContext {
 
 enum class RegionClass { Outside, Inside, Mixed };
 
+/// Margin, in voxels, added to every "this region lies on one side" test: it absorbs the rounding of
+/// distances and the small error of brushes whose distance is itself a numerical minimum (strokes).
+constexpr double kSideMargin = 1e-3;
+
 /// Classifies the footprint [origin, origin + size]^3 (voxel centres) against the brush. The distance
 /// bound is Lipschitz-1, so a centre farther from the surface than the half-diagonal decides the region.
 RegionClass classifyRegion(const EditContext& ctx, const Coord& origin, int size)
 {
     const double half = 0.5 * size;
     const Vec3d centre = ctx.world(origin) + Vec3d(half * ctx.voxelSize);
-    const double radius = std::sqrt(3.0) * half * ctx.voxelSize * (1.0 + 1e-9) + 1e-12;
+    const double radius = (std::sqrt(3.0) * half + kSideMargin) * ctx.voxelSize;
     const double d = ctx.field.distance(centre);
     if (d > radius) return RegionClass::Outside;
     if (d + ctx.maxErodeOffset < -radius) return RegionClass::Inside;
@@ -271,7 +275,7 @@ BlockResult computeBlockFor(const EditContext& ctx, const BlockTask& task, Const
     // its half-diagonal is on one side of it: its voxels get a sign-correct bound |d(c)| - |p - c| instead
     // of an exact distance, which is all the inside tests and the crossing search need from them.
     const double vs = ctx.voxelSize;
-    const double cubeReach = std::sqrt(3.0) * vs * (1.0 + 1e-9);
+    const double cubeReach = (std::sqrt(3.0) + kSideMargin) * vs;
     double offsetLength[27]; // distance of each voxel of a cube from the cube's centre
     for (int n = 0; n < 27; ++n) {
         const int di = n / 9 - 1, dj = (n / 3) % 3 - 1, dk = n % 3 - 1;
@@ -531,7 +535,8 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
         constexpr double kLimit = 1e9;
         for (int i = 0; i < 3; ++i) {
             if (std::fabs(wb.min[i] / vs) > kLimit || std::fabs(wb.max[i] / vs) > kLimit)
-                throw std::invalid_argument("the brush lies too far from the origin for this voxel size");
+                throw std::invalid_argument("the brush reaches beyond a billion voxels from the origin "
+                                            "(too large or too far away for this voxel size)");
         }
         const CoordBBox brushBox(Coord(int(std::floor(wb.min.x() / vs)) - 1, int(std::floor(wb.min.y() / vs)) - 1,
                                        int(std::floor(wb.min.z() / vs)) - 1),
