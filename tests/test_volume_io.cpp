@@ -214,10 +214,9 @@ TEST_CASE("the real file header followed by random bytes is rejected", "[io]")
     checkHeaderThenJunk({8, 32, 64});
 }
 
-// Hidden (run with  vdbclay_tests "[fuzz]"): junk that starts inside the grid descriptors is rejected,
-// but loadVolume hands files without a trailer to OpenVDB's metadata reader first, which allocates
-// strings of the random lengths it reads: ~8 s and ~9 GB of resident memory per 4 KiB file.
-TEST_CASE("random bytes after the grid descriptors are rejected", "[.][io][fuzz]")
+// Junk that starts inside the grid descriptors: without a trailer the file never reaches OpenVDB's
+// metadata reader, which would allocate strings of the random lengths it reads (gigabytes per file).
+TEST_CASE("random bytes after the grid descriptors are rejected", "[io][fuzz]")
 {
     checkHeaderThenJunk({200, 400});
 }
