@@ -26,8 +26,8 @@ std::array<double, 3> decodeOctahedral(double u, double v)
         x = (1.0 - std::fabs(v)) * signNotZero(u);
         y = (1.0 - std::fabs(u)) * signNotZero(v);
     }
-    const double len = std::sqrt(x * x + y * y + z * z);
-    return {x / len, y / len, z / len};
+    const double inv = 1.0 / std::sqrt(x * x + y * y + z * z);
+    return {x * inv, y * inv, z * inv};
 }
 
 double codeToCoord(int q) { return q / double(kNormalMax) * 2.0 - 1.0; }
@@ -55,8 +55,9 @@ std::array<uint16_t, 2> quantizeNormal(const std::array<double, 3>& nIn)
         return std::max({std::fabs(d[0] - n[0]), std::fabs(d[1] - n[1]), std::fabs(d[2] - n[2])});
     };
     const double fu = (u + 1.0) * 0.5 * kNormalMax, fv = (v + 1.0) * 0.5 * kNormalMax;
-    const int nearU = std::clamp(int(std::lround(fu)), 0, int(kNormalMax));
-    const int nearV = std::clamp(int(std::lround(fv)), 0, int(kNormalMax));
+    // fu and fv lie in [0, kNormalMax]: adding 0.5 and truncating rounds to nearest.
+    const int nearU = std::min(int(fu + 0.5), int(kNormalMax));
+    const int nearV = std::min(int(fv + 0.5), int(kNormalMax));
     double bestError = errorOf(nearU, nearV);
     std::array<uint16_t, 2> best{uint16_t(nearU), uint16_t(nearV)};
     constexpr double kGoodEnough = 0.5e-3;
