@@ -15,6 +15,17 @@ uint64_t edgeKey(int32_t i, int32_t j, int32_t k, int axis)
     return (x << 42) | (y << 22) | (z << 2) | uint64_t(axis);
 }
 
+uint64_t faceKey(int32_t i, int32_t j, int32_t k, int axis, int segment)
+{
+    // Bit 63 marks a face key (edge keys use bits 0-61); 20 bits per coordinate as for edges.
+    constexpr int64_t kBias = int64_t(1) << 19;
+    constexpr uint64_t kMask = (uint64_t(1) << 20) - 1;
+    const uint64_t x = uint64_t(int64_t(i) + kBias) & kMask;
+    const uint64_t y = uint64_t(int64_t(j) + kBias) & kMask;
+    const uint64_t z = uint64_t(int64_t(k) + kBias) & kMask;
+    return (uint64_t(1) << 63) | (uint64_t(segment & 1) << 62) | (uint64_t(axis) << 60) | (x << 40) | (y << 20) | z;
+}
+
 Mesh weldChunks(const std::vector<MeshChunk>& chunks)
 {
     Mesh out;
@@ -30,15 +41,24 @@ Mesh weldChunks(const std::vector<MeshChunk>& chunks)
     for (const auto& c : chunks) {
         remap.resize(c.mesh.vertexCount());
         for (std::size_t v = 0; v < c.mesh.vertexCount(); ++v) {
-            auto [it, inserted] = index.emplace(c.vertexKeys[v], uint32_t(out.positions.size()));
-            if (inserted) {
+            const uint32_t next = uint32_t(out.positions.size());
+            bool fresh = true;
+            if (c.vertexKeys[v] != kUnsharedVertex) {
+                auto [it, inserted] = index.emplace(c.vertexKeys[v], next);
+                fresh = inserted;
+                remap[v] = it->second;
+            } else {
+                remap[v] = next;
+            }
+            if (fresh) {
                 out.positions.push_back(c.mesh.positions[v]);
                 out.normals.push_back(c.mesh.normals[v]);
                 out.materials.push_back(c.mesh.materials[v]);
             }
-            remap[v] = it->second;
         }
         for (const auto& t : c.mesh.triangles) out.triangles.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
+        out.triangleMaterials.insert(out.triangleMaterials.end(), c.mesh.triangleMaterials.begin(),
+                                     c.mesh.triangleMaterials.end());
     }
     return out;
 }

@@ -14,6 +14,7 @@ struct Mesh {
     std::vector<std::array<float, 3>> normals;   // unit, pointing out of the solid
     std::vector<MaterialId> materials;           // per vertex: the material of the solid side
     std::vector<std::array<uint32_t, 3>> triangles; // counter-clockwise seen from outside
+    std::vector<MaterialId> triangleMaterials;      // per triangle: the material of its solid side
 
     std::size_t vertexCount() const { return positions.size(); }
     std::size_t triangleCount() const { return triangles.size(); }
@@ -32,8 +33,13 @@ struct MeshChunk {
 /// coordinates within +-kMaxEdgeKeyCoordinate.
 uint64_t edgeKey(int32_t i, int32_t j, int32_t k, int axis);
 constexpr int32_t kMaxEdgeKeyCoordinate = 1 << 19;
+/// Key of a vertex inside a cell face (a 2D sharp feature): the face's minimum corner, its normal
+/// axis, and which of the face's (at most two) segments it lies on. Never equal to an edge key.
+uint64_t faceKey(int32_t i, int32_t j, int32_t k, int axis, int segment);
+/// Key of a vertex that belongs to one chunk only (a cell's inner vertex): never welded.
+constexpr uint64_t kUnsharedVertex = ~uint64_t(0);
 
-/// Joins chunks, merging vertices with the same edge key.
+/// Joins chunks, merging vertices with the same key (kUnsharedVertex vertices are kept apart).
 Mesh weldChunks(const std::vector<MeshChunk>& chunks);
 
 } // namespace vdbclay

@@ -1,5 +1,7 @@
 #include "mesher/MeshIO.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -7,6 +9,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <map>
 #include <unistd.h>
 
 namespace vdbclay {
@@ -69,6 +73,146 @@ void writePly(std::ostream& os, const Mesh& mesh, const MaterialTable& materials
     }
 }
 
+/// glTF 2.0 binary: one mesh with one primitive per material (triangles grouped by the material of
+/// their first vertex), each with its own compacted POSITION, NORMAL and uint32 index accessors.
+void writeGlb(std::ostream& os, const Mesh& mesh, const MaterialTable& materials)
+{
+    using nlohmann::json;
+    static_assert(sizeof(float) == 4 && sizeof(uint32_t) == 4, "glTF components are 32-bit");
+    constexpr uint32_t kArrayBuffer = 34962, kElementArrayBuffer = 34963;
+    constexpr uint32_t kFloat = 5126, kUnsignedInt = 5125;
+
+    std::map<MaterialId, std::vector<uint32_t>> groups; // material -> triangle indices
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const uint32_t v0 = mesh.triangles[t][0];
+        groups[v0 < mesh.materials.size() ? mesh.materials[v0] : kEmptyMaterial].push_back(uint32_t(t));
+    }
+    const bool hasNormals = mesh.normals.size() == mesh.positions.size();
+
+    std::vector<char> bin;
+    auto append = [&bin](const void* data, std::size_t bytes) {
+        const char* c = static_cast<const char*>(data);
+        bin.insert(bin.end(), c, c + bytes);
+    };
+    json doc;
+    doc["asset"] = {{"version", "2.0"}, {"generator", "VDBClay"}};
+    json bufferViews = json::array(), accessors = json::array(), primitives = json::array(),
+         gltfMaterials = json::array();
+    auto addView = [&](std::size_t offset, std::size_t bytes, uint32_t target) {
+        bufferViews.push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", bytes}, {"target", target}});
+        return bufferViews.size() - 1;
+    };
+
+    for (const auto& [id, tris] : groups) {
+        // Compact the vertices this primitive uses.
+        std::vector<uint32_t> remap(mesh.positions.size(), std::numeric_limits<uint32_t>::max());
+        std::vector<uint32_t> vertices, indices;
+        indices.reserve(tris.size() * 3);
+        for (uint32_t t : tris)
+            for (uint32_t v : mesh.triangles[t]) {
+                if (remap[v] == std::numeric_limits<uint32_t>::max()) {
+                    remap[v] = uint32_t(vertices.size());
+                    vertices.push_back(v);
+                }
+                indices.push_back(remap[v]);
+            }
+        std::array<float, 3> lo{}, hi{};
+        lo.fill(std::numeric_limits<float>::infinity());
+        hi.fill(-std::numeric_limits<float>::infinity());
+        const std::size_t posOffset = bin.size();
+        for (uint32_t v : vertices) {
+            const auto& p = mesh.positions[v];
+            for (int i = 0; i < 3; ++i) {
+                lo[i] = std::min(lo[i], p[i]);
+                hi[i] = std::max(hi[i], p[i]);
+            }
+            append(p.data(), 12);
+        }
+        json attributes;
+        accessors.push_back({{"bufferView", addView(posOffset, bin.size() - posOffset, kArrayBuffer)},
+                             {"componentType", kFloat},
+                             {"count", vertices.size()},
+                             {"type", "VEC3"},
+                             {"min", {lo[0], lo[1], lo[2]}},
+                             {"max", {hi[0], hi[1], hi[2]}}});
+        attributes["POSITION"] = accessors.size() - 1;
+        if (hasNormals) {
+            const std::size_t nOffset = bin.size();
+            for (uint32_t v : vertices) {
+                std::array<float, 3> n = mesh.normals[v];
+                const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+                if (len > 0.0f && std::isfinite(len)) {
+                    for (float& c : n) c /= len;
+                } else {
+                    n = {0.0f, 0.0f, 1.0f}; // glTF requires unit normals
+                }
+                append(n.data(), 12);
+            }
+            accessors.push_back({{"bufferView", addView(nOffset, bin.size() - nOffset, kArrayBuffer)},
+                                 {"componentType", kFloat},
+                                 {"count", vertices.size()},
+                                 {"type", "VEC3"}});
+            attributes["NORMAL"] = accessors.size() - 1;
+        }
+        const std::size_t iOffset = bin.size();
+        append(indices.data(), indices.size() * 4);
+        accessors.push_back({{"bufferView", addView(iOffset, bin.size() - iOffset, kElementArrayBuffer)},
+                             {"componentType", kUnsignedInt},
+                             {"count", indices.size()},
+                             {"type", "SCALAR"}});
+        const std::size_t indexAccessor = accessors.size() - 1;
+
+        std::array<float, 4> color{0.8f, 0.8f, 0.8f, 1.0f};
+        std::string name = "material " + std::to_string(id);
+        if (id != kEmptyMaterial && id <= materials.size()) {
+            color = materials.at(id).color;
+            name = materials.at(id).name;
+        }
+        for (float& c : color) c = std::clamp(c, 0.0f, 1.0f);
+        gltfMaterials.push_back({{"name", name},
+                                 {"pbrMetallicRoughness",
+                                  {{"baseColorFactor", {color[0], color[1], color[2], color[3]}},
+                                   {"metallicFactor", 0.0},
+                                   {"roughnessFactor", 0.8}}}});
+        primitives.push_back({{"attributes", attributes},
+                              {"indices", indexAccessor},
+                              {"material", gltfMaterials.size() - 1},
+                              {"mode", 4}});
+    }
+    if (!primitives.empty()) {
+        doc["buffers"] = json::array({{{"byteLength", bin.size()}}});
+        doc["bufferViews"] = bufferViews;
+        doc["accessors"] = accessors;
+        doc["materials"] = gltfMaterials;
+        doc["meshes"] = json::array({{{"name", "VDBClay mesh"}, {"primitives", primitives}}});
+        doc["nodes"] = json::array({{{"mesh", 0}, {"name", "VDBClay mesh"}}});
+        doc["scenes"] = json::array({{{"nodes", {0}}}});
+        doc["scene"] = 0;
+    }
+
+    std::string text = doc.dump();
+    while (text.size() % 4) text.push_back(' ');
+    while (bin.size() % 4) bin.push_back('\0');
+    const bool withBin = !bin.empty();
+    const uint64_t total = 12 + 8 + text.size() + (withBin ? 8 + bin.size() : 0);
+    if (total > std::numeric_limits<uint32_t>::max()) throw MeshIOError("mesh too large for a GLB file (4 GiB)");
+    auto put32 = [&os](uint32_t v) {
+        const unsigned char b[4] = {uint8_t(v), uint8_t(v >> 8), uint8_t(v >> 16), uint8_t(v >> 24)};
+        os.write(reinterpret_cast<const char*>(b), 4);
+    };
+    put32(0x46546C67u); // "glTF"
+    put32(2);
+    put32(uint32_t(total));
+    put32(uint32_t(text.size()));
+    put32(0x4E4F534Au); // "JSON"
+    os.write(text.data(), std::streamsize(text.size()));
+    if (withBin) {
+        put32(uint32_t(bin.size()));
+        put32(0x004E4942u); // "BIN\0"
+        os.write(bin.data(), std::streamsize(bin.size()));
+    }
+}
+
 } // namespace
 
 void writeMesh(const Mesh& mesh, const MaterialTable& materials, const std::string& path)
@@ -76,8 +220,8 @@ void writeMesh(const Mesh& mesh, const MaterialTable& materials, const std::stri
     const fs::path target(path);
     std::string ext = target.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    if (ext != ".obj" && ext != ".ply")
-        throw MeshIOError("cannot tell the mesh format of '" + path + "': use a .obj or .ply file name");
+    if (ext != ".obj" && ext != ".ply" && ext != ".glb")
+        throw MeshIOError("cannot tell the mesh format of '" + path + "': use a .obj, .ply or .glb file name");
     const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
     if (!fs::is_directory(dir)) throw MeshIOError("directory '" + dir.string() + "' does not exist");
     if (fs::is_directory(target)) throw MeshIOError("'" + path + "' is a directory");
@@ -86,8 +230,16 @@ void writeMesh(const Mesh& mesh, const MaterialTable& materials, const std::stri
     {
         std::ofstream os(temp, std::ios::binary | std::ios::trunc);
         if (!os) throw MeshIOError("cannot create '" + temp.string() + "': " + std::strerror(errno));
-        if (ext == ".obj") writeObj(os, mesh, materials);
-        else writePly(os, mesh, materials);
+        try {
+            if (ext == ".obj") writeObj(os, mesh, materials);
+            else if (ext == ".ply") writePly(os, mesh, materials);
+            else writeGlb(os, mesh, materials);
+        } catch (...) {
+            os.close();
+            std::error_code ec;
+            fs::remove(temp, ec);
+            throw;
+        }
         os.flush();
         if (!os) {
             std::error_code ec;

@@ -17,12 +17,8 @@ MesherKind parseMesherKind(const std::string& s); // throws std::invalid_argumen
 
 struct MeshOptions {
     MesherKind kind = MesherKind::MarchingCubes;
-};
-
-/// Thrown for a mesher that this build does not provide yet (Cubical Marching Squares: issue 3).
-class MesherUnavailable : public std::runtime_error {
-public:
-    using std::runtime_error::runtime_error;
+    /// CMS: crossings whose normals span more than this angle make a sharp feature (edge or corner).
+    double sharpAngleDegrees = 30.0;
 };
 
 std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions& options = {});
