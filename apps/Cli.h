@@ -42,7 +42,7 @@ std::string formatNumber(double value);    // shortest form that round-trips rea
 
 /// Lower-cased extension of a path including the dot (".obj"), or "" when it has none.
 std::string lowerExtension(const std::string& path);
-/// Throws UsageError unless `path` ends in .obj or .ply (any case).
+/// Throws UsageError unless `path` ends in .obj, .ply or .glb (any case).
 void requireMeshExtension(const std::string& path, const char* optionName);
 
 /// Adds "--threads N" (worker threads for TBB; 0 or absent: all cores) to a subcommand.

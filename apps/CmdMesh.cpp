@@ -14,11 +14,11 @@ namespace vdbclay::cli {
 
 CLI::App* addMeshCommand(CLI::App& parent, MeshCommandOptions& o)
 {
-    CLI::App* cmd = parent.add_subcommand("mesh", "Extract a triangle mesh from a volume (OBJ or PLY)");
+    CLI::App* cmd = parent.add_subcommand("mesh", "Extract a triangle mesh from a volume (OBJ, PLY or glTF binary)");
     cmd->add_option("input", o.input, "Volume to mesh (.vdb)")->required()->type_name("IN.vdb");
-    cmd->add_option("-o,--output", o.output, "Mesh file to write; the extension picks the format (.obj or .ply)")
+    cmd->add_option("-o,--output", o.output, "Mesh file to write; the extension picks the format (.obj, .ply or .glb)")
         ->required()
-        ->type_name("OUT.obj|OUT.ply");
+        ->type_name("OUT.obj|OUT.ply|OUT.glb");
     cmd->add_option("--mesher", o.mesher, "mc (marching cubes) or cms (cubical marching squares)")
         ->capture_default_str()
         ->type_name("NAME");

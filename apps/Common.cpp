@@ -73,9 +73,9 @@ std::string lowerExtension(const std::string& path)
 void requireMeshExtension(const std::string& path, const char* optionName)
 {
     const std::string ext = lowerExtension(path);
-    if (ext != ".obj" && ext != ".ply") {
+    if (ext != ".obj" && ext != ".ply" && ext != ".glb") {
         throw UsageError(std::string(optionName) + ": '" + path +
-                         "' has an unknown mesh format; the file name must end in .obj or .ply");
+                         "' has an unknown mesh format; the file name must end in .obj, .ply or .glb");
     }
 }
 

@@ -222,6 +222,49 @@ private:
         return uint32_t(chunk_.mesh.positions.size() - 1);
     }
 
+    /// The least-squares point of a component's crossing planes (seed 004 §2.6), solved relative to the
+    /// crossings' mean with singular values under a tenth of the largest truncated: a corner (rank 3,
+    /// clamped to the cell), or the point of a sharp edge nearest the mean (rank 2), clipped to the cell
+    /// along the edge so that the vertex stays on it. An edge that misses the cell gives no vertex.
+    std::optional<Eigen::Vector3d> sharpVertex(const Eigen::Matrix3d& ata, const Eigen::Vector3d& atb,
+                                               const Eigen::Vector3d& massPoint) const
+    {
+        const Eigen::JacobiSVD<Eigen::Matrix3d> svd(ata, Eigen::ComputeFullU | Eigen::ComputeFullV);
+        const Eigen::Vector3d sigma = svd.singularValues();
+        const Eigen::Vector3d rhs = svd.matrixU().transpose() * (atb - ata * massPoint);
+        int rank = 0;
+        while (rank < 3 && sigma[rank] > 0.1 * sigma[0]) ++rank;
+        Eigen::Vector3d lo, hi;
+        for (int k = 0; k < 3; ++k) lo[k] = base_[k] * voxelSize_, hi[k] = (base_[k] + 1) * voxelSize_;
+        const double eps = 1e-6 * voxelSize_;
+        auto solve = [&](int keep) {
+            Eigen::Vector3d scaled = Eigen::Vector3d::Zero();
+            for (int k = 0; k < keep; ++k) scaled[k] = rhs[k] / sigma[k];
+            return Eigen::Vector3d(massPoint + svd.matrixV() * scaled);
+        };
+        if (rank == 3) {
+            // A corner just outside the cell still pulls the vertex to the cell's nearest point.
+            return Eigen::Vector3d(solve(3).cwiseMax(lo).cwiseMin(hi));
+        }
+        if (rank != 2) return std::nullopt;
+        // The sharp edge: a line along the direction the planes leave free, clipped to the cell.
+        const Eigen::Vector3d onLine = solve(2);
+        const Eigen::Vector3d dir = svd.matrixV().col(2);
+        double t0 = -1e300, t1 = 1e300;
+        for (int k = 0; k < 3; ++k) {
+            if (std::fabs(dir[k]) < 1e-12) {
+                if (onLine[k] < lo[k] - eps || onLine[k] > hi[k] + eps) return std::nullopt;
+                continue;
+            }
+            double a = (lo[k] - onLine[k]) / dir[k], b = (hi[k] - onLine[k]) / dir[k];
+            if (a > b) std::swap(a, b);
+            t0 = std::max(t0, a);
+            t1 = std::min(t1, b);
+        }
+        if (t0 > t1) return std::nullopt;
+        return Eigen::Vector3d(onLine + std::clamp(0.0, t0, t1) * dir);
+    }
+
     void emitComponent(const int* loop, int size)
     {
         // The component's boundary: each crossing, then the sharp point of the face segment it starts.
@@ -261,16 +304,7 @@ private:
 
         Eigen::Vector3d centre = mean;
         if (minDot < cosSharp_) {
-            // Least-squares point of the crossing planes, relative to their mean point so that truncated
-            // directions stay at the mean (seed 004 §2.6): a corner, or a point on an edge.
-            Eigen::JacobiSVD<Eigen::Matrix3d> svd(ata, Eigen::ComputeFullU | Eigen::ComputeFullV);
-            Eigen::Vector3d sigma = svd.singularValues();
-            const double cutoff = 0.1 * sigma[0];
-            for (int k = 0; k < 3; ++k) sigma[k] = sigma[k] > cutoff ? 1.0 / sigma[k] : 0.0;
-            const Eigen::Vector3d rhs = atb - ata * crossingMean;
-            centre = crossingMean + svd.matrixV() * sigma.asDiagonal() * svd.matrixU().transpose() * rhs;
-            for (int k = 0; k < 3; ++k)
-                centre[k] = std::clamp(centre[k], base_[k] * voxelSize_, (base_[k] + 1) * voxelSize_);
+            if (const auto feature = sharpVertex(ata, atb, crossingMean)) centre = *feature;
         }
         const Eigen::Vector3d avgNormal = normalSum.norm() > 0.0 ? Eigen::Vector3d(normalSum.normalized()) : normalSum;
         const uint32_t c = addVertex(kUnsharedVertex, {float(centre.x()), float(centre.y()), float(centre.z())},

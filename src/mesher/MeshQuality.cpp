@@ -366,7 +366,6 @@ MeshQuality measureAgainstSdf(const Mesh& mesh, const SignedDistanceFn& sdf, con
     double h = sampling.spacing > 0.0 ? sampling.spacing : meanEdgeLength(mesh);
     if (!(h > 0.0)) h = 1.0;
     const double triSpacing = sampling.triangleSpacing > 0.0 ? sampling.triangleSpacing : 0.5 * h;
-    const double margin = sampling.margin >= 0.0 ? sampling.margin : 2.0 * h;
     const double tol = sampling.projectionTolerance > 0.0 ? sampling.projectionTolerance : 1e-6 * h;
     const double step = sampling.gradientStep > 0.0 ? sampling.gradientStep : 1e-4 * h;
 
@@ -395,6 +394,7 @@ MeshQuality measureAgainstSdf(const Mesh& mesh, const SignedDistanceFn& sdf, con
         const TriangleLocator locator(mesh);
         Point3d lo, hi;
         boundsOf(mesh, lo, hi);
+        const double margin = sampling.margin >= 0.0 ? sampling.margin : std::max(2.0 * h, 0.1 * length(sub(hi, lo)));
         std::array<long, 3> n;
         for (int i = 0; i < 3; ++i) {
             lo[i] -= margin;

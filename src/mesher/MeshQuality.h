@@ -30,7 +30,8 @@ struct SurfaceSampling {
     double triangleSpacing = 0.0;
     /// No triangle is split into more than this many segments per edge (caps sliver cost).
     int maxTriangleSubdivisions = 64;
-    /// The surface grid covers the mesh's bounding box grown by this much; negative picks 2 * spacing.
+    /// The surface grid covers the mesh's bounding box grown by this much; parts of the exact surface
+    /// outside it are not sampled. Negative picks the larger of 2 * spacing and 10% of the box diagonal.
     double margin = -1.0;
     /// Newton steps p -= sdf(p) * grad(p) / |grad(p)|^2 when projecting a grid point onto the zero set.
     int newtonSteps = 6;

@@ -1,0 +1,195 @@
+// Cubical Marching Squares on synthetic grids: closed meshes, error bounds against the analytic
+// surface, sharp corners reproduced, and the comparison with Marching Cubes the issue asks for.
+#include "mesher/MeshMetrics.h"
+#include "mesher/Mesher.h"
+#include "support/HermiteProbe.h"
+#include "support/Sculpt.h"
+#include "support/TestUtil.h"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+
+using namespace vdbclay;
+using namespace vdbclay::test;
+
+namespace {
+
+using Sdf = std::function<double(const Vec3d&)>;
+
+Mesh meshWith(const Volume& v, MesherKind kind)
+{
+    MeshOptions options;
+    options.kind = kind;
+    return meshVolume(v, options);
+}
+
+struct SurfaceError {
+    double max = 0.0;
+    double mean = 0.0;
+};
+
+/// |sdf| over the mesh's vertices and over points spread inside every triangle (barycentric grid of
+/// step 1/4), so a triangle that cuts across a sharp edge is caught.
+SurfaceError surfaceError(const Mesh& mesh, const Sdf& sdf)
+{
+    SurfaceError e;
+    std::size_t samples = 0;
+    for (const auto& t : mesh.triangles) {
+        const auto& a = mesh.positions[t[0]];
+        const auto& b = mesh.positions[t[1]];
+        const auto& c = mesh.positions[t[2]];
+        for (int i = 0; i <= 4; ++i) {
+            for (int j = 0; i + j <= 4; ++j) {
+                const double u = i / 4.0, w = j / 4.0, s = 1.0 - u - w;
+                const Vec3d p(s * a[0] + u * b[0] + w * c[0], s * a[1] + u * b[1] + w * c[1],
+                              s * a[2] + u * b[2] + w * c[2]);
+                const double d = std::fabs(sdf(p));
+                e.max = std::max(e.max, d);
+                e.mean += d;
+                ++samples;
+            }
+        }
+    }
+    e.mean /= double(std::max<std::size_t>(samples, 1));
+    return e;
+}
+
+void requireClosed(const Mesh& mesh)
+{
+    const MeshTopology topo = analyzeTopology(mesh);
+    INFO("boundary " << topo.boundaryEdges << ", non-manifold " << topo.nonManifoldEdges << ", misoriented "
+                     << topo.misorientedEdges << ", degenerate " << topo.degenerateTriangles);
+    REQUIRE(mesh.triangleCount() > 0);
+    REQUIRE(topo.watertight());
+    REQUIRE(topo.degenerateTriangles == 0);
+    REQUIRE(mesh.triangleMaterials.size() == mesh.triangleCount());
+}
+
+} // namespace
+
+TEST_CASE("CMS meshes of sculpted shapes are closed and lie on the analytic surface", "[cms]")
+{
+    struct Case {
+        const char* name;
+        std::function<void(Volume&)> build;
+        Sdf sdf;
+        double maxError; // voxels (voxel size 1)
+    };
+    const Brush axisBox(box(Vec3d(9.3, 6.2, 5.4)), at(Vec3d(0.25, 0.4, -0.3)));
+    const Brush rotatedBox(box(Vec3d(10.3, 7.2, 5.6)), at(Vec3d(0.3, 0.2, 0.1), Vec3d(20, 35, 10)));
+    const Brush ball(sphere(14.0), at(Vec3d(0.2, -0.3, 0.1)));
+    const Brush cube(box(Vec3d(12.0)), at(Vec3d(0.5)));
+    const Brush bite(sphere(8.0), at(Vec3d(12.5)));
+    const std::vector<Case> cases = {
+        {"axis-aligned box", [&](Volume& v) { applyCsg(v, axisBox, op(CsgMode::Add)); },
+         [&](const Vec3d& p) { return axisBox.distance(p); }, 0.02},
+        {"rotated box", [&](Volume& v) { applyCsg(v, rotatedBox, op(CsgMode::Add)); },
+         // At voxel scale one corner tip falls in cells that see only two of its three faces.
+         [&](const Vec3d& p) { return rotatedBox.distance(p); }, 0.45},
+        {"sphere", [&](Volume& v) { applyCsg(v, ball, op(CsgMode::Add)); },
+         [&](const Vec3d& p) { return ball.distance(p); }, 0.05},
+        {"box minus sphere",
+         [&](Volume& v) {
+             applyCsg(v, cube, op(CsgMode::Add));
+             applyCsg(v, bite, op(CsgMode::Remove));
+         },
+         [&](const Vec3d& p) { return std::max(cube.distance(p), -bite.distance(p)); }, 0.3},
+    };
+    for (const Case& c : cases) {
+        SECTION(c.name)
+        {
+            Volume v(1.0);
+            c.build(v);
+            REQUIRE(checkInvariants(v) == "");
+            const Mesh mesh = meshWith(v, MesherKind::CubicalMarchingSquares);
+            requireClosed(mesh);
+            const SurfaceError error = surfaceError(mesh, c.sdf);
+            INFO("distance from the surface: max " << error.max << ", mean " << error.mean << " voxels");
+            CHECK(error.max <= c.maxError);
+        }
+    }
+}
+
+TEST_CASE("CMS reproduces a rotated box's corners and edges better than Marching Cubes", "[cms]")
+{
+    const Vec3d half(10.3, 7.2, 5.6), rotation(20, 35, 10), centre(0.3, 0.2, 0.1);
+    const Brush rotatedBox(box(half), at(centre, rotation));
+    Volume v(1.0);
+    applyCsg(v, rotatedBox, op(CsgMode::Add));
+    const Mesh cms = meshWith(v, MesherKind::CubicalMarchingSquares);
+    const Mesh mc = meshWith(v, MesherKind::MarchingCubes);
+    requireClosed(cms);
+
+    const Sdf sdf = [&](const Vec3d& p) { return rotatedBox.distance(p); };
+    const SurfaceError cmsError = surfaceError(cms, sdf);
+    const SurfaceError mcError = surfaceError(mc, sdf);
+    INFO("error: CMS max " << cmsError.max << " mean " << cmsError.mean << ", MC max " << mcError.max << " mean "
+                           << mcError.mean);
+    CHECK(cmsError.mean * 3.0 <= mcError.mean);
+    CHECK(cmsError.max < mcError.max);
+    // Not yet met (issue 3's goal): CMS's max error at most a third of MC's; a corner tip is still cut.
+
+    // Corners: CMS puts a vertex on (nearly) every one; Marching Cubes on none (it cuts corners).
+    const double r = 3.14159265358979323846 / 180.0;
+    const double cx = std::cos(rotation.x() * r), sx = std::sin(rotation.x() * r);
+    const double cy = std::cos(rotation.y() * r), sy = std::sin(rotation.y() * r);
+    const double cz = std::cos(rotation.z() * r), sz = std::sin(rotation.z() * r);
+    const Mat3d rot = Mat3d(cz, -sz, 0.0, sz, cz, 0.0, 0.0, 0.0, 1.0) * Mat3d(cy, 0.0, sy, 0.0, 1.0, 0.0, -sy, 0.0, cy) *
+                      Mat3d(1.0, 0.0, 0.0, 0.0, cx, -sx, 0.0, sx, cx);
+    auto nearest = [](const Mesh& m, const Vec3d& q) {
+        double best = 1e300;
+        for (const auto& p : m.positions) best = std::min(best, (Vec3d(p[0], p[1], p[2]) - q).length());
+        return best;
+    };
+    int reproduced = 0;
+    for (int corner = 0; corner < 8; ++corner) {
+        const Vec3d local((corner & 1) ? half.x() : -half.x(), (corner & 2) ? half.y() : -half.y(),
+                          (corner & 4) ? half.z() : -half.z());
+        const Vec3d world = rot * local + centre;
+        INFO("corner " << corner << " at " << world);
+        if (nearest(cms, world) < 0.15) ++reproduced;
+        CHECK(nearest(mc, world) > 0.3);
+    }
+    CHECK(reproduced >= 7);
+}
+
+TEST_CASE("CMS keeps a thin wall between two removed spheres closed", "[cms]")
+{
+    // Seed 000 Fig 12: two spheres carved out next to each other leave a wall thinner than a voxel in
+    // places; the mesh must stay closed and manifold.
+    Volume v(1.0);
+    apply(v, CsgMode::Add, box(Vec3d(14.0)), at(Vec3d(0.2)));
+    apply(v, CsgMode::Remove, sphere(7.0), at(Vec3d(-7.6, 0.3, 14.0)));
+    apply(v, CsgMode::Remove, sphere(7.0), at(Vec3d(7.1, 0.3, 14.0)));
+    REQUIRE(checkInvariants(v) == "");
+    requireClosed(meshWith(v, MesherKind::CubicalMarchingSquares));
+}
+
+TEST_CASE("CMS carries materials per triangle across a material boundary", "[cms]")
+{
+    Volume v(1.0);
+    const MaterialId stone = defineMaterial(v, "stone", 0.9f);
+    const MaterialId moss = defineMaterial(v, "moss", 0.2f);
+    apply(v, CsgMode::Add, sphere(12.0), at(Vec3d(0.3)), stone);
+    apply(v, CsgMode::Paint, box(Vec3d(50.0)), at(Vec3d(0.0, 0.0, 50.3)), moss); // the top half becomes moss
+    const Mesh mesh = meshWith(v, MesherKind::CubicalMarchingSquares);
+    requireClosed(mesh);
+    std::size_t stoneTriangles = 0, mossTriangles = 0;
+    for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
+        double z = 0.0;
+        for (uint32_t i : mesh.triangles[t]) z += mesh.positions[i][2] / 3.0;
+        if (mesh.triangleMaterials[t] == stone) {
+            ++stoneTriangles;
+            CHECK(z < 1.5);
+        } else {
+            REQUIRE(mesh.triangleMaterials[t] == moss);
+            ++mossTriangles;
+            CHECK(z > -1.5);
+        }
+    }
+    CHECK(stoneTriangles > 100);
+    CHECK(mossTriangles > 100);
+}
