@@ -73,7 +73,9 @@ int runSculpt(const SculptOptions& options);
 struct MeshCommandOptions {
     std::string input;
     std::string output;
-    std::string mesher = "mc";
+    std::string mesher = "cms";
+    double angleDegrees = 30.0;
+    bool uniform = false;
     bool json = false;
 };
 CLI::App* addMeshCommand(CLI::App& parent, MeshCommandOptions& options);

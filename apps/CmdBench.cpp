@@ -19,6 +19,8 @@ CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& o)
                 "        vs createLevelSetSphere + csgDifference on a FloatGrid level set\n"
                 "memory  bytes per surface voxel of a sphere and a box vs a narrow-band level set\n"
                 "io      save/load time and file size vs a Blosc-compressed FloatGrid level set\n"
+                "mesh    uniform CMS and MC meshing time, triangles and distance to the exact surface of\n"
+                "        sharp and thin shapes vs tools::volumeToMesh (adaptivity 0 and 0.5) on level sets\n"
                 "Build in Release for meaningful figures; docs/BENCHMARKS.md has measured tables.");
     return cmd;
 }
@@ -27,7 +29,7 @@ int runBenchCommand(const BenchCommandOptions& o)
 {
     bool known = false;
     for (const auto& n : bench::benchNames()) known = known || n == o.which;
-    if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory or io)");
+    if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory, io or mesh)");
     return bench::runBench(o.which, o.json, o.quick);
 }
 

@@ -19,9 +19,15 @@ CLI::App* addMeshCommand(CLI::App& parent, MeshCommandOptions& o)
     cmd->add_option("-o,--output", o.output, "Mesh file to write; the extension picks the format (.obj, .ply or .glb)")
         ->required()
         ->type_name("OUT.obj|OUT.ply|OUT.glb");
-    cmd->add_option("--mesher", o.mesher, "mc (marching cubes) or cms (cubical marching squares)")
+    cmd->add_option("--mesher", o.mesher, "cms (cubical marching squares, sharp features) or mc (marching cubes)")
         ->capture_default_str()
         ->type_name("NAME");
+    cmd->add_option("--angle", o.angleDegrees,
+                    "CMS: normals spanning more than this angle make a sharp edge or corner")
+        ->capture_default_str()
+        ->type_name("DEG");
+    cmd->add_flag("--uniform", o.uniform,
+                  "CMS: mesh every voxel cell (adaptive cells are not implemented yet, so CMS is always uniform)");
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text");
     return cmd;
 }
@@ -34,11 +40,13 @@ int runMesh(const MeshCommandOptions& o)
     } catch (const std::invalid_argument& e) {
         throw UsageError(std::string("--mesher: ") + e.what());
     }
+    if (!(o.angleDegrees > 0.0 && o.angleDegrees < 180.0)) throw UsageError("--angle must lie between 0 and 180 degrees");
+    options.sharpAngleDegrees = o.angleDegrees;
     requireMeshExtension(o.output, "--output");
 
     const auto start = std::chrono::steady_clock::now();
     const Volume volume = loadVolume(o.input);
-    const Mesh mesh = meshVolume(volume, options); // MesherUnavailable reaches main: exit 1
+    const Mesh mesh = meshVolume(volume, options);
     const MeshTopology topology = analyzeTopology(mesh);
     writeMesh(mesh, volume.materials(), o.output);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

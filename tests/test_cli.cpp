@@ -151,8 +151,10 @@ TEST_CASE("cli: mesh --json reports a watertight mesh and writes it", "[cli]")
     REQUIRE(runCli(dir, "new vol.vdb --shape torus --size 10").exitCode == 0);
     const json obj = parseJsonOutput(runCli(dir, "mesh vol.vdb -o vol.obj --json"));
     CHECK(obj["watertight"] == true);
-    CHECK(obj["mesher"] == "mc");
-    const Mesh mesh = meshVolume(loadVolume(dir.file("vol.vdb")));
+    CHECK(obj["mesher"] == "cms"); // the default
+    MeshOptions cms;
+    cms.kind = MesherKind::CubicalMarchingSquares;
+    const Mesh mesh = meshVolume(loadVolume(dir.file("vol.vdb")), cms);
     CHECK(obj["triangles"].get<std::size_t>() == mesh.triangleCount());
     CHECK(obj["vertices"].get<std::size_t>() == mesh.vertexCount());
 
@@ -167,8 +169,11 @@ TEST_CASE("cli: mesh --json reports a watertight mesh and writes it", "[cli]")
     CHECK(v == mesh.vertexCount());
     CHECK(f == mesh.triangleCount());
 
-    const json ply = parseJsonOutput(runCli(dir, "mesh vol.vdb -o vol.ply --json"));
+    const json ply = parseJsonOutput(runCli(dir, "mesh vol.vdb -o vol.ply --mesher mc --angle 45 --json"));
     CHECK(ply["watertight"] == true);
+    CHECK(ply["mesher"] == "mc");
+    CHECK(ply["triangles"].get<std::size_t>() == meshVolume(loadVolume(dir.file("vol.vdb"))).triangleCount());
+    CHECK(runCli(dir, "mesh vol.vdb -o bad.ply --angle 0").exitCode == 2);
     const auto plyBytes = readBytes(dir.file("vol.ply"));
     CHECK(std::string(plyBytes.begin(), plyBytes.begin() + 3) == "ply");
 }
