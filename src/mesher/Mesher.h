@@ -5,7 +5,10 @@
 #include "mesher/Mesh.h"
 #include "vdb_hermite/Volume.h"
 
+#include <array>
+#include <optional>
 #include <stdexcept>
+#include <vector>
 #include <string>
 
 namespace vdbclay {
@@ -22,6 +25,10 @@ struct MeshOptions {
 };
 
 std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions& options = {});
+/// The chunks of the leaves at the given origins (leaf-aligned); empty where there is no leaf.
+std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
+                                                     const std::vector<std::array<int32_t, 3>>& leafOrigins,
+                                                     const MeshOptions& options = {});
 Mesh meshVolume(const Volume& volume, const MeshOptions& options = {});
 
 } // namespace vdbclay

@@ -14,6 +14,7 @@
 
 #include "vdb_hermite/Materials.h"
 #include "vdb_hermite/Quantize.h"
+#include "vdb_hermite/Volume.h"
 
 #include <openvdb/openvdb.h>
 #include <openvdb/io/Compression.h>
@@ -63,8 +64,6 @@ using openvdb::Coord;
 using openvdb::CoordBBox;
 using openvdb::Index;
 
-constexpr int kLeafLog2Dim = 3;
-constexpr int kLeafDim = 1 << kLeafLog2Dim;      // 8 voxels per side
 constexpr int kLeafVoxels = kLeafDim * kLeafDim * kLeafDim;
 constexpr int kEdgeBits = kLeafVoxels * 3;        // one bit per (voxel, positive edge)
 constexpr int kEdgeWords = kEdgeBits / 64;

@@ -14,6 +14,10 @@ namespace detail {
 struct VolumeGrid;
 }
 
+/// Leaves are cubes of 8^3 voxels; edits report, and meshers chunk, by leaf.
+constexpr int kLeafLog2Dim = 3;
+constexpr int kLeafDim = 1 << kLeafLog2Dim;
+
 struct VolumeStats {
     double voxelSize = 1.0;
     uint64_t activeVoxels = 0; // voxels with at least one Hermite sample (surface voxels)

@@ -1,0 +1,48 @@
+#include "mesher/MeshChunkSet.h"
+
+#include <optional>
+#include <set>
+
+namespace vdbclay {
+
+void MeshChunkSet::rebuild(const Volume& volume)
+{
+    chunks_.clear();
+    for (MeshChunk& chunk : meshVolumeChunks(volume, options_)) {
+        const BlockOrigin origin = chunk.leafOrigin;
+        chunks_[origin] = std::move(chunk);
+    }
+}
+
+std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockOrigin>& dirtyBlocks)
+{
+    std::set<BlockOrigin> affected;
+    for (const BlockOrigin& b : dirtyBlocks) {
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz)
+                    affected.insert({b[0] + dx * kLeafDim, b[1] + dy * kLeafDim, b[2] + dz * kLeafDim});
+    }
+    const std::vector<BlockOrigin> origins(affected.begin(), affected.end());
+    std::vector<std::optional<MeshChunk>> fresh = meshLeafChunks(volume, origins, options_);
+    std::size_t remeshed = 0;
+    for (std::size_t i = 0; i < origins.size(); ++i) {
+        if (fresh[i]) {
+            chunks_[origins[i]] = std::move(*fresh[i]);
+            ++remeshed;
+        } else {
+            chunks_.erase(origins[i]);
+        }
+    }
+    return remeshed;
+}
+
+Mesh MeshChunkSet::weld() const
+{
+    std::vector<MeshChunk> ordered;
+    ordered.reserve(chunks_.size());
+    for (const auto& [origin, chunk] : chunks_) ordered.push_back(chunk);
+    return weldChunks(ordered);
+}
+
+} // namespace vdbclay

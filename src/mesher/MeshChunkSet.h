@@ -1,0 +1,37 @@
+// Incremental meshing: the mesh of a volume kept as one chunk per leaf, re-meshed where an edit
+// changed the volume. After update(), every chunk equals what a full re-mesh gives for its leaf.
+#pragma once
+
+#include "mesher/Mesher.h"
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <vector>
+
+namespace vdbclay {
+
+class MeshChunkSet {
+public:
+    using BlockOrigin = std::array<int32_t, 3>;
+
+    explicit MeshChunkSet(const MeshOptions& options = {}) : options_(options) {}
+
+    /// Meshes every leaf.
+    void rebuild(const Volume& volume);
+
+    /// Re-meshes the leaves around the given leaf-sized blocks (EditStats::dirtyBlocks): a cell reads
+    /// the leaves of its eight corners, so each dirty block's 26 neighbours are re-meshed too; chunks of
+    /// leaves that no longer exist are dropped. Returns the number of chunks re-meshed.
+    std::size_t update(const Volume& volume, const std::vector<BlockOrigin>& dirtyBlocks);
+
+    const std::map<BlockOrigin, MeshChunk>& chunks() const { return chunks_; }
+    /// The whole mesh, chunks welded in the order of their leaf origins.
+    Mesh weld() const;
+
+private:
+    MeshOptions options_;
+    std::map<BlockOrigin, MeshChunk> chunks_;
+};
+
+} // namespace vdbclay
