@@ -8,7 +8,7 @@
 
 namespace vdbclay::bench {
 
-std::vector<std::string> benchNames() { return {"csg", "memory", "io"}; }
+std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh"}; }
 
 int runBench(const std::string& which, bool json, bool quick)
 {
@@ -16,7 +16,8 @@ int runBench(const std::string& which, bool json, bool quick)
     if (which == "csg") return benchCsg(json, quick);
     if (which == "memory") return benchMemory(json, quick);
     if (which == "io") return benchIo(json, quick);
-    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory or io)");
+    if (which == "mesh") return benchMesh(json, quick);
+    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io or mesh)");
 }
 
 } // namespace vdbclay::bench

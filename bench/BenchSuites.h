@@ -6,5 +6,6 @@ namespace vdbclay::bench {
 int benchCsg(bool json, bool quick);
 int benchMemory(bool json, bool quick);
 int benchIo(bool json, bool quick);
+int benchMesh(bool json, bool quick);
 
 } // namespace vdbclay::bench

@@ -185,6 +185,32 @@ TEST_CASE("cli: bench memory --quick --json prints one JSON object", "[cli]")
     CHECK_FALSE(j.empty());
 }
 
+TEST_CASE("cli: bench mesh --quick --json has every shape and mesher", "[cli]")
+{
+    TempDir dir;
+    const json j = parseJsonOutput(runCli(dir, "bench mesh --quick --json"));
+    REQUIRE(j.contains("shapes"));
+    for (const char* shape : {"rotated_box", "sphere", "box_minus_sphere", "thin_wall"}) {
+        INFO(shape);
+        REQUIRE(j["shapes"].contains(shape));
+        const json& s = j["shapes"][shape];
+        CHECK(s["surface_cells"].get<double>() > 0);
+        CHECK(s.contains("cms_over_openvdb_cells_per_second"));
+        for (const char* mesher : {"cms_uniform", "mc", "openvdb_adaptivity_0", "openvdb_adaptivity_0.5"}) {
+            INFO(mesher);
+            REQUIRE(s["meshers"].contains(mesher));
+            const json& m = s["meshers"][mesher];
+            for (const char* key : {"ms", "triangles", "mean_distance", "max_distance", "watertight"}) {
+                INFO(key);
+                CHECK(m.contains(key));
+            }
+            CHECK(m["triangles"].get<double>() > 0);
+        }
+        // Uniform CMS is closed on every shape.
+        CHECK(s["meshers"]["cms_uniform"]["watertight"] == true);
+    }
+}
+
 TEST_CASE("cli: demo writes a volume, meshes and the script it ran", "[cli]")
 {
     TempDir dir;
