@@ -15,15 +15,17 @@ uint64_t edgeKey(int32_t i, int32_t j, int32_t k, int axis)
     return (x << 42) | (y << 22) | (z << 2) | uint64_t(axis);
 }
 
-uint64_t faceKey(int32_t i, int32_t j, int32_t k, int axis, int segment)
+uint64_t faceKey(int32_t i, int32_t j, int32_t k, int axis, int segment, int slot)
 {
-    // Bit 63 marks a face key (edge keys use bits 0-61); 20 bits per coordinate as for edges.
-    constexpr int64_t kBias = int64_t(1) << 19;
-    constexpr uint64_t kMask = (uint64_t(1) << 20) - 1;
+    // Bit 63 marks a face key (edge keys use bits 0-61): axis in bits 61-62, segment in 60, slot in
+    // 57-59, and 19 bits per coordinate.
+    constexpr int64_t kBias = int64_t(1) << 18;
+    constexpr uint64_t kMask = (uint64_t(1) << 19) - 1;
     const uint64_t x = uint64_t(int64_t(i) + kBias) & kMask;
     const uint64_t y = uint64_t(int64_t(j) + kBias) & kMask;
     const uint64_t z = uint64_t(int64_t(k) + kBias) & kMask;
-    return (uint64_t(1) << 63) | (uint64_t(segment & 1) << 62) | (uint64_t(axis) << 60) | (x << 40) | (y << 20) | z;
+    return (uint64_t(1) << 63) | (uint64_t(axis & 3) << 61) | (uint64_t(segment & 1) << 60) |
+           (uint64_t(slot & 7) << 57) | (x << 38) | (y << 19) | z;
 }
 
 Mesh weldChunks(const std::vector<MeshChunk>& chunks)

@@ -32,10 +32,11 @@ struct MeshChunk {
 /// Key of the grid edge that starts at voxel (i,j,k) and runs along `axis` (0,1,2); unique for
 /// coordinates within +-kMaxEdgeKeyCoordinate.
 uint64_t edgeKey(int32_t i, int32_t j, int32_t k, int axis);
-constexpr int32_t kMaxEdgeKeyCoordinate = 1 << 19;
-/// Key of a vertex inside a cell face (a 2D sharp feature): the face's minimum corner, its normal
-/// axis, and which of the face's (at most two) segments it lies on. Never equal to an edge key.
-uint64_t faceKey(int32_t i, int32_t j, int32_t k, int axis, int segment);
+constexpr int32_t kMaxEdgeKeyCoordinate = 1 << 18;
+/// Key of a vertex inside a cell face (a 2D sharp feature or a material transition): the face's
+/// minimum corner, its normal axis, which of the face's (at most two) segments it lies on, and its
+/// place along that segment (0..7). Never equal to an edge key.
+uint64_t faceKey(int32_t i, int32_t j, int32_t k, int axis, int segment, int slot);
 /// Key of a vertex that belongs to one chunk only (a cell's inner vertex): never welded.
 constexpr uint64_t kUnsharedVertex = ~uint64_t(0);
 

@@ -33,7 +33,7 @@ void checkRange(const Coord& origin)
 {
     using namespace mesher_detail;
     if (std::max({std::abs(origin.x()), std::abs(origin.y()), std::abs(origin.z())}) >= kMaxEdgeKeyCoordinate - kLeafDim)
-        throw std::runtime_error("the volume reaches beyond the mesher's range of +-524,288 voxels from the origin");
+        throw std::runtime_error("the volume reaches beyond the mesher's range of +-262,144 voxels from the origin");
 }
 
 /// Meshes the given leaves in parallel, one chunk each.
