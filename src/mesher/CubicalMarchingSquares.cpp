@@ -69,10 +69,24 @@ private:
 struct FacePoint {
     Vec2 onFace;
     std::array<double, 3> position;
-    uint64_t key = 0;
-    bool transition = false;
-    MaterialId materialAfter = kEmptyMaterial; // transitions: the material from here on
-    std::array<float, 3> interfaceNormal{};    // transitions: the material interface's normal
+    uint64_t key;
+    bool transition;
+    MaterialId materialAfter;              // transitions: the material from here on
+    std::array<float, 3> interfaceNormal;  // transitions: the material interface's normal
+};
+
+/// The points inside one face segment, in order from its entering crossing: at most a sharp feature
+/// and two transitions (a run cut off by one segment has at most three solid corners).
+struct SegmentPoints {
+    FacePoint items[4];
+    int count = 0;
+
+    void insert(int at, const FacePoint& p)
+    {
+        for (int k = count; k > at; --k) items[k] = items[k - 1];
+        items[at] = p;
+        ++count;
+    }
 };
 
 /// A segment on one face, from the crossing where the walk enters the solid to the one where it
@@ -179,16 +193,16 @@ private:
             const FaceSegment& seg = segments[s];
             next_[seg.in] = seg.out;
             linked_[seg.in] = true;
-            std::vector<FacePoint>& points = facePoints_[seg.in];
-            if (seg.sharp) points.push_back(FacePoint{*seg.sharp, toWorld(*seg.sharp)});
+            SegmentPoints& points = facePoints_[seg.in];
+            if (seg.sharp) points.insert(0, FacePoint{*seg.sharp, toWorld(*seg.sharp), 0, false, kEmptyMaterial, {}});
             // A face with one segment may hold material interfaces between its solid corners.
             if (nSeg == 1) insertTransitions(face, seg, axis, points, toWorld);
             // Slots count along the segment from its end with the smaller key, the same in both cells.
             const int index = (s == 0 ? key0 <= key1 : key1 < key0) ? 0 : 1;
             const bool forward = crossings_.at(seg.in).key < crossings_.at(seg.out).key;
-            for (std::size_t k = 0; k < points.size(); ++k) {
-                const int slot = int(forward ? k : points.size() - 1 - k);
-                points[k].key = faceKey(faceCorner.x(), faceCorner.y(), faceCorner.z(), axis, index, slot);
+            for (int k = 0; k < points.count; ++k) {
+                const int slot = forward ? k : points.count - 1 - k;
+                points.items[k].key = faceKey(faceCorner.x(), faceCorner.y(), faceCorner.z(), axis, index, slot);
             }
         }
     }
@@ -197,7 +211,7 @@ private:
     /// interface's tangent line (through that edge's Hermite sample) splits the segment. Transitions
     /// are inserted in order along the segment so its pieces never fold.
     template<typename ToWorld>
-    void insertTransitions(const CellFace& face, const FaceSegment& seg, int axis, std::vector<FacePoint>& points,
+    void insertTransitions(const CellFace& face, const FaceSegment& seg, int axis, SegmentPoints& points,
                            const ToWorld& toWorld)
     {
         // The solid run the segment cuts off, in walk order: from the corner after `in` to the one
@@ -219,21 +233,20 @@ private:
             if (len < 1e-6) continue;
             n = {n.x / len, n.y / len};
             const Vec2 c = project(interface.position, axis);
+            if (points.count == 4) break;
             // The segment as a polyline: in, the points so far, out.
-            std::vector<Vec2> poly{project(crossings_.at(seg.in).position, axis)};
-            for (const FacePoint& fp : points) poly.push_back(fp.onFace);
-            poly.push_back(project(crossings_.at(seg.out).position, axis));
-            for (std::size_t k = 0; k + 1 < poly.size(); ++k) {
+            Vec2 poly[6];
+            int size = 0;
+            poly[size++] = project(crossings_.at(seg.in).position, axis);
+            for (int k = 0; k < points.count; ++k) poly[size++] = points.items[k].onFace;
+            poly[size++] = project(crossings_.at(seg.out).position, axis);
+            for (int k = 0; k + 1 < size; ++k) {
                 const double fa = n.x * (poly[k].x - c.x) + n.y * (poly[k].y - c.y);
                 const double fb = n.x * (poly[k + 1].x - c.x) + n.y * (poly[k + 1].y - c.y);
                 if ((fa < 0.0) == (fb < 0.0) || fa == fb) continue;
                 const double t = fa / (fa - fb);
                 const Vec2 hit{poly[k].x + t * (poly[k + 1].x - poly[k].x), poly[k].y + t * (poly[k + 1].y - poly[k].y)};
-                FacePoint fp{hit, toWorld(hit)};
-                fp.transition = true;
-                fp.materialAfter = mats_[q].id;
-                fp.interfaceNormal = interface.normal;
-                points.insert(points.begin() + std::ptrdiff_t(k), fp);
+                points.insert(k, FacePoint{hit, toWorld(hit), 0, true, mats_[q].id, interface.normal});
                 break;
             }
         }
@@ -335,8 +348,10 @@ private:
             segmentMaterial[n] = x.material;
             ids[n++] = vertex(x.key, x.position, x.normal, x.material);
             MaterialId material = x.material;
-            if (const auto fp = facePoints_.find(loop[i]); fp != facePoints_.end()) {
-                for (const FacePoint& point : fp->second) {
+            {
+                const SegmentPoints& points = facePoints_[loop[i]];
+                for (int k = 0; k < points.count; ++k) {
+                    const FacePoint& point = points.items[k];
                     const auto& q = point.position;
                     const Eigen::Vector3d qv(q[0], q[1], q[2]);
                     mean += qv;
@@ -384,7 +399,7 @@ private:
     std::unordered_map<uint64_t, uint32_t>& local_;
     int next_[12] = {};
     bool linked_[12] = {};
-    std::unordered_map<int, std::vector<FacePoint>> facePoints_; // by the segment's entering edge
+    SegmentPoints facePoints_[12]; // by the segment's entering edge
 };
 
 } // namespace
