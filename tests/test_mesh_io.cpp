@@ -231,3 +231,27 @@ TEST_CASE("OBJ and PLY export still work", "[meshio]")
     REQUIRE(header != std::string::npos);
     CHECK(ply.size() == header + 11 + 8 * 28 + 8 * 13);
 }
+
+TEST_CASE("GLB primitives follow per-triangle materials when the mesh has them", "[meshio]")
+{
+    MaterialTable materials;
+    Material clay;
+    clay.name = "clay";
+    const MaterialId clayId = materials.define(clay);
+    Mesh mesh = twoMaterialMesh(1); // every vertex of material 1 ...
+    mesh.triangleMaterials.assign(mesh.triangleCount(), 1);
+    for (std::size_t t = 0; t < 3; ++t) mesh.triangleMaterials[t] = clayId; // ... but three clay triangles
+    TempDir dir;
+    writeMesh(mesh, materials, dir.file("split.glb"));
+    const Glb glb = readGlb(dir.file("split.glb"));
+    const json& primitives = glb.doc["meshes"][0]["primitives"];
+    REQUIRE(primitives.size() == 2);
+    std::size_t indices = 0;
+    for (const auto& p : primitives) {
+        const std::size_t count = glb.doc["accessors"][p["indices"].get<std::size_t>()]["count"].get<std::size_t>();
+        const std::string name = glb.doc["materials"][p["material"].get<std::size_t>()]["name"];
+        CHECK(count == 3 * (name == "clay" ? 3 : mesh.triangleCount() - 3));
+        indices += count;
+    }
+    CHECK(indices == 3 * mesh.triangleCount());
+}

@@ -73,8 +73,9 @@ void writePly(std::ostream& os, const Mesh& mesh, const MaterialTable& materials
     }
 }
 
-/// glTF 2.0 binary: one mesh with one primitive per material (triangles grouped by the material of
-/// their first vertex), each with its own compacted POSITION, NORMAL and uint32 index accessors.
+/// glTF 2.0 binary: one mesh with one primitive per material (each triangle's material, or the material
+/// of its first vertex for meshes without per-triangle materials), each with its own compacted
+/// POSITION, NORMAL and uint32 index accessors.
 void writeGlb(std::ostream& os, const Mesh& mesh, const MaterialTable& materials)
 {
     using nlohmann::json;
@@ -83,9 +84,12 @@ void writeGlb(std::ostream& os, const Mesh& mesh, const MaterialTable& materials
     constexpr uint32_t kFloat = 5126, kUnsignedInt = 5125;
 
     std::map<MaterialId, std::vector<uint32_t>> groups; // material -> triangle indices
+    const bool perTriangle = mesh.triangleMaterials.size() == mesh.triangles.size();
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
         const uint32_t v0 = mesh.triangles[t][0];
-        groups[v0 < mesh.materials.size() ? mesh.materials[v0] : kEmptyMaterial].push_back(uint32_t(t));
+        const MaterialId id = perTriangle ? mesh.triangleMaterials[t]
+                                          : (v0 < mesh.materials.size() ? mesh.materials[v0] : kEmptyMaterial);
+        groups[id].push_back(uint32_t(t));
     }
     const bool hasNormals = mesh.normals.size() == mesh.positions.size();
 
