@@ -100,7 +100,7 @@ int runDemo(const DemoOptions& o)
     }
 
     const auto meshStart = std::chrono::steady_clock::now();
-    const Mesh mesh = meshVolume(volume, MeshOptions{MesherKind::MarchingCubes});
+    const Mesh mesh = meshVolume(volume, MeshOptions{MesherKind::CubicalMarchingSquares});
     const double meshSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - meshStart).count();
     const MeshTopology topology = analyzeTopology(mesh);
     writeMesh(mesh, volume.materials(), objPath);
@@ -125,7 +125,7 @@ int runDemo(const DemoOptions& o)
                    {"sculpt_seconds", sculptSeconds},
                    {"leaf_count", stats.leafCount},
                    {"active_voxels", stats.activeVoxels},
-                   {"mesher", mesherName(MesherKind::MarchingCubes)},
+                   {"mesher", mesherName(MesherKind::CubicalMarchingSquares)},
                    {"mesh_seconds", meshSeconds},
                    {"vertices", mesh.vertexCount()},
                    {"triangles", mesh.triangleCount()},
@@ -149,7 +149,7 @@ int runDemo(const DemoOptions& o)
                  {"leaves", std::to_string(stats.leafCount)},
                  {"active voxels", std::to_string(stats.activeVoxels)},
                  {"mesh", std::to_string(mesh.triangleCount()) + " triangles, " + std::to_string(mesh.vertexCount()) +
-                              " vertices (" + mesherName(MesherKind::MarchingCubes) + ", " +
+                              " vertices (" + mesherName(MesherKind::CubicalMarchingSquares) + ", " +
                               formatSeconds(meshSeconds) + ")"},
                  {"watertight", topology.watertight() ? "yes" : "no"},
                  {"volume", vdbPath},
