@@ -96,27 +96,41 @@ private:
 
 /// Every cell whose corners are not all solid or all empty and that `leaf` owns: a cell belongs to
 /// the leaf holding its first corner that lies in a leaf, so the leaves' cells tile space exactly.
+/// The corners' materials (voxels o-1 .. o+8 per axis) are gathered once per leaf.
 template<typename CellFn>
 void forEachOwnedSurfaceCell(const HermiteLeaf& leaf, const Neighbourhood& hood, CellFn&& fn)
 {
+    constexpr int kSpan = kLeafDim + 2; // o-1 .. o+8
     const Coord o = leaf.origin();
-    for (int x = -1; x < kLeafDim; ++x) {
-        for (int y = -1; y < kLeafDim; ++y) {
-            for (int z = -1; z < kLeafDim; ++z) {
-                const Coord base = o.offsetBy(x, y, z);
+    MaterialValue grid[kSpan][kSpan][kSpan];
+    for (int x = 0; x < kSpan; ++x)
+        for (int y = 0; y < kSpan; ++y)
+            for (int z = 0; z < kSpan; ++z) grid[x][y][z] = hood.material(o.offsetBy(x - 1, y - 1, z - 1));
+    // Whether the block holding grid index i (per axis: 0 -> the -1 block, 9 -> the +1 block) is a
+    // leaf, and whether that leaf is this one.
+    auto block = [](int i) { return i == 0 ? -1 : (i == kSpan - 1 ? 1 : 0); };
+    bool isLeaf[3][3][3];
+    for (int bx = -1; bx <= 1; ++bx)
+        for (int by = -1; by <= 1; ++by)
+            for (int bz = -1; bz <= 1; ++bz)
+                isLeaf[bx + 1][by + 1][bz + 1] = hood.leafOf(o.offsetBy(bx * kLeafDim, by * kLeafDim, bz * kLeafDim)) != nullptr;
+
+    for (int x = 0; x <= kLeafDim; ++x) {
+        for (int y = 0; y <= kLeafDim; ++y) {
+            for (int z = 0; z <= kLeafDim; ++z) {
                 MaterialValue mats[8];
                 unsigned solid = 0;
                 int owner = -1;
                 for (int c = 0; c < 8; ++c) {
-                    const Coord p = base.offsetBy(cornerBit(c, 0), cornerBit(c, 1), cornerBit(c, 2));
-                    mats[c] = hood.material(p);
+                    const int cx = x + cornerBit(c, 0), cy = y + cornerBit(c, 1), cz = z + cornerBit(c, 2);
+                    mats[c] = grid[cx][cy][cz];
                     if (mats[c].solid()) solid |= 1u << c;
-                    if (owner < 0 && hood.leafOf(p)) owner = c;
+                    if (owner < 0 && isLeaf[block(cx) + 1][block(cy) + 1][block(cz) + 1]) owner = c;
                 }
                 if (solid == 0 || solid == 0xFF) continue;
-                const Coord ownerCorner = base.offsetBy(cornerBit(owner, 0), cornerBit(owner, 1), cornerBit(owner, 2));
-                if (hood.leafOf(ownerCorner) != &leaf) continue;
-                fn(base, mats, solid);
+                const int ox = x + cornerBit(owner, 0), oy = y + cornerBit(owner, 1), oz = z + cornerBit(owner, 2);
+                if (block(ox) != 0 || block(oy) != 0 || block(oz) != 0) continue; // owned by a neighbour
+                fn(o.offsetBy(x - 1, y - 1, z - 1), mats, solid);
             }
         }
     }

@@ -131,7 +131,7 @@ private:
         const EdgeCrossing& a = crossings_.at(in);
         const EdgeCrossing& b = crossings_.at(out);
         Vec2 na = project(a.normal, axis), nb = project(b.normal, axis);
-        const double la = std::hypot(na.x, na.y), lb = std::hypot(nb.x, nb.y);
+        const double la = std::sqrt(na.x * na.x + na.y * na.y), lb = std::sqrt(nb.x * nb.x + nb.y * nb.y);
         if (la < 1e-6 || lb < 1e-6) return std::nullopt;
         na = {na.x / la, na.y / la};
         nb = {nb.x / lb, nb.y / lb};
@@ -229,7 +229,7 @@ private:
             const EdgeCrossing& interface = crossings_.at(e);
             if (mats_[p] == mats_[q]) continue;
             Vec2 n = project(interface.normal, axis);
-            const double len = std::hypot(n.x, n.y);
+            const double len = std::sqrt(n.x * n.x + n.y * n.y);
             if (len < 1e-6) continue;
             n = {n.x / len, n.y / len};
             const Vec2 c = project(interface.position, axis);
