@@ -21,6 +21,9 @@ constexpr int kFootVoxels = kFoot * kFoot * kFoot;
 constexpr int kLowerDim = 128;      // voxels per side of a HermiteLower node
 constexpr int kUpperDim = 4096;
 
+/// The origin of the node of side `dim` (a power of two) that holds `c`.
+inline Coord alignDown(const Coord& c, int dim) { return Coord(c.x() & ~(dim - 1), c.y() & ~(dim - 1), c.z() & ~(dim - 1)); }
+
 inline int footIndex(int i, int j, int k) { return (i * kFoot + j) * kFoot + k; }
 constexpr int kFootStride[3] = {kFoot * kFoot, kFoot, 1}; // +x, +y, +z neighbours in the footprint
 /// Footprint offsets of the voxels of a 3^3 cube from its first voxel, in cube order (x slowest).
@@ -377,11 +380,6 @@ public:
     std::vector<TileEdit> edits;
 
 private:
-    static Coord alignDown(const Coord& c, int dim)
-    {
-        return Coord(c.x() & ~(dim - 1), c.y() & ~(dim - 1), c.z() & ~(dim - 1));
-    }
-
     /// Empty space stays empty under every op but add.
     bool untouched(bool hasChildren, MaterialValue tile) const
     {
@@ -442,12 +440,9 @@ CoordBBox solidBounds(const HermiteTree& tree)
 {
     CoordBBox box;
     for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) box.expand(leaf->getNodeBoundingBox());
-    for (auto it = tree.cbeginValueAll(); it; ++it) {
-        if (it.isVoxelValue() || !it.getValue().solid()) continue;
-        CoordBBox tile;
-        it.getBoundingBox(tile);
-        box.expand(tile);
-    }
+    forEachTile(tree, [&](const CoordBBox& tile, MaterialValue value) {
+        if (value.solid()) box.expand(tile);
+    });
     return box;
 }
 
@@ -457,7 +452,7 @@ void pruneTouched(HermiteTree& tree, const std::set<Coord>& lowers)
 {
     std::set<Coord> uppers;
     for (const Coord& o : lowers) {
-        uppers.insert(Coord(o.x() & ~(kUpperDim - 1), o.y() & ~(kUpperDim - 1), o.z() & ~(kUpperDim - 1)));
+        uppers.insert(alignDown(o, kUpperDim));
         const HermiteLower* node = tree.probeConstNode<HermiteLower>(o);
         MaterialValue value;
         bool state = false;
@@ -560,9 +555,6 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
 
     EditStats stats;
     std::set<Coord> lowers;
-    auto lowerOf = [](const Coord& c) {
-        return Coord(c.x() & ~(kLowerDim - 1), c.y() & ~(kLowerDim - 1), c.z() & ~(kLowerDim - 1));
-    };
     // Tiles go through the tree itself (see pruneTouched); leaves through an accessor made afterwards.
     for (const TileEdit& e : walker.edits) {
         if (e.level == 2) {
@@ -576,7 +568,7 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
             stats.dirtyBlocks.push_back({e.origin.x(), e.origin.y(), e.origin.z()});
         }
         tree.addTile(e.level, e.origin, e.value, false);
-        lowers.insert(lowerOf(e.origin));
+        lowers.insert(alignDown(e.origin, kLowerDim));
         ++stats.tilesWritten;
     }
     std::vector<std::pair<HermiteLeaf*, std::size_t>> writes;
@@ -585,7 +577,7 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
         BlockResult& r = results[i];
         stats.crossingsComputed += r.crossings;
         ++stats.blocksComputed;
-        lowers.insert(lowerOf(task.origin));
+        lowers.insert(alignDown(task.origin, kLowerDim));
         if (r.uniform) {
             ++stats.tilesWritten;
             if (!task.oldLeaf && task.tileValue == r.value) continue;

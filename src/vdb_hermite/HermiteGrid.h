@@ -219,6 +219,20 @@ using HermiteGrid = openvdb::Grid<HermiteTree>;
 using HermiteLower = HermiteTree::RootNodeType::ChildNodeType::ChildNodeType; // 128^3, tiles of 8^3
 using HermiteUpper = HermiteTree::RootNodeType::ChildNodeType;                // 4096^3, tiles of 128^3
 
+/// Calls fn(bbox, value) for every tile of the tree, never for its voxels: the value iterator is
+/// stopped above the leaf level, so the cost follows the node count, not the voxel count.
+template<typename Fn>
+void forEachTile(const HermiteTree& tree, Fn&& fn)
+{
+    auto it = tree.cbeginValueAll();
+    it.setMaxDepth(HermiteTree::ValueAllCIter::LEAF_DEPTH - 1);
+    for (; it; ++it) {
+        CoordBBox box;
+        it.getBoundingBox(box);
+        fn(box, *it);
+    }
+}
+
 /// Metadata keys stored on the grid.
 constexpr const char* kFormatVersionKey = "vdbclay_format_version";
 constexpr const char* kMaterialsKey = "vdbclay_materials";

@@ -55,17 +55,16 @@ VolumeStats Volume::stats() const
     CoordBBox bbox;
     for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
         s.samples += leaf->sampleCount();
+        const MaterialValue* values = leaf->buffer().data();
         for (Index n = 0; n < Index(kLeafVoxels); ++n) {
-            if (leaf->getValue(n).solid() || leaf->isValueOn(n)) bbox.expand(leaf->offsetToGlobalCoord(n));
+            if (values[n].solid() || leaf->isValueOn(n)) bbox.expand(leaf->offsetToGlobalCoord(n));
         }
     }
-    for (auto it = tree.cbeginValueAll(); it; ++it) {
-        if (it.isVoxelValue() || !it.getValue().solid()) continue;
+    forEachTile(tree, [&](const CoordBBox& tile, MaterialValue value) {
+        if (!value.solid()) return;
         ++s.tileCount;
-        CoordBBox tile;
-        it.getBoundingBox(tile);
         bbox.expand(tile);
-    }
+    });
     s.empty = bbox.empty();
     if (!s.empty) {
         s.bboxMin = {bbox.min().x(), bbox.min().y(), bbox.min().z()};
@@ -92,12 +91,7 @@ bool identical(const Volume& a, const Volume& b)
     using Tile = std::tuple<Coord, Coord, MaterialId>;
     auto tiles = [](const HermiteTree& t) {
         std::vector<Tile> out;
-        for (auto it = t.cbeginValueAll(); it; ++it) {
-            if (it.isVoxelValue()) continue;
-            CoordBBox box;
-            it.getBoundingBox(box);
-            out.emplace_back(box.min(), box.max(), it.getValue().id);
-        }
+        forEachTile(t, [&](const CoordBBox& box, MaterialValue value) { out.emplace_back(box.min(), box.max(), value.id); });
         return out;
     };
     return tiles(ta) == tiles(tb);

@@ -197,9 +197,7 @@ Volume loadVolume(const std::string& path)
             const MaterialValue* values = leaf->buffer().data();
             corrupt = std::any_of(values, values + kLeafVoxels, undefinedMaterial);
         }
-        auto tiles = grid->constTree().cbeginValueAll();
-        tiles.setMaxDepth(HermiteTree::ValueAllCIter::LEAF_DEPTH - 1); // tiles only, not voxels
-        for (; tiles && !corrupt; ++tiles) corrupt = undefinedMaterial(*tiles);
+        forEachTile(grid->constTree(), [&](const CoordBBox&, MaterialValue v) { corrupt = corrupt || undefinedMaterial(v); });
         if (corrupt) throw VolumeIOError("'" + path + "' is corrupt: a voxel uses an undefined material id");
         grid->removeMeta(kFormatVersionKey);
         grid->removeMeta(kMaterialsKey);
