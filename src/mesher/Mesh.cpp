@@ -30,17 +30,26 @@ uint64_t faceKey(int32_t i, int32_t j, int32_t k, int axis, int segment, int slo
 
 Mesh weldChunks(const std::vector<MeshChunk>& chunks)
 {
+    std::vector<const MeshChunk*> pointers;
+    pointers.reserve(chunks.size());
+    for (const MeshChunk& c : chunks) pointers.push_back(&c);
+    return weldChunks(pointers);
+}
+
+Mesh weldChunks(const std::vector<const MeshChunk*>& chunks)
+{
     Mesh out;
     std::size_t vertices = 0, triangles = 0;
-    for (const auto& c : chunks) {
-        vertices += c.mesh.vertexCount();
-        triangles += c.mesh.triangleCount();
+    for (const MeshChunk* c : chunks) {
+        vertices += c->mesh.vertexCount();
+        triangles += c->mesh.triangleCount();
     }
     out.triangles.reserve(triangles);
     std::unordered_map<uint64_t, uint32_t> index;
     index.reserve(vertices);
     std::vector<uint32_t> remap;
-    for (const auto& c : chunks) {
+    for (const MeshChunk* chunk : chunks) {
+        const MeshChunk& c = *chunk;
         remap.resize(c.mesh.vertexCount());
         for (std::size_t v = 0; v < c.mesh.vertexCount(); ++v) {
             const uint32_t next = uint32_t(out.positions.size());

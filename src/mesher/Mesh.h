@@ -42,5 +42,6 @@ constexpr uint64_t kUnsharedVertex = ~uint64_t(0);
 
 /// Joins chunks, merging vertices with the same key (kUnsharedVertex vertices are kept apart).
 Mesh weldChunks(const std::vector<MeshChunk>& chunks);
+Mesh weldChunks(const std::vector<const MeshChunk*>& chunks);
 
 } // namespace vdbclay

@@ -39,9 +39,9 @@ std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockOr
 
 Mesh MeshChunkSet::weld() const
 {
-    std::vector<MeshChunk> ordered;
+    std::vector<const MeshChunk*> ordered;
     ordered.reserve(chunks_.size());
-    for (const auto& [origin, chunk] : chunks_) ordered.push_back(chunk);
+    for (const auto& [origin, chunk] : chunks_) ordered.push_back(&chunk);
     return weldChunks(ordered);
 }
 
