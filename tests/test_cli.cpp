@@ -232,9 +232,7 @@ TEST_CASE("cli: bad input fails cleanly with a message", "[cli]")
     TempDir dir;
     SECTION("info on random bytes")
     {
-        std::mt19937_64 rng(0x5eed0201);
-        std::vector<char> junk(4096);
-        for (char& c : junk) c = char(rng() & 0xff);
+        const std::vector<char> junk = randomBytes(4096, 0x5eed0201);
         writeBytes(dir.file("junk.vdb"), junk.data(), junk.size());
         checkCleanFailure(runCli(dir, "info junk.vdb"));
         checkCleanFailure(runCli(dir, "info junk.vdb --json"));

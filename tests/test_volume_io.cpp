@@ -157,9 +157,7 @@ TEST_CASE("files that are not VDBClay volumes are rejected", "[io]")
     TempDir dir;
     SECTION("random bytes")
     {
-        std::mt19937_64 rng(0x5eed0101);
-        std::vector<char> junk(8192);
-        for (char& c : junk) c = char(rng() & 0xff);
+        const std::vector<char> junk = randomBytes(8192, 0x5eed0101);
         writeBytes(dir.file("junk.vdb"), junk.data(), junk.size());
         requireRejected(dir.file("junk.vdb"));
     }
@@ -197,10 +195,11 @@ void checkHeaderThenJunk(std::initializer_list<std::size_t> keeps)
     TempDir dir;
     saveVolume(makeSculpted(), dir.file("good.vdb"));
     const std::vector<char> bytes = readBytes(dir.file("good.vdb"));
-    std::mt19937_64 rng(0x5eed0102);
+    uint64_t seed = 0x5eed0102;
     for (std::size_t keep : keeps) {
         std::vector<char> mixed(bytes.begin(), bytes.begin() + std::ptrdiff_t(keep));
-        for (int i = 0; i < 4096; ++i) mixed.push_back(char(rng() & 0xff));
+        const std::vector<char> junk = randomBytes(4096, seed++);
+        mixed.insert(mixed.end(), junk.begin(), junk.end());
         const std::string path = dir.file("mixed-" + std::to_string(keep) + ".vdb");
         writeBytes(path, mixed.data(), mixed.size());
         requireRejected(path);

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -64,6 +65,15 @@ inline void writeBytes(const std::string& path, const char* data, std::size_t si
 }
 
 inline void writeText(const std::string& path, const std::string& text) { writeBytes(path, text.data(), text.size()); }
+
+/// Deterministic junk: `size` pseudo-random bytes from `seed`.
+inline std::vector<char> randomBytes(std::size_t size, uint64_t seed)
+{
+    std::mt19937_64 rng(seed);
+    std::vector<char> bytes(size);
+    for (char& c : bytes) c = char(rng() & 0xff);
+    return bytes;
+}
 
 inline double sphereVolume(double r) { return 4.0 / 3.0 * kPi * r * r * r; }
 /// Volume of the cap of height h cut from a ball of radius r.
