@@ -76,6 +76,7 @@ Primitive parsePrimitive(const json& b, const std::string& where)
         p.rounding = number(b, "rounding", where, 0.0);
         break;
     case Shape::Cylinder:
+    case Shape::Cone:
         p.radius = number(b, "radius", where);
         p.height = number(b, "height", where);
         break;
@@ -86,10 +87,6 @@ Primitive parsePrimitive(const json& b, const std::string& where)
     case Shape::Torus:
         p.radius = number(b, "radius", where);
         p.minorRadius = number(b, "minor_radius", where);
-        break;
-    case Shape::Cone:
-        p.radius = number(b, "radius", where);
-        p.height = number(b, "height", where);
         break;
     case Shape::HalfSpace: p.normal = vec3Or(b, "normal", where, Vec3d(0.0, 1.0, 0.0)); break;
     }
