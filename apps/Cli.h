@@ -75,6 +75,7 @@ struct MeshCommandOptions {
     std::string output;
     std::string mesher = "cms";
     double angleDegrees = 30.0;
+    double subdivisionAngleDegrees = 15.0;
     bool uniform = false;
     bool json = false;
 };

@@ -100,7 +100,9 @@ int runDemo(const DemoOptions& o)
     }
 
     const auto meshStart = std::chrono::steady_clock::now();
-    const Mesh mesh = meshVolume(volume, MeshOptions{MesherKind::CubicalMarchingSquares});
+    MeshOptions meshOptions;
+    meshOptions.kind = MesherKind::CubicalMarchingSquares;
+    const Mesh mesh = meshVolume(volume, meshOptions);
     const double meshSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - meshStart).count();
     const MeshTopology topology = analyzeTopology(mesh);
     writeMesh(mesh, volume.materials(), objPath);

@@ -26,11 +26,25 @@ CLI::App* addMeshCommand(CLI::App& parent, MeshCommandOptions& o)
                     "CMS: normals spanning more than this angle make a sharp edge or corner")
         ->capture_default_str()
         ->type_name("DEG");
+    cmd->add_option("--adapt-angle", o.subdivisionAngleDegrees,
+                    "CMS: a cell wider than one voxel is split while its normals span more than this angle")
+        ->capture_default_str()
+        ->type_name("DEG");
     cmd->add_flag("--uniform", o.uniform,
-                  "CMS: mesh every voxel cell (adaptive cells are not implemented yet, so CMS is always uniform)");
+                  "CMS: mesh every voxel cell instead of adaptive cells (up to 8 voxels wide on flat surface)");
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text");
     return cmd;
 }
+
+namespace {
+
+std::string cellsName(const MeshOptions& options)
+{
+    if (options.kind == MesherKind::MarchingCubes || options.maxCellWidth == 1) return "uniform";
+    return "adaptive";
+}
+
+} // namespace
 
 int runMesh(const MeshCommandOptions& o)
 {
@@ -42,6 +56,10 @@ int runMesh(const MeshCommandOptions& o)
     }
     if (!(o.angleDegrees > 0.0 && o.angleDegrees < 180.0)) throw UsageError("--angle must lie between 0 and 180 degrees");
     options.sharpAngleDegrees = o.angleDegrees;
+    if (!(o.subdivisionAngleDegrees > 0.0 && o.subdivisionAngleDegrees < 180.0))
+        throw UsageError("--adapt-angle must lie between 0 and 180 degrees");
+    options.subdivisionAngleDegrees = o.subdivisionAngleDegrees;
+    options.maxCellWidth = o.uniform ? 1 : 8;
     requireMeshExtension(o.output, "--output");
 
     const auto start = std::chrono::steady_clock::now();
@@ -54,6 +72,7 @@ int runMesh(const MeshCommandOptions& o)
     if (o.json) {
         printJson({{"output", o.output},
                    {"mesher", mesherName(options.kind)},
+                   {"cells", cellsName(options)},
                    {"vertices", mesh.vertexCount()},
                    {"triangles", mesh.triangleCount()},
                    {"watertight", topology.watertight()},
@@ -67,6 +86,7 @@ int runMesh(const MeshCommandOptions& o)
         }
         printFields({{"meshed", o.input + " -> " + o.output},
                      {"mesher", mesherName(options.kind)},
+                     {"cells", cellsName(options)},
                      {"vertices", std::to_string(mesh.vertexCount())},
                      {"triangles", std::to_string(mesh.triangleCount())},
                      {"watertight", closed},

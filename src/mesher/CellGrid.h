@@ -94,18 +94,36 @@ private:
     MaterialValue tiles_[27];
 };
 
+/// The materials of the voxels o-1 .. o+8 per axis around a leaf at origin o: every corner a cell
+/// owned by the leaf can have, gathered once per leaf.
+struct CornerGrid {
+    static constexpr int kSpan = kLeafDim + 2;
+
+    CornerGrid(const HermiteLeaf& leaf, const Neighbourhood& hood) : origin(leaf.origin())
+    {
+        for (int x = 0; x < kSpan; ++x)
+            for (int y = 0; y < kSpan; ++y)
+                for (int z = 0; z < kSpan; ++z) cells[x][y][z] = hood.material(origin.offsetBy(x - 1, y - 1, z - 1));
+    }
+
+    /// The material at leaf-local voxel (x, y, z), each in -1 .. 8.
+    MaterialValue at(int x, int y, int z) const { return cells[x + 1][y + 1][z + 1]; }
+
+    Coord origin;
+    MaterialValue cells[kSpan][kSpan][kSpan];
+};
+
+/// Which of a leaf's owned cells forEachOwnedSurfaceCell visits: all of them, or only those whose
+/// minimum corner lies outside the leaf (in a tile block beside it).
+enum class OwnedCells { All, OutsideLeaf };
+
 /// Every cell whose corners are not all solid or all empty and that `leaf` owns: a cell belongs to
 /// the leaf holding its first corner that lies in a leaf, so the leaves' cells tile space exactly.
-/// The corners' materials (voxels o-1 .. o+8 per axis) are gathered once per leaf.
 template<typename CellFn>
-void forEachOwnedSurfaceCell(const HermiteLeaf& leaf, const Neighbourhood& hood, CellFn&& fn)
+void forEachOwnedSurfaceCell(const CornerGrid& grid, const Neighbourhood& hood, OwnedCells which, CellFn&& fn)
 {
-    constexpr int kSpan = kLeafDim + 2; // o-1 .. o+8
-    const Coord o = leaf.origin();
-    MaterialValue grid[kSpan][kSpan][kSpan];
-    for (int x = 0; x < kSpan; ++x)
-        for (int y = 0; y < kSpan; ++y)
-            for (int z = 0; z < kSpan; ++z) grid[x][y][z] = hood.material(o.offsetBy(x - 1, y - 1, z - 1));
+    constexpr int kSpan = CornerGrid::kSpan;
+    const Coord o = grid.origin;
     // Whether the block holding grid index i (per axis: 0 -> the -1 block, 9 -> the +1 block) is a
     // leaf, and whether that leaf is this one.
     auto block = [](int i) { return i == 0 ? -1 : (i == kSpan - 1 ? 1 : 0); };
@@ -118,12 +136,13 @@ void forEachOwnedSurfaceCell(const HermiteLeaf& leaf, const Neighbourhood& hood,
     for (int x = 0; x <= kLeafDim; ++x) {
         for (int y = 0; y <= kLeafDim; ++y) {
             for (int z = 0; z <= kLeafDim; ++z) {
+                if (which == OwnedCells::OutsideLeaf && x > 0 && y > 0 && z > 0) continue;
                 MaterialValue mats[8];
                 unsigned solid = 0;
                 int owner = -1;
                 for (int c = 0; c < 8; ++c) {
                     const int cx = x + cornerBit(c, 0), cy = y + cornerBit(c, 1), cz = z + cornerBit(c, 2);
-                    mats[c] = grid[cx][cy][cz];
+                    mats[c] = grid.cells[cx][cy][cz];
                     if (mats[c].solid()) solid |= 1u << c;
                     if (owner < 0 && isLeaf[block(cx) + 1][block(cy) + 1][block(cz) + 1]) owner = c;
                 }
@@ -145,24 +164,32 @@ struct EdgeCrossing {
     MaterialId material;
 };
 
+/// The crossing on the voxel edge from `start` along `axis`, whose ends hold `low` and `high`.
+inline EdgeCrossing voxelEdgeCrossing(const Neighbourhood& hood, const Coord& start, int axis, MaterialValue low,
+                                      MaterialValue high, double voxelSize)
+{
+    const PackedSample* s = hood.sample(start, axis);
+    const UnpackedSample u = s ? unpackSample(*s) : UnpackedSample{0.5f, {0.f, 0.f, 0.f}};
+    std::array<float, 3> pos{float(start.x()), float(start.y()), float(start.z())};
+    pos[axis] += u.offset;
+    for (float& p : pos) p = float(p * voxelSize);
+    const MaterialValue m = low.solid() ? low : high;
+    return {edgeKey(start.x(), start.y(), start.z(), axis), pos, u.normal, m.id};
+}
+
 inline EdgeCrossing edgeCrossing(const Neighbourhood& hood, const Coord& base, const MaterialValue mats[8], int e,
                                  double voxelSize)
 {
     const int axis = e / 4;
     const int lowCorner = edgeLowCorner(e);
     const Coord start = base.offsetBy(cornerBit(lowCorner, 0), cornerBit(lowCorner, 1), cornerBit(lowCorner, 2));
-    const PackedSample* s = hood.sample(start, axis);
-    const UnpackedSample u = s ? unpackSample(*s) : UnpackedSample{0.5f, {0.f, 0.f, 0.f}};
-    std::array<float, 3> pos{float(start.x()), float(start.y()), float(start.z())};
-    pos[axis] += u.offset;
-    for (float& p : pos) p = float(p * voxelSize);
-    const int highCorner = lowCorner | (1 << axis);
-    const MaterialValue m = mats[lowCorner].solid() ? mats[lowCorner] : mats[highCorner];
-    return {edgeKey(start.x(), start.y(), start.z(), axis), pos, u.normal, m.id};
+    return voxelEdgeCrossing(hood, start, axis, mats[lowCorner], mats[lowCorner | (1 << axis)], voxelSize);
 }
 
 MeshChunk meshLeafMarchingCubes(const HermiteLeaf& leaf, ConstAccessor& acc, double voxelSize);
+class CellWidthField;
+/// `widths`: the adaptive cells around the leaf (CellOctree.h); null meshes voxel cells.
 MeshChunk meshLeafCubicalMarchingSquares(const HermiteLeaf& leaf, ConstAccessor& acc, double voxelSize,
-                                         double sharpAngleDegrees);
+                                         double sharpAngleDegrees, const CellWidthField* widths);
 
 } // namespace vdbclay::mesher_detail

@@ -1,5 +1,5 @@
 // Cubical Marching Squares (Ho et al., seed 000; seed 004 §2.6 and §4.2.2) over Hermite data, on
-// uniform voxel cells.
+// voxel cells or on the adaptive cells of CellOctree.h.
 //
 // Each face of a cell is meshed on its own by marching squares. A face segment whose two crossings'
 // normals span more than the sharp angle gets a 2D sharp feature: the point where the crossings'
@@ -10,7 +10,14 @@
 // cell) when its normals span the sharp angle, else the mean of its vertices, and is fanned from it.
 // A face's segments and sharp points depend on the face alone, so neighbouring cells agree on them
 // and the welded mesh is watertight.
+//
+// Adaptive cells: a cell face is meshed as the squares of the finer of the two cells sharing it (a
+// wide face beside narrower cells is split into their faces), so both cells walk the same squares and
+// no crack opens between cells of different widths. A wide cell's edge has at most one crossing, which
+// is the crossing of the voxel edge where its material changes: the same point, with the same key, at
+// every width.
 #include "mesher/CellGrid.h"
+#include "mesher/CellOctree.h"
 
 #include <Eigen/Dense>
 
@@ -40,30 +47,6 @@ bool segmentsCross(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d)
     return ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0)) && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0));
 }
 
-/// What one cell needs to know about its crossings, computed once per cell.
-class CellCrossings {
-public:
-    CellCrossings(const Neighbourhood& hood, const Coord& base, const MaterialValue mats[8], double voxelSize)
-        : hood_(hood), base_(base), mats_(mats), voxelSize_(voxelSize) {}
-
-    const EdgeCrossing& at(int e)
-    {
-        if (!known_[e]) {
-            crossings_[e] = edgeCrossing(hood_, base_, mats_, e, voxelSize_);
-            known_[e] = true;
-        }
-        return crossings_[e];
-    }
-
-private:
-    const Neighbourhood& hood_;
-    Coord base_;
-    const MaterialValue* mats_;
-    double voxelSize_;
-    EdgeCrossing crossings_[12];
-    bool known_[12] = {};
-};
-
 /// A vertex inside a face segment: its 2D sharp feature, or a material transition (where the
 /// tangent line of a material interface on the face meets the segment, seed 004 Algorithm 2).
 struct FacePoint {
@@ -89,145 +72,275 @@ struct SegmentPoints {
     }
 };
 
-/// A segment on one face, from the crossing where the walk enters the solid to the one where it
-/// leaves, with its optional 2D sharp feature.
-struct FaceSegment {
-    int in, out;
-    std::optional<Vec2> sharp;
+/// A segment on one face square, from the crossing where the walk enters the solid to the one where
+/// it leaves, with the points inside it.
+struct Segment {
+    EdgeCrossing in, out;
+    SegmentPoints points;
+};
+
+/// Buffers reused by the cells of one leaf.
+struct CellScratch {
+    std::vector<Segment> segments;
+    std::vector<int> loop;
+    std::vector<uint32_t> ids;
+    std::vector<MaterialId> pieceMaterials;
+    std::vector<bool> used;
+};
+
+/// What every cell of one leaf shares.
+struct LeafContext {
+    const Neighbourhood& hood;
+    const CellWidthField* widths; // null: voxel cells only
+    double voxelSize;
+    double cosSharp;
+    MeshChunk& chunk;
+    std::unordered_map<uint64_t, uint32_t>& local;
+    CellScratch& scratch;
+};
+
+/// The crossing on the grid edge of `length` voxels from `start` along `axis`, whose ends hold `low`
+/// and `high`: the crossing of the voxel edge where the material changes (there is one, as the cells
+/// that own such an edge are simple).
+EdgeCrossing crossingAlong(const Neighbourhood& hood, const Coord& start, int axis, int length, MaterialValue low,
+                           MaterialValue high, double voxelSize)
+{
+    Coord at = start;
+    MaterialValue previous = low;
+    for (int k = 1; k < length; ++k) {
+        Coord next = at;
+        next[axis] += 1;
+        const MaterialValue m = hood.material(next);
+        if (m != previous) return voxelEdgeCrossing(hood, at, axis, previous, m, voxelSize);
+        at = next;
+    }
+    return voxelEdgeCrossing(hood, at, axis, previous, high, voxelSize);
+}
+
+/// One square a cell face is meshed in: the whole face, or a face of a narrower cell beside it.
+struct Square {
+    int axis;         // the face's normal axis
+    int width;
+    Coord corners[4]; // counter-clockwise seen from outside the cell being meshed
+    MaterialValue mats[4];
+    int cellCorners[4]; // the cell's corner at each square corner, when the square is the whole face
+    bool wholeFace;
+    Coord minCorner;
 };
 
 class CellMesher {
 public:
-    CellMesher(const Neighbourhood& hood, const Coord& base, const MaterialValue mats[8], unsigned solid,
-               double voxelSize, double cosSharp, MeshChunk& chunk, std::unordered_map<uint64_t, uint32_t>& local)
-        : crossings_(hood, base, mats, voxelSize), base_(base), mats_(mats), solid_(solid), voxelSize_(voxelSize),
-          cosSharp_(cosSharp), chunk_(chunk), local_(local) {}
+    CellMesher(LeafContext& ctx, const Coord& base, int width, const MaterialValue mats[8])
+        : ctx_(ctx), base_(base), width_(width), mats_(mats), segments_(ctx.scratch.segments)
+    {
+        segments_.clear();
+    }
 
     void run()
     {
-        for (int f = 0; f < 6; ++f) meshFace(f);
-        bool used[12] = {};
-        for (int start = 0; start < 12; ++start) {
-            if (!linked_[start] || used[start]) continue;
-            int loop[12], size = 0;
-            for (int e = start; !used[e] && size < 12; e = next_[e]) {
-                used[e] = true;
-                loop[size++] = e;
+        for (int f = 0; f < 6; ++f) {
+            const int axis = f / 2;
+            meshFaceRegion(f, base_[(axis + 1) % 3], base_[(axis + 2) % 3], width_);
+        }
+        std::vector<bool>& used = ctx_.scratch.used;
+        used.assign(segments_.size(), false);
+        std::vector<int>& loop = ctx_.scratch.loop;
+        for (std::size_t start = 0; start < segments_.size(); ++start) {
+            if (used[start]) continue;
+            loop.clear();
+            int s = int(start);
+            while (s >= 0 && !used[s]) {
+                used[s] = true;
+                loop.push_back(s);
+                s = segmentStartingAt(segments_[s].out.key);
             }
-            emitComponent(loop, size);
+            if (s == int(start)) emitComponent(loop);
         }
     }
 
 private:
+    int segmentStartingAt(uint64_t key) const
+    {
+        for (std::size_t i = 0; i < segments_.size(); ++i)
+            if (segments_[i].in.key == key) return int(i);
+        return -1;
+    }
+
+    /// Meshes the part (u0, v0, width) of face f, split where the cell across it is narrower.
+    void meshFaceRegion(int f, int u0, int v0, int width)
+    {
+        const int axis = f / 2, side = f % 2, u = (axis + 1) % 3, v = (axis + 2) % 3;
+        if (width > 1 && ctx_.widths) {
+            Coord across;
+            across[axis] = side ? base_[axis] + width_ : base_[axis] - 1;
+            across[u] = u0;
+            across[v] = v0;
+            if (ctx_.widths->widthAt(across) < width) {
+                const int half = width / 2;
+                for (int q = 0; q < 4; ++q) meshFaceRegion(f, u0 + half * (q & 1), v0 + half * (q >> 1), half);
+                return;
+            }
+        }
+        meshSquare(makeSquare(f, u0, v0, width));
+    }
+
+    Square makeSquare(int f, int u0, int v0, int width) const
+    {
+        const int axis = f / 2, side = f % 2, u = (axis + 1) % 3, v = (axis + 2) % 3;
+        Square sq;
+        sq.axis = axis;
+        sq.width = width;
+        sq.wholeFace = width == width_;
+        for (int i = 0; i < 4; ++i) {
+            const int c = kFaces[f].corners[i];
+            Coord& p = sq.corners[i];
+            p[axis] = base_[axis] + side * width_;
+            p[u] = u0 + width * cornerBit(c, u);
+            p[v] = v0 + width * cornerBit(c, v);
+            sq.cellCorners[i] = c;
+            sq.mats[i] = sq.wholeFace ? mats_[c] : ctx_.hood.material(p);
+        }
+        sq.minCorner[axis] = base_[axis] + side * width_;
+        sq.minCorner[u] = u0;
+        sq.minCorner[v] = v0;
+        return sq;
+    }
+
+    /// The crossing on side i of the square (from its corner i to corner i + 1).
+    const EdgeCrossing& squareCrossing(const Square& sq, int i)
+    {
+        if (!known_[i]) {
+            const int j = (i + 1) % 4;
+            const Coord &p = sq.corners[i], &q = sq.corners[j];
+            const int axis = p[0] != q[0] ? 0 : (p[1] != q[1] ? 1 : 2);
+            const bool forward = p[axis] < q[axis];
+            if (sq.wholeFace) {
+                const int e = cellEdge(sq.cellCorners[i], sq.cellCorners[j]);
+                if (!cellKnown_[e]) {
+                    cellCrossings_[e] = crossingAlong(ctx_.hood, forward ? p : q, axis, sq.width,
+                                                      forward ? sq.mats[i] : sq.mats[j],
+                                                      forward ? sq.mats[j] : sq.mats[i], ctx_.voxelSize);
+                    cellKnown_[e] = true;
+                }
+                squareCrossings_[i] = cellCrossings_[e];
+            } else {
+                squareCrossings_[i] = crossingAlong(ctx_.hood, forward ? p : q, axis, sq.width,
+                                                    forward ? sq.mats[i] : sq.mats[j],
+                                                    forward ? sq.mats[j] : sq.mats[i], ctx_.voxelSize);
+            }
+            known_[i] = true;
+        }
+        return squareCrossings_[i];
+    }
+
     Vec2 project(const std::array<float, 3>& v, int axis) const
     {
         return {v[(axis + 1) % 3], v[(axis + 2) % 3]};
     }
 
     /// Where the tangent lines of the segment's two crossings meet, if their normals span the sharp
-    /// angle and the point lies on the face.
-    std::optional<Vec2> sharpFeature(int in, int out, int axis)
+    /// angle and the point lies on the square.
+    std::optional<Vec2> sharpFeature(const EdgeCrossing& a, const EdgeCrossing& b, const Square& sq) const
     {
-        const EdgeCrossing& a = crossings_.at(in);
-        const EdgeCrossing& b = crossings_.at(out);
+        const int axis = sq.axis;
         Vec2 na = project(a.normal, axis), nb = project(b.normal, axis);
         const double la = std::sqrt(na.x * na.x + na.y * na.y), lb = std::sqrt(nb.x * nb.x + nb.y * nb.y);
         if (la < 1e-6 || lb < 1e-6) return std::nullopt;
         na = {na.x / la, na.y / la};
         nb = {nb.x / lb, nb.y / lb};
-        if (na.x * nb.x + na.y * nb.y > cosSharp_) return std::nullopt;
+        if (na.x * nb.x + na.y * nb.y > ctx_.cosSharp) return std::nullopt;
         const double det = cross2(na, nb);
         if (std::fabs(det) < 1e-9) return std::nullopt;
         const Vec2 pa = project(a.position, axis), pb = project(b.position, axis);
         const double ca = na.x * pa.x + na.y * pa.y, cb = nb.x * pb.x + nb.y * pb.y;
         const Vec2 p{(ca * nb.y - cb * na.y) / det, (na.x * cb - nb.x * ca) / det};
-        const int bAxis = (axis + 1) % 3, cAxis = (axis + 2) % 3;
-        const double lo0 = base_[bAxis] * voxelSize_, lo1 = base_[cAxis] * voxelSize_;
-        const double eps = 1e-9 * voxelSize_;
-        if (p.x < lo0 - eps || p.x > lo0 + voxelSize_ + eps || p.y < lo1 - eps || p.y > lo1 + voxelSize_ + eps)
+        const double vs = ctx_.voxelSize, extent = sq.width * vs;
+        const double lo0 = sq.minCorner[(axis + 1) % 3] * vs, lo1 = sq.minCorner[(axis + 2) % 3] * vs;
+        const double eps = 1e-9 * vs;
+        if (p.x < lo0 - eps || p.x > lo0 + extent + eps || p.y < lo1 - eps || p.y > lo1 + extent + eps)
             return std::nullopt;
         return p;
     }
 
-    void meshFace(int f)
+    void meshSquare(const Square& sq)
     {
-        const CellFace& face = kFaces[f];
-        const int axis = f / 2, side = f % 2;
-        int edges[4], count = 0;
+        for (bool& k : known_) k = false;
+        const int axis = sq.axis;
+        int sides[4], count = 0;
         bool entering[4];
         for (int i = 0; i < 4; ++i) {
-            const int p = face.corners[i], q = face.corners[(i + 1) % 4];
-            const bool sp = (solid_ >> p) & 1u, sq = (solid_ >> q) & 1u;
-            if (sp == sq) continue;
-            edges[count] = cellEdge(p, q);
-            entering[count] = sq;
+            const bool sp = sq.mats[i].solid(), sq1 = sq.mats[(i + 1) % 4].solid();
+            if (sp == sq1) continue;
+            sides[count] = i;
+            entering[count] = sq1;
             ++count;
         }
         if (count == 0) return;
-        FaceSegment segments[2];
+        struct Pairing {
+            int in, out; // square sides
+            std::optional<Vec2> sharp;
+        } pairs[2] = {};
         int nSeg = 0;
         auto pairUp = [&](int shift) {
             nSeg = 0;
             for (int i = 0; i < count; ++i) {
                 if (!entering[i]) continue;
-                const int in = edges[i], out = edges[(i + shift) % count];
-                segments[nSeg++] = {in, out, sharpFeature(in, out, axis)};
+                const int in = sides[i], out = sides[(i + shift) % count];
+                pairs[nSeg++] = {in, out, sharpFeature(squareCrossing(sq, in), squareCrossing(sq, out), sq)};
             }
         };
         pairUp(1); // each entering crossing to the leaving one that follows it: solid corners stay apart
-        if (count == 4 && segmentsOverlap(segments, axis)) pairUp(3);
+        if (count == 4 && segmentsOverlap(sq, pairs[0].in, pairs[0].out, pairs[0].sharp, pairs[1].in, pairs[1].out,
+                                          pairs[1].sharp))
+            pairUp(3);
 
-        // Both cells sharing this face must name its points alike: order segments by their crossings.
-        const uint64_t key0 = std::min(crossings_.at(segments[0].in).key, crossings_.at(segments[0].out).key);
-        const uint64_t key1 =
-            nSeg > 1 ? std::min(crossings_.at(segments[1].in).key, crossings_.at(segments[1].out).key) : key0;
-        const Coord faceCorner = side ? base_.offsetBy(axis == 0, axis == 1, axis == 2) : base_;
+        // Both cells sharing this square must name its points alike: order segments by their crossings.
+        auto minKey = [&](const Pairing& p) {
+            return std::min(squareCrossing(sq, p.in).key, squareCrossing(sq, p.out).key);
+        };
+        const uint64_t key0 = minKey(pairs[0]);
+        const uint64_t key1 = nSeg > 1 ? minKey(pairs[1]) : key0;
+        const double plane = sq.minCorner[axis] * ctx_.voxelSize;
         auto toWorld = [&](const Vec2& q) {
             std::array<double, 3> pos{};
-            pos[axis] = faceCorner[axis] * voxelSize_;
+            pos[axis] = plane;
             pos[(axis + 1) % 3] = q.x;
             pos[(axis + 2) % 3] = q.y;
             return pos;
         };
         for (int s = 0; s < nSeg; ++s) {
-            const FaceSegment& seg = segments[s];
-            next_[seg.in] = seg.out;
-            linked_[seg.in] = true;
-            SegmentPoints& points = facePoints_[seg.in];
-            if (seg.sharp) points.insert(0, FacePoint{*seg.sharp, toWorld(*seg.sharp), 0, false, kEmptyMaterial, {}});
-            // A face with one segment may hold material interfaces between its solid corners.
-            if (nSeg == 1) insertTransitions(face, seg, axis, points, toWorld);
+            const Pairing& pr = pairs[s];
+            Segment seg{squareCrossing(sq, pr.in), squareCrossing(sq, pr.out), {}};
+            SegmentPoints& points = seg.points;
+            if (pr.sharp) points.insert(0, FacePoint{*pr.sharp, toWorld(*pr.sharp), 0, false, kEmptyMaterial, {}});
+            // A square with one segment may hold material interfaces between its solid corners.
+            if (nSeg == 1) insertTransitions(sq, pr.in, seg, toWorld);
             // Slots count along the segment from its end with the smaller key, the same in both cells.
             const int index = (s == 0 ? key0 <= key1 : key1 < key0) ? 0 : 1;
-            const bool forward = crossings_.at(seg.in).key < crossings_.at(seg.out).key;
+            const bool forward = seg.in.key < seg.out.key;
             for (int k = 0; k < points.count; ++k) {
                 const int slot = forward ? k : points.count - 1 - k;
-                points.items[k].key = faceKey(faceCorner.x(), faceCorner.y(), faceCorner.z(), axis, index, slot);
+                points.items[k].key = faceKey(sq.minCorner.x(), sq.minCorner.y(), sq.minCorner.z(), axis, index, slot);
             }
+            segments_.push_back(seg);
         }
     }
 
-    /// Seed 004 Algorithm 2: where two consecutive solid corners of the face differ in material, the
+    /// Seed 004 Algorithm 2: where two consecutive solid corners of the square differ in material, the
     /// interface's tangent line (through that edge's Hermite sample) splits the segment. Transitions
     /// are inserted in order along the segment so its pieces never fold.
     template<typename ToWorld>
-    void insertTransitions(const CellFace& face, const FaceSegment& seg, int axis, SegmentPoints& points,
-                           const ToWorld& toWorld)
+    void insertTransitions(const Square& sq, int inSide, Segment& seg, const ToWorld& toWorld)
     {
-        // The solid run the segment cuts off, in walk order: from the corner after `in` to the one
-        // before `out`.
-        int first = -1;
-        for (int i = 0; i < 4; ++i) {
-            const int p = face.corners[i], q = face.corners[(i + 1) % 4];
-            if (cellEdge(p, q) == seg.in && ((solid_ >> q) & 1u)) first = (i + 1) % 4;
-        }
-        if (first < 0) return;
+        const int axis = sq.axis;
+        SegmentPoints& points = seg.points;
+        // The solid run the segment cuts off, in walk order: from the corner after its entering side.
+        const int first = (inSide + 1) % 4;
         for (int step = 0; step < 3; ++step) {
-            const int p = face.corners[(first + step) % 4], q = face.corners[(first + step + 1) % 4];
-            if (!((solid_ >> p) & 1u) || !((solid_ >> q) & 1u)) break;
-            const int e = cellEdge(p, q);
-            const EdgeCrossing& interface = crossings_.at(e);
-            if (mats_[p] == mats_[q]) continue;
+            const int p = (first + step) % 4, q = (first + step + 1) % 4;
+            if (!sq.mats[p].solid() || !sq.mats[q].solid()) break;
+            if (sq.mats[p] == sq.mats[q]) continue;
+            const EdgeCrossing& interface = squareCrossing(sq, p);
             Vec2 n = project(interface.normal, axis);
             const double len = std::sqrt(n.x * n.x + n.y * n.y);
             if (len < 1e-6) continue;
@@ -237,38 +350,41 @@ private:
             // The segment as a polyline: in, the points so far, out.
             Vec2 poly[6];
             int size = 0;
-            poly[size++] = project(crossings_.at(seg.in).position, axis);
+            poly[size++] = project(seg.in.position, axis);
             for (int k = 0; k < points.count; ++k) poly[size++] = points.items[k].onFace;
-            poly[size++] = project(crossings_.at(seg.out).position, axis);
+            poly[size++] = project(seg.out.position, axis);
             for (int k = 0; k + 1 < size; ++k) {
                 const double fa = n.x * (poly[k].x - c.x) + n.y * (poly[k].y - c.y);
                 const double fb = n.x * (poly[k + 1].x - c.x) + n.y * (poly[k + 1].y - c.y);
                 if ((fa < 0.0) == (fb < 0.0) || fa == fb) continue;
                 const double t = fa / (fa - fb);
                 const Vec2 hit{poly[k].x + t * (poly[k + 1].x - poly[k].x), poly[k].y + t * (poly[k + 1].y - poly[k].y)};
-                points.insert(k, FacePoint{hit, toWorld(hit), 0, true, mats_[q].id, interface.normal});
+                points.insert(k, FacePoint{hit, toWorld(hit), 0, true, sq.mats[q].id, interface.normal});
                 break;
             }
         }
     }
 
-    /// Whether the two segments of an ambiguous face, with their sharp features, cross each other.
-    /// The polylines are put in an order both cells sharing the face agree on, so that both make the
+    /// Whether the two segments of an ambiguous square, with their sharp features, cross each other.
+    /// The polylines are put in an order both cells sharing the square agree on, so that both make the
     /// same floating-point decision.
-    bool segmentsOverlap(const FaceSegment segments[2], int axis)
+    bool segmentsOverlap(const Square& sq, int in0, int out0, const std::optional<Vec2>& sharp0, int in1, int out1,
+                         const std::optional<Vec2>& sharp1)
     {
+        const int ins[2] = {in0, in1}, outs[2] = {out0, out1};
+        const std::optional<Vec2>* sharps[2] = {&sharp0, &sharp1};
         Vec2 poly[2][3];
         int sizes[2];
         uint64_t minKey[2];
         for (int s = 0; s < 2; ++s) {
-            const EdgeCrossing& in = crossings_.at(segments[s].in);
-            const EdgeCrossing& out = crossings_.at(segments[s].out);
+            const EdgeCrossing& in = squareCrossing(sq, ins[s]);
+            const EdgeCrossing& out = squareCrossing(sq, outs[s]);
             const bool forward = in.key < out.key;
             minKey[s] = std::min(in.key, out.key);
             sizes[s] = 0;
-            poly[s][sizes[s]++] = project(forward ? in.position : out.position, axis);
-            if (segments[s].sharp) poly[s][sizes[s]++] = *segments[s].sharp;
-            poly[s][sizes[s]++] = project(forward ? out.position : in.position, axis);
+            poly[s][sizes[s]++] = project(forward ? in.position : out.position, sq.axis);
+            if (*sharps[s]) poly[s][sizes[s]++] = **sharps[s];
+            poly[s][sizes[s]++] = project(forward ? out.position : in.position, sq.axis);
         }
         if (minKey[1] < minKey[0]) {
             std::swap(poly[0], poly[1]);
@@ -283,7 +399,7 @@ private:
     uint32_t vertex(uint64_t key, const std::array<float, 3>& pos, const std::array<float, 3>& normal,
                     MaterialId material)
     {
-        auto [it, inserted] = local_.emplace(key, uint32_t(chunk_.mesh.positions.size()));
+        auto [it, inserted] = ctx_.local.emplace(key, uint32_t(ctx_.chunk.mesh.positions.size()));
         if (inserted) addVertex(key, pos, normal, material);
         return it->second;
     }
@@ -291,11 +407,12 @@ private:
     uint32_t addVertex(uint64_t key, const std::array<float, 3>& pos, const std::array<float, 3>& normal,
                        MaterialId material)
     {
-        chunk_.mesh.positions.push_back(pos);
-        chunk_.mesh.normals.push_back(normal);
-        chunk_.mesh.materials.push_back(material);
-        chunk_.vertexKeys.push_back(key);
-        return uint32_t(chunk_.mesh.positions.size() - 1);
+        Mesh& mesh = ctx_.chunk.mesh;
+        mesh.positions.push_back(pos);
+        mesh.normals.push_back(normal);
+        mesh.materials.push_back(material);
+        ctx_.chunk.vertexKeys.push_back(key);
+        return uint32_t(mesh.positions.size() - 1);
     }
 
     /// The least-squares point of a component's crossing planes (seed 004 §2.6), solved relative to the
@@ -314,30 +431,36 @@ private:
         for (; rank < 3 && sigma[rank] > 0.1 * sigma[0]; ++rank) scaled[rank] = rhs[rank] / sigma[rank];
         if (rank < 2) return std::nullopt;
         Eigen::Vector3d lo, hi;
-        for (int k = 0; k < 3; ++k) lo[k] = base_[k] * voxelSize_, hi[k] = (base_[k] + 1) * voxelSize_;
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = base_[k] * ctx_.voxelSize;
+            hi[k] = (base_[k] + width_) * ctx_.voxelSize;
+        }
         return Eigen::Vector3d((massPoint + svd.matrixV() * scaled).cwiseMax(lo).cwiseMin(hi));
     }
 
-    void emitComponent(const int* loop, int size)
+    /// Fans one closed loop of segments from its inner vertex.
+    void emitComponent(const std::vector<int>& loop)
     {
-        // The component's boundary: each crossing, then the points inside the face segment it starts.
-        uint32_t ids[64];
-        MaterialId segmentMaterial[64];
-        int planes = size;
+        // The component's boundary: each segment's entering crossing, then the points inside it.
+        std::vector<uint32_t>& ids = ctx_.scratch.ids;
+        std::vector<MaterialId>& pieceMaterials = ctx_.scratch.pieceMaterials;
+        ids.clear();
+        pieceMaterials.clear();
+        int planes = 0;
         bool hasTransition = false;
-        int n = 0;
         Eigen::Vector3d mean = Eigen::Vector3d::Zero();
         Eigen::Vector3d crossingMean = Eigen::Vector3d::Zero();
         Eigen::Vector3d normalSum = Eigen::Vector3d::Zero();
         Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
         Eigen::Vector3d atb = Eigen::Vector3d::Zero();
         double minDot = 1.0;
-        for (int i = 0; i < size; ++i) {
-            const EdgeCrossing& x = crossings_.at(loop[i]);
+        for (std::size_t i = 0; i < loop.size(); ++i) {
+            const Segment& seg = segments_[loop[i]];
+            const EdgeCrossing& x = seg.in;
             const Eigen::Vector3d p(x.position[0], x.position[1], x.position[2]);
             const Eigen::Vector3d nrm(x.normal[0], x.normal[1], x.normal[2]);
-            for (int j = 0; j < i; ++j) {
-                const auto& other = crossings_.at(loop[j]).normal;
+            for (std::size_t j = 0; j < i; ++j) {
+                const auto& other = segments_[loop[j]].in.normal;
                 minDot = std::min(minDot, double(nrm.x() * other[0] + nrm.y() * other[1] + nrm.z() * other[2]));
             }
             ata += nrm * nrm.transpose();
@@ -345,76 +468,99 @@ private:
             crossingMean += p;
             normalSum += nrm;
             mean += p;
-            segmentMaterial[n] = x.material;
-            ids[n++] = vertex(x.key, x.position, x.normal, x.material);
+            ++planes;
+            pieceMaterials.push_back(x.material);
+            ids.push_back(vertex(x.key, x.position, x.normal, x.material));
             MaterialId material = x.material;
-            {
-                const SegmentPoints& points = facePoints_[loop[i]];
-                for (int k = 0; k < points.count; ++k) {
-                    const FacePoint& point = points.items[k];
-                    const auto& q = point.position;
-                    const Eigen::Vector3d qv(q[0], q[1], q[2]);
-                    mean += qv;
-                    if (point.transition) {
-                        // The interface plane joins the solve, so the vertex lands on the material
-                        // boundary (seed 004 §4.2.2.1).
-                        const Eigen::Vector3d in(point.interfaceNormal[0], point.interfaceNormal[1],
-                                                 point.interfaceNormal[2]);
-                        ata += in * in.transpose();
-                        atb += in * in.dot(qv);
-                        crossingMean += qv;
-                        ++planes;
-                        hasTransition = true;
-                        material = point.materialAfter;
-                    }
-                    segmentMaterial[n] = material;
-                    ids[n++] = vertex(point.key, {float(q[0]), float(q[1]), float(q[2])}, x.normal, material);
+            for (int k = 0; k < seg.points.count; ++k) {
+                const FacePoint& point = seg.points.items[k];
+                const auto& q = point.position;
+                const Eigen::Vector3d qv(q[0], q[1], q[2]);
+                mean += qv;
+                if (point.transition) {
+                    // The interface plane joins the solve, so the vertex lands on the material
+                    // boundary (seed 004 §4.2.2.1).
+                    const Eigen::Vector3d in(point.interfaceNormal[0], point.interfaceNormal[1],
+                                             point.interfaceNormal[2]);
+                    ata += in * in.transpose();
+                    atb += in * in.dot(qv);
+                    crossingMean += qv;
+                    ++planes;
+                    hasTransition = true;
+                    material = point.materialAfter;
                 }
+                pieceMaterials.push_back(material);
+                ids.push_back(vertex(point.key, {float(q[0]), float(q[1]), float(q[2])}, x.normal, material));
             }
         }
+        const std::size_t n = ids.size();
         mean /= double(n);
         crossingMean /= double(planes);
 
         Eigen::Vector3d centre = mean;
-        if (minDot < cosSharp_ || hasTransition) {
+        if (minDot < ctx_.cosSharp || hasTransition) {
             if (const auto feature = sharpVertex(ata, atb, crossingMean)) centre = *feature;
         }
         const Eigen::Vector3d avgNormal = normalSum.norm() > 0.0 ? Eigen::Vector3d(normalSum.normalized()) : normalSum;
         const uint32_t c = addVertex(kUnsharedVertex, {float(centre.x()), float(centre.y()), float(centre.z())},
                                      {float(avgNormal.x()), float(avgNormal.y()), float(avgNormal.z())},
-                                     segmentMaterial[0]);
-        for (int i = 0; i < n; ++i) {
-            chunk_.mesh.triangles.push_back({c, ids[i], ids[(i + 1) % n]});
-            chunk_.mesh.triangleMaterials.push_back(segmentMaterial[i]);
+                                     pieceMaterials[0]);
+        Mesh& mesh = ctx_.chunk.mesh;
+        for (std::size_t i = 0; i < n; ++i) {
+            mesh.triangles.push_back({c, ids[i], ids[(i + 1) % n]});
+            mesh.triangleMaterials.push_back(pieceMaterials[i]);
         }
     }
 
-    CellCrossings crossings_;
+    LeafContext& ctx_;
     Coord base_;
+    int width_;
     const MaterialValue* mats_;
-    unsigned solid_;
-    double voxelSize_;
-    double cosSharp_;
-    MeshChunk& chunk_;
-    std::unordered_map<uint64_t, uint32_t>& local_;
-    int next_[12] = {};
-    bool linked_[12] = {};
-    SegmentPoints facePoints_[12]; // by the segment's entering edge
+    std::vector<Segment>& segments_;
+    EdgeCrossing cellCrossings_[12];
+    bool cellKnown_[12] = {};
+    EdgeCrossing squareCrossings_[4];
+    bool known_[4] = {};
 };
 
 } // namespace
 
 MeshChunk meshLeafCubicalMarchingSquares(const HermiteLeaf& leaf, ConstAccessor& acc, double voxelSize,
-                                         double sharpAngleDegrees)
+                                         double sharpAngleDegrees, const CellWidthField* widths)
 {
     const Neighbourhood hood(leaf, acc);
+    const CornerGrid grid(leaf, hood);
     MeshChunk chunk;
     chunk.leafOrigin = {leaf.origin().x(), leaf.origin().y(), leaf.origin().z()};
     std::unordered_map<uint64_t, uint32_t> local;
-    const double cosSharp = std::cos(sharpAngleDegrees * M_PI / 180.0);
-    forEachOwnedSurfaceCell(leaf, hood, [&](const Coord& base, const MaterialValue mats[8], unsigned solid) {
-        CellMesher(hood, base, mats, solid, voxelSize, cosSharp, chunk, local).run();
-    });
+    CellScratch scratch;
+    LeafContext ctx{hood, widths, voxelSize, std::cos(sharpAngleDegrees * M_PI / 180.0), chunk, local, scratch};
+    auto meshCell = [&](const Coord& base, int width, const MaterialValue mats[8]) {
+        CellMesher(ctx, base, width, mats).run();
+    };
+    const LeafCellSizes* own = widths ? widths->own() : nullptr;
+    if (!own) {
+        forEachOwnedSurfaceCell(grid, hood, OwnedCells::All,
+                                [&](const Coord& base, const MaterialValue mats[8], unsigned) { meshCell(base, 1, mats); });
+        return chunk;
+    }
+    forEachOwnedSurfaceCell(grid, hood, OwnedCells::OutsideLeaf,
+                            [&](const Coord& base, const MaterialValue mats[8], unsigned) { meshCell(base, 1, mats); });
+    // The leaf's own cells, each visited at its minimum corner.
+    for (int x = 0; x < kLeafDim; ++x)
+        for (int y = 0; y < kLeafDim; ++y)
+            for (int z = 0; z < kLeafDim; ++z) {
+                const int width = own->widthAt(x, y, z);
+                if (x % width || y % width || z % width) continue;
+                MaterialValue mats[8];
+                unsigned solid = 0;
+                for (int c = 0; c < 8; ++c) {
+                    mats[c] = grid.at(x + width * cornerBit(c, 0), y + width * cornerBit(c, 1), z + width * cornerBit(c, 2));
+                    if (mats[c].solid()) solid |= 1u << c;
+                }
+                if (solid == 0 || solid == 0xFF) continue;
+                meshCell(grid.origin.offsetBy(x, y, z), width, mats);
+            }
     return chunk;
 }
 

@@ -57,7 +57,8 @@ MeshChunk meshLeafMarchingCubes(const HermiteLeaf& leaf, ConstAccessor& acc, dou
     MeshChunk chunk;
     chunk.leafOrigin = {leaf.origin().x(), leaf.origin().y(), leaf.origin().z()};
     std::unordered_map<uint64_t, uint32_t> local;
-    forEachOwnedSurfaceCell(leaf, hood, [&](const Coord& base, const MaterialValue mats[8], unsigned solid) {
+    const CornerGrid grid(leaf, hood);
+    forEachOwnedSurfaceCell(grid, hood, OwnedCells::All, [&](const Coord& base, const MaterialValue mats[8], unsigned solid) {
         int loops[4][12], sizes[4];
         const int nLoops = cellLoops(solid, loops, sizes);
         for (int l = 0; l < nLoops; ++l) {

@@ -1,7 +1,6 @@
 #include "mesher/MeshChunkSet.h"
 
 #include <optional>
-#include <set>
 
 namespace vdbclay {
 
@@ -16,14 +15,7 @@ void MeshChunkSet::rebuild(const Volume& volume)
 
 std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockOrigin>& dirtyBlocks)
 {
-    std::set<BlockOrigin> affected;
-    for (const BlockOrigin& b : dirtyBlocks) {
-        for (int dx = -1; dx <= 1; ++dx)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dz = -1; dz <= 1; ++dz)
-                    affected.insert({b[0] + dx * kLeafDim, b[1] + dy * kLeafDim, b[2] + dz * kLeafDim});
-    }
-    const std::vector<BlockOrigin> origins(affected.begin(), affected.end());
+    const std::vector<BlockOrigin> origins = leavesAffectedBy(dirtyBlocks, options_);
     std::vector<std::optional<MeshChunk>> fresh = meshLeafChunks(volume, origins, options_);
     std::size_t remeshed = 0;
     for (std::size_t i = 0; i < origins.size(); ++i) {

@@ -20,9 +20,9 @@ public:
     /// Meshes every leaf.
     void rebuild(const Volume& volume);
 
-    /// Re-meshes the leaves around the given leaf-sized blocks (EditStats::dirtyBlocks): a cell reads
-    /// the leaves of its eight corners, so each dirty block's 26 neighbours are re-meshed too; chunks of
-    /// leaves that no longer exist are dropped. Returns the number of chunks re-meshed.
+    /// Re-meshes the leaves around the given leaf-sized blocks (EditStats::dirtyBlocks), as
+    /// leavesAffectedBy lists them; chunks of leaves that no longer exist are dropped. Returns the
+    /// number of chunks re-meshed.
     std::size_t update(const Volume& volume, const std::vector<BlockOrigin>& dirtyBlocks);
 
     const std::map<BlockOrigin, MeshChunk>& chunks() const { return chunks_; }

@@ -1,6 +1,7 @@
 #include "mesher/Mesher.h"
 
 #include "mesher/CellGrid.h"
+#include "mesher/CellOctree.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -8,7 +9,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <optional>
 #include <stdexcept>
+#include <unordered_map>
 
 namespace vdbclay {
 
@@ -27,7 +30,75 @@ void checkOptions(const MeshOptions& options)
 {
     if (!(options.sharpAngleDegrees > 0.0 && options.sharpAngleDegrees < 180.0))
         throw std::invalid_argument("the sharp-feature angle must lie between 0 and 180 degrees");
+    if (!(options.subdivisionAngleDegrees > 0.0 && options.subdivisionAngleDegrees < 180.0))
+        throw std::invalid_argument("the subdivision angle must lie between 0 and 180 degrees");
+    const int w = options.maxCellWidth;
+    if (w != 1 && w != 2 && w != 4 && w != kLeafDim)
+        throw std::invalid_argument("the widest cell must be 1, 2, 4 or 8 voxels");
 }
+
+bool adaptive(const MeshOptions& options)
+{
+    return options.kind == MesherKind::CubicalMarchingSquares && (options.maxCellWidth > 1 || options.leafMaxCellWidth);
+}
+
+/// The adaptive cells of the given leaves and of their face neighbours (all a leaf's cell faces touch).
+class AdaptiveCells {
+public:
+    AdaptiveCells(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves, const MeshOptions& options)
+    {
+        using namespace mesher_detail;
+        std::vector<const HermiteLeaf*> subdivided;
+        auto add = [&](const HermiteLeaf* leaf) {
+            if (leaf && index_.emplace(leaf->origin(), subdivided.size()).second) subdivided.push_back(leaf);
+        };
+        for (const HermiteLeaf* leaf : leaves) add(leaf);
+        for (const HermiteLeaf* leaf : leaves)
+            for (int f = 0; f < 6; ++f) add(tree.probeConstLeaf(faceNeighbour(leaf->origin(), f)));
+        sizes_.resize(subdivided.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, subdivided.size(), 8), [&](const auto& range) {
+            ConstAccessor acc(tree);
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                const HermiteLeaf& leaf = *subdivided[i];
+                const Neighbourhood hood(leaf, acc);
+                SubdivisionCriteria criteria;
+                criteria.maxCellSize = options.maxCellWidth;
+                if (options.leafMaxCellWidth) {
+                    const Coord o = leaf.origin();
+                    criteria.maxCellSize = std::min(criteria.maxCellSize, options.leafMaxCellWidth({o.x(), o.y(), o.z()}));
+                }
+                criteria.cosHalfSpread = std::cos(0.5 * options.subdivisionAngleDegrees * M_PI / 180.0);
+                sizes_[i] = subdivideLeaf(CornerGrid(leaf, hood), hood, criteria);
+            }
+        });
+    }
+
+    /// The cell widths around `leaf`, which must be one of the leaves given to the constructor.
+    mesher_detail::CellWidthField around(const HermiteLeaf& leaf) const
+    {
+        const mesher_detail::LeafCellSizes* blocks[7] = {find(leaf.origin())};
+        for (int f = 0; f < 6; ++f) blocks[1 + f] = find(faceNeighbour(leaf.origin(), f));
+        return mesher_detail::CellWidthField(leaf.origin(), blocks);
+    }
+
+private:
+    /// Face f in the order -x, +x, -y, +y, -z, +z.
+    static Coord faceNeighbour(const Coord& origin, int f)
+    {
+        Coord c = origin;
+        c[f / 2] += (f % 2 ? 1 : -1) * kLeafDim;
+        return c;
+    }
+
+    const mesher_detail::LeafCellSizes* find(const Coord& origin) const
+    {
+        const auto it = index_.find(origin);
+        return it == index_.end() ? nullptr : &sizes_[it->second];
+    }
+
+    std::unordered_map<Coord, std::size_t> index_;
+    std::vector<mesher_detail::LeafCellSizes> sizes_;
+};
 
 void checkRange(const Coord& origin)
 {
@@ -42,12 +113,20 @@ std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<con
 {
     using namespace mesher_detail;
     std::vector<MeshChunk> chunks(leaves.size());
+    std::optional<AdaptiveCells> cells;
+    if (adaptive(options)) cells.emplace(tree, leaves, options);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 8), [&](const auto& range) {
         ConstAccessor acc(tree);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            chunks[i] = options.kind == MesherKind::MarchingCubes
-                            ? meshLeafMarchingCubes(*leaves[i], acc, voxelSize)
-                            : meshLeafCubicalMarchingSquares(*leaves[i], acc, voxelSize, options.sharpAngleDegrees);
+            const HermiteLeaf& leaf = *leaves[i];
+            if (options.kind == MesherKind::MarchingCubes) {
+                chunks[i] = meshLeafMarchingCubes(leaf, acc, voxelSize);
+            } else if (cells) {
+                const CellWidthField widths = cells->around(leaf);
+                chunks[i] = meshLeafCubicalMarchingSquares(leaf, acc, voxelSize, options.sharpAngleDegrees, &widths);
+            } else {
+                chunks[i] = meshLeafCubicalMarchingSquares(leaf, acc, voxelSize, options.sharpAngleDegrees, nullptr);
+            }
         }
     });
     return chunks;
@@ -87,6 +166,34 @@ std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
     std::vector<MeshChunk> chunks = meshLeaves(tree, leaves, volume.voxelSize(), options);
     std::vector<std::optional<MeshChunk>> out(leafOrigins.size());
     for (std::size_t k = 0; k < chunks.size(); ++k) out[slot[k]] = std::move(chunks[k]);
+    return out;
+}
+
+std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
+                                                     const MeshOptions& options)
+{
+    std::vector<std::array<int32_t, 3>> out;
+    auto add = [&](const std::array<int32_t, 3>& b, int dx, int dy, int dz) {
+        out.push_back({b[0] + dx * kLeafDim, b[1] + dy * kLeafDim, b[2] + dz * kLeafDim});
+    };
+    for (const auto& b : dirtyBlocks) {
+        // A cell reads the blocks of its eight corners.
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz) add(b, dx, dy, dz);
+        if (!adaptive(options)) continue;
+        // A leaf's subdivision reads the blocks at +0/+1 per axis, and decides how its face
+        // neighbours split their faces.
+        for (int dx = -1; dx <= 0; ++dx)
+            for (int dy = -1; dy <= 0; ++dy)
+                for (int dz = -1; dz <= 0; ++dz)
+                    for (int f = 0; f < 6; ++f) {
+                        const int step = f % 2 ? 1 : -1;
+                        add(b, dx + (f / 2 == 0) * step, dy + (f / 2 == 1) * step, dz + (f / 2 == 2) * step);
+                    }
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
     return out;
 }
 

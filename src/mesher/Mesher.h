@@ -6,6 +6,7 @@
 #include "vdb_hermite/Volume.h"
 
 #include <array>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <vector>
@@ -22,7 +23,21 @@ struct MeshOptions {
     MesherKind kind = MesherKind::MarchingCubes;
     /// CMS: crossings whose normals span more than this angle make a sharp feature (edge or corner).
     double sharpAngleDegrees = 30.0;
+    /// CMS: the widest cell in voxels (1, 2, 4 or 8). 1 meshes every voxel cell (uniform CMS); wider
+    /// cells cover flat, simple stretches of surface with fewer triangles.
+    int maxCellWidth = 8;
+    /// CMS: a cell wider than one voxel is split while its crossings' normals span more than this angle.
+    double subdivisionAngleDegrees = 15.0;
+    /// CMS, optional: a cap on the cell width per leaf (given its origin), for meshing regions at
+    /// different depths; the mesh stays watertight across them.
+    std::function<int(const std::array<int32_t, 3>&)> leafMaxCellWidth;
 };
+
+/// The leaves whose chunks can change when the given leaf-sized blocks change (EditStats::dirtyBlocks):
+/// the blocks a changed voxel's cells touch and, for adaptive CMS, the leaves whose face neighbours'
+/// subdivision reads it. Sorted and unique.
+std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
+                                                     const MeshOptions& options);
 
 std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions& options = {});
 /// The chunks of the leaves at the given origins (leaf-aligned); empty where there is no leaf.

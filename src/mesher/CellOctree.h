@@ -1,0 +1,66 @@
+// Internal to the mesher: the adaptive cells of Cubical Marching Squares (seed 000 §5). Each leaf is
+// an octree of cells 8, 4, 2 and 1 voxels wide; a cell stays whole only while the surface inside it is
+// simple enough for one cell to carry it. OpenVDB-heavy: include only from mesher .cpp files.
+#pragma once
+
+#include "mesher/CellGrid.h"
+
+#include <cstdint>
+
+namespace vdbclay::mesher_detail {
+
+struct SubdivisionCriteria {
+    int maxCellSize = 8;        // 1, 2, 4 or 8 voxels
+    double cosHalfSpread = 1.0; // a cell splits when a crossing normal lies further than half the
+                                // spread angle from the cell's mean normal
+};
+
+/// The cells of one leaf: entry (x, y, z) holds log2 of the width of the cell containing the voxel
+/// cell at leaf-local (x, y, z). Cells are aligned to their width.
+struct LeafCellSizes {
+    uint8_t log2Width[kLeafDim][kLeafDim][kLeafDim];
+
+    int widthAt(int x, int y, int z) const { return 1 << log2Width[x][y][z]; }
+};
+
+/// Merges cells bottom-up: a cell wider than one voxel stays whole when its eight children stayed
+/// whole and
+///  - every grid line through it (along x, y or z) changes material at most once, so each of its
+///    edges has at most one crossing and no face or interior hides surface its corners do not show;
+///  - it holds at most one solid material (material boundaries are meshed at voxel resolution);
+///  - none of its faces is ambiguous (two solid corners on a diagonal);
+///  - its crossings' normals span less than the criteria's angle.
+LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, const SubdivisionCriteria& criteria);
+
+/// The cell widths around one leaf: its own cells and those of its six face neighbours, which is
+/// all a cell face of the leaf can touch. Blocks without subdivision (tiles) hold one-voxel cells.
+class CellWidthField {
+public:
+    /// `blocks`: the leaf's own cells, then the -x, +x, -y, +y, -z, +z neighbours' (null: one-voxel cells).
+    CellWidthField(const Coord& origin, const LeafCellSizes* const blocks[7]) : origin_(origin)
+    {
+        for (int i = 0; i < 7; ++i) blocks_[i] = blocks[i];
+    }
+
+    /// The width of the cell containing the voxel cell at `c`, which lies in the leaf or a face neighbour.
+    int widthAt(const Coord& c) const
+    {
+        int local[3], slot = 0;
+        for (int a = 0; a < 3; ++a) {
+            const int d = c[a] - origin_[a];
+            const int block = d < 0 ? -1 : (d >= kLeafDim ? 1 : 0);
+            local[a] = d - block * kLeafDim;
+            if (block != 0) slot = 1 + 2 * a + (block > 0);
+        }
+        const LeafCellSizes* sizes = blocks_[slot];
+        return sizes ? sizes->widthAt(local[0], local[1], local[2]) : 1;
+    }
+
+    const LeafCellSizes* own() const { return blocks_[0]; }
+
+private:
+    Coord origin_;
+    const LeafCellSizes* blocks_[7];
+};
+
+} // namespace vdbclay::mesher_detail
