@@ -151,12 +151,24 @@ TEST_CASE("cli: mesh --json reports a watertight mesh and writes it", "[cli]")
     REQUIRE(runCli(dir, "new vol.vdb --shape torus --size 10").exitCode == 0);
     const json obj = parseJsonOutput(runCli(dir, "mesh vol.vdb -o vol.obj --json"));
     CHECK(obj["watertight"] == true);
-    CHECK(obj["mesher"] == "cms"); // the default
+    CHECK(obj["mesher"] == "cms"); // the default, with adaptive cells
+    CHECK(obj["cells"] == "adaptive");
     MeshOptions cms;
     cms.kind = MesherKind::CubicalMarchingSquares;
     const Mesh mesh = meshVolume(loadVolume(dir.file("vol.vdb")), cms);
     CHECK(obj["triangles"].get<std::size_t>() == mesh.triangleCount());
     CHECK(obj["vertices"].get<std::size_t>() == mesh.vertexCount());
+
+    // On flat faces adaptive cells take fewer triangles than --uniform's voxel cells.
+    REQUIRE(runCli(dir, "new box.vdb --shape box --size 12.3").exitCode == 0);
+    const json adaptive = parseJsonOutput(runCli(dir, "mesh box.vdb -o adaptive.glb --json"));
+    const json uniform = parseJsonOutput(runCli(dir, "mesh box.vdb -o uniform.glb --uniform --json"));
+    CHECK(uniform["cells"] == "uniform");
+    CHECK(uniform["watertight"] == true);
+    cms.maxCellWidth = 1;
+    CHECK(uniform["triangles"].get<std::size_t>() == meshVolume(loadVolume(dir.file("box.vdb")), cms).triangleCount());
+    CHECK(uniform["triangles"].get<std::size_t>() > 2 * adaptive["triangles"].get<std::size_t>());
+    CHECK(runCli(dir, "mesh vol.vdb -o bad.ply --adapt-angle 180").exitCode == 2);
 
     // The OBJ holds that many vertices and faces.
     const auto objBytes = readBytes(dir.file("vol.obj"));
@@ -190,13 +202,14 @@ TEST_CASE("cli: bench mesh --quick --json has every shape and mesher", "[cli]")
     TempDir dir;
     const json j = parseJsonOutput(runCli(dir, "bench mesh --quick --json"));
     REQUIRE(j.contains("shapes"));
-    for (const char* shape : {"rotated_box", "sphere", "box_minus_sphere", "thin_wall"}) {
+    for (const char* shape : {"box", "rotated_box", "sphere", "box_minus_sphere", "thin_wall"}) {
         INFO(shape);
         REQUIRE(j["shapes"].contains(shape));
         const json& s = j["shapes"][shape];
         CHECK(s["surface_cells"].get<double>() > 0);
         CHECK(s.contains("cms_over_openvdb_cells_per_second"));
-        for (const char* mesher : {"cms_uniform", "mc", "openvdb_adaptivity_0", "openvdb_adaptivity_0.5"}) {
+        for (const char* mesher :
+             {"cms_uniform", "cms_adaptive", "mc", "openvdb_adaptivity_0", "openvdb_adaptivity_0.5"}) {
             INFO(mesher);
             REQUIRE(s["meshers"].contains(mesher));
             const json& m = s["meshers"][mesher];
@@ -206,8 +219,9 @@ TEST_CASE("cli: bench mesh --quick --json has every shape and mesher", "[cli]")
             }
             CHECK(m["triangles"].get<double>() > 0);
         }
-        // Uniform CMS is closed on every shape.
+        // CMS is closed on every shape, with uniform and with adaptive cells.
         CHECK(s["meshers"]["cms_uniform"]["watertight"] == true);
+        CHECK(s["meshers"]["cms_adaptive"]["watertight"] == true);
     }
 }
 

@@ -21,11 +21,20 @@ namespace {
 
 using Sdf = std::function<double(const Vec3d&)>;
 
-Mesh meshWith(const Volume& v, MesherKind kind)
+/// Cells for CMS: one voxel each, or adaptive cells up to eight voxels wide.
+enum class Cells { Uniform, Adaptive };
+
+MeshOptions optionsFor(MesherKind kind, Cells cells = Cells::Adaptive)
 {
     MeshOptions options;
     options.kind = kind;
-    return meshVolume(v, options);
+    options.maxCellWidth = cells == Cells::Uniform ? 1 : 8;
+    return options;
+}
+
+Mesh meshWith(const Volume& v, MesherKind kind, Cells cells = Cells::Adaptive)
+{
+    return meshVolume(v, optionsFor(kind, cells));
 }
 
 struct SurfaceError {
@@ -61,7 +70,8 @@ TEST_CASE("CMS meshes of sculpted shapes are closed and lie on the analytic surf
         const char* name;
         std::function<void(Volume&)> build;
         Sdf sdf;
-        double maxError; // voxels (voxel size 1)
+        double maxError;         // voxels (voxel size 1), uniform cells
+        double maxAdaptiveError; // adaptive cells (a cell may span 15 degrees of a curved surface)
     };
     const Brush axisBox(box(Vec3d(9.3, 6.2, 5.4)), at(Vec3d(0.25, 0.4, -0.3)));
     const Brush rotatedBox(box(Vec3d(10.3, 7.2, 5.6)), at(Vec3d(0.3, 0.2, 0.1), Vec3d(20, 35, 10)));
@@ -70,18 +80,18 @@ TEST_CASE("CMS meshes of sculpted shapes are closed and lie on the analytic surf
     const Brush bite(sphere(8.0), at(Vec3d(12.5)));
     const std::vector<Case> cases = {
         {"axis-aligned box", [&](Volume& v) { applyCsg(v, axisBox, op(CsgMode::Add)); },
-         [&](const Vec3d& p) { return axisBox.distance(p); }, 0.02},
+         [&](const Vec3d& p) { return axisBox.distance(p); }, 0.02, 0.02},
         {"rotated box", [&](Volume& v) { applyCsg(v, rotatedBox, op(CsgMode::Add)); },
          // At voxel scale one corner tip falls in cells that see only two of its three faces.
-         [&](const Vec3d& p) { return rotatedBox.distance(p); }, 0.5},
+         [&](const Vec3d& p) { return rotatedBox.distance(p); }, 0.5, 0.5},
         {"sphere", [&](Volume& v) { applyCsg(v, ball, op(CsgMode::Add)); },
-         [&](const Vec3d& p) { return ball.distance(p); }, 0.05},
+         [&](const Vec3d& p) { return ball.distance(p); }, 0.05, 0.15},
         {"box minus sphere",
          [&](Volume& v) {
              applyCsg(v, cube, op(CsgMode::Add));
              applyCsg(v, bite, op(CsgMode::Remove));
          },
-         [&](const Vec3d& p) { return std::max(cube.distance(p), -bite.distance(p)); }, 0.1},
+         [&](const Vec3d& p) { return std::max(cube.distance(p), -bite.distance(p)); }, 0.1, 0.15},
     };
     for (const Case& c : cases) {
         SECTION(c.name)
@@ -89,11 +99,14 @@ TEST_CASE("CMS meshes of sculpted shapes are closed and lie on the analytic surf
             Volume v(1.0);
             c.build(v);
             REQUIRE(checkInvariants(v) == "");
-            const Mesh mesh = meshWith(v, MesherKind::CubicalMarchingSquares);
-            requireClosed(mesh);
-            const SurfaceError error = surfaceError(mesh, c.sdf);
-            INFO("distance to the surface: max " << error.max << ", mean " << error.mean << " voxels");
-            CHECK(error.max <= c.maxError);
+            for (const Cells cells : {Cells::Uniform, Cells::Adaptive}) {
+                const Mesh mesh = meshWith(v, MesherKind::CubicalMarchingSquares, cells);
+                requireClosed(mesh);
+                const SurfaceError error = surfaceError(mesh, c.sdf);
+                INFO((cells == Cells::Uniform ? "uniform" : "adaptive") << " distance to the surface: max " << error.max
+                                                                        << ", mean " << error.mean << " voxels");
+                CHECK(error.max <= (cells == Cells::Uniform ? c.maxError : c.maxAdaptiveError));
+            }
         }
     }
 }
@@ -150,7 +163,8 @@ TEST_CASE("CMS keeps a thin wall between two removed spheres closed", "[cms]")
     apply(v, CsgMode::Remove, sphere(7.0), at(Vec3d(-7.6, 0.3, 14.0)));
     apply(v, CsgMode::Remove, sphere(7.0), at(Vec3d(7.1, 0.3, 14.0)));
     REQUIRE(checkInvariants(v) == "");
-    requireClosed(meshWith(v, MesherKind::CubicalMarchingSquares));
+    requireClosed(meshWith(v, MesherKind::CubicalMarchingSquares, Cells::Uniform));
+    requireClosed(meshWith(v, MesherKind::CubicalMarchingSquares, Cells::Adaptive));
 }
 
 TEST_CASE("CMS carries materials per triangle across a material boundary", "[cms]")
@@ -160,7 +174,8 @@ TEST_CASE("CMS carries materials per triangle across a material boundary", "[cms
     const MaterialId moss = defineMaterial(v, "moss", 0.2f);
     apply(v, CsgMode::Add, sphere(12.0), at(Vec3d(0.3)), stone);
     apply(v, CsgMode::Paint, box(Vec3d(50.0)), at(Vec3d(0.0, 0.0, 50.3)), moss); // the top half becomes moss
-    const Mesh mesh = meshWith(v, MesherKind::CubicalMarchingSquares);
+    const Cells cells = GENERATE(Cells::Uniform, Cells::Adaptive);
+    const Mesh mesh = meshWith(v, MesherKind::CubicalMarchingSquares, cells);
     requireClosed(mesh);
     // Material transitions split the face segments where the interface plane z = 0.3 meets them, and
     // the interface joins each cell's vertex solve, so vertices line the boundary. A crossing keeps the
@@ -195,8 +210,7 @@ TEST_CASE("re-meshing the leaves an edit touched gives exactly the full re-mesh"
     Volume v(1.0);
     const MaterialId moss = defineMaterial(v, "moss", 0.2f);
     apply(v, CsgMode::Add, sphere(18.0), at(Vec3d(0.3)));
-    MeshOptions options;
-    options.kind = MesherKind::CubicalMarchingSquares;
+    const MeshOptions options = optionsFor(MesherKind::CubicalMarchingSquares, GENERATE(Cells::Uniform, Cells::Adaptive));
     MeshChunkSet incremental(options);
     incremental.rebuild(v);
 
@@ -223,4 +237,51 @@ TEST_CASE("re-meshing the leaves an edit touched gives exactly the full re-mesh"
         CHECK(it->second.vertexKeys == chunk.vertexKeys);
     }
     requireClosed(incremental.weld());
+}
+
+TEST_CASE("adaptive CMS covers flat faces with a quarter of uniform CMS's triangles at the same error", "[cms][adaptive]")
+{
+    const Brush axisBox(box(Vec3d(20.3, 14.3, 11.3)), at(Vec3d(0.0)));
+    Volume v(1.0);
+    applyCsg(v, axisBox, op(CsgMode::Add));
+    const Mesh uniform = meshWith(v, MesherKind::CubicalMarchingSquares, Cells::Uniform);
+    const Mesh adaptive = meshWith(v, MesherKind::CubicalMarchingSquares, Cells::Adaptive);
+    requireClosed(adaptive);
+    const Sdf sdf = [&](const Vec3d& p) { return axisBox.distance(p); };
+    const SurfaceError uniformError = surfaceError(uniform, sdf), adaptiveError = surfaceError(adaptive, sdf);
+    INFO("triangles: uniform " << uniform.triangleCount() << ", adaptive " << adaptive.triangleCount()
+                               << "; max error: uniform " << uniformError.max << ", adaptive " << adaptiveError.max);
+    CHECK(adaptive.triangleCount() * 4 <= uniform.triangleCount());
+    CHECK(adaptiveError.max <= 0.02);
+    CHECK(uniformError.max <= 0.02);
+}
+
+TEST_CASE("leaves meshed at different depths stay watertight and on the surface", "[cms][adaptive]")
+{
+    // Seed 000 §5: cells of different widths meet without cracks because the wider face is meshed as the
+    // narrower cells' squares. A checkerboard of per-leaf caps puts leaves of every depth side by side.
+    const Brush cube(box(Vec3d(20.0)), at(Vec3d(0.4, 0.3, 0.2), Vec3d(0, 10, 5)));
+    const Brush bite(sphere(13.0), at(Vec3d(20.0, 20.0, 18.0)));
+    Volume v(1.0);
+    applyCsg(v, cube, op(CsgMode::Add));
+    applyCsg(v, bite, op(CsgMode::Remove));
+    const Sdf sdf = [&](const Vec3d& p) { return std::max(cube.distance(p), -bite.distance(p)); };
+
+    MeshOptions mixed = optionsFor(MesherKind::CubicalMarchingSquares, Cells::Adaptive);
+    mixed.leafMaxCellWidth = [](const std::array<int32_t, 3>& origin) {
+        const int parity = ((origin[0] + origin[1] + origin[2]) / kLeafDim) & 3;
+        return 1 << (parity < 0 ? parity + 4 : parity); // 1, 2, 4 or 8 by leaf
+    };
+    const Mesh mesh = meshVolume(v, mixed);
+    requireClosed(mesh);
+    const SurfaceError error = surfaceError(mesh, sdf);
+    INFO("max " << error.max << ", mean " << error.mean);
+    CHECK(error.max <= 0.6);
+
+    // The caps took effect: fewer triangles than uniform cells, more than unconstrained adaptive cells.
+    const std::size_t uniform = meshWith(v, MesherKind::CubicalMarchingSquares, Cells::Uniform).triangleCount();
+    const std::size_t adaptive = meshWith(v, MesherKind::CubicalMarchingSquares, Cells::Adaptive).triangleCount();
+    INFO("triangles: uniform " << uniform << ", mixed " << mesh.triangleCount() << ", adaptive " << adaptive);
+    CHECK(mesh.triangleCount() < uniform);
+    CHECK(mesh.triangleCount() > adaptive);
 }
