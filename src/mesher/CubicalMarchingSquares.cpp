@@ -238,19 +238,29 @@ private:
         return {v[(axis + 1) % 3], v[(axis + 2) % 3]};
     }
 
-    /// Where the tangent lines of the segment's two crossings meet, if their normals span the sharp
-    /// angle and the point lies on the square.
-    std::optional<Vec2> sharpFeature(const EdgeCrossing& a, const EdgeCrossing& b, const Square& sq) const
+    /// The shape of a segment between two crossings of a square.
+    struct SegmentShape {
+        std::optional<Vec2> sharp; // where the crossings' tangent lines meet, when it is a feature
+        bool plausible = true;     // false: the normals span the sharp angle but meet off the square
+    };
+
+    /// A segment has a 2D sharp feature where its crossings' tangent lines meet, if their normals span
+    /// the sharp angle and the point lies on the square. Solved with the crossings in key order, so
+    /// both cells sharing the square get the same bits.
+    SegmentShape segmentShape(const EdgeCrossing& first, const EdgeCrossing& second, const Square& sq) const
     {
+        const bool ordered = first.key < second.key;
+        const EdgeCrossing& a = ordered ? first : second;
+        const EdgeCrossing& b = ordered ? second : first;
         const int axis = sq.axis;
         Vec2 na = project(a.normal, axis), nb = project(b.normal, axis);
         const double la = std::sqrt(na.x * na.x + na.y * na.y), lb = std::sqrt(nb.x * nb.x + nb.y * nb.y);
-        if (la < 1e-6 || lb < 1e-6) return std::nullopt;
+        if (la < 1e-6 || lb < 1e-6) return {};
         na = {na.x / la, na.y / la};
         nb = {nb.x / lb, nb.y / lb};
-        if (na.x * nb.x + na.y * nb.y > ctx_.cosSharp) return std::nullopt;
+        if (na.x * nb.x + na.y * nb.y > ctx_.cosSharp) return {};
         const double det = cross2(na, nb);
-        if (std::fabs(det) < 1e-9) return std::nullopt;
+        if (std::fabs(det) < 1e-9) return {std::nullopt, false};
         const Vec2 pa = project(a.position, axis), pb = project(b.position, axis);
         const double ca = na.x * pa.x + na.y * pa.y, cb = nb.x * pb.x + nb.y * pb.y;
         const Vec2 p{(ca * nb.y - cb * na.y) / det, (na.x * cb - nb.x * ca) / det};
@@ -258,8 +268,8 @@ private:
         const double lo0 = sq.minCorner[(axis + 1) % 3] * vs, lo1 = sq.minCorner[(axis + 2) % 3] * vs;
         const double eps = 1e-9 * vs;
         if (p.x < lo0 - eps || p.x > lo0 + extent + eps || p.y < lo1 - eps || p.y > lo1 + extent + eps)
-            return std::nullopt;
-        return p;
+            return {std::nullopt, false};
+        return {p, true};
     }
 
     void meshSquare(const Square& sq)
@@ -278,21 +288,37 @@ private:
         if (count == 0) return;
         struct Pairing {
             int in, out; // square sides
-            std::optional<Vec2> sharp;
-        } pairs[2] = {};
-        int nSeg = 0;
+            SegmentShape shape;
+        };
+        struct Pairings {
+            Pairing segments[2];
+            int count = 0;
+            bool plausible() const { return segments[0].shape.plausible && segments[1].shape.plausible; }
+        };
         auto pairUp = [&](int shift) {
-            nSeg = 0;
+            Pairings p;
             for (int i = 0; i < count; ++i) {
                 if (!entering[i]) continue;
                 const int in = sides[i], out = sides[(i + shift) % count];
-                pairs[nSeg++] = {in, out, sharpFeature(squareCrossing(sq, in), squareCrossing(sq, out), sq)};
+                p.segments[p.count++] = {in, out, segmentShape(squareCrossing(sq, in), squareCrossing(sq, out), sq)};
             }
+            return p;
         };
-        pairUp(1); // each entering crossing to the leaving one that follows it: solid corners stay apart
-        if (count == 4 && segmentsOverlap(sq, pairs[0].in, pairs[0].out, pairs[0].sharp, pairs[1].in, pairs[1].out,
-                                          pairs[1].sharp))
-            pairUp(3);
+        auto overlap = [&](const Pairings& p) {
+            return segmentsOverlap(sq, p.segments[0].in, p.segments[0].out, p.segments[0].shape.sharp,
+                                   p.segments[1].in, p.segments[1].out, p.segments[1].shape.sharp);
+        };
+        // Each entering crossing to the leaving one that follows it, so the solid corners stay apart;
+        // on an ambiguous square, the other pairing (joining the solid corners) when that one's
+        // segments cross, or when its segments join crossings whose normals disagree without a sharp
+        // feature on the square while the other pairing's do not.
+        Pairings chosen = pairUp(1);
+        if (count == 4) {
+            const Pairings joined = pairUp(3);
+            if (overlap(chosen) || (!chosen.plausible() && joined.plausible() && !overlap(joined))) chosen = joined;
+        }
+        const Pairing* pairs = chosen.segments;
+        const int nSeg = chosen.count;
 
         // Both cells sharing this square must name its points alike: order segments by their crossings.
         auto minKey = [&](const Pairing& p) {
@@ -312,7 +338,8 @@ private:
             const Pairing& pr = pairs[s];
             Segment seg{squareCrossing(sq, pr.in), squareCrossing(sq, pr.out), {}};
             SegmentPoints& points = seg.points;
-            if (pr.sharp) points.insert(0, FacePoint{*pr.sharp, toWorld(*pr.sharp), 0, false, kEmptyMaterial, {}});
+            if (const auto& sharp = pr.shape.sharp)
+                points.insert(0, FacePoint{*sharp, toWorld(*sharp), 0, false, kEmptyMaterial, {}});
             // A square with one segment may hold material interfaces between its solid corners.
             if (nSeg == 1) insertTransitions(sq, pr.in, seg, toWorld);
             // Slots count along the segment from its end with the smaller key, the same in both cells.
@@ -415,27 +442,85 @@ private:
         return uint32_t(mesh.positions.size() - 1);
     }
 
-    /// The least-squares point of a component's crossing planes (seed 004 §2.6), solved relative to the
-    /// crossings' mean with singular values under a tenth of the largest truncated, and clamped to the
-    /// cell: a corner (rank 3) or the point of a sharp edge nearest the mean (rank 2). A lone plane
-    /// (rank 1) has no feature; the caller keeps the mean point. (Clipping an edge's line to the cell
-    /// instead of clamping was tried: it measured worse on the rotated box.)
-    std::optional<Eigen::Vector3d> sharpVertex(const Eigen::Matrix3d& ata, const Eigen::Vector3d& atb,
-                                               const Eigen::Vector3d& massPoint) const
+    /// The least-squares point of crossing planes (seed 004 §2.6), solved relative to `massPoint` with
+    /// singular values under a tenth of the largest truncated; `rank` is how many were kept.
+    static Eigen::Vector3d solveQef(const Eigen::Matrix3d& ata, const Eigen::Vector3d& atb,
+                                    const Eigen::Vector3d& massPoint, int& rank)
     {
         const Eigen::JacobiSVD<Eigen::Matrix3d> svd(ata, Eigen::ComputeFullU | Eigen::ComputeFullV);
         const Eigen::Vector3d sigma = svd.singularValues();
         const Eigen::Vector3d rhs = svd.matrixU().transpose() * (atb - ata * massPoint);
         Eigen::Vector3d scaled = Eigen::Vector3d::Zero();
-        int rank = 0;
+        rank = 0;
         for (; rank < 3 && sigma[rank] > 0.1 * sigma[0]; ++rank) scaled[rank] = rhs[rank] / sigma[rank];
-        if (rank < 2) return std::nullopt;
-        Eigen::Vector3d lo, hi;
+        return massPoint + svd.matrixV() * scaled;
+    }
+
+    void cellBounds(Eigen::Vector3d& lo, Eigen::Vector3d& hi) const
+    {
         for (int k = 0; k < 3; ++k) {
             lo[k] = base_[k] * ctx_.voxelSize;
             hi[k] = (base_[k] + width_) * ctx_.voxelSize;
         }
-        return Eigen::Vector3d((massPoint + svd.matrixV() * scaled).cwiseMax(lo).cwiseMin(hi));
+    }
+
+    /// A component's sharp vertex: a corner (rank 3) or the point of a sharp edge nearest the mean
+    /// (rank 2), clamped to the cell. A lone plane (rank 1) has no feature; the caller keeps the mean
+    /// point. (Clipping an edge's line to the cell instead of clamping was tried: it measured worse on
+    /// the rotated box.)
+    ///
+    /// A corner's tip may poke into a cell whose edges see only two of its faces. An edge cell
+    /// therefore also reads the crossings one voxel around it, facing the same way as its own; if
+    /// their planes meet in a corner inside the cell, the vertex goes there.
+    std::optional<Eigen::Vector3d> sharpVertex(Eigen::Matrix3d ata, Eigen::Vector3d atb, const Eigen::Vector3d& massPoint,
+                                               const Eigen::Vector3d& normalSum) const
+    {
+        Eigen::Vector3d lo, hi;
+        cellBounds(lo, hi);
+        int rank = 0;
+        const Eigen::Vector3d own = solveQef(ata, atb, massPoint, rank);
+        if (rank < 2) return std::nullopt;
+        if (rank == 2) {
+            const Eigen::Vector3d facing = normalSum.normalized();
+            forEachCrossingAround([&](const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
+                if (n.dot(facing) < -0.3) return; // the far side of a thin part
+                ata += n * n.transpose();
+                atb += n * n.dot(p);
+            });
+            int wideRank = 0;
+            const Eigen::Vector3d corner = solveQef(ata, atb, massPoint, wideRank);
+            const double eps = 1e-6 * ctx_.voxelSize;
+            if (wideRank == 3 && (corner.array() >= lo.array() - eps).all() && (corner.array() <= hi.array() + eps).all())
+                return corner;
+        }
+        return Eigen::Vector3d(own.cwiseMax(lo).cwiseMin(hi));
+    }
+
+    /// The crossings on the voxel edges of the lattice one voxel around the cell.
+    template<typename Fn>
+    void forEachCrossingAround(Fn&& fn) const
+    {
+        const Neighbourhood& hood = ctx_.hood;
+        const int span = width_ + 3; // voxels base-1 .. base+width+1
+        for (int x = 0; x < span; ++x)
+            for (int y = 0; y < span; ++y)
+                for (int z = 0; z < span; ++z) {
+                    const Coord v = base_.offsetBy(x - 1, y - 1, z - 1);
+                    const bool solid = hood.material(v).solid();
+                    const int at[3] = {x, y, z};
+                    for (int axis = 0; axis < 3; ++axis) {
+                        if (at[axis] == span - 1) continue;
+                        Coord w = v;
+                        w[axis] += 1;
+                        if (hood.material(w).solid() == solid) continue;
+                        const PackedSample* sample = hood.sample(v, axis);
+                        if (!sample) continue;
+                        const UnpackedSample u = unpackSample(*sample);
+                        Eigen::Vector3d p(v.x(), v.y(), v.z());
+                        p[axis] += u.offset;
+                        fn(Eigen::Vector3d(p * ctx_.voxelSize), Eigen::Vector3d(u.normal[0], u.normal[1], u.normal[2]));
+                    }
+                }
     }
 
     /// Fans one closed loop of segments from its inner vertex.
@@ -499,7 +584,7 @@ private:
 
         Eigen::Vector3d centre = mean;
         if (minDot < ctx_.cosSharp || hasTransition) {
-            if (const auto feature = sharpVertex(ata, atb, crossingMean)) centre = *feature;
+            if (const auto feature = sharpVertex(ata, atb, crossingMean, normalSum)) centre = *feature;
         }
         const Eigen::Vector3d avgNormal = normalSum.norm() > 0.0 ? Eigen::Vector3d(normalSum.normalized()) : normalSum;
         const uint32_t c = addVertex(kUnsharedVertex, {float(centre.x()), float(centre.y()), float(centre.z())},
