@@ -7,6 +7,8 @@
 
 #include <openvdb/tree/ValueAccessor.h>
 
+#include <memory>
+
 namespace vdbclay::mesher_detail {
 
 using ConstAccessor = openvdb::tree::ValueAccessor<const HermiteTree, /*IsSafe=*/false>;
@@ -159,6 +161,8 @@ void forEachOwnedSurfaceCell(const CornerGrid& grid, const Neighbourhood& hood, 
 /// material of its solid side.
 struct EdgeCrossing {
     uint64_t key;
+    Coord start; // the voxel edge's lower end
+    int axis;
     std::array<float, 3> position;
     std::array<float, 3> normal;
     MaterialId material;
@@ -174,7 +178,7 @@ inline EdgeCrossing voxelEdgeCrossing(const Neighbourhood& hood, const Coord& st
     pos[axis] += u.offset;
     for (float& p : pos) p = float(p * voxelSize);
     const MaterialValue m = low.solid() ? low : high;
-    return {edgeKey(start.x(), start.y(), start.z(), axis), pos, u.normal, m.id};
+    return {edgeKey(start.x(), start.y(), start.z(), axis), start, axis, pos, u.normal, m.id};
 }
 
 inline EdgeCrossing edgeCrossing(const Neighbourhood& hood, const Coord& base, const MaterialValue mats[8], int e,
@@ -188,8 +192,25 @@ inline EdgeCrossing edgeCrossing(const Neighbourhood& hood, const Coord& base, c
 
 MeshChunk meshLeafMarchingCubes(const HermiteLeaf& leaf, ConstAccessor& acc, double voxelSize);
 class CellWidthField;
-/// `widths`: the adaptive cells around the leaf (CellOctree.h); null meshes voxel cells.
-MeshChunk meshLeafCubicalMarchingSquares(const HermiteLeaf& leaf, ConstAccessor& acc, double voxelSize,
-                                         double sharpAngleDegrees, const CellWidthField* widths);
+
+/// Cubical Marching Squares, one leaf at a time; keeps its buffers from one leaf to the next, so use
+/// one per thread.
+class CubicalMarchingSquaresMesher {
+public:
+    CubicalMarchingSquaresMesher(double voxelSize, double sharpAngleDegrees);
+    ~CubicalMarchingSquaresMesher();
+    CubicalMarchingSquaresMesher(const CubicalMarchingSquaresMesher&) = delete;
+    CubicalMarchingSquaresMesher& operator=(const CubicalMarchingSquaresMesher&) = delete;
+
+    /// `widths`: the adaptive cells around the leaf (CellOctree.h); null meshes voxel cells.
+    MeshChunk mesh(const HermiteLeaf& leaf, ConstAccessor& acc, const CellWidthField* widths);
+
+    struct Buffers;
+
+private:
+    double voxelSize_;
+    double cosSharp_;
+    std::unique_ptr<Buffers> buffers_;
+};
 
 } // namespace vdbclay::mesher_detail

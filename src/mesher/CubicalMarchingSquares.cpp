@@ -79,24 +79,75 @@ struct Segment {
     SegmentPoints points;
 };
 
-/// Buffers reused by the cells of one leaf.
-struct CellScratch {
+} // namespace
+
+/// Buffers reused from cell to cell and leaf to leaf.
+struct CubicalMarchingSquaresMesher::Buffers {
+    // The chunk being built; copied out at its exact size when the leaf is done.
+    MeshChunk chunk;
+    // Vertex index of each voxel edge whose lower end lies in o-1 .. o+8 (per axis) of the leaf at
+    // origin o, and of the face points; both cleared per leaf.
+    static constexpr int kSpan = kLeafDim + 2;
+    static constexpr uint32_t kNone = ~uint32_t(0);
+    uint32_t edgeVertex[kSpan * kSpan * kSpan * 3];
+    std::vector<uint32_t> usedEdgeSlots;
+    std::unordered_map<uint64_t, uint32_t> otherVertices;
+    // Per cell.
     std::vector<Segment> segments;
     std::vector<int> loop;
     std::vector<uint32_t> ids;
     std::vector<MaterialId> pieceMaterials;
     std::vector<bool> used;
+
+    Buffers() { std::fill(std::begin(edgeVertex), std::end(edgeVertex), kNone); }
+
+    void startLeaf(const Coord& origin)
+    {
+        chunk = MeshChunk{};
+        chunk.leafOrigin = {origin.x(), origin.y(), origin.z()};
+        for (uint32_t slot : usedEdgeSlots) edgeVertex[slot] = kNone;
+        usedEdgeSlots.clear();
+        otherVertices.clear();
+    }
+
+    /// The slot of a voxel edge in edgeVertex, or -1 when it lies outside the leaf's span.
+    static int edgeSlot(const Coord& origin, const Coord& start, int axis)
+    {
+        int slot = 0;
+        for (int a = 0; a < 3; ++a) {
+            const int d = start[a] - origin[a] + 1;
+            if (d < 0 || d >= kSpan) return -1;
+            slot = slot * kSpan + d;
+        }
+        return slot * 3 + axis;
+    }
+
+    MeshChunk finishLeaf()
+    {
+        MeshChunk out;
+        out.leafOrigin = chunk.leafOrigin;
+        out.mesh.positions = chunk.mesh.positions;
+        out.mesh.normals = chunk.mesh.normals;
+        out.mesh.materials = chunk.mesh.materials;
+        out.mesh.triangles = chunk.mesh.triangles;
+        out.mesh.triangleMaterials = chunk.mesh.triangleMaterials;
+        out.vertexKeys = chunk.vertexKeys;
+        return out;
+    }
 };
+
+namespace {
+
+using Buffers = CubicalMarchingSquaresMesher::Buffers;
 
 /// What every cell of one leaf shares.
 struct LeafContext {
     const Neighbourhood& hood;
     const CellWidthField* widths; // null: voxel cells only
+    Coord origin;
     double voxelSize;
     double cosSharp;
-    MeshChunk& chunk;
-    std::unordered_map<uint64_t, uint32_t>& local;
-    CellScratch& scratch;
+    Buffers& buffers;
 };
 
 /// The crossing on the grid edge of `length` voxels from `start` along `axis`, whose ends hold `low`
@@ -131,7 +182,7 @@ struct Square {
 class CellMesher {
 public:
     CellMesher(LeafContext& ctx, const Coord& base, int width, const MaterialValue mats[8])
-        : ctx_(ctx), base_(base), width_(width), mats_(mats), segments_(ctx.scratch.segments)
+        : ctx_(ctx), base_(base), width_(width), mats_(mats), segments_(ctx.buffers.segments)
     {
         segments_.clear();
     }
@@ -142,9 +193,9 @@ public:
             const int axis = f / 2;
             meshFaceRegion(f, base_[(axis + 1) % 3], base_[(axis + 2) % 3], width_);
         }
-        std::vector<bool>& used = ctx_.scratch.used;
+        std::vector<bool>& used = ctx_.buffers.used;
         used.assign(segments_.size(), false);
-        std::vector<int>& loop = ctx_.scratch.loop;
+        std::vector<int>& loop = ctx_.buffers.loop;
         for (std::size_t start = 0; start < segments_.size(); ++start) {
             if (used[start]) continue;
             loop.clear();
@@ -423,22 +474,38 @@ private:
         return false;
     }
 
+    /// The chunk's vertex for a crossing, added on first use.
+    uint32_t vertex(const EdgeCrossing& x)
+    {
+        Buffers& b = ctx_.buffers;
+        const int slot = Buffers::edgeSlot(ctx_.origin, x.start, x.axis);
+        if (slot < 0) return vertex(x.key, x.position, x.normal, x.material);
+        uint32_t& index = b.edgeVertex[slot];
+        if (index == Buffers::kNone) {
+            index = addVertex(x.key, x.position, x.normal, x.material);
+            b.usedEdgeSlots.push_back(uint32_t(slot));
+        }
+        return index;
+    }
+
+    /// The chunk's vertex for a face point (or a crossing outside the leaf's span), added on first use.
     uint32_t vertex(uint64_t key, const std::array<float, 3>& pos, const std::array<float, 3>& normal,
                     MaterialId material)
     {
-        auto [it, inserted] = ctx_.local.emplace(key, uint32_t(ctx_.chunk.mesh.positions.size()));
-        if (inserted) addVertex(key, pos, normal, material);
+        const auto [it, inserted] = ctx_.buffers.otherVertices.try_emplace(key, 0u);
+        if (inserted) it->second = addVertex(key, pos, normal, material);
         return it->second;
     }
 
     uint32_t addVertex(uint64_t key, const std::array<float, 3>& pos, const std::array<float, 3>& normal,
                        MaterialId material)
     {
-        Mesh& mesh = ctx_.chunk.mesh;
+        MeshChunk& chunk = ctx_.buffers.chunk;
+        Mesh& mesh = chunk.mesh;
         mesh.positions.push_back(pos);
         mesh.normals.push_back(normal);
         mesh.materials.push_back(material);
-        ctx_.chunk.vertexKeys.push_back(key);
+        chunk.vertexKeys.push_back(key);
         return uint32_t(mesh.positions.size() - 1);
     }
 
@@ -527,8 +594,8 @@ private:
     void emitComponent(const std::vector<int>& loop)
     {
         // The component's boundary: each segment's entering crossing, then the points inside it.
-        std::vector<uint32_t>& ids = ctx_.scratch.ids;
-        std::vector<MaterialId>& pieceMaterials = ctx_.scratch.pieceMaterials;
+        std::vector<uint32_t>& ids = ctx_.buffers.ids;
+        std::vector<MaterialId>& pieceMaterials = ctx_.buffers.pieceMaterials;
         ids.clear();
         pieceMaterials.clear();
         int planes = 0;
@@ -555,7 +622,7 @@ private:
             mean += p;
             ++planes;
             pieceMaterials.push_back(x.material);
-            ids.push_back(vertex(x.key, x.position, x.normal, x.material));
+            ids.push_back(vertex(x));
             MaterialId material = x.material;
             for (int k = 0; k < seg.points.count; ++k) {
                 const FacePoint& point = seg.points.items[k];
@@ -590,7 +657,7 @@ private:
         const uint32_t c = addVertex(kUnsharedVertex, {float(centre.x()), float(centre.y()), float(centre.z())},
                                      {float(avgNormal.x()), float(avgNormal.y()), float(avgNormal.z())},
                                      pieceMaterials[0]);
-        Mesh& mesh = ctx_.chunk.mesh;
+        Mesh& mesh = ctx_.buffers.chunk.mesh;
         for (std::size_t i = 0; i < n; ++i) {
             mesh.triangles.push_back({c, ids[i], ids[(i + 1) % n]});
             mesh.triangleMaterials.push_back(pieceMaterials[i]);
@@ -610,16 +677,19 @@ private:
 
 } // namespace
 
-MeshChunk meshLeafCubicalMarchingSquares(const HermiteLeaf& leaf, ConstAccessor& acc, double voxelSize,
-                                         double sharpAngleDegrees, const CellWidthField* widths)
+CubicalMarchingSquaresMesher::CubicalMarchingSquaresMesher(double voxelSize, double sharpAngleDegrees)
+    : voxelSize_(voxelSize), cosSharp_(std::cos(sharpAngleDegrees * M_PI / 180.0)), buffers_(std::make_unique<Buffers>())
+{
+}
+
+CubicalMarchingSquaresMesher::~CubicalMarchingSquaresMesher() = default;
+
+MeshChunk CubicalMarchingSquaresMesher::mesh(const HermiteLeaf& leaf, ConstAccessor& acc, const CellWidthField* widths)
 {
     const Neighbourhood hood(leaf, acc);
     const CornerGrid grid(leaf, hood);
-    MeshChunk chunk;
-    chunk.leafOrigin = {leaf.origin().x(), leaf.origin().y(), leaf.origin().z()};
-    std::unordered_map<uint64_t, uint32_t> local;
-    CellScratch scratch;
-    LeafContext ctx{hood, widths, voxelSize, std::cos(sharpAngleDegrees * M_PI / 180.0), chunk, local, scratch};
+    buffers_->startLeaf(leaf.origin());
+    LeafContext ctx{hood, widths, leaf.origin(), voxelSize_, cosSharp_, *buffers_};
     auto meshCell = [&](const Coord& base, int width, const MaterialValue mats[8]) {
         CellMesher(ctx, base, width, mats).run();
     };
@@ -627,7 +697,7 @@ MeshChunk meshLeafCubicalMarchingSquares(const HermiteLeaf& leaf, ConstAccessor&
     if (!own) {
         forEachOwnedSurfaceCell(grid, hood, OwnedCells::All,
                                 [&](const Coord& base, const MaterialValue mats[8], unsigned) { meshCell(base, 1, mats); });
-        return chunk;
+        return buffers_->finishLeaf();
     }
     forEachOwnedSurfaceCell(grid, hood, OwnedCells::OutsideLeaf,
                             [&](const Coord& base, const MaterialValue mats[8], unsigned) { meshCell(base, 1, mats); });
@@ -646,7 +716,7 @@ MeshChunk meshLeafCubicalMarchingSquares(const HermiteLeaf& leaf, ConstAccessor&
                 if (solid == 0 || solid == 0xFF) continue;
                 meshCell(grid.origin.offsetBy(x, y, z), width, mats);
             }
-    return chunk;
+    return buffers_->finishLeaf();
 }
 
 } // namespace vdbclay::mesher_detail

@@ -117,15 +117,19 @@ std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<con
     if (adaptive(options)) cells.emplace(tree, leaves, options);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 8), [&](const auto& range) {
         ConstAccessor acc(tree);
+        if (options.kind == MesherKind::MarchingCubes) {
+            for (std::size_t i = range.begin(); i != range.end(); ++i)
+                chunks[i] = meshLeafMarchingCubes(*leaves[i], acc, voxelSize);
+            return;
+        }
+        CubicalMarchingSquaresMesher cms(voxelSize, options.sharpAngleDegrees);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const HermiteLeaf& leaf = *leaves[i];
-            if (options.kind == MesherKind::MarchingCubes) {
-                chunks[i] = meshLeafMarchingCubes(leaf, acc, voxelSize);
-            } else if (cells) {
+            if (cells) {
                 const CellWidthField widths = cells->around(leaf);
-                chunks[i] = meshLeafCubicalMarchingSquares(leaf, acc, voxelSize, options.sharpAngleDegrees, &widths);
+                chunks[i] = cms.mesh(leaf, acc, &widths);
             } else {
-                chunks[i] = meshLeafCubicalMarchingSquares(leaf, acc, voxelSize, options.sharpAngleDegrees, nullptr);
+                chunks[i] = cms.mesh(leaf, acc, nullptr);
             }
         }
     });
