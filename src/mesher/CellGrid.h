@@ -121,13 +121,13 @@ enum class OwnedCells { All, OutsideLeaf };
 
 /// Every cell whose corners are not all solid or all empty and that `leaf` owns: a cell belongs to
 /// the leaf holding its first corner that lies in a leaf, so the leaves' cells tile space exactly.
+/// Surface cells are found a row of ten corners at a time from bit masks of the solid corners.
 template<typename CellFn>
 void forEachOwnedSurfaceCell(const CornerGrid& grid, const Neighbourhood& hood, OwnedCells which, CellFn&& fn)
 {
     constexpr int kSpan = CornerGrid::kSpan;
     const Coord o = grid.origin;
-    // Whether the block holding grid index i (per axis: 0 -> the -1 block, 9 -> the +1 block) is a
-    // leaf, and whether that leaf is this one.
+    // Whether the block holding grid index i (per axis: 0 -> the -1 block, 9 -> the +1 block) is a leaf.
     auto block = [](int i) { return i == 0 ? -1 : (i == kSpan - 1 ? 1 : 0); };
     bool isLeaf[3][3][3];
     for (int bx = -1; bx <= 1; ++bx)
@@ -135,20 +135,32 @@ void forEachOwnedSurfaceCell(const CornerGrid& grid, const Neighbourhood& hood, 
             for (int bz = -1; bz <= 1; ++bz)
                 isLeaf[bx + 1][by + 1][bz + 1] = hood.leafOf(o.offsetBy(bx * kLeafDim, by * kLeafDim, bz * kLeafDim)) != nullptr;
 
-    for (int x = 0; x <= kLeafDim; ++x) {
-        for (int y = 0; y <= kLeafDim; ++y) {
-            for (int z = 0; z <= kLeafDim; ++z) {
-                if (which == OwnedCells::OutsideLeaf && x > 0 && y > 0 && z > 0) continue;
+    uint32_t solidRow[kSpan][kSpan]; // bit z: corner (x, y, z) is solid
+    for (int x = 0; x < kSpan; ++x)
+        for (int y = 0; y < kSpan; ++y) {
+            uint32_t bits = 0;
+            for (int z = 0; z < kSpan; ++z) bits |= uint32_t(grid.cells[x][y][z].solid()) << z;
+            solidRow[x][y] = bits;
+        }
+    constexpr uint32_t kCellBits = (1u << (kSpan - 1)) - 1; // cells z = 0 .. 8
+    for (int x = 0; x < kSpan - 1; ++x) {
+        for (int y = 0; y < kSpan - 1; ++y) {
+            const uint32_t a = solidRow[x][y], b = solidRow[x + 1][y], c = solidRow[x][y + 1], d = solidRow[x + 1][y + 1];
+            const uint32_t all = a & b & c & d, any = a | b | c | d;
+            uint32_t mixed = ((any | (any >> 1)) & ~(all & (all >> 1))) & kCellBits;
+            if (which == OwnedCells::OutsideLeaf && x > 0 && y > 0) mixed &= 1u; // only z = 0 lies outside
+            while (mixed) {
+                const int z = __builtin_ctz(mixed);
+                mixed &= mixed - 1;
                 MaterialValue mats[8];
                 unsigned solid = 0;
                 int owner = -1;
-                for (int c = 0; c < 8; ++c) {
-                    const int cx = x + cornerBit(c, 0), cy = y + cornerBit(c, 1), cz = z + cornerBit(c, 2);
-                    mats[c] = grid.cells[cx][cy][cz];
-                    if (mats[c].solid()) solid |= 1u << c;
-                    if (owner < 0 && isLeaf[block(cx) + 1][block(cy) + 1][block(cz) + 1]) owner = c;
+                for (int corner = 0; corner < 8; ++corner) {
+                    const int cx = x + cornerBit(corner, 0), cy = y + cornerBit(corner, 1), cz = z + cornerBit(corner, 2);
+                    mats[corner] = grid.cells[cx][cy][cz];
+                    if (mats[corner].solid()) solid |= 1u << corner;
+                    if (owner < 0 && isLeaf[block(cx) + 1][block(cy) + 1][block(cz) + 1]) owner = corner;
                 }
-                if (solid == 0 || solid == 0xFF) continue;
                 const int ox = x + cornerBit(owner, 0), oy = y + cornerBit(owner, 1), oz = z + cornerBit(owner, 2);
                 if (block(ox) != 0 || block(oy) != 0 || block(oz) != 0) continue; // owned by a neighbour
                 fn(o.offsetBy(x - 1, y - 1, z - 1), mats, solid);

@@ -75,8 +75,10 @@ struct SegmentPoints {
 /// A segment on one face square, from the crossing where the walk enters the solid to the one where
 /// it leaves, with the points inside it.
 struct Segment {
+    Segment(const EdgeCrossing& enter, const EdgeCrossing& leave) : in(enter), out(leave) {}
+
     EdgeCrossing in, out;
-    SegmentPoints points;
+    SegmentPoints points; // its items stay uninitialised until inserted
 };
 
 } // namespace
@@ -90,6 +92,9 @@ struct CubicalMarchingSquaresMesher::Buffers {
     static constexpr int kSpan = kLeafDim + 2;
     static constexpr uint32_t kNone = ~uint32_t(0);
     uint32_t edgeVertex[kSpan * kSpan * kSpan * 3];
+    // Decoded crossings by the same slots (index into `crossings`), as up to four cells read each.
+    uint32_t edgeCrossing[kSpan * kSpan * kSpan * 3];
+    std::vector<EdgeCrossing> crossings;
     std::vector<uint32_t> usedEdgeSlots;
     std::unordered_map<uint64_t, uint32_t> otherVertices;
     // Per cell.
@@ -99,14 +104,19 @@ struct CubicalMarchingSquaresMesher::Buffers {
     std::vector<MaterialId> pieceMaterials;
     std::vector<bool> used;
 
-    Buffers() { std::fill(std::begin(edgeVertex), std::end(edgeVertex), kNone); }
+    Buffers()
+    {
+        std::fill(std::begin(edgeVertex), std::end(edgeVertex), kNone);
+        std::fill(std::begin(edgeCrossing), std::end(edgeCrossing), kNone);
+    }
 
     void startLeaf(const Coord& origin)
     {
         chunk = MeshChunk{};
         chunk.leafOrigin = {origin.x(), origin.y(), origin.z()};
-        for (uint32_t slot : usedEdgeSlots) edgeVertex[slot] = kNone;
+        for (uint32_t slot : usedEdgeSlots) edgeVertex[slot] = edgeCrossing[slot] = kNone;
         usedEdgeSlots.clear();
+        crossings.clear();
         otherVertices.clear();
     }
 
@@ -150,22 +160,39 @@ struct LeafContext {
     Buffers& buffers;
 };
 
+/// The crossing on a voxel edge, decoded once per leaf.
+const EdgeCrossing& cachedCrossing(const LeafContext& ctx, const Coord& start, int axis, MaterialValue low,
+                                   MaterialValue high, EdgeCrossing& uncached)
+{
+    Buffers& b = ctx.buffers;
+    const int slot = Buffers::edgeSlot(ctx.origin, start, axis);
+    if (slot < 0) return uncached = voxelEdgeCrossing(ctx.hood, start, axis, low, high, ctx.voxelSize);
+    uint32_t& index = b.edgeCrossing[slot];
+    if (index == Buffers::kNone) {
+        index = uint32_t(b.crossings.size());
+        b.crossings.push_back(voxelEdgeCrossing(ctx.hood, start, axis, low, high, ctx.voxelSize));
+        if (b.edgeVertex[slot] == Buffers::kNone) b.usedEdgeSlots.push_back(uint32_t(slot));
+    }
+    return b.crossings[index];
+}
+
 /// The crossing on the grid edge of `length` voxels from `start` along `axis`, whose ends hold `low`
 /// and `high`: the crossing of the voxel edge where the material changes (there is one, as the cells
 /// that own such an edge are simple).
-EdgeCrossing crossingAlong(const Neighbourhood& hood, const Coord& start, int axis, int length, MaterialValue low,
-                           MaterialValue high, double voxelSize)
+EdgeCrossing crossingAlong(const LeafContext& ctx, const Coord& start, int axis, int length, MaterialValue low,
+                           MaterialValue high)
 {
+    EdgeCrossing uncached;
     Coord at = start;
     MaterialValue previous = low;
     for (int k = 1; k < length; ++k) {
         Coord next = at;
         next[axis] += 1;
-        const MaterialValue m = hood.material(next);
-        if (m != previous) return voxelEdgeCrossing(hood, at, axis, previous, m, voxelSize);
+        const MaterialValue m = ctx.hood.material(next);
+        if (m != previous) return cachedCrossing(ctx, at, axis, previous, m, uncached);
         at = next;
     }
-    return voxelEdgeCrossing(hood, at, axis, previous, high, voxelSize);
+    return cachedCrossing(ctx, at, axis, previous, high, uncached);
 }
 
 /// One square a cell face is meshed in: the whole face, or a face of a narrower cell beside it.
@@ -190,6 +217,10 @@ public:
     void run()
     {
         for (int f = 0; f < 6; ++f) {
+            // A face whose corners agree holds no crossing (a wide cell's faces are simple).
+            const int* c = kFaces[f].corners;
+            const bool s0 = mats_[c[0]].solid();
+            if (mats_[c[1]].solid() == s0 && mats_[c[2]].solid() == s0 && mats_[c[3]].solid() == s0) continue;
             const int axis = f / 2;
             meshFaceRegion(f, base_[(axis + 1) % 3], base_[(axis + 2) % 3], width_);
         }
@@ -268,16 +299,16 @@ private:
             if (sq.wholeFace) {
                 const int e = cellEdge(sq.cellCorners[i], sq.cellCorners[j]);
                 if (!cellKnown_[e]) {
-                    cellCrossings_[e] = crossingAlong(ctx_.hood, forward ? p : q, axis, sq.width,
+                    cellCrossings_[e] = crossingAlong(ctx_, forward ? p : q, axis, sq.width,
                                                       forward ? sq.mats[i] : sq.mats[j],
-                                                      forward ? sq.mats[j] : sq.mats[i], ctx_.voxelSize);
+                                                      forward ? sq.mats[j] : sq.mats[i]);
                     cellKnown_[e] = true;
                 }
                 squareCrossings_[i] = cellCrossings_[e];
             } else {
-                squareCrossings_[i] = crossingAlong(ctx_.hood, forward ? p : q, axis, sq.width,
+                squareCrossings_[i] = crossingAlong(ctx_, forward ? p : q, axis, sq.width,
                                                     forward ? sq.mats[i] : sq.mats[j],
-                                                    forward ? sq.mats[j] : sq.mats[i], ctx_.voxelSize);
+                                                    forward ? sq.mats[j] : sq.mats[i]);
             }
             known_[i] = true;
         }
@@ -387,7 +418,7 @@ private:
         };
         for (int s = 0; s < nSeg; ++s) {
             const Pairing& pr = pairs[s];
-            Segment seg{squareCrossing(sq, pr.in), squareCrossing(sq, pr.out), {}};
+            Segment& seg = segments_.emplace_back(squareCrossing(sq, pr.in), squareCrossing(sq, pr.out));
             SegmentPoints& points = seg.points;
             if (const auto& sharp = pr.shape.sharp)
                 points.insert(0, FacePoint{*sharp, toWorld(*sharp), 0, false, kEmptyMaterial, {}});
@@ -400,7 +431,6 @@ private:
                 const int slot = forward ? k : points.count - 1 - k;
                 points.items[k].key = faceKey(sq.minCorner.x(), sq.minCorner.y(), sq.minCorner.z(), axis, index, slot);
             }
-            segments_.push_back(seg);
         }
     }
 
@@ -483,7 +513,7 @@ private:
         uint32_t& index = b.edgeVertex[slot];
         if (index == Buffers::kNone) {
             index = addVertex(x.key, x.position, x.normal, x.material);
-            b.usedEdgeSlots.push_back(uint32_t(slot));
+            if (b.edgeCrossing[slot] == Buffers::kNone) b.usedEdgeSlots.push_back(uint32_t(slot));
         }
         return index;
     }
