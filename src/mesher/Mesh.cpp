@@ -1,6 +1,6 @@
 #include "mesher/Mesh.h"
 
-#include <unordered_map>
+#include <vector>
 
 namespace vdbclay {
 
@@ -28,6 +28,48 @@ uint64_t faceKey(int32_t i, int32_t j, int32_t k, int axis, int segment, int slo
            (uint64_t(slot & 7) << 57) | (x << 38) | (y << 19) | z;
 }
 
+namespace {
+
+/// Vertex keys to welded indices: open addressing with linear probing, which avoids a node
+/// allocation per vertex. kUnsharedVertex (never inserted) marks empty slots.
+class KeyIndex {
+public:
+    explicit KeyIndex(std::size_t count)
+    {
+        std::size_t capacity = 16;
+        while (capacity < 2 * count) capacity *= 2;
+        keys_.assign(capacity, kUnsharedVertex);
+        values_.resize(capacity);
+        mask_ = capacity - 1;
+    }
+
+    /// The index stored for `key`, storing `fresh` first if there is none; `inserted` tells which.
+    uint32_t findOrInsert(uint64_t key, uint32_t fresh, bool& inserted)
+    {
+        std::size_t slot = std::size_t((key * 0x9E3779B97F4A7C15ull) >> 17) & mask_;
+        while (true) {
+            if (keys_[slot] == key) {
+                inserted = false;
+                return values_[slot];
+            }
+            if (keys_[slot] == kUnsharedVertex) {
+                keys_[slot] = key;
+                values_[slot] = fresh;
+                inserted = true;
+                return fresh;
+            }
+            slot = (slot + 1) & mask_;
+        }
+    }
+
+private:
+    std::vector<uint64_t> keys_;
+    std::vector<uint32_t> values_;
+    std::size_t mask_ = 0;
+};
+
+} // namespace
+
 Mesh weldChunks(const std::vector<MeshChunk>& chunks)
 {
     std::vector<const MeshChunk*> pointers;
@@ -45,8 +87,11 @@ Mesh weldChunks(const std::vector<const MeshChunk*>& chunks)
         triangles += c->mesh.triangleCount();
     }
     out.triangles.reserve(triangles);
-    std::unordered_map<uint64_t, uint32_t> index;
-    index.reserve(vertices);
+    out.triangleMaterials.reserve(triangles);
+    out.positions.reserve(vertices);
+    out.normals.reserve(vertices);
+    out.materials.reserve(vertices);
+    KeyIndex index(vertices);
     std::vector<uint32_t> remap;
     for (const MeshChunk* chunk : chunks) {
         const MeshChunk& c = *chunk;
@@ -55,9 +100,7 @@ Mesh weldChunks(const std::vector<const MeshChunk*>& chunks)
             const uint32_t next = uint32_t(out.positions.size());
             bool fresh = true;
             if (c.vertexKeys[v] != kUnsharedVertex) {
-                auto [it, inserted] = index.emplace(c.vertexKeys[v], next);
-                fresh = inserted;
-                remap[v] = it->second;
+                remap[v] = index.findOrInsert(c.vertexKeys[v], next, fresh);
             } else {
                 remap[v] = next;
             }
