@@ -1,6 +1,8 @@
 #include "mesher/CellOctree.h"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace vdbclay::mesher_detail {
 
@@ -8,68 +10,156 @@ namespace {
 
 constexpr int kLattice = kLeafDim + 1; // voxels o .. o+8 per axis
 
+/// The spread of a set of unit normals: their sum, and the largest angle between one of them and the
+/// sum's direction. Merging bounds a parent's spread by its children's (the angle from the parent's
+/// mean to a child's mean plus the child's own spread), so each normal is read once.
+struct NormalCone {
+    double sum[3] = {0.0, 0.0, 0.0};
+    double halfAngle = 0.0; // radians
+    int count = 0;
+
+    static double angleBetween(const double a[3], const double b[3])
+    {
+        const double la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+        const double lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+        if (la == 0.0 || lb == 0.0) return M_PI;
+        const double c = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (la * lb);
+        return std::acos(std::clamp(c, -1.0, 1.0));
+    }
+};
+
 /// A leaf's voxel lattice (o .. o+8) with the normals of its crossings, read once per leaf.
 class LeafLattice {
 public:
     LeafLattice(const CornerGrid& grid, const Neighbourhood& hood)
     {
+        MaterialId solid = kEmptyMaterial;
+        singleMaterial_ = true;
         for (int x = 0; x < kLattice; ++x)
             for (int y = 0; y < kLattice; ++y)
-                for (int z = 0; z < kLattice; ++z) material_[x][y][z] = grid.at(x, y, z).id;
+                for (int z = 0; z < kLattice; ++z) {
+                    const MaterialId m = grid.at(x, y, z).id;
+                    material_[x][y][z] = m;
+                    if (m == kEmptyMaterial) continue;
+                    if (solid == kEmptyMaterial) solid = m;
+                    else if (m != solid) singleMaterial_ = false;
+                }
+        // Solid bits along each axis: line (u, v) of axis a holds bit t for voxel t along a, where u and
+        // v are the coordinates along (a + 1) % 3 and (a + 2) % 3.
         for (int axis = 0; axis < 3; ++axis)
-            for (int x = 0; x < kLattice; ++x)
-                for (int y = 0; y < kLattice; ++y)
-                    for (int z = 0; z < kLattice; ++z) {
-                        int v[3] = {x, y, z};
-                        crossed_[axis][x][y][z] = false;
-                        if (v[axis] == kLeafDim) continue;
-                        const bool low = material_[x][y][z] != kEmptyMaterial;
-                        ++v[axis];
-                        const bool high = material_[v[0]][v[1]][v[2]] != kEmptyMaterial;
-                        if (low == high) continue;
-                        const PackedSample* s = hood.sample(grid.origin.offsetBy(x, y, z), axis);
+            for (int u = 0; u < kLattice; ++u)
+                for (int v = 0; v < kLattice; ++v) {
+                    uint32_t bits = 0;
+                    for (int t = 0; t < kLattice; ++t) {
+                        int c[3];
+                        c[axis] = t;
+                        c[(axis + 1) % 3] = u;
+                        c[(axis + 2) % 3] = v;
+                        bits |= uint32_t(material(c) != kEmptyMaterial) << t;
+                    }
+                    solidLine_[axis][u][v] = bits;
+                }
+        // The crossings' normals (a leaf's surface holds a few hundred).
+        for (int axis = 0; axis < 3; ++axis)
+            for (int u = 0; u < kLattice; ++u)
+                for (int v = 0; v < kLattice; ++v) {
+                    uint32_t changes = (solidLine_[axis][u][v] ^ (solidLine_[axis][u][v] >> 1)) & ((1u << kLeafDim) - 1);
+                    while (changes) {
+                        const int t = __builtin_ctz(changes);
+                        changes &= changes - 1;
+                        int c[3];
+                        c[axis] = t;
+                        c[(axis + 1) % 3] = u;
+                        c[(axis + 2) % 3] = v;
+                        const PackedSample* s = hood.sample(grid.origin.offsetBy(c[0], c[1], c[2]), axis);
                         if (!s) continue;
                         const auto n = unpackSample(*s).normal;
-                        crossed_[axis][x][y][z] = true;
-                        for (int k = 0; k < 3; ++k) normal_[axis][x][y][z][k] = n[k];
+                        crossings_.push_back({{c[0], c[1], c[2]}, axis, {n[0], n[1], n[2]}});
                     }
+                }
     }
 
-    /// Whether the cell of `width` at leaf-local `b` can stay whole (see subdivideLeaf).
-    bool simple(const int b[3], int width, double cosHalfSpread) const
+    /// Whether every grid line through the cell of `width` at leaf-local `b` changes material at most
+    /// once, the cell holds at most one solid material, and none of its faces is ambiguous.
+    bool simpleTopology(const int b[3], int width) const
     {
-        return singleChangeLines(b, width) && unambiguousFaces(b, width) && narrowNormals(b, width, cosHalfSpread);
+        if (!singleMaterial_ && !singleMaterialIn(b, width)) return false;
+        const uint32_t span = (1u << width) - 1;
+        for (int axis = 0; axis < 3; ++axis) {
+            const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+            for (int i = 0; i <= width; ++i)
+                for (int j = 0; j <= width; ++j) {
+                    const uint32_t bits = solidLine_[axis][b[u] + i][b[v] + j] >> b[axis];
+                    const uint32_t changes = (bits ^ (bits >> 1)) & span;
+                    if (changes & (changes - 1)) return false; // more than one change
+
+                }
+        }
+        return unambiguousFaces(b, width);
+    }
+
+    /// The normal cones of the two-voxel cells: each crossing counts in every such cell that holds its
+    /// voxel edge (up to four, where the edge lies on cell faces).
+    void twoVoxelCones(NormalCone cones[]) const
+    {
+        constexpr int kCells = kLeafDim / 2;
+        auto forEachCell = [](const Crossing& x, auto&& fn) {
+            int lo[3], hi[3];
+            for (int a = 0; a < 3; ++a) {
+                if (a == x.axis) {
+                    lo[a] = hi[a] = x.at[a] / 2;
+                } else {
+                    lo[a] = std::max(0, (x.at[a] - 1) / 2);
+                    hi[a] = std::min(kCells - 1, x.at[a] / 2);
+                    if (x.at[a] % 2 == 1) lo[a] = hi[a] = x.at[a] / 2;
+                }
+            }
+            for (int i = lo[0]; i <= hi[0]; ++i)
+                for (int j = lo[1]; j <= hi[1]; ++j)
+                    for (int k = lo[2]; k <= hi[2]; ++k) fn(i, j, k);
+        };
+        for (const Crossing& x : crossings_)
+            forEachCell(x, [&](int i, int j, int k) {
+                NormalCone& c = cones[(i * kCells + j) * kCells + k];
+                for (int a = 0; a < 3; ++a) c.sum[a] += x.normal[a];
+                ++c.count;
+            });
+        double minCos[kCells * kCells * kCells];
+        std::fill(std::begin(minCos), std::end(minCos), 1.0);
+        for (const Crossing& x : crossings_)
+            forEachCell(x, [&](int i, int j, int k) {
+                const int cell = (i * kCells + j) * kCells + k;
+                const double* sum = cones[cell].sum;
+                const double length = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+                const double c = length > 0.0
+                                     ? (x.normal[0] * sum[0] + x.normal[1] * sum[1] + x.normal[2] * sum[2]) / length
+                                     : -1.0;
+                minCos[cell] = std::min(minCos[cell], c);
+            });
+        for (int cell = 0; cell < kCells * kCells * kCells; ++cell)
+            if (cones[cell].count) cones[cell].halfAngle = std::acos(std::clamp(minCos[cell], -1.0, 1.0));
     }
 
 private:
+    struct Crossing {
+        int at[3];
+        int axis;
+        double normal[3];
+    };
+
     MaterialId material(const int v[3]) const { return material_[v[0]][v[1]][v[2]]; }
 
-    bool singleChangeLines(const int b[3], int width) const
+    bool singleMaterialIn(const int b[3], int width) const
     {
         MaterialId solid = kEmptyMaterial;
-        for (int axis = 0; axis < 3; ++axis) {
-            const int u = (axis + 1) % 3, w = (axis + 2) % 3;
-            for (int i = 0; i <= width; ++i) {
-                for (int j = 0; j <= width; ++j) {
-                    int v[3];
-                    v[axis] = b[axis];
-                    v[u] = b[u] + i;
-                    v[w] = b[w] + j;
-                    MaterialId previous = material(v);
-                    int changes = 0;
-                    for (int t = 1; t <= width; ++t) {
-                        ++v[axis];
-                        const MaterialId m = material(v);
-                        if (m != kEmptyMaterial) {
-                            if (solid == kEmptyMaterial) solid = m;
-                            else if (m != solid) return false;
-                        }
-                        if (m != previous && ++changes > 1) return false;
-                        previous = m;
-                    }
+        for (int x = b[0]; x <= b[0] + width; ++x)
+            for (int y = b[1]; y <= b[1] + width; ++y)
+                for (int z = b[2]; z <= b[2] + width; ++z) {
+                    const MaterialId m = material_[x][y][z];
+                    if (m == kEmptyMaterial) continue;
+                    if (solid == kEmptyMaterial) solid = m;
+                    else if (m != solid) return false;
                 }
-            }
-        }
         return true;
     }
 
@@ -88,37 +178,10 @@ private:
         return true;
     }
 
-    template<typename Fn>
-    void forEachNormal(const int b[3], int width, Fn&& fn) const
-    {
-        for (int axis = 0; axis < 3; ++axis) {
-            int hi[3] = {b[0] + width, b[1] + width, b[2] + width};
-            hi[axis] -= 1; // edges along `axis` start before the far face
-            for (int x = b[0]; x <= hi[0]; ++x)
-                for (int y = b[1]; y <= hi[1]; ++y)
-                    for (int z = b[2]; z <= hi[2]; ++z)
-                        if (crossed_[axis][x][y][z]) fn(normal_[axis][x][y][z]);
-        }
-    }
-
-    bool narrowNormals(const int b[3], int width, double cosHalfSpread) const
-    {
-        double sum[3] = {0.0, 0.0, 0.0};
-        forEachNormal(b, width, [&](const float* n) {
-            for (int k = 0; k < 3; ++k) sum[k] += n[k];
-        });
-        const double length = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
-        if (length == 0.0) return true; // no crossings, or normals that cancel (caught by the lines)
-        bool narrow = true;
-        forEachNormal(b, width, [&](const float* n) {
-            if ((n[0] * sum[0] + n[1] * sum[1] + n[2] * sum[2]) < cosHalfSpread * length) narrow = false;
-        });
-        return narrow;
-    }
-
     MaterialId material_[kLattice][kLattice][kLattice];
-    bool crossed_[3][kLattice][kLattice][kLattice];
-    float normal_[3][kLattice][kLattice][kLattice][3];
+    bool singleMaterial_;
+    uint32_t solidLine_[3][kLattice][kLattice];
+    std::vector<Crossing> crossings_;
 };
 
 } // namespace
@@ -128,8 +191,13 @@ LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, c
     LeafCellSizes sizes{};
     if (criteria.maxCellSize <= 1) return sizes;
     const LeafLattice lattice(grid, hood);
-    // whole[level][x][y][z]: whether the cell of width 2^level at (x, y, z) * 2^level stays whole.
+    const double halfSpread = std::acos(std::clamp(criteria.cosHalfSpread, -1.0, 1.0));
+    // whole[level][x][y][z]: whether the cell of width 2^level at (x, y, z) * 2^level stays whole,
+    // with its normals' cone.
     bool whole[4][kLeafDim][kLeafDim][kLeafDim] = {};
+    // cones[level][(x * count + y) * count + z], count = 8 >> level cells per axis.
+    NormalCone cones[4][(kLeafDim / 2) * (kLeafDim / 2) * (kLeafDim / 2)];
+    lattice.twoVoxelCones(cones[1]);
     for (int x = 0; x < kLeafDim; ++x)
         for (int y = 0; y < kLeafDim; ++y)
             for (int z = 0; z < kLeafDim; ++z) whole[0][x][y][z] = true;
@@ -140,12 +208,34 @@ LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, c
         for (int x = 0; x < count; ++x)
             for (int y = 0; y < count; ++y)
                 for (int z = 0; z < count; ++z) {
-                    bool children = true;
-                    for (int c = 0; c < 8 && children; ++c)
-                        children = whole[level - 1][2 * x + cornerBit(c, 0)][2 * y + cornerBit(c, 1)][2 * z + cornerBit(c, 2)];
+                    bool& keep = whole[level][x][y][z];
+                    keep = true;
+                    for (int c = 0; c < 8 && keep; ++c)
+                        keep = whole[level - 1][2 * x + cornerBit(c, 0)][2 * y + cornerBit(c, 1)][2 * z + cornerBit(c, 2)];
                     const int b[3] = {x * width, y * width, z * width};
-                    whole[level][x][y][z] = children && lattice.simple(b, width, criteria.cosHalfSpread);
-                    any = any || whole[level][x][y][z];
+                    if (!keep || !lattice.simpleTopology(b, width)) {
+                        keep = false;
+                        continue;
+                    }
+                    NormalCone& cone = cones[level][(x * count + y) * count + z];
+                    if (level > 1) {
+                        auto childCone = [&](int c) -> const NormalCone& {
+                            const int childCount = 2 * count;
+                            const int cx = 2 * x + cornerBit(c, 0), cy = 2 * y + cornerBit(c, 1), cz = 2 * z + cornerBit(c, 2);
+                            return cones[level - 1][(cx * childCount + cy) * childCount + cz];
+                        };
+                        for (int c = 0; c < 8; ++c) {
+                            for (int k = 0; k < 3; ++k) cone.sum[k] += childCone(c).sum[k];
+                            cone.count += childCone(c).count;
+                        }
+                        for (int c = 0; c < 8; ++c) {
+                            const NormalCone& child = childCone(c);
+                            if (child.count == 0) continue;
+                            cone.halfAngle = std::max(cone.halfAngle, NormalCone::angleBetween(child.sum, cone.sum) + child.halfAngle);
+                        }
+                    }
+                    keep = cone.halfAngle <= halfSpread;
+                    any = any || keep;
                 }
         if (!any) break;
         finest = level;

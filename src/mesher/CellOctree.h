@@ -29,7 +29,8 @@ struct LeafCellSizes {
 ///    edges has at most one crossing and no face or interior hides surface its corners do not show;
 ///  - it holds at most one solid material (material boundaries are meshed at voxel resolution);
 ///  - none of its faces is ambiguous (two solid corners on a diagonal);
-///  - its crossings' normals span less than the criteria's angle.
+///  - its crossings' normals lie within half the criteria's angle of their mean (bounded from its
+///    children's cones above two voxels, so a cell may split where an exact test would not).
 LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, const SubdivisionCriteria& criteria);
 
 /// The cell widths around one leaf: its own cells and those of its six face neighbours, which is
