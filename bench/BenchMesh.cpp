@@ -5,6 +5,7 @@
 #include "BenchUtil.h"
 
 #include "mesher/Mesh.h"
+#include "mesher/MeshChunkSet.h"
 #include "mesher/MeshMetrics.h"
 #include "mesher/MeshQuality.h"
 #include "mesher/Mesher.h"
@@ -261,6 +262,61 @@ struct ShapeResult {
     std::vector<RowResult> rows; // cms uniform, cms adaptive, mc, vdb0, vdb05
 };
 
+/// Re-meshing after brush stamps: a MeshChunkSet of a sphere is updated with the dirty blocks of each
+/// radius-32 stamp (alternately removing and adding material on the surface).
+struct RemeshResult {
+    std::string key;
+    std::string label;
+    double sphereRadius = 0;
+    double medianMs = 0;
+    double maxMs = 0;
+    double medianChunks = 0;
+    bool matchesFullMesh = false;
+};
+
+RemeshResult runRemesh(bool quick, int maxCellWidth, const std::string& key, const std::string& label)
+{
+    constexpr double kStampRadius = 32.0;
+    constexpr int kStamps = 9;
+    RemeshResult r;
+    r.key = key;
+    r.label = label;
+    r.sphereRadius = quick ? 100.0 : 200.0;
+    Volume volume(kVoxelSize);
+    CsgOp add;
+    add.mode = CsgMode::Add;
+    applyCsg(volume, sphere(r.sphereRadius, Vec3d(0.0)), add);
+    MeshOptions options;
+    options.kind = MesherKind::CubicalMarchingSquares;
+    options.maxCellWidth = maxCellWidth;
+    MeshChunkSet chunks(options);
+    chunks.rebuild(volume);
+    std::vector<double> times, counts;
+    for (int i = 0; i < kStamps; ++i) {
+        const double angle = 0.35 * i;
+        const Vec3d at(r.sphereRadius * std::cos(angle), r.sphereRadius * std::sin(angle), 5.0 * i);
+        CsgOp op;
+        op.mode = i % 2 ? CsgMode::Add : CsgMode::Remove;
+        const EditStats edit = applyCsg(volume, sphere(kStampRadius, at), op);
+        std::size_t remeshed = 0;
+        times.push_back(timeMs([&] { remeshed = chunks.update(volume, edit.dirtyBlocks); }));
+        counts.push_back(double(remeshed));
+    }
+    r.medianMs = median(times);
+    r.maxMs = *std::max_element(times.begin(), times.end());
+    r.medianChunks = median(counts);
+    MeshChunkSet full(options);
+    full.rebuild(volume);
+    r.matchesFullMesh = full.chunks().size() == chunks.chunks().size();
+    for (const auto& [origin, chunk] : full.chunks()) {
+        const auto it = chunks.chunks().find(origin);
+        r.matchesFullMesh = r.matchesFullMesh && it != chunks.chunks().end() &&
+                            it->second.mesh.triangles == chunk.mesh.triangles &&
+                            it->second.mesh.positions == chunk.mesh.positions;
+    }
+    return r;
+}
+
 double cellsPerSecond(uint64_t cells, double ms) { return ms > 0.0 ? double(cells) / (ms / 1000.0) : 0.0; }
 
 std::string distanceCell(double d) { return std::isfinite(d) ? fixed(d, 3) : "inf"; }
@@ -288,6 +344,9 @@ int benchMesh(bool json, bool quick)
             runOpenVdb(*levelSet, 0.5, "openvdb_adaptivity_0.5", "OpenVDB volumeToMesh adaptivity 0.5", shape));
         results.push_back(std::move(res));
     }
+
+    const std::vector<RemeshResult> remesh = {runRemesh(quick, 1, "cms_uniform", "CMS uniform"),
+                                              runRemesh(quick, 8, "cms_adaptive", "CMS adaptive")};
 
     auto ratio = [](const ShapeResult& r) {
         const double cms = cellsPerSecond(r.surfaceCells, r.rows[0].ms);
@@ -327,6 +386,17 @@ int benchMesh(bool json, bool quick)
             shapesJson[r.shape->key] = s;
         }
         out["shapes"] = shapesJson;
+        nlohmann::json remeshJson = nlohmann::json::object();
+        for (const auto& r : remesh) {
+            remeshJson[r.key] = {{"label", r.label},
+                                 {"sphere_radius", r.sphereRadius},
+                                 {"stamp_radius", 32.0},
+                                 {"median_ms", r.medianMs},
+                                 {"max_ms", r.maxMs},
+                                 {"median_chunks_remeshed", r.medianChunks},
+                                 {"matches_full_mesh", r.matchesFullMesh}};
+        }
+        out["remesh_after_stamp"] = remeshJson;
         std::cout << out.dump() << std::endl;
         return 0;
     }
@@ -355,6 +425,16 @@ int benchMesh(bool json, bool quick)
                   << " M/s, ratio CMS/OpenVDB " << fixed(ratio(r), 2) << "; adaptive CMS has "
                   << fixed(triangleRatio(r), 3) << "x uniform CMS's triangles\n";
     }
+
+    std::cout << "\nRe-meshing after a radius-32 stamp on a sphere of radius " << fixed(remesh[0].sphereRadius, 0)
+              << " (MeshChunkSet::update over the stamp's dirty blocks; 9 stamps, alternately removing and adding):\n\n";
+    Table table;
+    table.header = {"mesher", "median ms", "max ms", "chunks re-meshed", "equals full re-mesh"};
+    for (const auto& r : remesh) {
+        table.rows.push_back({r.label, fixed(r.medianMs, 2), fixed(r.maxMs, 2), fixed(r.medianChunks, 0),
+                              r.matchesFullMesh ? "yes" : "no"});
+    }
+    table.print(std::cout);
     return 0;
 }
 

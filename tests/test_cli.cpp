@@ -223,6 +223,15 @@ TEST_CASE("cli: bench mesh --quick --json has every shape and mesher", "[cli]")
         CHECK(s["meshers"]["cms_uniform"]["watertight"] == true);
         CHECK(s["meshers"]["cms_adaptive"]["watertight"] == true);
     }
+    // Re-meshing after stamps leaves exactly the chunks a full re-mesh gives.
+    for (const char* mesher : {"cms_uniform", "cms_adaptive"}) {
+        INFO(mesher);
+        REQUIRE(j["remesh_after_stamp"].contains(mesher));
+        const json& r = j["remesh_after_stamp"][mesher];
+        CHECK(r["median_ms"].get<double>() > 0.0);
+        CHECK(r["median_chunks_remeshed"].get<double>() > 0.0);
+        CHECK(r["matches_full_mesh"] == true);
+    }
 }
 
 TEST_CASE("cli: demo writes a volume, meshes and the script it ran", "[cli]")
