@@ -28,8 +28,8 @@ struct MeshOptions {
     int maxCellWidth = 8;
     /// CMS: a cell wider than one voxel is split while its crossings' normals span more than this angle.
     double subdivisionAngleDegrees = 15.0;
-    /// CMS, optional: a cap on the cell width per leaf (given its origin), for meshing regions at
-    /// different depths; the mesh stays watertight across them.
+    /// CMS, optional: a cap on the cell width per leaf (given its origin; rounded down to 1, 2, 4 or 8),
+    /// for meshing regions at different depths; the mesh stays watertight across them.
     std::function<int(const std::array<int32_t, 3>&)> leafMaxCellWidth;
 };
 
