@@ -1,5 +1,7 @@
 #include "mesher/CellOctree.h"
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -73,8 +75,10 @@ public:
                         c[(axis + 2) % 3] = v;
                         const PackedSample* s = hood.sample(grid.origin.offsetBy(c[0], c[1], c[2]), axis);
                         if (!s) continue;
-                        const auto n = unpackSample(*s).normal;
-                        crossings_.push_back({{c[0], c[1], c[2]}, axis, {n[0], n[1], n[2]}});
+                        const UnpackedSample u = unpackSample(*s);
+                        double p[3] = {double(c[0]), double(c[1]), double(c[2])};
+                        p[axis] += u.offset;
+                        crossings_.push_back({{c[0], c[1], c[2]}, axis, {u.normal[0], u.normal[1], u.normal[2]}, {p[0], p[1], p[2]}});
                     }
                 }
     }
@@ -140,11 +144,69 @@ public:
             if (cones[cell].count) cones[cell].halfAngle = std::acos(std::clamp(minCos[cell], -1.0, 1.0));
     }
 
+    /// Whether the two-voxel cell (i, j, k) holds one straight sharp edge: its crossings' normals fall
+    /// into two groups, each within `cosHalfSpread` of its own mean, and the two groups' planes meet
+    /// in a line through the cell. CMS puts that cell's vertex on the edge, so it needs no splitting.
+    bool holdsOneSharpEdge(int i, int j, int k, double cosHalfSpread) const
+    {
+        const int b[3] = {2 * i, 2 * j, 2 * k};
+        const Crossing* members[64];
+        int count = 0;
+        for (const Crossing& x : crossings_) {
+            bool inside = true;
+            for (int a = 0; a < 3 && inside; ++a) {
+                const int hi = b[a] + 2 - (a == x.axis ? 1 : 0);
+                inside = x.at[a] >= b[a] && x.at[a] <= hi;
+            }
+            if (inside && count < 64) members[count++] = &x;
+        }
+        if (count < 2) return false;
+        auto dot = [](const double* a, const double* c) { return a[0] * c[0] + a[1] * c[1] + a[2] * c[2]; };
+        const double* seed[2] = {members[0]->normal, members[0]->normal};
+        for (int m = 1; m < count; ++m)
+            if (dot(members[m]->normal, seed[0]) < dot(seed[1], seed[0])) seed[1] = members[m]->normal;
+        double mean[2][3] = {};
+        int group[64];
+        for (int m = 0; m < count; ++m) {
+            group[m] = dot(members[m]->normal, seed[1]) > dot(members[m]->normal, seed[0]) ? 1 : 0;
+            for (int a = 0; a < 3; ++a) mean[group[m]][a] += members[m]->normal[a];
+        }
+        for (auto& g : mean) {
+            const double length = std::sqrt(dot(g, g));
+            if (length == 0.0) return false;
+            for (double& v : g) v /= length;
+        }
+        for (int m = 0; m < count; ++m)
+            if (dot(members[m]->normal, mean[group[m]]) < cosHalfSpread) return false;
+        // The edge: the point nearest the cell's centre on both groups' mean planes.
+        const Eigen::Vector3d n0(mean[0][0], mean[0][1], mean[0][2]), n1(mean[1][0], mean[1][1], mean[1][2]);
+        const Eigen::Vector3d direction = n0.cross(n1);
+        if (direction.norm() < 1e-3) return false;
+        double offset[2] = {0.0, 0.0};
+        int sizes[2] = {0, 0};
+        for (int m = 0; m < count; ++m) {
+            const Eigen::Vector3d p(members[m]->position[0], members[m]->position[1], members[m]->position[2]);
+            offset[group[m]] += (group[m] ? n1 : n0).dot(p);
+            ++sizes[group[m]];
+        }
+        const Eigen::Vector3d centre(b[0] + 1.0, b[1] + 1.0, b[2] + 1.0);
+        Eigen::Matrix3d system;
+        system.row(0) = n0;
+        system.row(1) = n1;
+        system.row(2) = direction;
+        const Eigen::Vector3d rhs(offset[0] / sizes[0], offset[1] / sizes[1], direction.dot(centre));
+        const Eigen::Vector3d onEdge = system.partialPivLu().solve(rhs);
+        for (int a = 0; a < 3; ++a)
+            if (onEdge[a] < b[a] || onEdge[a] > b[a] + 2) return false;
+        return true;
+    }
+
 private:
     struct Crossing {
         int at[3];
         int axis;
         double normal[3];
+        double position[3]; // leaf-local voxel units
     };
 
     MaterialId material(const int v[3]) const { return material_[v[0]][v[1]][v[2]]; }
@@ -234,7 +296,8 @@ LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, c
                             cone.halfAngle = std::max(cone.halfAngle, NormalCone::angleBetween(child.sum, cone.sum) + child.halfAngle);
                         }
                     }
-                    keep = cone.halfAngle <= halfSpread;
+                    keep = cone.halfAngle <= halfSpread ||
+                           (level == 1 && lattice.holdsOneSharpEdge(x, y, z, criteria.cosHalfSpread));
                     any = any || keep;
                 }
         if (!any) break;
