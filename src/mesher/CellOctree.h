@@ -30,7 +30,9 @@ struct LeafCellSizes {
 ///  - it holds at most one solid material (material boundaries are meshed at voxel resolution);
 ///  - none of its faces is ambiguous (two solid corners on a diagonal);
 ///  - its crossings' normals lie within half the criteria's angle of their mean (bounded from its
-///    children's cones above two voxels, so a cell may split where an exact test would not).
+///    children's cones above two voxels, so a cell may split where an exact test would not), or, for
+///    a two-voxel cell, they form two such groups whose planes meet in a line through the cell: one
+///    straight sharp edge, which the cell's vertex reproduces.
 LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, const SubdivisionCriteria& criteria);
 
 /// The cell widths around one leaf: its own cells and those of its six face neighbours, which is
