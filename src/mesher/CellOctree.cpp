@@ -35,8 +35,11 @@ class LeafLattice {
 public:
     LeafLattice(const CornerGrid& grid, const Neighbourhood& hood)
     {
+        // Solid bits along each axis: line (u, v) of axis a holds bit t for voxel t along a, where u and
+        // v are the coordinates along (a + 1) % 3 and (a + 2) % 3.
         MaterialId solid = kEmptyMaterial;
         singleMaterial_ = true;
+        std::fill(&solidLine_[0][0][0], &solidLine_[0][0][0] + 3 * kLattice * kLattice, 0u);
         for (int x = 0; x < kLattice; ++x)
             for (int y = 0; y < kLattice; ++y)
                 for (int z = 0; z < kLattice; ++z) {
@@ -45,21 +48,9 @@ public:
                     if (m == kEmptyMaterial) continue;
                     if (solid == kEmptyMaterial) solid = m;
                     else if (m != solid) singleMaterial_ = false;
-                }
-        // Solid bits along each axis: line (u, v) of axis a holds bit t for voxel t along a, where u and
-        // v are the coordinates along (a + 1) % 3 and (a + 2) % 3.
-        for (int axis = 0; axis < 3; ++axis)
-            for (int u = 0; u < kLattice; ++u)
-                for (int v = 0; v < kLattice; ++v) {
-                    uint32_t bits = 0;
-                    for (int t = 0; t < kLattice; ++t) {
-                        int c[3];
-                        c[axis] = t;
-                        c[(axis + 1) % 3] = u;
-                        c[(axis + 2) % 3] = v;
-                        bits |= uint32_t(material(c) != kEmptyMaterial) << t;
-                    }
-                    solidLine_[axis][u][v] = bits;
+                    solidLine_[0][y][z] |= 1u << x;
+                    solidLine_[1][z][x] |= 1u << y;
+                    solidLine_[2][x][y] |= 1u << z;
                 }
         // The crossings' normals (a leaf's surface holds a few hundred).
         for (int axis = 0; axis < 3; ++axis)
@@ -257,9 +248,10 @@ LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, c
     // whole[level][x][y][z]: whether the cell of width 2^level at (x, y, z) * 2^level stays whole,
     // with its normals' cone.
     bool whole[4][kLeafDim][kLeafDim][kLeafDim] = {};
-    // cones[level][(x * count + y) * count + z], count = 8 >> level cells per axis.
-    NormalCone cones[4][(kLeafDim / 2) * (kLeafDim / 2) * (kLeafDim / 2)];
-    lattice.twoVoxelCones(cones[1]);
+    // Normal cones of the cells of width 2, 4 and 8, at (x * count + y) * count + z with count = 8 >> level.
+    NormalCone twoVoxel[64], fourVoxel[8], eightVoxel[1];
+    NormalCone* const cones[4] = {nullptr, twoVoxel, fourVoxel, eightVoxel};
+    lattice.twoVoxelCones(twoVoxel);
     for (int x = 0; x < kLeafDim; ++x)
         for (int y = 0; y < kLeafDim; ++y)
             for (int z = 0; z < kLeafDim; ++z) whole[0][x][y][z] = true;
