@@ -5,7 +5,8 @@
 // normals span more than the sharp angle gets a 2D sharp feature: the point where the crossings'
 // tangent lines meet, when it lies on the face. On an ambiguous face (two solid corners on a
 // diagonal) the segments that cut off each solid corner are used unless their sharp features make them
-// cross, in which case the other pairing is. Segments are linked into components; each component gets
+// cross, or unless they join crossings whose normals disagree with no sharp feature on the face while
+// the other pairing's do not; then the other pairing is. Segments are linked into components; each component gets
 // one inner vertex, the least-squares point of its crossing planes (truncated SVD, clamped to the
 // cell) when its normals span the sharp angle, else the mean of its vertices, and is fanned from it.
 // A face's segments and sharp points depend on the face alone, so neighbouring cells agree on them
