@@ -13,6 +13,8 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <set>
+#include <tuple>
 
 using namespace vdbclay;
 using namespace vdbclay::test;
@@ -304,4 +306,54 @@ TEST_CASE("leaves meshed at different depths stay watertight and on the surface"
     INFO("triangles: uniform " << uniform << ", mixed " << mesh.triangleCount() << ", adaptive " << adaptive);
     CHECK(mesh.triangleCount() < uniform);
     CHECK(mesh.triangleCount() > adaptive);
+}
+
+TEST_CASE("re-meshing reaches the leaves whose subdivision reads an edited block", "[cms][incremental]")
+{
+    // A shallow bump just past a block boundary changes samples on that block's first voxel layer. The
+    // leaf before it reads that layer when it subdivides: its wide cell splits, and so must the face of
+    // the leaf before that, two blocks from the edit. The CSG kernel reports a margin of blocks around
+    // an edit, which would hide this; here only the blocks whose samples changed are passed on.
+    Volume v(1.0);
+    apply(v, CsgMode::Add, box(Vec3d(20.3, 20.3, 20.3)), at(Vec3d(0.0)));
+    const MeshOptions options = optionsFor(MesherKind::CubicalMarchingSquares, Cells::Adaptive);
+    MeshChunkSet incremental(options);
+    incremental.rebuild(v);
+    auto blockOf = [](const EdgeRecord& e) {
+        std::array<int32_t, 3> b{};
+        for (int a = 0; a < 3; ++a) b[a] = e.voxel[a] & ~(kLeafDim - 1);
+        return b;
+    };
+    auto key = [](const EdgeRecord& e) {
+        return std::make_tuple(e.voxel, e.axis, e.from, e.to, e.sample.offset, e.sample.normalU, e.sample.normalV);
+    };
+    const Vec3d bumps[] = {Vec3d(16.5, 4.3, 19.0), Vec3d(4.3, 16.5, 19.0), Vec3d(19.0, 4.3, 8.5),
+                           Vec3d(0.5, -11.5, 19.0)};
+    for (const Vec3d& centre : bumps) {
+        const std::vector<EdgeRecord> before = collectEdges(v);
+        apply(v, CsgMode::Add, sphere(1.6), at(centre));
+        const std::vector<EdgeRecord> after = collectEdges(v);
+        // The blocks holding a sample that appeared, vanished or changed.
+        std::set<decltype(key(before[0]))> old, now;
+        for (const EdgeRecord& e : before) old.insert(key(e));
+        for (const EdgeRecord& e : after) now.insert(key(e));
+        std::set<std::array<int32_t, 3>> changed;
+        for (const EdgeRecord& e : before) if (!now.count(key(e))) changed.insert(blockOf(e));
+        for (const EdgeRecord& e : after) if (!old.count(key(e))) changed.insert(blockOf(e));
+        REQUIRE(!changed.empty());
+        incremental.update(v, std::vector<std::array<int32_t, 3>>(changed.begin(), changed.end()));
+
+        MeshChunkSet full(options);
+        full.rebuild(v);
+        INFO("after the bump at " << centre);
+        REQUIRE(incremental.chunks().size() == full.chunks().size());
+        for (const auto& [origin, chunk] : full.chunks()) {
+            INFO("leaf at " << origin[0] << "," << origin[1] << "," << origin[2]);
+            const auto it = incremental.chunks().find(origin);
+            REQUIRE(it != incremental.chunks().end());
+            CHECK(it->second.mesh.triangles == chunk.mesh.triangles);
+            CHECK(it->second.mesh.positions == chunk.mesh.positions);
+        }
+    }
+    requireClosed(incremental.weld());
 }

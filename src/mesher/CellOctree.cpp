@@ -72,7 +72,20 @@ public:
                         crossings_.push_back({{c[0], c[1], c[2]}, axis, {u.normal[0], u.normal[1], u.normal[2]}, {p[0], p[1], p[2]}});
                     }
                 }
+        // Each two-voxel cell's crossings: a crossing counts in every such cell that holds its voxel
+        // edge (up to four, where the edge lies on cell faces).
+        std::fill(std::begin(memberStart_), std::end(memberStart_), 0);
+        for (const Crossing& x : crossings_) forEachTwoVoxelCell(x, [&](int cell) { ++memberStart_[cell + 1]; });
+        for (int cell = 0; cell < kTwoVoxelCells; ++cell) memberStart_[cell + 1] += memberStart_[cell];
+        members_.resize(memberStart_[kTwoVoxelCells]);
+        int next[kTwoVoxelCells];
+        std::copy(memberStart_, memberStart_ + kTwoVoxelCells, next);
+        for (std::size_t i = 0; i < crossings_.size(); ++i)
+            forEachTwoVoxelCell(crossings_[i], [&](int cell) { members_[next[cell]++] = &crossings_[i]; });
     }
+
+    /// Two-voxel cell (i, j, k) is number (i * 4 + j) * 4 + k.
+    static constexpr int kTwoVoxelCells = (kLeafDim / 2) * (kLeafDim / 2) * (kLeafDim / 2);
 
     /// Whether every grid line through the cell of `width` at leaf-local `b` changes material at most
     /// once, the cell holds at most one solid material, and none of its faces is ambiguous.
@@ -87,52 +100,29 @@ public:
                     const uint32_t bits = solidLine_[axis][b[u] + i][b[v] + j] >> b[axis];
                     const uint32_t changes = (bits ^ (bits >> 1)) & span;
                     if (changes & (changes - 1)) return false; // more than one change
-
                 }
         }
         return unambiguousFaces(b, width);
     }
 
-    /// The normal cones of the two-voxel cells: each crossing counts in every such cell that holds its
-    /// voxel edge (up to four, where the edge lies on cell faces).
-    void twoVoxelCones(NormalCone cones[]) const
+    /// The normal cones of the two-voxel cells.
+    void twoVoxelCones(NormalCone cones[kTwoVoxelCells]) const
     {
-        constexpr int kCells = kLeafDim / 2;
-        auto forEachCell = [](const Crossing& x, auto&& fn) {
-            int lo[3], hi[3];
-            for (int a = 0; a < 3; ++a) {
-                if (a == x.axis) {
-                    lo[a] = hi[a] = x.at[a] / 2;
-                } else {
-                    lo[a] = std::max(0, (x.at[a] - 1) / 2);
-                    hi[a] = std::min(kCells - 1, x.at[a] / 2);
-                    if (x.at[a] % 2 == 1) lo[a] = hi[a] = x.at[a] / 2;
-                }
-            }
-            for (int i = lo[0]; i <= hi[0]; ++i)
-                for (int j = lo[1]; j <= hi[1]; ++j)
-                    for (int k = lo[2]; k <= hi[2]; ++k) fn(i, j, k);
-        };
-        for (const Crossing& x : crossings_)
-            forEachCell(x, [&](int i, int j, int k) {
-                NormalCone& c = cones[(i * kCells + j) * kCells + k];
-                for (int a = 0; a < 3; ++a) c.sum[a] += x.normal[a];
+        for (int cell = 0; cell < kTwoVoxelCells; ++cell) {
+            NormalCone& c = cones[cell];
+            for (int m = memberStart_[cell]; m < memberStart_[cell + 1]; ++m) {
+                for (int a = 0; a < 3; ++a) c.sum[a] += members_[m]->normal[a];
                 ++c.count;
-            });
-        double minCos[kCells * kCells * kCells];
-        std::fill(std::begin(minCos), std::end(minCos), 1.0);
-        for (const Crossing& x : crossings_)
-            forEachCell(x, [&](int i, int j, int k) {
-                const int cell = (i * kCells + j) * kCells + k;
-                const double* sum = cones[cell].sum;
-                const double length = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
-                const double c = length > 0.0
-                                     ? (x.normal[0] * sum[0] + x.normal[1] * sum[1] + x.normal[2] * sum[2]) / length
-                                     : -1.0;
-                minCos[cell] = std::min(minCos[cell], c);
-            });
-        for (int cell = 0; cell < kCells * kCells * kCells; ++cell)
-            if (cones[cell].count) cones[cell].halfAngle = std::acos(std::clamp(minCos[cell], -1.0, 1.0));
+            }
+            if (c.count == 0) continue;
+            const double length = std::sqrt(c.sum[0] * c.sum[0] + c.sum[1] * c.sum[1] + c.sum[2] * c.sum[2]);
+            double minCos = 1.0;
+            for (int m = memberStart_[cell]; m < memberStart_[cell + 1]; ++m) {
+                const double* n = members_[m]->normal;
+                minCos = std::min(minCos, length > 0.0 ? (n[0] * c.sum[0] + n[1] * c.sum[1] + n[2] * c.sum[2]) / length : -1.0);
+            }
+            c.halfAngle = std::acos(std::clamp(minCos, -1.0, 1.0));
+        }
     }
 
     /// Whether the two-voxel cell (i, j, k) holds one straight sharp edge: its crossings' normals fall
@@ -141,23 +131,17 @@ public:
     bool holdsOneSharpEdge(int i, int j, int k, double cosHalfSpread) const
     {
         const int b[3] = {2 * i, 2 * j, 2 * k};
-        const Crossing* members[64];
-        int count = 0;
-        for (const Crossing& x : crossings_) {
-            bool inside = true;
-            for (int a = 0; a < 3 && inside; ++a) {
-                const int hi = b[a] + 2 - (a == x.axis ? 1 : 0);
-                inside = x.at[a] >= b[a] && x.at[a] <= hi;
-            }
-            if (inside && count < 64) members[count++] = &x;
-        }
+        constexpr int kCells = kLeafDim / 2;
+        const int cell = (i * kCells + j) * kCells + k;
+        const Crossing* const* members = members_.data() + memberStart_[cell];
+        const int count = memberStart_[cell + 1] - memberStart_[cell];
         if (count < 2) return false;
         auto dot = [](const double* a, const double* c) { return a[0] * c[0] + a[1] * c[1] + a[2] * c[2]; };
         const double* seed[2] = {members[0]->normal, members[0]->normal};
         for (int m = 1; m < count; ++m)
             if (dot(members[m]->normal, seed[0]) < dot(seed[1], seed[0])) seed[1] = members[m]->normal;
         double mean[2][3] = {};
-        int group[64];
+        std::vector<int> group(count);
         for (int m = 0; m < count; ++m) {
             group[m] = dot(members[m]->normal, seed[1]) > dot(members[m]->normal, seed[0]) ? 1 : 0;
             for (int a = 0; a < 3; ++a) mean[group[m]][a] += members[m]->normal[a];
@@ -202,6 +186,26 @@ private:
 
     MaterialId material(const int v[3]) const { return material_[v[0]][v[1]][v[2]]; }
 
+    /// Calls fn(cell) for each two-voxel cell that holds the crossing's voxel edge.
+    template<typename Fn>
+    static void forEachTwoVoxelCell(const Crossing& x, Fn&& fn)
+    {
+        constexpr int kCells = kLeafDim / 2;
+        int lo[3], hi[3];
+        for (int a = 0; a < 3; ++a) {
+            const int at = x.at[a];
+            if (a == x.axis || at % 2 == 1) {
+                lo[a] = hi[a] = std::min(kCells - 1, at / 2);
+            } else { // on the boundary between two cells (or on the leaf's face)
+                lo[a] = std::max(0, at / 2 - 1);
+                hi[a] = std::min(kCells - 1, at / 2);
+            }
+        }
+        for (int i = lo[0]; i <= hi[0]; ++i)
+            for (int j = lo[1]; j <= hi[1]; ++j)
+                for (int k = lo[2]; k <= hi[2]; ++k) fn((i * kCells + j) * kCells + k);
+    }
+
     bool singleMaterialIn(const int b[3], int width) const
     {
         MaterialId solid = kEmptyMaterial;
@@ -235,6 +239,8 @@ private:
     bool singleMaterial_;
     uint32_t solidLine_[3][kLattice][kLattice];
     std::vector<Crossing> crossings_;
+    std::vector<const Crossing*> members_;
+    int memberStart_[kTwoVoxelCells + 1];
 };
 
 } // namespace
