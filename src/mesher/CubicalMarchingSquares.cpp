@@ -90,7 +90,7 @@ struct CubicalMarchingSquaresMesher::Buffers {
     MeshChunk chunk;
     // Vertex index of each voxel edge whose lower end lies in o-1 .. o+8 (per axis) of the leaf at
     // origin o, and of the face points; both cleared per leaf.
-    static constexpr int kSpan = kLeafDim + 2;
+    static constexpr int kSpan = CornerGrid::kSpan;
     static constexpr uint32_t kNone = ~uint32_t(0);
     uint32_t edgeVertex[kSpan * kSpan * kSpan * 3];
     // Decoded crossings by the same slots (index into `crossings`), as up to four cells read each.
@@ -113,8 +113,13 @@ struct CubicalMarchingSquaresMesher::Buffers {
 
     void startLeaf(const Coord& origin)
     {
-        chunk = MeshChunk{};
         chunk.leafOrigin = {origin.x(), origin.y(), origin.z()};
+        Mesh& m = chunk.mesh;
+        for (auto* v : {&m.positions, &m.normals}) v->clear();
+        m.materials.clear();
+        m.triangles.clear();
+        m.triangleMaterials.clear();
+        chunk.vertexKeys.clear();
         for (uint32_t slot : usedEdgeSlots) edgeVertex[slot] = edgeCrossing[slot] = kNone;
         usedEdgeSlots.clear();
         crossings.clear();
@@ -133,18 +138,8 @@ struct CubicalMarchingSquaresMesher::Buffers {
         return slot * 3 + axis;
     }
 
-    MeshChunk finishLeaf()
-    {
-        MeshChunk out;
-        out.leafOrigin = chunk.leafOrigin;
-        out.mesh.positions = chunk.mesh.positions;
-        out.mesh.normals = chunk.mesh.normals;
-        out.mesh.materials = chunk.mesh.materials;
-        out.mesh.triangles = chunk.mesh.triangles;
-        out.mesh.triangleMaterials = chunk.mesh.triangleMaterials;
-        out.vertexKeys = chunk.vertexKeys;
-        return out;
-    }
+    /// A copy of the chunk, its vectors at their exact size; the buffers keep their capacity.
+    MeshChunk finishLeaf() const { return chunk; }
 };
 
 namespace {
@@ -297,19 +292,17 @@ private:
             const Coord &p = sq.corners[i], &q = sq.corners[j];
             const int axis = p[0] != q[0] ? 0 : (p[1] != q[1] ? 1 : 2);
             const bool forward = p[axis] < q[axis];
-            if (sq.wholeFace) {
+            auto compute = [&] {
+                return crossingAlong(ctx_, forward ? p : q, axis, sq.width, sq.mats[forward ? i : j],
+                                     sq.mats[forward ? j : i]);
+            };
+            if (sq.wholeFace) { // the cell's own edge, which its other face shares
                 const int e = cellEdge(sq.cellCorners[i], sq.cellCorners[j]);
-                if (!cellKnown_[e]) {
-                    cellCrossings_[e] = crossingAlong(ctx_, forward ? p : q, axis, sq.width,
-                                                      forward ? sq.mats[i] : sq.mats[j],
-                                                      forward ? sq.mats[j] : sq.mats[i]);
-                    cellKnown_[e] = true;
-                }
+                if (!cellKnown_[e]) cellCrossings_[e] = compute();
+                cellKnown_[e] = true;
                 squareCrossings_[i] = cellCrossings_[e];
             } else {
-                squareCrossings_[i] = crossingAlong(ctx_, forward ? p : q, axis, sq.width,
-                                                    forward ? sq.mats[i] : sq.mats[j],
-                                                    forward ? sq.mats[j] : sq.mats[i]);
+                squareCrossings_[i] = compute();
             }
             known_[i] = true;
         }
@@ -604,19 +597,18 @@ private:
             for (int y = 0; y < span; ++y)
                 for (int z = 0; z < span; ++z) {
                     const Coord v = base_.offsetBy(x - 1, y - 1, z - 1);
-                    const bool solid = hood.material(v).solid();
+                    const MaterialValue low = hood.material(v);
                     const int at[3] = {x, y, z};
                     for (int axis = 0; axis < 3; ++axis) {
                         if (at[axis] == span - 1) continue;
                         Coord w = v;
                         w[axis] += 1;
-                        if (hood.material(w).solid() == solid) continue;
-                        const PackedSample* sample = hood.sample(v, axis);
-                        if (!sample) continue;
-                        const UnpackedSample u = unpackSample(*sample);
-                        Eigen::Vector3d p(v.x(), v.y(), v.z());
-                        p[axis] += u.offset;
-                        fn(Eigen::Vector3d(p * ctx_.voxelSize), Eigen::Vector3d(u.normal[0], u.normal[1], u.normal[2]));
+                        const MaterialValue high = hood.material(w);
+                        if (high.solid() == low.solid() || !hood.sample(v, axis)) continue;
+                        EdgeCrossing uncached;
+                        const EdgeCrossing& c = cachedCrossing(ctx_, v, axis, low, high, uncached);
+                        fn(Eigen::Vector3d(c.position[0], c.position[1], c.position[2]),
+                           Eigen::Vector3d(c.normal[0], c.normal[1], c.normal[2]));
                     }
                 }
     }
