@@ -304,6 +304,65 @@ TEST_CASE("a brush that covers whole 128^3 nodes fills them", "[csg][add]")
     CHECK(checkInvariants(v) == "");
 }
 
+namespace {
+
+std::vector<Coord3> sortedUnique(std::vector<Coord3> blocks)
+{
+    std::sort(blocks.begin(), blocks.end());
+    blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
+    return blocks;
+}
+
+} // namespace
+
+TEST_CASE("an edit reports exactly the blocks whose content changed", "[csg][dirty]")
+{
+    Volume v(1.0);
+    const MaterialId stone = defineMaterial(v, "stone", 0.9f);
+    apply(v, CsgMode::Add, sphere(30.0), at(kC));
+    struct Step {
+        const char* name;
+        CsgMode mode;
+        Brush brush;
+    };
+    const std::vector<Step> steps = {
+        {"remove at the surface", CsgMode::Remove, Brush(sphere(9.0), at({29.0, 3.0, -2.0}))},
+        {"the same remove again", CsgMode::Remove, Brush(sphere(9.0), at({29.0, 3.0, -2.0}))},
+        {"add a rotated box", CsgMode::Add, Brush(box({10.0, 4.0, 6.0}), at({-20.0, 20.0, 5.0}, {20.0, 35.0, 10.0}))},
+        {"paint across the surface", CsgMode::Paint, Brush(sphere(12.0), at({0.0, -30.0, 0.0}))},
+        {"erode", CsgMode::Erode, Brush(sphere(8.0), at({0.0, 0.0, 30.0}))},
+        {"intersect with a large sphere", CsgMode::Intersect, Brush(sphere(34.0), at({3.0, 0.0, 0.0}))},
+    };
+    for (const Step& step : steps) {
+        INFO(step.name);
+        const Volume before = v.clone();
+        const EditStats stats = applyCsg(v, step.brush, op(step.mode, step.mode == CsgMode::Paint ? stone : 1));
+        const std::vector<Coord3> changed = changedBlocks(before, v);
+        CHECK(sortedUnique(stats.dirtyBlocks) == changed);
+        if (std::string(step.name) == "the same remove again") CHECK(changed.empty());
+        else CHECK_FALSE(changed.empty());
+        // Fewer blocks than the CSG kernel looked at: the brush's bounding box is not the change.
+        CHECK(changed.size() < stats.blocksComputed + stats.tilesWritten);
+    }
+}
+
+TEST_CASE("a 128^3 node that becomes a tile reports the blocks on its faces", "[csg][dirty]")
+{
+    // The cells of leaves beside the node read the blocks on its faces; its inner blocks touch no leaf.
+    Volume v(1.0);
+    apply(v, CsgMode::Add, box({10.0, 10.0, 10.0}), at({-20.0, 64.0, 64.0}));
+    const Volume before = v.clone();
+    const EditStats stats = applyCsg(v, Brush(sphere(120.0), at({64.0, 64.0, 64.0})), op(CsgMode::Add));
+    const std::vector<Coord3> dirty = sortedUnique(stats.dirtyBlocks);
+    std::size_t inner = 0;
+    for (const Coord3& b : changedBlocks(before, v)) {
+        const bool insideNode = std::all_of(b.begin(), b.end(), [](int c) { return c >= 8 && c <= 112; });
+        if (insideNode) ++inner;
+        else CHECK(std::binary_search(dirty.begin(), dirty.end(), b));
+    }
+    CHECK(inner == 14 * 14 * 14);
+}
+
 TEST_CASE("brushes that do not reach the solid change nothing", "[csg]")
 {
     Volume a(1.0);

@@ -558,12 +558,21 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
     // Tiles go through the tree itself (see pruneTouched); leaves through an accessor made afterwards.
     for (const TileEdit& e : walker.edits) {
         if (e.level == 2) {
+            // The node's leaves change, and so do the blocks on its faces, which the cells of
+            // neighbouring leaves read even when the node was and stays a tile.
             if (const HermiteLower* node = tree.probeConstNode<HermiteLower>(e.origin)) {
                 for (auto it = node->cbeginChildOn(); it; ++it) {
                     const Coord c = it->origin();
                     stats.dirtyBlocks.push_back({c.x(), c.y(), c.z()});
                 }
             }
+            constexpr int kLast = kLowerDim - kLeafDim;
+            for (int x = 0; x <= kLast; x += kLeafDim)
+                for (int y = 0; y <= kLast; y += kLeafDim)
+                    for (int z = 0; z <= kLast; z += kLeafDim) {
+                        const bool onFace = x == 0 || y == 0 || z == 0 || x == kLast || y == kLast || z == kLast;
+                        if (onFace) stats.dirtyBlocks.push_back({e.origin.x() + x, e.origin.y() + y, e.origin.z() + z});
+                    }
         } else {
             stats.dirtyBlocks.push_back({e.origin.x(), e.origin.y(), e.origin.z()});
         }
@@ -584,6 +593,8 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
             tree.addTile(1, task.origin, r.value, false);
         } else {
             ++stats.leavesWritten;
+            // Blocks the brush only grazes keep their content: they need no write and no re-mesh.
+            if (task.oldLeaf && task.oldLeaf->holds(r.data)) continue;
             writes.emplace_back(tree.touchLeaf(task.origin), i);
         }
         stats.dirtyBlocks.push_back({task.origin.x(), task.origin.y(), task.origin.z()});

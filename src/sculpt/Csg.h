@@ -37,7 +37,9 @@ struct EditStats {
     uint64_t leavesWritten = 0;    // blocks that are (still) leaves afterwards
     uint64_t tilesWritten = 0;     // blocks or nodes that became (or stayed) uniform tiles
     uint64_t crossingsComputed = 0;
-    /// Origins of the leaf-sized blocks whose content may have changed (for re-meshing).
+    /// Origins of the leaf-sized blocks whose content changed (for re-meshing): every such block, and
+    /// otherwise only blocks on the faces of 128^3 nodes that became tiles. Blocks the brush reached
+    /// but left as they were are not listed.
     std::vector<std::array<int32_t, 3>> dirtyBlocks;
 };
 

@@ -129,6 +129,8 @@ public:
     void assign(HermiteLeafData&& data);
     /// Copies the content out, the inverse of assign().
     HermiteLeafData extract() const;
+    /// Whether assign(data) would leave this leaf as it is.
+    bool holds(const HermiteLeafData& data) const;
 
     // Tree-facing overrides: the tree templates call these on the child node type directly.
     void readBuffers(std::istream& is, bool fromHalf = false);

@@ -46,6 +46,12 @@ HermiteLeafData HermiteLeaf::extract() const
     return data;
 }
 
+bool HermiteLeaf::holds(const HermiteLeafData& data) const
+{
+    return edgeBits_ == data.edgeBits && samples_ == data.samples &&
+           std::equal(data.material.begin(), data.material.end(), this->buffer().data());
+}
+
 void HermiteLeaf::writeBuffers(std::ostream& os, bool toHalf) const
 {
     BaseLeaf::writeBuffers(os, toHalf);

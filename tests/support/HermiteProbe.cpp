@@ -119,6 +119,35 @@ std::string checkInvariants(const Volume& volume)
     return {};
 }
 
+std::vector<std::array<int32_t, 3>> changedBlocks(const Volume& a, const Volume& b)
+{
+    const HermiteTree& ta = a.impl().grid->constTree();
+    const HermiteTree& tb = b.impl().grid->constTree();
+    CoordBBox bounds;
+    for (const HermiteTree* t : {&ta, &tb}) {
+        for (auto leaf = t->cbeginLeaf(); leaf; ++leaf) bounds.expand(leaf->getNodeBoundingBox());
+        forEachTile(*t, [&](const CoordBBox& tile, MaterialValue value) {
+            if (value.solid()) bounds.expand(tile); // empty tiles read as the background
+        });
+    }
+    std::vector<std::array<int32_t, 3>> out;
+    if (bounds.empty()) return out;
+    openvdb::tree::ValueAccessor<const HermiteTree> accA(ta), accB(tb);
+    // Every leaf holds at least one sample or one material boundary, so a leaf facing a tile differs.
+    auto differs = [&](const Coord& origin) {
+        const HermiteLeaf* la = accA.probeConstLeaf(origin);
+        const HermiteLeaf* lb = accB.probeConstLeaf(origin);
+        if (la && lb) return *la != *lb;
+        if (la || lb) return true;
+        return accA.getValue(origin) != accB.getValue(origin);
+    };
+    for (int x = bounds.min().x(); x <= bounds.max().x(); x += kLeafDim)
+        for (int y = bounds.min().y(); y <= bounds.max().y(); y += kLeafDim)
+            for (int z = bounds.min().z(); z <= bounds.max().z(); z += kLeafDim)
+                if (differs(Coord(x, y, z))) out.push_back({x, y, z});
+    return out;
+}
+
 std::vector<uint64_t> solidVoxelsPerMaterial(const Volume& volume)
 {
     const HermiteTree& tree = volume.impl().grid->constTree();

@@ -32,6 +32,9 @@ std::vector<EdgeRecord> collectEdges(const Volume& volume);
 /// carries a sample, and decoded offsets lie in [0,1]. Returns "" or a description of the first violation.
 std::string checkInvariants(const Volume& volume);
 
+/// Origins of the leaf-sized blocks whose materials or samples differ between two volumes, sorted.
+std::vector<std::array<int32_t, 3>> changedBlocks(const Volume& a, const Volume& b);
+
 /// Number of solid voxels (leaf voxels and tile voxels) per material id; index 0 is unused.
 std::vector<uint64_t> solidVoxelsPerMaterial(const Volume& volume);
 
