@@ -7,6 +7,7 @@
 
 #include <openvdb/tree/ValueAccessor.h>
 
+#include <algorithm>
 #include <memory>
 
 namespace vdbclay::mesher_detail {
@@ -103,9 +104,19 @@ struct CornerGrid {
 
     CornerGrid(const HermiteLeaf& leaf, const Neighbourhood& hood) : origin(leaf.origin())
     {
+        // A leaf's voxels are stored z fastest, so the eight inner corners of each row are one copy.
         for (int x = 0; x < kSpan; ++x)
-            for (int y = 0; y < kSpan; ++y)
-                for (int z = 0; z < kSpan; ++z) cells[x][y][z] = hood.material(origin.offsetBy(x - 1, y - 1, z - 1));
+            for (int y = 0; y < kSpan; ++y) {
+                MaterialValue* row = cells[x][y];
+                const Coord start = origin.offsetBy(x - 1, y - 1, 0);
+                row[0] = hood.material(start.offsetBy(0, 0, -1));
+                row[kSpan - 1] = hood.material(start.offsetBy(0, 0, kLeafDim));
+                if (const HermiteLeaf* rowLeaf = hood.leafOf(start)) {
+                    std::copy_n(&rowLeaf->buffer()[HermiteLeaf::coordToOffset(start)], kLeafDim, row + 1);
+                } else {
+                    std::fill_n(row + 1, kLeafDim, hood.material(start));
+                }
+            }
     }
 
     /// The material at leaf-local voxel (x, y, z), each in -1 .. 8.
@@ -154,7 +165,9 @@ void forEachOwnedSurfaceCell(const CornerGrid& grid, const Neighbourhood& hood, 
                 mixed &= mixed - 1;
                 MaterialValue mats[8];
                 unsigned solid = 0;
-                int owner = -1;
+                // A cell whose minimum corner lies in the leaf is the leaf's; others go to the first
+                // of their corners that lies in a leaf.
+                int owner = x > 0 && y > 0 && z > 0 ? 0 : -1;
                 for (int corner = 0; corner < 8; ++corner) {
                     const int cx = x + cornerBit(corner, 0), cy = y + cornerBit(corner, 1), cz = z + cornerBit(corner, 2);
                     mats[corner] = grid.cells[cx][cy][cz];

@@ -25,6 +25,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <stdexcept>
 #include <vector>
 #include <utility>
 #include <unordered_map>
@@ -78,7 +79,7 @@ struct SegmentPoints {
 struct Segment {
     Segment(const EdgeCrossing& enter, const EdgeCrossing& leave) : in(enter), out(leave) {}
 
-    EdgeCrossing in, out;
+    const EdgeCrossing &in, &out; // in the leaf's crossing cache
     SegmentPoints points; // its items stay uninitialised until inserted
 };
 
@@ -94,6 +95,7 @@ struct CubicalMarchingSquaresMesher::Buffers {
     static constexpr uint32_t kNone = ~uint32_t(0);
     uint32_t edgeVertex[kSpan * kSpan * kSpan * 3];
     // Decoded crossings by the same slots (index into `crossings`), as up to four cells read each.
+    // `crossings` is reserved for every slot, so references into it stay valid for the whole leaf.
     uint32_t edgeCrossing[kSpan * kSpan * kSpan * 3];
     std::vector<EdgeCrossing> crossings;
     std::vector<uint32_t> usedEdgeSlots;
@@ -109,6 +111,7 @@ struct CubicalMarchingSquaresMesher::Buffers {
     {
         std::fill(std::begin(edgeVertex), std::end(edgeVertex), kNone);
         std::fill(std::begin(edgeCrossing), std::end(edgeCrossing), kNone);
+        crossings.reserve(std::size(edgeCrossing));
     }
 
     void startLeaf(const Coord& origin)
@@ -156,13 +159,11 @@ struct LeafContext {
     Buffers& buffers;
 };
 
-/// The crossing on a voxel edge, decoded once per leaf.
-const EdgeCrossing& cachedCrossing(const LeafContext& ctx, const Coord& start, int axis, MaterialValue low,
-                                   MaterialValue high, EdgeCrossing& uncached)
+/// The crossing on the voxel edge in `slot` (Buffers::edgeSlot), decoded on first use.
+const EdgeCrossing& crossingInSlot(const LeafContext& ctx, int slot, const Coord& start, int axis, MaterialValue low,
+                                   MaterialValue high)
 {
     Buffers& b = ctx.buffers;
-    const int slot = Buffers::edgeSlot(ctx.origin, start, axis);
-    if (slot < 0) return uncached = voxelEdgeCrossing(ctx.hood, start, axis, low, high, ctx.voxelSize);
     uint32_t& index = b.edgeCrossing[slot];
     if (index == Buffers::kNone) {
         index = uint32_t(b.crossings.size());
@@ -172,13 +173,24 @@ const EdgeCrossing& cachedCrossing(const LeafContext& ctx, const Coord& start, i
     return b.crossings[index];
 }
 
+/// The crossing on a voxel edge, decoded once per leaf; `uncached` holds it when the edge lies outside
+/// the leaf's span (only the ring around an edge cell reaches that far).
+const EdgeCrossing& cachedCrossing(const LeafContext& ctx, const Coord& start, int axis, MaterialValue low,
+                                   MaterialValue high, EdgeCrossing& uncached)
+{
+    const int slot = Buffers::edgeSlot(ctx.origin, start, axis);
+    if (slot < 0) return uncached = voxelEdgeCrossing(ctx.hood, start, axis, low, high, ctx.voxelSize);
+    return crossingInSlot(ctx, slot, start, axis, low, high);
+}
+
 /// The crossing on the grid edge of `length` voxels from `start` along `axis`, whose ends hold `low`
 /// and `high`: the crossing of the voxel edge where the material changes (there is one, as the cells
-/// that own such an edge are simple).
-EdgeCrossing crossingAlong(const LeafContext& ctx, const Coord& start, int axis, int length, MaterialValue low,
-                           MaterialValue high)
+/// that own such an edge are simple). The edges of the cells a leaf owns lie in its span, so the result
+/// lives in the leaf's crossing cache.
+const EdgeCrossing& crossingAlong(const LeafContext& ctx, const Coord& start, int axis, int length, MaterialValue low,
+                                  MaterialValue high, EdgeCrossing& uncached)
 {
-    EdgeCrossing uncached;
+    if (length == 1) return cachedCrossing(ctx, start, axis, low, high, uncached);
     Coord at = start;
     MaterialValue previous = low;
     for (int k = 1; k < length; ++k) {
@@ -205,7 +217,8 @@ struct Square {
 class CellMesher {
 public:
     CellMesher(LeafContext& ctx, const Coord& base, int width, const MaterialValue mats[8])
-        : ctx_(ctx), base_(base), width_(width), mats_(mats), segments_(ctx.buffers.segments)
+        : ctx_(ctx), base_(base), width_(width), mats_(mats), segments_(ctx.buffers.segments),
+          baseSlot_(Buffers::edgeSlot(ctx.origin, base, 0))
     {
         segments_.clear();
     }
@@ -287,26 +300,26 @@ private:
     /// The crossing on side i of the square (from its corner i to corner i + 1).
     const EdgeCrossing& squareCrossing(const Square& sq, int i)
     {
-        if (!known_[i]) {
+        if (!squareCrossings_[i] && sq.wholeFace && width_ == 1) {
+            // A voxel cell's own edge: its slot follows from the cell's.
+            const int e = cellEdge(sq.cellCorners[i], sq.cellCorners[(i + 1) % 4]);
+            const int low = edgeLowCorner(e), axis = e / 4;
+            const int dx = cornerBit(low, 0), dy = cornerBit(low, 1), dz = cornerBit(low, 2);
+            const int slot = baseSlot_ + ((dx * Buffers::kSpan + dy) * Buffers::kSpan + dz) * 3 + axis;
+            squareCrossings_[i] = &crossingInSlot(ctx_, slot, base_.offsetBy(dx, dy, dz), axis, mats_[low],
+                                                  mats_[low | (1 << axis)]);
+        } else if (!squareCrossings_[i]) {
             const int j = (i + 1) % 4;
             const Coord &p = sq.corners[i], &q = sq.corners[j];
             const int axis = p[0] != q[0] ? 0 : (p[1] != q[1] ? 1 : 2);
             const bool forward = p[axis] < q[axis];
-            auto compute = [&] {
-                return crossingAlong(ctx_, forward ? p : q, axis, sq.width, sq.mats[forward ? i : j],
-                                     sq.mats[forward ? j : i]);
-            };
-            if (sq.wholeFace) { // the cell's own edge, which its other face shares
-                const int e = cellEdge(sq.cellCorners[i], sq.cellCorners[j]);
-                if (!cellKnown_[e]) cellCrossings_[e] = compute();
-                cellKnown_[e] = true;
-                squareCrossings_[i] = cellCrossings_[e];
-            } else {
-                squareCrossings_[i] = compute();
-            }
-            known_[i] = true;
+            EdgeCrossing uncached;
+            const EdgeCrossing& x = crossingAlong(ctx_, forward ? p : q, axis, sq.width, sq.mats[forward ? i : j],
+                                                  sq.mats[forward ? j : i], uncached);
+            if (&x == &uncached) throw std::logic_error("CMS: a cell edge lies outside its leaf's span");
+            squareCrossings_[i] = &x;
         }
-        return squareCrossings_[i];
+        return *squareCrossings_[i];
     }
 
     Vec2 project(const std::array<float, 3>& v, int axis) const
@@ -350,7 +363,7 @@ private:
 
     void meshSquare(const Square& sq)
     {
-        for (bool& k : known_) k = false;
+        for (const EdgeCrossing*& x : squareCrossings_) x = nullptr;
         const int axis = sq.axis;
         int sides[4], count = 0;
         bool entering[4];
@@ -417,7 +430,7 @@ private:
             if (const auto& sharp = pr.shape.sharp)
                 points.insert(0, FacePoint{*sharp, toWorld(*sharp), 0, false, kEmptyMaterial, {}});
             // A square with one segment may hold material interfaces between its solid corners.
-            if (nSeg == 1) insertTransitions(sq, pr.in, seg, toWorld);
+            if (nSeg == 1 && mixedMaterials(sq)) insertTransitions(sq, pr.in, seg, toWorld);
             // Slots count along the segment from its end with the smaller key, the same in both cells.
             const int index = (s == 0 ? key0 <= key1 : key1 < key0) ? 0 : 1;
             const bool forward = seg.in.key < seg.out.key;
@@ -426,6 +439,17 @@ private:
                 points.items[k].key = faceKey(sq.minCorner.x(), sq.minCorner.y(), sq.minCorner.z(), axis, index, slot);
             }
         }
+    }
+
+    static bool mixedMaterials(const Square& sq)
+    {
+        MaterialValue first{};
+        for (const MaterialValue m : sq.mats) {
+            if (!m.solid()) continue;
+            if (!first.solid()) first = m;
+            else if (m != first) return true;
+        }
+        return false;
     }
 
     /// Seed 004 Algorithm 2: where two consecutive solid corners of the square differ in material, the
@@ -613,6 +637,35 @@ private:
                 }
     }
 
+    /// The sharp vertex of a component from the planes of its crossings and of its material
+    /// transitions: the interface planes join the solve, so the vertex lands on the material boundary
+    /// (seed 004 §4.2.2.1).
+    std::optional<Eigen::Vector3d> componentFeature(const std::vector<int>& loop, const Eigen::Vector3d& normalSum) const
+    {
+        Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+        Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+        Eigen::Vector3d massPoint = Eigen::Vector3d::Zero();
+        int planes = 0;
+        auto addPlane = [&](const std::array<double, 3>& at, const std::array<float, 3>& normal) {
+            const Eigen::Vector3d p(at[0], at[1], at[2]);
+            const Eigen::Vector3d n(normal[0], normal[1], normal[2]);
+            ata += n * n.transpose();
+            atb += n * n.dot(p);
+            massPoint += p;
+            ++planes;
+        };
+        for (const int s : loop) {
+            const Segment& seg = segments_[s];
+            const auto& p = seg.in.position;
+            addPlane({p[0], p[1], p[2]}, seg.in.normal);
+            for (int k = 0; k < seg.points.count; ++k) {
+                const FacePoint& point = seg.points.items[k];
+                if (point.transition) addPlane(point.position, point.interfaceNormal);
+            }
+        }
+        return sharpVertex(ata, atb, massPoint / double(planes), normalSum);
+    }
+
     /// Fans one closed loop of segments from its inner vertex.
     void emitComponent(const std::vector<int>& loop)
     {
@@ -621,46 +674,28 @@ private:
         std::vector<MaterialId>& pieceMaterials = ctx_.buffers.pieceMaterials;
         ids.clear();
         pieceMaterials.clear();
-        int planes = 0;
         bool hasTransition = false;
         Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-        Eigen::Vector3d crossingMean = Eigen::Vector3d::Zero();
         Eigen::Vector3d normalSum = Eigen::Vector3d::Zero();
-        Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
-        Eigen::Vector3d atb = Eigen::Vector3d::Zero();
         double minDot = 1.0;
         for (std::size_t i = 0; i < loop.size(); ++i) {
             const Segment& seg = segments_[loop[i]];
             const EdgeCrossing& x = seg.in;
-            const Eigen::Vector3d p(x.position[0], x.position[1], x.position[2]);
             const Eigen::Vector3d nrm(x.normal[0], x.normal[1], x.normal[2]);
             for (std::size_t j = 0; j < i; ++j) {
                 const auto& other = segments_[loop[j]].in.normal;
                 minDot = std::min(minDot, double(nrm.x() * other[0] + nrm.y() * other[1] + nrm.z() * other[2]));
             }
-            ata += nrm * nrm.transpose();
-            atb += nrm * nrm.dot(p);
-            crossingMean += p;
             normalSum += nrm;
-            mean += p;
-            ++planes;
+            mean += Eigen::Vector3d(x.position[0], x.position[1], x.position[2]);
             pieceMaterials.push_back(x.material);
             ids.push_back(vertex(x));
             MaterialId material = x.material;
             for (int k = 0; k < seg.points.count; ++k) {
                 const FacePoint& point = seg.points.items[k];
                 const auto& q = point.position;
-                const Eigen::Vector3d qv(q[0], q[1], q[2]);
-                mean += qv;
+                mean += Eigen::Vector3d(q[0], q[1], q[2]);
                 if (point.transition) {
-                    // The interface plane joins the solve, so the vertex lands on the material
-                    // boundary (seed 004 §4.2.2.1).
-                    const Eigen::Vector3d in(point.interfaceNormal[0], point.interfaceNormal[1],
-                                             point.interfaceNormal[2]);
-                    ata += in * in.transpose();
-                    atb += in * in.dot(qv);
-                    crossingMean += qv;
-                    ++planes;
                     hasTransition = true;
                     material = point.materialAfter;
                 }
@@ -670,11 +705,10 @@ private:
         }
         const std::size_t n = ids.size();
         mean /= double(n);
-        crossingMean /= double(planes);
 
         Eigen::Vector3d centre = mean;
         if (minDot < ctx_.cosSharp || hasTransition) {
-            if (const auto feature = sharpVertex(ata, atb, crossingMean, normalSum)) centre = *feature;
+            if (const auto feature = componentFeature(loop, normalSum)) centre = *feature;
         }
         const Eigen::Vector3d avgNormal = normalSum.norm() > 0.0 ? Eigen::Vector3d(normalSum.normalized()) : normalSum;
         const uint32_t c = addVertex(kUnsharedVertex, {float(centre.x()), float(centre.y()), float(centre.z())},
@@ -692,10 +726,8 @@ private:
     int width_;
     const MaterialValue* mats_;
     std::vector<Segment>& segments_;
-    EdgeCrossing cellCrossings_[12];
-    bool cellKnown_[12] = {};
-    EdgeCrossing squareCrossings_[4];
-    bool known_[4] = {};
+    int baseSlot_; // the slot of the cell's minimum corner's x edge
+    const EdgeCrossing* squareCrossings_[4] = {};
 };
 
 } // namespace
