@@ -83,6 +83,15 @@ struct Segment {
     SegmentPoints points; // its items stay uninitialised until inserted
 };
 
+/// Appends a copy of a segment, walked the other way when `reversed`.
+void appendSegment(std::vector<Segment>& to, const Segment& from, bool reversed)
+{
+    Segment& copy = reversed ? to.emplace_back(from.out, from.in) : to.emplace_back(from.in, from.out);
+    const int n = from.points.count;
+    copy.points.count = n;
+    for (int k = 0; k < n; ++k) copy.points.items[k] = from.points.items[reversed ? n - 1 - k : k];
+}
+
 } // namespace
 
 /// Buffers reused from cell to cell and leaf to leaf.
@@ -99,6 +108,16 @@ struct CubicalMarchingSquaresMesher::Buffers {
     uint32_t edgeCrossing[kSpan * kSpan * kSpan * 3];
     std::vector<EdgeCrossing> crossings;
     std::vector<uint32_t> usedEdgeSlots;
+    // The segments of each one-voxel face square, by the slot of its minimum corner and normal axis,
+    // as meshed by the first cell that reached it; the cell on its other side reuses them reversed.
+    struct SquareRecord {
+        uint32_t first = kNone; // into squareSegments
+        uint16_t count = 0;
+        uint8_t side = 0; // of the face for the cell that meshed it
+    };
+    SquareRecord squares[kSpan * kSpan * kSpan * 3];
+    std::vector<Segment> squareSegments;
+    std::vector<uint32_t> usedSquareSlots;
     std::unordered_map<uint64_t, uint32_t> otherVertices;
     // Per cell.
     std::vector<Segment> segments;
@@ -125,6 +144,9 @@ struct CubicalMarchingSquaresMesher::Buffers {
         chunk.vertexKeys.clear();
         for (uint32_t slot : usedEdgeSlots) edgeVertex[slot] = edgeCrossing[slot] = kNone;
         usedEdgeSlots.clear();
+        for (uint32_t slot : usedSquareSlots) squares[slot] = SquareRecord{};
+        usedSquareSlots.clear();
+        squareSegments.clear();
         crossings.clear();
         otherVertices.clear();
     }
@@ -272,7 +294,35 @@ private:
                 return;
             }
         }
-        meshSquare(makeSquare(f, u0, v0, width));
+        if (width == 1) meshVoxelSquare(f, u0, v0);
+        else meshSquare(makeSquare(f, u0, v0, width));
+    }
+
+    /// A one-voxel square is meshed once per leaf; the cell on its other side walks it the other
+    /// way round, so it takes the segments reversed. Squares with material transitions are meshed
+    /// by each cell, as the transitions name the material on their far side.
+    void meshVoxelSquare(int f, int u0, int v0)
+    {
+        const int axis = f / 2, side = f % 2;
+        Coord minCorner;
+        minCorner[axis] = base_[axis] + side * width_;
+        minCorner[(axis + 1) % 3] = u0;
+        minCorner[(axis + 2) % 3] = v0;
+        Buffers& b = ctx_.buffers;
+        const int slot = Buffers::edgeSlot(ctx_.origin, minCorner, axis);
+        if (slot >= 0 && b.squares[slot].first != Buffers::kNone) {
+            const Buffers::SquareRecord& record = b.squares[slot];
+            for (uint32_t i = record.first; i < record.first + record.count; ++i)
+                appendSegment(segments_, b.squareSegments[i], record.side != side);
+            return;
+        }
+        const std::size_t before = segments_.size();
+        const Square sq = makeSquare(f, u0, v0, 1);
+        meshSquare(sq);
+        if (slot < 0 || mixedMaterials(sq)) return;
+        b.squares[slot] = {uint32_t(b.squareSegments.size()), uint16_t(segments_.size() - before), uint8_t(side)};
+        b.usedSquareSlots.push_back(uint32_t(slot));
+        for (std::size_t i = before; i < segments_.size(); ++i) appendSegment(b.squareSegments, segments_[i], false);
     }
 
     Square makeSquare(int f, int u0, int v0, int width) const
