@@ -4,11 +4,13 @@
 #include "mesher/CellOctree.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <unordered_map>
@@ -115,6 +117,8 @@ std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<con
     std::vector<MeshChunk> chunks(leaves.size());
     std::optional<AdaptiveCells> cells;
     if (adaptive(options)) cells.emplace(tree, leaves, options);
+    // One mesher per thread: its buffers span a leaf's neighbourhood and are worth keeping.
+    tbb::enumerable_thread_specific<std::unique_ptr<CubicalMarchingSquaresMesher>> meshers;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 8), [&](const auto& range) {
         ConstAccessor acc(tree);
         if (options.kind == MesherKind::MarchingCubes) {
@@ -122,7 +126,9 @@ std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<con
                 chunks[i] = meshLeafMarchingCubes(*leaves[i], acc, voxelSize);
             return;
         }
-        CubicalMarchingSquaresMesher cms(voxelSize, options.sharpAngleDegrees);
+        std::unique_ptr<CubicalMarchingSquaresMesher>& local = meshers.local();
+        if (!local) local = std::make_unique<CubicalMarchingSquaresMesher>(voxelSize, options.sharpAngleDegrees);
+        CubicalMarchingSquaresMesher& cms = *local;
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const HermiteLeaf& leaf = *leaves[i];
             if (cells) {
