@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <cstddef>
 #include <stdexcept>
 #include <string>
@@ -12,6 +13,10 @@
 
 namespace CLI {
 class App;
+}
+
+namespace vdbclay {
+struct ScriptOpReport;
 }
 
 namespace vdbclay::cli {
@@ -34,6 +39,15 @@ void printJson(const nlohmann::json& object);
 
 /// Prints "key: value" lines with the values aligned in one column, each indented by `indent`.
 void printFields(const std::vector<std::pair<std::string, std::string>>& fields, std::size_t indent = 2);
+
+/// Wall-clock seconds since `start` (a steady_clock reading).
+inline double secondsSince(std::chrono::steady_clock::time_point start)
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// One stroke-script op as reported in --json output: index, mode, blocks computed, seconds.
+nlohmann::json opReportJson(const ScriptOpReport& report);
 
 /// Short human-readable forms.
 std::string formatSeconds(double seconds); // "812 ms", "3.42 s"

@@ -90,7 +90,7 @@ int runDemo(const DemoOptions& o)
     Volume volume(kDemoVoxelSize);
     const auto sculptStart = std::chrono::steady_clock::now();
     const std::vector<ScriptOpReport> reports = runStrokeScript(volume, script);
-    const double sculptSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - sculptStart).count();
+    const double sculptSeconds = secondsSince(sculptStart);
 
     saveVolume(volume, vdbPath);
     {
@@ -103,21 +103,19 @@ int runDemo(const DemoOptions& o)
     MeshOptions meshOptions;
     meshOptions.kind = MesherKind::CubicalMarchingSquares;
     const Mesh mesh = meshVolume(volume, meshOptions);
-    const double meshSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - meshStart).count();
+    const double meshSeconds = secondsSince(meshStart);
     const MeshTopology topology = analyzeTopology(mesh);
     writeMesh(mesh, volume.materials(), objPath);
     writeMesh(mesh, volume.materials(), plyPath);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = secondsSince(start);
     const VolumeStats stats = volume.stats();
 
     if (o.json) {
         nlohmann::json ops = nlohmann::json::array();
         for (const auto& r : reports) {
-            ops.push_back({{"index", r.index},
-                           {"mode", csgModeName(r.mode)},
-                           {"description", describeOp(script.ops[r.index])},
-                           {"blocks", r.stats.blocksComputed},
-                           {"seconds", r.seconds}});
+            nlohmann::json op = opReportJson(r);
+            op["description"] = describeOp(script.ops[r.index]);
+            ops.push_back(std::move(op));
         }
         printJson({{"out_dir", o.outDir},
                    {"voxel_size", kDemoVoxelSize},

@@ -67,7 +67,7 @@ int runMesh(const MeshCommandOptions& o)
     const Mesh mesh = meshVolume(volume, options);
     const MeshTopology topology = analyzeTopology(mesh);
     writeMesh(mesh, volume.materials(), o.output);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = secondsSince(start);
 
     if (o.json) {
         printJson({{"output", o.output},

@@ -112,7 +112,7 @@ int runNew(const NewOptions& o)
     }
     applyCsg(volume, Brush(primitive, Placement{}), op);
     saveVolume(volume, o.output);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = secondsSince(start);
 
     const VolumeStats stats = volume.stats();
     if (o.json) {

@@ -40,17 +40,12 @@ int runSculpt(const SculptOptions& o)
     };
     const std::vector<ScriptOpReport> reports = runStrokeScript(volume, script, progress);
     saveVolume(volume, o.output);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = secondsSince(start);
 
     const VolumeStats stats = volume.stats();
     if (o.json) {
         nlohmann::json ops = nlohmann::json::array();
-        for (const auto& r : reports) {
-            ops.push_back({{"index", r.index},
-                           {"mode", csgModeName(r.mode)},
-                           {"blocks", r.stats.blocksComputed},
-                           {"seconds", r.seconds}});
-        }
+        for (const auto& r : reports) ops.push_back(opReportJson(r));
         printJson({{"input", o.input},
                    {"output", o.output},
                    {"ops", reports.size()},

@@ -1,5 +1,7 @@
 #include "Cli.h"
 
+#include "sculpt/StrokeScript.h"
+
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -35,6 +37,14 @@ void printFields(const std::vector<std::pair<std::string, std::string>>& fields,
                   << f.second << '\n';
     }
     std::cout.flush();
+}
+
+nlohmann::json opReportJson(const ScriptOpReport& report)
+{
+    return {{"index", report.index},
+            {"mode", csgModeName(report.mode)},
+            {"blocks", report.stats.blocksComputed},
+            {"seconds", report.seconds}};
 }
 
 std::string formatSeconds(double seconds)
