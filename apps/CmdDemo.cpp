@@ -6,13 +6,13 @@
 #include "mesher/MeshMetrics.h"
 #include "mesher/Mesher.h"
 #include "sculpt/StrokeScript.h"
+#include "vdb_hermite/AtomicFile.h"
 #include "vdb_hermite/VolumeIO.h"
 
 #include <CLI/CLI.hpp>
 
 #include <chrono>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 
 namespace vdbclay::cli {
@@ -93,11 +93,7 @@ int runDemo(const DemoOptions& o)
     const double sculptSeconds = secondsSince(sculptStart);
 
     saveVolume(volume, vdbPath);
-    {
-        std::ofstream out(scriptPath, std::ios::binary | std::ios::trunc);
-        out << kDemoScript << '\n';
-        if (!out.flush()) throw std::runtime_error("cannot write '" + scriptPath + "'");
-    }
+    writeFileAtomically(scriptPath, [](std::ostream& out) { out << kDemoScript << '\n'; });
 
     const auto meshStart = std::chrono::steady_clock::now();
     MeshOptions meshOptions;

@@ -2,6 +2,7 @@
 #include "support/HermiteProbe.h"
 #include "support/Sculpt.h"
 #include "support/TestUtil.h"
+#include "vdb_hermite/AtomicFile.h"
 #include "vdb_hermite/VolumeIO.h"
 
 #include <catch2/catch.hpp>
@@ -354,6 +355,39 @@ TEST_CASE("saving into a directory that does not exist throws and leaves nothing
     CHECK_THROWS_AS(saveVolume(makeSmall(), (dir.path() / "sub").string()), VolumeIOError);
     CHECK(std::filesystem::is_directory(dir.path() / "sub"));
     CHECK(dir.entries() == std::vector<std::string>{"sub"});
+}
+
+TEST_CASE("writeFileAtomically replaces a file whole or not at all", "[io][atomic]")
+{
+    TempDir dir;
+    const std::string path = dir.file("notes.txt");
+    writeFileAtomically(path, [](std::ostream& os) { os << "first"; });
+    const std::vector<char> first{'f', 'i', 'r', 's', 't'};
+    CHECK(readBytes(path) == first);
+
+    // A writer that fails half-way leaves the old content and no temporary file.
+    CHECK_THROWS_WITH(writeFileAtomically(path,
+                                          [](std::ostream& os) {
+                                              os << "half of the second";
+                                              throw std::runtime_error("writer gave up");
+                                          }),
+                      "writer gave up");
+    CHECK(readBytes(path) == first);
+    CHECK(dir.entries() == std::vector<std::string>{"notes.txt"});
+
+    // `finish` sees the temporary file with everything written so far and may append to it.
+    writeFileAtomically(
+        path, [](std::ostream& os) { os << "ab"; },
+        [&](const std::string& temp, uint64_t bytes) {
+            CHECK(bytes == 2);
+            CHECK(temp != dir.file("notes.txt"));
+            std::ofstream(temp, std::ios::binary | std::ios::app) << "c";
+        });
+    CHECK(readBytes(path) == std::vector<char>{'a', 'b', 'c'});
+    CHECK(dir.entries() == std::vector<std::string>{"notes.txt"});
+
+    CHECK_THROWS_AS(writeFileAtomically(dir.path().string(), [](std::ostream&) {}), FileWriteError);
+    CHECK_THROWS_AS(writeFileAtomically(dir.file("missing/x.txt"), [](std::ostream&) {}), FileWriteError);
 }
 
 TEST_CASE("a failed save leaves the existing file intact and no temporary files", "[io]")

@@ -1,17 +1,16 @@
 #include "mesher/MeshIO.h"
 
+#include "vdb_hermite/AtomicFile.h"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <cerrno>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <map>
-#include <unistd.h>
 
 namespace vdbclay {
 
@@ -91,8 +90,6 @@ void writeGlb(std::ostream& os, const Mesh& mesh, const MaterialTable& materials
                                           : (v0 < mesh.materials.size() ? mesh.materials[v0] : kEmptyMaterial);
         groups[id].push_back(uint32_t(t));
     }
-    const bool hasNormals = mesh.normals.size() == mesh.positions.size();
-
     std::vector<char> bin;
     auto append = [&bin](const void* data, std::size_t bytes) {
         const char* c = static_cast<const char*>(data);
@@ -140,24 +137,22 @@ void writeGlb(std::ostream& os, const Mesh& mesh, const MaterialTable& materials
                              {"min", {lo[0], lo[1], lo[2]}},
                              {"max", {hi[0], hi[1], hi[2]}}});
         attributes["POSITION"] = accessors.size() - 1;
-        if (hasNormals) {
-            const std::size_t nOffset = bin.size();
-            for (uint32_t v : vertices) {
-                std::array<float, 3> n = mesh.normals[v];
-                const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-                if (len > 0.0f && std::isfinite(len)) {
-                    for (float& c : n) c /= len;
-                } else {
-                    n = {0.0f, 0.0f, 1.0f}; // glTF requires unit normals
-                }
-                append(n.data(), 12);
+        const std::size_t nOffset = bin.size();
+        for (uint32_t v : vertices) {
+            std::array<float, 3> n = mesh.normals[v];
+            const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            if (len > 0.0f && std::isfinite(len)) {
+                for (float& c : n) c /= len;
+            } else {
+                n = {0.0f, 0.0f, 1.0f}; // glTF requires unit normals
             }
-            accessors.push_back({{"bufferView", addView(nOffset, bin.size() - nOffset, kArrayBuffer)},
-                                 {"componentType", kFloat},
-                                 {"count", vertices.size()},
-                                 {"type", "VEC3"}});
-            attributes["NORMAL"] = accessors.size() - 1;
+            append(n.data(), 12);
         }
+        accessors.push_back({{"bufferView", addView(nOffset, bin.size() - nOffset, kArrayBuffer)},
+                             {"componentType", kFloat},
+                             {"count", vertices.size()},
+                             {"type", "VEC3"}});
+        attributes["NORMAL"] = accessors.size() - 1;
         const std::size_t iOffset = bin.size();
         append(indices.data(), indices.size() * 4);
         accessors.push_back({{"bufferView", addView(iOffset, bin.size() - iOffset, kElementArrayBuffer)},
@@ -221,41 +216,21 @@ void writeGlb(std::ostream& os, const Mesh& mesh, const MaterialTable& materials
 
 void writeMesh(const Mesh& mesh, const MaterialTable& materials, const std::string& path)
 {
-    const fs::path target(path);
-    std::string ext = target.extension().string();
+    std::string ext = fs::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     if (ext != ".obj" && ext != ".ply" && ext != ".glb")
         throw MeshIOError("cannot tell the mesh format of '" + path + "': use a .obj, .ply or .glb file name");
-    const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-    if (!fs::is_directory(dir)) throw MeshIOError("directory '" + dir.string() + "' does not exist");
-    if (fs::is_directory(target)) throw MeshIOError("'" + path + "' is a directory");
-
-    const fs::path temp = dir / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()));
-    {
-        std::ofstream os(temp, std::ios::binary | std::ios::trunc);
-        if (!os) throw MeshIOError("cannot create '" + temp.string() + "': " + std::strerror(errno));
-        try {
+    if (mesh.normals.size() != mesh.positions.size())
+        throw MeshIOError("cannot write '" + path + "': the mesh has " + std::to_string(mesh.normals.size()) +
+                          " normals for " + std::to_string(mesh.positions.size()) + " vertices");
+    try {
+        writeFileAtomically(path, [&](std::ostream& os) {
             if (ext == ".obj") writeObj(os, mesh, materials);
             else if (ext == ".ply") writePly(os, mesh, materials);
             else writeGlb(os, mesh, materials);
-        } catch (...) {
-            os.close();
-            std::error_code ec;
-            fs::remove(temp, ec);
-            throw;
-        }
-        os.flush();
-        if (!os) {
-            std::error_code ec;
-            fs::remove(temp, ec);
-            throw MeshIOError("cannot write '" + path + "' (disk full?)");
-        }
-    }
-    std::error_code ec;
-    fs::rename(temp, target, ec);
-    if (ec) {
-        fs::remove(temp, ec);
-        throw MeshIOError("cannot replace '" + path + "': " + ec.message());
+        });
+    } catch (const FileWriteError& e) {
+        throw MeshIOError(e.what());
     }
 }
 

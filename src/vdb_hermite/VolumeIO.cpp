@@ -1,5 +1,6 @@
 #include "vdb_hermite/VolumeIO.h"
 
+#include "vdb_hermite/AtomicFile.h"
 #include "vdb_hermite/HermiteGrid.h"
 
 #include <openvdb/io/Stream.h>
@@ -9,29 +10,14 @@
 #include <array>
 #include <cerrno>
 #include <cstring>
-#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 
 namespace vdbclay {
 
 namespace {
 
 namespace fs = std::filesystem;
-
-void syncPath(const std::string& path, bool directory)
-{
-    const int fd = ::open(path.c_str(), directory ? O_RDONLY | O_DIRECTORY : O_RDONLY);
-    if (fd < 0) {
-        if (directory) return; // some filesystems do not allow opening directories; the rename still stands
-        throw VolumeIOError("cannot reopen '" + path + "' to flush it: " + std::strerror(errno));
-    }
-    const int rc = ::fsync(fd);
-    const int err = errno;
-    ::close(fd);
-    if (rc != 0 && !directory) throw VolumeIOError("cannot flush '" + path + "' to disk: " + std::strerror(err));
-}
 
 // OpenVDB trusts the sizes it reads, so a damaged file can corrupt memory while it is parsed. Every
 // file we write therefore ends with a trailer holding the size and CRC-32 of everything before it,
@@ -110,42 +96,26 @@ bool hasVdbMagic(const std::string& path)
 void saveVolume(const Volume& volume, const std::string& path)
 {
     initializeHermiteGrid();
-    const fs::path target(path);
-    if (target.filename().empty()) throw VolumeIOError("'" + path + "' is not a file name");
-    if (fs::is_directory(target)) throw VolumeIOError("'" + path + "' is a directory");
-    const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-    if (!fs::is_directory(dir)) throw VolumeIOError("directory '" + dir.string() + "' does not exist");
-
     HermiteGrid::Ptr out = openvdb::gridPtrCast<HermiteGrid>(volume.impl().grid->copyGrid()); // shares the tree
     out->insertMeta(kFormatVersionKey, openvdb::Int32Metadata(kFormatVersion));
     out->insertMeta(kMaterialsKey, openvdb::StringMetadata(volume.materials().toJson()));
-
-    const std::string temp = (dir / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()))).string();
     try {
         // Written through a stream we own: OpenVDB's File does not check its writes, so a full disk
         // would otherwise go unnoticed.
-        std::ofstream os(temp, std::ios::binary | std::ios::trunc);
-        if (!os) throw VolumeIOError("cannot create '" + temp + "': " + std::strerror(errno));
-        openvdb::io::Stream stream(os);
-        stream.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
-        stream.write(openvdb::GridCPtrVec{out});
-        os.flush();
-        const std::streamoff written = os.tellp();
-        if (!os || written <= 0) throw VolumeIOError("cannot write '" + path + "' (disk full?)");
-        os.close();
-        appendTrailer(temp, uint64_t(written));
-        syncPath(temp, false);
-        fs::rename(temp, target);
+        writeFileAtomically(
+            path,
+            [&](std::ostream& os) {
+                openvdb::io::Stream stream(os);
+                stream.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
+                stream.write(openvdb::GridCPtrVec{out});
+            },
+            [](const std::string& temp, uint64_t written) { appendTrailer(temp, written); });
     } catch (const VolumeIOError&) {
-        std::error_code ec;
-        fs::remove(temp, ec);
         throw;
     } catch (const std::exception& e) {
-        std::error_code ec;
-        fs::remove(temp, ec);
-        throw VolumeIOError("cannot write '" + path + "': " + e.what());
+        throw VolumeIOError(dynamic_cast<const FileWriteError*>(&e) ? std::string(e.what())
+                                                                   : "cannot write '" + path + "': " + e.what());
     }
-    syncPath(dir.string(), true);
 }
 
 Volume loadVolume(const std::string& path)

@@ -1,0 +1,26 @@
+// Crash-safe file replacement, shared by every writer of user files (volumes, meshes, scripts).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <iosfwd>
+#include <stdexcept>
+#include <string>
+
+namespace vdbclay {
+
+/// A file could not be written; the message names the file and the cause.
+class FileWriteError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Replaces `path` so that a crash leaves either its old content or the complete new one: `write`
+/// fills a temporary file beside it, `finish` (optional) may then append to that file by path, and
+/// the file is flushed to disk, renamed over `path`, and the directory flushed. The temporary file is
+/// removed on any failure. Throws FileWriteError for an unusable path or a failed write, flush or
+/// rename; exceptions from `write` and `finish` pass through unchanged.
+void writeFileAtomically(const std::string& path, const std::function<void(std::ostream&)>& write,
+                         const std::function<void(const std::string& tempPath, uint64_t bytes)>& finish = {});
+
+} // namespace vdbclay
