@@ -104,6 +104,7 @@ struct BlockTask {
 
 struct BlockResult {
     bool uniform = false;
+    bool unchanged = false; // the block keeps its old content exactly
     MaterialValue value{};
     HermiteLeafData data;
     uint64_t crossings = 0;
@@ -436,6 +437,16 @@ private:
     CoordBBox region_;
 };
 
+/// Whether a leaf lies in the block at `origin` or in one of its 26 neighbours.
+bool hasLeafAround(openvdb::tree::ValueAccessor<const HermiteTree>& acc, const Coord& origin)
+{
+    for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dz = -1; dz <= 1; ++dz)
+                if (acc.probeConstLeaf(origin.offsetBy(dx * kLeafDim, dy * kLeafDim, dz * kLeafDim))) return true;
+    return false;
+}
+
 CoordBBox solidBounds(const HermiteTree& tree)
 {
     CoordBBox box;
@@ -550,31 +561,40 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
     std::vector<BlockResult> results(walker.tasks.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, walker.tasks.size(), 4), [&](const auto& range) {
         ConstAccessor acc(tree);
-        for (std::size_t i = range.begin(); i != range.end(); ++i) results[i] = computeBlock(ctx, walker.tasks[i], acc);
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const BlockTask& task = walker.tasks[i];
+            BlockResult& r = results[i] = computeBlock(ctx, task, acc);
+            // A block the brush only grazes needs no write and no re-mesh.
+            r.unchanged = r.uniform ? !task.oldLeaf && task.tileValue == r.value
+                                    : task.oldLeaf && task.oldLeaf->holds(r.data);
+        }
     });
 
     EditStats stats;
     std::set<Coord> lowers;
+    // Blocks whose content changed: those that were or become leaves are always dirty; a block that
+    // stays a tile is dirty only if a leaf borders it afterwards, as only a leaf's cells read it.
+    auto addDirty = [&](const Coord& c) { stats.dirtyBlocks.push_back({c.x(), c.y(), c.z()}); };
+    std::vector<Coord> changedTiles;
     // Tiles go through the tree itself (see pruneTouched); leaves through an accessor made afterwards.
     for (const TileEdit& e : walker.edits) {
         if (e.level == 2) {
             // The node's leaves change, and so do the blocks on its faces, which the cells of
             // neighbouring leaves read even when the node was and stays a tile.
             if (const HermiteLower* node = tree.probeConstNode<HermiteLower>(e.origin)) {
-                for (auto it = node->cbeginChildOn(); it; ++it) {
-                    const Coord c = it->origin();
-                    stats.dirtyBlocks.push_back({c.x(), c.y(), c.z()});
-                }
+                for (auto it = node->cbeginChildOn(); it; ++it) addDirty(it->origin());
             }
             constexpr int kLast = kLowerDim - kLeafDim;
             for (int x = 0; x <= kLast; x += kLeafDim)
                 for (int y = 0; y <= kLast; y += kLeafDim)
                     for (int z = 0; z <= kLast; z += kLeafDim) {
                         const bool onFace = x == 0 || y == 0 || z == 0 || x == kLast || y == kLast || z == kLast;
-                        if (onFace) stats.dirtyBlocks.push_back({e.origin.x() + x, e.origin.y() + y, e.origin.z() + z});
+                        if (onFace) changedTiles.push_back(e.origin.offsetBy(x, y, z));
                     }
+        } else if (tree.probeConstLeaf(e.origin)) {
+            addDirty(e.origin);
         } else {
-            stats.dirtyBlocks.push_back({e.origin.x(), e.origin.y(), e.origin.z()});
+            changedTiles.push_back(e.origin);
         }
         tree.addTile(e.level, e.origin, e.value, false);
         lowers.insert(alignDown(e.origin, kLowerDim));
@@ -583,27 +603,26 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
     std::vector<std::pair<HermiteLeaf*, std::size_t>> writes;
     for (std::size_t i = 0; i < walker.tasks.size(); ++i) {
         const BlockTask& task = walker.tasks[i];
-        BlockResult& r = results[i];
+        const BlockResult& r = results[i];
         stats.crossingsComputed += r.crossings;
         ++stats.blocksComputed;
         lowers.insert(alignDown(task.origin, kLowerDim));
-        if (r.uniform) {
-            ++stats.tilesWritten;
-            if (!task.oldLeaf && task.tileValue == r.value) continue;
-            tree.addTile(1, task.origin, r.value, false);
-        } else {
-            ++stats.leavesWritten;
-            // Blocks the brush only grazes keep their content: they need no write and no re-mesh.
-            if (task.oldLeaf && task.oldLeaf->holds(r.data)) continue;
-            writes.emplace_back(tree.touchLeaf(task.origin), i);
-        }
-        stats.dirtyBlocks.push_back({task.origin.x(), task.origin.y(), task.origin.z()});
+        if (r.uniform) ++stats.tilesWritten;
+        else ++stats.leavesWritten;
+        if (r.unchanged) continue;
+        if (r.uniform) tree.addTile(1, task.origin, r.value, false);
+        else writes.emplace_back(tree.touchLeaf(task.origin), i);
+        if (r.uniform && !task.oldLeaf) changedTiles.push_back(task.origin);
+        else addDirty(task.origin);
     }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, writes.size(), 8), [&](const auto& range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             writes[i].first->assign(std::move(results[writes[i].second].data));
     });
     pruneTouched(tree, lowers);
+    openvdb::tree::ValueAccessor<const HermiteTree> acc(tree);
+    for (const Coord& c : changedTiles)
+        if (hasLeafAround(acc, c)) addDirty(c);
     return stats;
 }
 

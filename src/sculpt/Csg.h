@@ -37,9 +37,11 @@ struct EditStats {
     uint64_t leavesWritten = 0;    // blocks that are (still) leaves afterwards
     uint64_t tilesWritten = 0;     // blocks or nodes that became (or stayed) uniform tiles
     uint64_t crossingsComputed = 0;
-    /// Origins of the leaf-sized blocks whose content changed (for re-meshing): every such block, and
-    /// otherwise only blocks on the faces of 128^3 nodes that became tiles. Blocks the brush reached
-    /// but left as they were are not listed.
+    /// Origins of the leaf-sized blocks whose content changed and that a mesh can read (for
+    /// re-meshing): every changed block that was or became a leaf, and every other changed block with
+    /// a leaf in its 3x3x3 neighbourhood afterwards. Blocks the brush left as they were, and changed
+    /// tiles deep inside solid or empty space, are not listed: the list grows with the surface an
+    /// edit touches, not with its volume.
     std::vector<std::array<int32_t, 3>> dirtyBlocks;
 };
 

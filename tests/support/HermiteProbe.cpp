@@ -148,6 +148,17 @@ std::vector<std::array<int32_t, 3>> changedBlocks(const Volume& a, const Volume&
     return out;
 }
 
+std::vector<std::array<int32_t, 3>> leafOrigins(const Volume& volume)
+{
+    std::vector<std::array<int32_t, 3>> out;
+    for (auto leaf = volume.impl().grid->constTree().cbeginLeaf(); leaf; ++leaf) {
+        const Coord o = leaf->origin();
+        out.push_back({o.x(), o.y(), o.z()});
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
 std::vector<uint64_t> solidVoxelsPerMaterial(const Volume& volume)
 {
     const HermiteTree& tree = volume.impl().grid->constTree();

@@ -35,6 +35,9 @@ std::string checkInvariants(const Volume& volume);
 /// Origins of the leaf-sized blocks whose materials or samples differ between two volumes, sorted.
 std::vector<std::array<int32_t, 3>> changedBlocks(const Volume& a, const Volume& b);
 
+/// Origins of the volume's leaves, sorted.
+std::vector<std::array<int32_t, 3>> leafOrigins(const Volume& volume);
+
 /// Number of solid voxels (leaf voxels and tile voxels) per material id; index 0 is unused.
 std::vector<uint64_t> solidVoxelsPerMaterial(const Volume& volume);
 
