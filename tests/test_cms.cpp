@@ -189,20 +189,25 @@ TEST_CASE("CMS carries materials per triangle across a material boundary", "[cms
     // material of its solid voxel (an edge holds one sample), so a triangle may reach up to a voxel
     // past the boundary, never more.
     constexpr double kBoundary = 0.3;
+    // Each piece of a segment carries the material of its side of the interface, so a triangle's
+    // centroid lies on its material's side.
     std::size_t stoneTriangles = 0, mossTriangles = 0, boundaryVertices = 0;
     for (std::size_t t = 0; t < mesh.triangleCount(); ++t) {
-        double zMin = 1e300, zMax = -1e300;
+        double zMin = 1e300, zMax = -1e300, zCentroid = 0.0;
         for (uint32_t i : mesh.triangles[t]) {
             zMin = std::min(zMin, double(mesh.positions[i][2]));
             zMax = std::max(zMax, double(mesh.positions[i][2]));
+            zCentroid += mesh.positions[i][2] / 3.0;
         }
         if (mesh.triangleMaterials[t] == stone) {
             ++stoneTriangles;
             CHECK(zMax < kBoundary + 1.0);
+            CHECK(zCentroid < kBoundary);
         } else {
             REQUIRE(mesh.triangleMaterials[t] == moss);
             ++mossTriangles;
             CHECK(zMin > kBoundary - 1.0);
+            CHECK(zCentroid > kBoundary);
         }
     }
     for (const auto& p : mesh.positions) boundaryVertices += std::fabs(p[2] - kBoundary) < 0.01;

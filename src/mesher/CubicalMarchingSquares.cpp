@@ -56,6 +56,7 @@ struct FacePoint {
     std::array<double, 3> position;
     uint64_t key;
     bool transition;
+    MaterialId materialBefore;             // transitions: the material up to here, in walk order
     MaterialId materialAfter;              // transitions: the material from here on
     std::array<float, 3> interfaceNormal;  // transitions: the material interface's normal
 };
@@ -89,7 +90,10 @@ void appendSegment(std::vector<Segment>& to, const Segment& from, bool reversed)
     Segment& copy = reversed ? to.emplace_back(from.out, from.in) : to.emplace_back(from.in, from.out);
     const int n = from.points.count;
     copy.points.count = n;
-    for (int k = 0; k < n; ++k) copy.points.items[k] = from.points.items[reversed ? n - 1 - k : k];
+    for (int k = 0; k < n; ++k) {
+        FacePoint& point = copy.points.items[k] = from.points.items[reversed ? n - 1 - k : k];
+        if (reversed) std::swap(point.materialBefore, point.materialAfter);
+    }
 }
 
 } // namespace
@@ -181,28 +185,21 @@ struct LeafContext {
     Buffers& buffers;
 };
 
-/// The crossing on the voxel edge in `slot` (Buffers::edgeSlot), decoded on first use.
-const EdgeCrossing& crossingInSlot(const LeafContext& ctx, int slot, const Coord& start, int axis, MaterialValue low,
-                                   MaterialValue high)
-{
-    Buffers& b = ctx.buffers;
-    uint32_t& index = b.edgeCrossing[slot];
-    if (index == Buffers::kNone) {
-        index = uint32_t(b.crossings.size());
-        b.crossings.push_back(voxelEdgeCrossing(ctx.hood, start, axis, low, high, ctx.voxelSize));
-        if (b.edgeVertex[slot] == Buffers::kNone) b.usedEdgeSlots.push_back(uint32_t(slot));
-    }
-    return b.crossings[index];
-}
-
 /// The crossing on a voxel edge, decoded once per leaf; `uncached` holds it when the edge lies outside
 /// the leaf's span (only the ring around an edge cell reaches that far).
 const EdgeCrossing& cachedCrossing(const LeafContext& ctx, const Coord& start, int axis, MaterialValue low,
                                    MaterialValue high, EdgeCrossing& uncached)
 {
+    Buffers& b = ctx.buffers;
     const int slot = Buffers::edgeSlot(ctx.origin, start, axis);
     if (slot < 0) return uncached = voxelEdgeCrossing(ctx.hood, start, axis, low, high, ctx.voxelSize);
-    return crossingInSlot(ctx, slot, start, axis, low, high);
+    uint32_t& index = b.edgeCrossing[slot];
+    if (index == Buffers::kNone) {
+        index = uint32_t(b.crossings.size()); // below the reserved capacity: one entry per slot at most
+        b.crossings.push_back(voxelEdgeCrossing(ctx.hood, start, axis, low, high, ctx.voxelSize));
+        if (b.edgeVertex[slot] == Buffers::kNone) b.usedEdgeSlots.push_back(uint32_t(slot));
+    }
+    return b.crossings[index];
 }
 
 /// The crossing on the grid edge of `length` voxels from `start` along `axis`, whose ends hold `low`
@@ -239,8 +236,7 @@ struct Square {
 class CellMesher {
 public:
     CellMesher(LeafContext& ctx, const Coord& base, int width, const MaterialValue mats[8])
-        : ctx_(ctx), base_(base), width_(width), mats_(mats), segments_(ctx.buffers.segments),
-          baseSlot_(Buffers::edgeSlot(ctx.origin, base, 0))
+        : ctx_(ctx), base_(base), width_(width), mats_(mats), segments_(ctx.buffers.segments)
     {
         segments_.clear();
     }
@@ -299,8 +295,7 @@ private:
     }
 
     /// A one-voxel square is meshed once per leaf; the cell on its other side walks it the other
-    /// way round, so it takes the segments reversed. Squares with material transitions are meshed
-    /// by each cell, as the transitions name the material on their far side.
+    /// way round, so it takes the segments reversed.
     void meshVoxelSquare(int f, int u0, int v0)
     {
         const int axis = f / 2, side = f % 2;
@@ -319,7 +314,7 @@ private:
         const std::size_t before = segments_.size();
         const Square sq = makeSquare(f, u0, v0, 1);
         meshSquare(sq);
-        if (slot < 0 || mixedMaterials(sq)) return;
+        if (slot < 0) return;
         b.squares[slot] = {uint32_t(b.squareSegments.size()), uint16_t(segments_.size() - before), uint8_t(side)};
         b.usedSquareSlots.push_back(uint32_t(slot));
         for (std::size_t i = before; i < segments_.size(); ++i) appendSegment(b.squareSegments, segments_[i], false);
@@ -350,15 +345,7 @@ private:
     /// The crossing on side i of the square (from its corner i to corner i + 1).
     const EdgeCrossing& squareCrossing(const Square& sq, int i)
     {
-        if (!squareCrossings_[i] && sq.wholeFace && width_ == 1) {
-            // A voxel cell's own edge: its slot follows from the cell's.
-            const int e = cellEdge(sq.cellCorners[i], sq.cellCorners[(i + 1) % 4]);
-            const int low = edgeLowCorner(e), axis = e / 4;
-            const int dx = cornerBit(low, 0), dy = cornerBit(low, 1), dz = cornerBit(low, 2);
-            const int slot = baseSlot_ + ((dx * Buffers::kSpan + dy) * Buffers::kSpan + dz) * 3 + axis;
-            squareCrossings_[i] = &crossingInSlot(ctx_, slot, base_.offsetBy(dx, dy, dz), axis, mats_[low],
-                                                  mats_[low | (1 << axis)]);
-        } else if (!squareCrossings_[i]) {
+        if (!squareCrossings_[i]) {
             const int j = (i + 1) % 4;
             const Coord &p = sq.corners[i], &q = sq.corners[j];
             const int axis = p[0] != q[0] ? 0 : (p[1] != q[1] ? 1 : 2);
@@ -478,7 +465,7 @@ private:
             Segment& seg = segments_.emplace_back(squareCrossing(sq, pr.in), squareCrossing(sq, pr.out));
             SegmentPoints& points = seg.points;
             if (const auto& sharp = pr.shape.sharp)
-                points.insert(0, FacePoint{*sharp, toWorld(*sharp), 0, false, kEmptyMaterial, {}});
+                points.insert(0, FacePoint{*sharp, toWorld(*sharp), 0, false, kEmptyMaterial, kEmptyMaterial, {}});
             // A square with one segment may hold material interfaces between its solid corners.
             if (nSeg == 1 && mixedMaterials(sq)) insertTransitions(sq, pr.in, seg, toWorld);
             // Slots count along the segment from its end with the smaller key, the same in both cells.
@@ -535,7 +522,7 @@ private:
                 if ((fa < 0.0) == (fb < 0.0) || fa == fb) continue;
                 const double t = fa / (fa - fb);
                 const Vec2 hit{poly[k].x + t * (poly[k + 1].x - poly[k].x), poly[k].y + t * (poly[k + 1].y - poly[k].y)};
-                points.insert(k, FacePoint{hit, toWorld(hit), 0, true, sq.mats[q].id, interface.normal});
+                points.insert(k, FacePoint{hit, toWorld(hit), 0, true, sq.mats[p].id, sq.mats[q].id, interface.normal});
                 break;
             }
         }
@@ -776,7 +763,6 @@ private:
     int width_;
     const MaterialValue* mats_;
     std::vector<Segment>& segments_;
-    int baseSlot_; // the slot of the cell's minimum corner's x edge
     const EdgeCrossing* squareCrossings_[4] = {};
 };
 
