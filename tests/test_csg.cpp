@@ -216,6 +216,20 @@ TEST_CASE("adding a brush again changes nothing (A + A == A)", "[csg]")
     }
 }
 
+TEST_CASE("adding a large sphere again changes nothing, also on edges its surface grazes", "[csg]")
+{
+    // Near where a large sphere's normal turns across an axis, an edge meets the surface at a shallow
+    // angle: the crossing search stops within a distance tolerance that allows the crossing to drift
+    // along the edge further than the stored offset's precision.
+    Volume a(1.0);
+    const Brush big(sphere(250.0), at(kC, {10.0, 20.0, 0.0}));
+    applyCsg(a, big, op(CsgMode::Add));
+    Volume b = a.clone();
+    const EditStats again = applyCsg(b, big, op(CsgMode::Add));
+    CHECK(again.dirtyBlocks.empty());
+    CHECK(identical(a, b));
+}
+
 namespace {
 
 /// Two materials, tiles in the sphere's core, leaves on the surfaces.

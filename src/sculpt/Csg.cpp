@@ -184,7 +184,7 @@ bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValu
     constexpr int segCount = 2;
 
     enum class Kind { Start, Old, Brush };
-    struct Run { double t; MaterialValue m; Kind kind; bool insideBefore; };
+    struct Run { double t; MaterialValue m; Kind kind; bool insideBefore; bool atOld; };
     Run runs[4];
     int runCount = 0;
     auto push = [&](const Run& r) {
@@ -196,11 +196,15 @@ bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValu
         const double off = ctx.offsetFor(seg.m);
         const bool inA = seg.fa + off < 0.0, inB = seg.fb + off < 0.0;
         const MaterialValue before = ctx.apply(seg.m, inA), after = ctx.apply(seg.m, inB);
-        push({seg.ta, before, s == 0 ? Kind::Start : Kind::Old, false});
+        push({seg.ta, before, s == 0 ? Kind::Start : Kind::Old, false, false});
         if (before != after) {
             const double tc = findCrossing(ctx, p0, edge, seg.ta, seg.tb, seg.fa + off, seg.fb + off, off);
             ++crossings;
-            push({tc, after, Kind::Brush, inA});
+            // The brush surface runs through the old surface point when its distance there is below
+            // the offset quantization (1/65535 of an edge); on an edge the surface grazes, the found
+            // crossing can still drift from it by more than kSameCrossing.
+            const bool atOld = std::fabs(dOld + off) < 1e-5 * ctx.voxelSize;
+            push({tc, after, Kind::Brush, inA, atOld});
         }
     }
     if (runCount < 2) return false;
@@ -213,7 +217,7 @@ bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValu
     // A brush crossing that coincides with the old one (the brush surface runs through the old surface
     // point, as in A union A) keeps the stored sample, so re-applying an edit changes nothing.
     constexpr double kSameCrossing = 1e-4;
-    if (old && (b.kind == Kind::Old || (b.kind == Kind::Brush && std::fabs(b.t - tOld) < kSameCrossing))) {
+    if (old && (b.kind == Kind::Old || (b.kind == Kind::Brush && (b.atOld || std::fabs(b.t - tOld) < kSameCrossing)))) {
         out = *old;
         return true;
     }
