@@ -625,6 +625,18 @@ TEST_CASE("erosion that cannot bite changes nothing", "[csg][erode]")
         applyCsg(v, Brush(sphere(8.0), at(kC + Vec3d(8.0, 4.0, 0.0))), op(CsgMode::Erode, 1, 0.0));
         CHECK(identical(before, v));
     }
+    SECTION("an explicit depth below the brush's inner radius")
+    {
+        // The rule removes what lies deeper than the depth; toughness 1 and strength 0 must still
+        // remove nothing, even where the brush reaches deeper than that.
+        CsgOp shallow = op(CsgMode::Erode, 1, 1.0);
+        shallow.erodeDepth = 2.0;
+        applyCsg(v, Brush(sphere(8.0), at(kC + Vec3d(-4.0, 8.0, 0.0))), shallow);
+        CHECK(identical(before, v));
+        shallow.strength = 0.0;
+        applyCsg(v, Brush(sphere(8.0), at(kC + Vec3d(8.0, 4.0, 0.0))), shallow);
+        CHECK(identical(before, v));
+    }
 }
 
 TEST_CASE("every brush shape alone gives a closed mesh of the analytic volume", "[csg][shapes]")

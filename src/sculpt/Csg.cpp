@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <set>
 #include <stdexcept>
 
@@ -524,9 +525,12 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
         const double depth = op.erodeDepth ? *op.erodeDepth : brush.innerRadius();
         if (!(depth > 0.0) || !std::isfinite(depth))
             throw std::invalid_argument("erode needs a positive depth (an unbounded brush needs an explicit depth)");
+        // A material the op cannot bite (toughness 1, or strength 0) is never inside: an explicit
+        // depth below the brush's inner radius would otherwise remove its deepest part.
         ctx.erodeOffset.assign(materials.size() + 1, 0.0);
         for (MaterialId id = 1; id <= materials.size(); ++id) {
-            ctx.erodeOffset[id] = (1.0 - op.strength * (1.0 - materials.at(id).toughness)) * depth;
+            const double bite = op.strength * (1.0 - materials.at(id).toughness);
+            ctx.erodeOffset[id] = bite > 0.0 ? (1.0 - bite) * depth : std::numeric_limits<double>::infinity();
         }
         ctx.maxErodeOffset = *std::max_element(ctx.erodeOffset.begin(), ctx.erodeOffset.end());
     }
