@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -88,8 +89,8 @@ struct MeshCommandOptions {
     std::string input;
     std::string output;
     std::string mesher = "cms";
-    double angleDegrees = 30.0;
-    double subdivisionAngleDegrees = 15.0;
+    std::optional<double> angleDegrees;            // CMS only; MeshOptions' default when absent
+    std::optional<double> subdivisionAngleDegrees; // adaptive CMS only
     bool uniform = false;
     bool json = false;
 };

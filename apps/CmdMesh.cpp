@@ -22,13 +22,14 @@ CLI::App* addMeshCommand(CLI::App& parent, MeshCommandOptions& o)
     cmd->add_option("--mesher", o.mesher, "cms (cubical marching squares, sharp features) or mc (marching cubes)")
         ->capture_default_str()
         ->type_name("NAME");
+    const MeshOptions defaults;
     cmd->add_option("--angle", o.angleDegrees,
-                    "CMS: normals spanning more than this angle make a sharp edge or corner")
-        ->capture_default_str()
+                    "CMS: normals spanning more than this angle make a sharp edge or corner (default " +
+                        formatNumber(defaults.sharpAngleDegrees) + ")")
         ->type_name("DEG");
     cmd->add_option("--adapt-angle", o.subdivisionAngleDegrees,
-                    "CMS: a cell wider than one voxel is split while its normals span more than this angle")
-        ->capture_default_str()
+                    "Adaptive CMS: a cell wider than one voxel is split while its normals span more than this "
+                    "angle (default " + formatNumber(defaults.subdivisionAngleDegrees) + ")")
         ->type_name("DEG");
     cmd->add_flag("--uniform", o.uniform,
                   "CMS: mesh every voxel cell instead of adaptive cells (up to 8 voxels wide on flat surface)");
@@ -54,12 +55,19 @@ int runMesh(const MeshCommandOptions& o)
     } catch (const std::invalid_argument& e) {
         throw UsageError(std::string("--mesher: ") + e.what());
     }
-    if (!(o.angleDegrees > 0.0 && o.angleDegrees < 180.0)) throw UsageError("--angle must lie between 0 and 180 degrees");
-    options.sharpAngleDegrees = o.angleDegrees;
-    if (!(o.subdivisionAngleDegrees > 0.0 && o.subdivisionAngleDegrees < 180.0))
-        throw UsageError("--adapt-angle must lie between 0 and 180 degrees");
-    options.subdivisionAngleDegrees = o.subdivisionAngleDegrees;
+    const bool cms = options.kind == MesherKind::CubicalMarchingSquares;
+    // Options that would have no effect are refused rather than silently ignored.
+    if (!cms && (o.angleDegrees || o.subdivisionAngleDegrees || o.uniform))
+        throw UsageError("--angle, --adapt-angle and --uniform apply to --mesher cms only");
+    if (o.uniform && o.subdivisionAngleDegrees) throw UsageError("--adapt-angle applies to adaptive cells, not --uniform");
+    options.sharpAngleDegrees = o.angleDegrees.value_or(options.sharpAngleDegrees);
+    options.subdivisionAngleDegrees = o.subdivisionAngleDegrees.value_or(options.subdivisionAngleDegrees);
     options.maxCellWidth = o.uniform ? 1 : 8;
+    try {
+        validateMeshOptions(options);
+    } catch (const std::invalid_argument& e) {
+        throw UsageError(e.what());
+    }
     requireMeshExtension(o.output, "--output");
 
     const auto start = std::chrono::steady_clock::now();

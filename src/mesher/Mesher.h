@@ -30,8 +30,14 @@ struct MeshOptions {
     double subdivisionAngleDegrees = 15.0;
     /// CMS, optional: a cap on the cell width per leaf (given its origin; rounded down to 1, 2, 4 or 8),
     /// for meshing regions at different depths; the mesh stays watertight across them.
+    /// Called from several threads at once, so it must be thread-safe.
     std::function<int(const std::array<int32_t, 3>&)> leafMaxCellWidth;
 };
+
+/// Throws std::invalid_argument for options the meshers cannot use (angles outside (0, 180), a widest
+/// cell other than 1, 2, 4 or 8). The meshing functions check this too; callers that load a volume
+/// first can check before.
+void validateMeshOptions(const MeshOptions& options);
 
 /// The leaves whose chunks can change when the given leaf-sized blocks change (EditStats::dirtyBlocks):
 /// the blocks a changed voxel's cells touch and, for adaptive CMS, the leaves whose face neighbours'
