@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -141,7 +142,9 @@ public:
         for (int m = 1; m < count; ++m)
             if (dot(members[m]->normal, seed[0]) < dot(seed[1], seed[0])) seed[1] = members[m]->normal;
         double mean[2][3] = {};
-        std::vector<int> group(count);
+        // A two-voxel cell holds at most 54 voxel edges (18 per axis).
+        std::array<uint8_t, 54> group;
+        if (count > int(group.size())) return false;
         for (int m = 0; m < count; ++m) {
             group[m] = dot(members[m]->normal, seed[1]) > dot(members[m]->normal, seed[0]) ? 1 : 0;
             for (int a = 0; a < 3; ++a) mean[group[m]][a] += members[m]->normal[a];
