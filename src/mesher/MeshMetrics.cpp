@@ -18,13 +18,13 @@ MeshTopology analyzeTopology(const Mesh& mesh)
     }
     for (const auto& [key, count] : directed) {
         const uint32_t from = uint32_t(key >> 32), to = uint32_t(key);
-        if (from > to && directed.count((uint64_t(to) << 32) | from)) continue; // counted from the other side
         const auto reverse = directed.find((uint64_t(to) << 32) | from);
         const uint32_t back = reverse == directed.end() ? 0 : reverse->second;
+        if (from > to && back > 0) continue; // counted from the other side
         const uint32_t total = count + back;
         if (total == 1) ++topo.boundaryEdges;
         else if (total > 2) ++topo.nonManifoldEdges;
-        else if (back == 0 || count == 0 || count == 2) ++topo.misorientedEdges;
+        else if (back != 1) ++topo.misorientedEdges; // two uses, both in the same direction
     }
     return topo;
 }

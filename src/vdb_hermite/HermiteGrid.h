@@ -106,11 +106,6 @@ public:
 
     static constexpr int edgeBit(Index voxelOffset, int axis) { return int(voxelOffset) * 3 + axis; }
 
-    bool hasSample(Index voxelOffset, int axis) const
-    {
-        const int bit = edgeBit(voxelOffset, axis);
-        return (edgeBits_[bit >> 6] >> (bit & 63)) & 1u;
-    }
     /// The sample on the positive `axis` edge of the voxel, or nullptr when that edge does not cross.
     const PackedSample* sample(Index voxelOffset, int axis) const
     {
@@ -121,8 +116,6 @@ public:
         return &samples_[prefix_[bit >> 6] + __builtin_popcountll(below)];
     }
     std::size_t sampleCount() const { return samples_.size(); }
-    const std::array<uint64_t, kEdgeWords>& edgeBits() const { return edgeBits_; }
-    const std::vector<PackedSample>& samples() const { return samples_; }
 
     /// Replaces the whole content (materials, samples, active states). Throws std::invalid_argument
     /// when the sample count does not match the edge mask.
