@@ -2,6 +2,7 @@
 // and the access to a leaf and its neighbours. OpenVDB-heavy: include only from mesher .cpp files.
 #pragma once
 
+#include "mesher/CellTopology.h"
 #include "mesher/Mesh.h"
 #include "vdb_hermite/HermiteGrid.h"
 
@@ -13,47 +14,6 @@
 namespace vdbclay::mesher_detail {
 
 using ConstAccessor = openvdb::tree::ValueAccessor<const HermiteTree, /*IsSafe=*/false>;
-
-/// Corner c of a cell is at offset (c & 1, (c >> 1) & 1, (c >> 2) & 1) from its minimum corner.
-constexpr int cornerBit(int c, int axis) { return (c >> axis) & 1; }
-
-struct CellFace {
-    int corners[4]; // counter-clockwise seen from outside the cell
-};
-
-constexpr CellFace makeFace(int axis, int side)
-{
-    const int b = (axis + 1) % 3, c = (axis + 2) % 3;
-    // (b,c) = (0,0), (1,0), (1,1), (0,1) turns counter-clockwise about +axis.
-    const int bc[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-    CellFace f{};
-    for (int i = 0; i < 4; ++i) {
-        const int k = side ? i : (4 - i) % 4; // reversed on the -axis face
-        f.corners[i] = (side << axis) | (bc[k][0] << b) | (bc[k][1] << c);
-    }
-    return f;
-}
-
-constexpr CellFace kFaces[6] = {makeFace(0, 0), makeFace(0, 1), makeFace(1, 0),
-                                makeFace(1, 1), makeFace(2, 0), makeFace(2, 1)};
-
-/// Cell edge between two corners that differ in one coordinate: axis * 4 + position of the edge's low
-/// corner in the other two coordinates.
-constexpr int cellEdge(int c0, int c1)
-{
-    const int diff = c0 ^ c1;
-    const int axis = diff == 1 ? 0 : (diff == 2 ? 1 : 2);
-    const int low = c0 & c1;
-    const int b = (axis + 1) % 3, c = (axis + 2) % 3;
-    return axis * 4 + (cornerBit(low, b) | (cornerBit(low, c) << 1));
-}
-
-/// The corner an edge starts from (its lower end).
-constexpr int edgeLowCorner(int edge)
-{
-    const int axis = edge / 4, b = (axis + 1) % 3, c = (axis + 2) % 3;
-    return ((edge & 1) << b) | (((edge >> 1) & 1) << c);
-}
 
 /// The leaves around one leaf, so cells at its borders find their corners and samples quickly.
 class Neighbourhood {
