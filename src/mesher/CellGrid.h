@@ -182,7 +182,9 @@ class CellWidthField;
 /// one per thread.
 class CubicalMarchingSquaresMesher {
 public:
-    CubicalMarchingSquaresMesher(double voxelSize, double sharpAngleDegrees);
+    /// `walkEveryCell` turns off the shortcut for smooth voxel cells, for tests that check it changes
+    /// nothing.
+    CubicalMarchingSquaresMesher(double voxelSize, double sharpAngleDegrees, bool walkEveryCell = false);
     ~CubicalMarchingSquaresMesher();
     CubicalMarchingSquaresMesher(const CubicalMarchingSquaresMesher&) = delete;
     CubicalMarchingSquaresMesher& operator=(const CubicalMarchingSquaresMesher&) = delete;
@@ -190,11 +192,17 @@ public:
     /// `widths`: the adaptive cells around the leaf (CellOctree.h); null meshes voxel cells.
     MeshChunk mesh(const HermiteLeaf& leaf, ConstAccessor& acc, const CellWidthField* widths);
 
+    /// Cells meshed so far: all of them, and those the smooth-cell shortcut took.
+    std::size_t cellsMeshed() const { return cellsMeshed_; }
+    std::size_t cellsFromCaseTable() const { return cellsFromCaseTable_; }
+
     struct Buffers;
 
 private:
     double voxelSize_;
     double cosSharp_;
+    bool walkEveryCell_;
+    std::size_t cellsMeshed_ = 0, cellsFromCaseTable_ = 0;
     std::unique_ptr<Buffers> buffers_;
 };
 

@@ -96,6 +96,38 @@ void appendSegment(std::vector<Segment>& to, const Segment& from, bool reversed)
     }
 }
 
+Vec2 project(const std::array<float, 3>& v, int axis) { return {v[(axis + 1) % 3], v[(axis + 2) % 3]}; }
+
+/// A normal projected onto a face with normal `axis` and normalised; false when it lies along the axis.
+bool faceNormal(const std::array<float, 3>& normal, int axis, Vec2& onFace)
+{
+    const Vec2 p = project(normal, axis);
+    const double length = std::sqrt(p.x * p.x + p.y * p.y);
+    if (length < 1e-6) return false;
+    onFace = {p.x / length, p.y / length};
+    return true;
+}
+
+/// Whether the normals at the two ends of a segment on a face with normal `axis` span the sharp angle
+/// on that face, which makes the segment a candidate for a 2D sharp feature; `a` and `b` get them
+/// projected onto the face.
+bool segmentBends(const std::array<float, 3>& normalA, const std::array<float, 3>& normalB, int axis, double cosSharp,
+                  Vec2& a, Vec2& b)
+{
+    return faceNormal(normalA, axis, a) && faceNormal(normalB, axis, b) && a.x * b.x + a.y * b.y <= cosSharp;
+}
+
+double normalDot(const std::array<float, 3>& a, const std::array<float, 3>& b)
+{
+    return double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2];
+}
+
+template<typename T>
+void accumulate(std::array<double, 3>& sum, const std::array<T, 3>& v)
+{
+    for (int k = 0; k < 3; ++k) sum[k] += v[k];
+}
+
 } // namespace
 
 /// Buffers reused from cell to cell and leaf to leaf.
@@ -167,6 +199,67 @@ struct CubicalMarchingSquaresMesher::Buffers {
         return slot * 3 + axis;
     }
 
+    /// The decoded crossing in a slot, decoded by `decode` on first use.
+    template<typename Decode>
+    const EdgeCrossing& crossingAt(int slot, Decode&& decode)
+    {
+        uint32_t& index = edgeCrossing[slot];
+        if (index == kNone) {
+            index = uint32_t(crossings.size()); // below the reserved capacity: one entry per slot at most
+            crossings.push_back(decode());
+            if (edgeVertex[slot] == kNone) usedEdgeSlots.push_back(uint32_t(slot));
+        }
+        return crossings[index];
+    }
+
+    /// The chunk's vertex for the crossing in a slot, added on first use.
+    uint32_t crossingVertex(int slot, const EdgeCrossing& x)
+    {
+        uint32_t& index = edgeVertex[slot];
+        if (index == kNone) {
+            index = addVertex(x.key, x.position, x.normal, x.material);
+            if (edgeCrossing[slot] == kNone) usedEdgeSlots.push_back(uint32_t(slot));
+        }
+        return index;
+    }
+
+    /// The chunk's vertex for a face point (or a crossing outside the leaf's span), added on first use.
+    uint32_t keyedVertex(uint64_t key, const std::array<float, 3>& pos, const std::array<float, 3>& normal,
+                         MaterialId material)
+    {
+        const auto [it, inserted] = otherVertices.try_emplace(key, 0u);
+        if (inserted) it->second = addVertex(key, pos, normal, material);
+        return it->second;
+    }
+
+    uint32_t addVertex(uint64_t key, const std::array<float, 3>& pos, const std::array<float, 3>& normal,
+                       MaterialId material)
+    {
+        Mesh& mesh = chunk.mesh;
+        mesh.positions.push_back(pos);
+        mesh.normals.push_back(normal);
+        mesh.materials.push_back(material);
+        chunk.vertexKeys.push_back(key);
+        return uint32_t(mesh.positions.size() - 1);
+    }
+
+    /// Fans a loop of boundary vertices from a new inner vertex at `centre`; triangle i, from boundary
+    /// vertex i to the next, gets `materials[i]`.
+    void addFan(const std::array<double, 3>& centre, const std::array<double, 3>& normalSum, const uint32_t* ids,
+                const MaterialId* materials, std::size_t n)
+    {
+        const double length = std::sqrt(normalSum[0] * normalSum[0] + normalSum[1] * normalSum[1] + normalSum[2] * normalSum[2]);
+        const double scale = length > 0.0 ? 1.0 / length : 0.0;
+        const uint32_t c = addVertex(kUnsharedVertex, {float(centre[0]), float(centre[1]), float(centre[2])},
+                                     {float(normalSum[0] * scale), float(normalSum[1] * scale), float(normalSum[2] * scale)},
+                                     materials[0]);
+        Mesh& mesh = chunk.mesh;
+        for (std::size_t i = 0; i < n; ++i) {
+            mesh.triangles.push_back({c, ids[i], ids[i + 1 < n ? i + 1 : 0]});
+            mesh.triangleMaterials.push_back(materials[i]);
+        }
+    }
+
     /// A copy of the chunk, its vectors at their exact size; the buffers keep their capacity.
     MeshChunk finishLeaf() const { return chunk; }
 };
@@ -190,16 +283,9 @@ struct LeafContext {
 const EdgeCrossing& cachedCrossing(const LeafContext& ctx, const Coord& start, int axis, MaterialValue low,
                                    MaterialValue high, EdgeCrossing& uncached)
 {
-    Buffers& b = ctx.buffers;
+    auto decode = [&] { return voxelEdgeCrossing(ctx.hood, start, axis, low, high, ctx.voxelSize); };
     const int slot = Buffers::edgeSlot(ctx.origin, start, axis);
-    if (slot < 0) return uncached = voxelEdgeCrossing(ctx.hood, start, axis, low, high, ctx.voxelSize);
-    uint32_t& index = b.edgeCrossing[slot];
-    if (index == Buffers::kNone) {
-        index = uint32_t(b.crossings.size()); // below the reserved capacity: one entry per slot at most
-        b.crossings.push_back(voxelEdgeCrossing(ctx.hood, start, axis, low, high, ctx.voxelSize));
-        if (b.edgeVertex[slot] == Buffers::kNone) b.usedEdgeSlots.push_back(uint32_t(slot));
-    }
-    return b.crossings[index];
+    return slot < 0 ? uncached = decode() : ctx.buffers.crossingAt(slot, decode);
 }
 
 /// The crossing on the grid edge of `length` voxels from `start` along `axis`, whose ends hold `low`
@@ -359,11 +445,6 @@ private:
         return *squareCrossings_[i];
     }
 
-    Vec2 project(const std::array<float, 3>& v, int axis) const
-    {
-        return {v[(axis + 1) % 3], v[(axis + 2) % 3]};
-    }
-
     /// The shape of a segment between two crossings of a square.
     struct SegmentShape {
         std::optional<Vec2> sharp; // where the crossings' tangent lines meet, when it is a feature
@@ -379,12 +460,8 @@ private:
         const EdgeCrossing& a = ordered ? first : second;
         const EdgeCrossing& b = ordered ? second : first;
         const int axis = sq.axis;
-        Vec2 na = project(a.normal, axis), nb = project(b.normal, axis);
-        const double la = std::sqrt(na.x * na.x + na.y * na.y), lb = std::sqrt(nb.x * nb.x + nb.y * nb.y);
-        if (la < 1e-6 || lb < 1e-6) return {};
-        na = {na.x / la, na.y / la};
-        nb = {nb.x / lb, nb.y / lb};
-        if (na.x * nb.x + na.y * nb.y > ctx_.cosSharp) return {};
+        Vec2 na, nb;
+        if (!segmentBends(a.normal, b.normal, axis, ctx_.cosSharp, na, nb)) return {};
         const double det = cross2(na, nb);
         if (std::fabs(det) < 1e-9) return {std::nullopt, false};
         const Vec2 pa = project(a.position, axis), pb = project(b.position, axis);
@@ -559,39 +636,12 @@ private:
         return false;
     }
 
-    /// The chunk's vertex for a crossing, added on first use.
+    /// The chunk's vertex for a crossing.
     uint32_t vertex(const EdgeCrossing& x)
     {
         Buffers& b = ctx_.buffers;
         const int slot = Buffers::edgeSlot(ctx_.origin, x.start, x.axis);
-        if (slot < 0) return vertex(x.key, x.position, x.normal, x.material);
-        uint32_t& index = b.edgeVertex[slot];
-        if (index == Buffers::kNone) {
-            index = addVertex(x.key, x.position, x.normal, x.material);
-            if (b.edgeCrossing[slot] == Buffers::kNone) b.usedEdgeSlots.push_back(uint32_t(slot));
-        }
-        return index;
-    }
-
-    /// The chunk's vertex for a face point (or a crossing outside the leaf's span), added on first use.
-    uint32_t vertex(uint64_t key, const std::array<float, 3>& pos, const std::array<float, 3>& normal,
-                    MaterialId material)
-    {
-        const auto [it, inserted] = ctx_.buffers.otherVertices.try_emplace(key, 0u);
-        if (inserted) it->second = addVertex(key, pos, normal, material);
-        return it->second;
-    }
-
-    uint32_t addVertex(uint64_t key, const std::array<float, 3>& pos, const std::array<float, 3>& normal,
-                       MaterialId material)
-    {
-        MeshChunk& chunk = ctx_.buffers.chunk;
-        Mesh& mesh = chunk.mesh;
-        mesh.positions.push_back(pos);
-        mesh.normals.push_back(normal);
-        mesh.materials.push_back(material);
-        chunk.vertexKeys.push_back(key);
-        return uint32_t(mesh.positions.size() - 1);
+        return slot < 0 ? b.keyedVertex(x.key, x.position, x.normal, x.material) : b.crossingVertex(slot, x);
     }
 
     /// The least-squares point of crossing planes (seed 004 §2.6), solved relative to `massPoint` with
@@ -712,50 +762,37 @@ private:
         ids.clear();
         pieceMaterials.clear();
         bool hasTransition = false;
-        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-        Eigen::Vector3d normalSum = Eigen::Vector3d::Zero();
+        std::array<double, 3> centre{}, normalSum{};
         double minDot = 1.0;
         for (std::size_t i = 0; i < loop.size(); ++i) {
             const Segment& seg = segments_[loop[i]];
             const EdgeCrossing& x = seg.in;
-            const Eigen::Vector3d nrm(x.normal[0], x.normal[1], x.normal[2]);
-            for (std::size_t j = 0; j < i; ++j) {
-                const auto& other = segments_[loop[j]].in.normal;
-                minDot = std::min(minDot, double(nrm.x() * other[0] + nrm.y() * other[1] + nrm.z() * other[2]));
-            }
-            normalSum += nrm;
-            mean += Eigen::Vector3d(x.position[0], x.position[1], x.position[2]);
+            for (std::size_t j = 0; j < i; ++j) minDot = std::min(minDot, normalDot(x.normal, segments_[loop[j]].in.normal));
+            accumulate(normalSum, x.normal);
+            accumulate(centre, x.position);
             pieceMaterials.push_back(x.material);
             ids.push_back(vertex(x));
             MaterialId material = x.material;
             for (int k = 0; k < seg.points.count; ++k) {
                 const FacePoint& point = seg.points.items[k];
                 const auto& q = point.position;
-                mean += Eigen::Vector3d(q[0], q[1], q[2]);
+                accumulate(centre, q);
                 if (point.transition) {
                     hasTransition = true;
                     material = point.materialAfter;
                 }
                 pieceMaterials.push_back(material);
-                ids.push_back(vertex(point.key, {float(q[0]), float(q[1]), float(q[2])}, x.normal, material));
+                ids.push_back(ctx_.buffers.keyedVertex(point.key, {float(q[0]), float(q[1]), float(q[2])}, x.normal, material));
             }
         }
         const std::size_t n = ids.size();
-        mean /= double(n);
+        for (double& c : centre) c /= double(n); // the mean point
 
-        Eigen::Vector3d centre = mean;
         if (minDot < ctx_.cosSharp || hasTransition) {
-            if (const auto feature = componentFeature(loop, normalSum)) centre = *feature;
+            if (const auto feature = componentFeature(loop, Eigen::Vector3d(normalSum[0], normalSum[1], normalSum[2])))
+                centre = {feature->x(), feature->y(), feature->z()};
         }
-        const Eigen::Vector3d avgNormal = normalSum.norm() > 0.0 ? Eigen::Vector3d(normalSum.normalized()) : normalSum;
-        const uint32_t c = addVertex(kUnsharedVertex, {float(centre.x()), float(centre.y()), float(centre.z())},
-                                     {float(avgNormal.x()), float(avgNormal.y()), float(avgNormal.z())},
-                                     pieceMaterials[0]);
-        Mesh& mesh = ctx_.buffers.chunk.mesh;
-        for (std::size_t i = 0; i < n; ++i) {
-            mesh.triangles.push_back({c, ids[i], ids[(i + 1) % n]});
-            mesh.triangleMaterials.push_back(pieceMaterials[i]);
-        }
+        ctx_.buffers.addFan(centre, normalSum, ids.data(), pieceMaterials.data(), n);
     }
 
     LeafContext& ctx_;
@@ -766,10 +803,77 @@ private:
     const EdgeCrossing* squareCrossings_[4] = {};
 };
 
+/// Slot offset of each cell edge from the slot of the cell's minimum corner (Buffers::edgeSlot).
+constexpr std::array<int, 12> kCellEdgeSlotOffsets = [] {
+    std::array<int, 12> offsets{};
+    for (int e = 0; e < 12; ++e) {
+        const int c = edgeLowCorner(e);
+        offsets[e] = ((cornerBit(c, 0) * Buffers::kSpan + cornerBit(c, 1)) * Buffers::kSpan + cornerBit(c, 2)) * 3 + e / 4;
+    }
+    return offsets;
+}();
+
+/// Most surface cells are voxel cells of one material with unambiguous faces whose crossings span no
+/// sharp angle, on a face or across the cell. The face walk gives such a cell its corner case's loops
+/// (CellTopology.h) with no face points, each fanned from its mean point; this builds exactly that
+/// straight from the table. Returns false, having added nothing, for any other cell.
+bool meshSmoothVoxelCell(LeafContext& ctx, const Coord& base, const MaterialValue mats[8], unsigned solid)
+{
+    const CellCase& cell = kCellCases[solid];
+    if (cell.ambiguousFace) return false;
+    MaterialValue material{};
+    for (int c = 0; c < 8; ++c) {
+        if (!mats[c].solid()) continue;
+        if (!material.solid()) material = mats[c];
+        else if (mats[c] != material) return false;
+    }
+    Buffers& b = ctx.buffers;
+    const int cellSlot = Buffers::edgeSlot(ctx.origin, base, 0);
+    const int count = cell.loopEnd[cell.loopCount - 1];
+    int slots[12];
+    const EdgeCrossing* crossings[12];
+    for (int i = 0; i < count; ++i) {
+        const int e = cell.edges[i], axis = e / 4, low = edgeLowCorner(e);
+        slots[i] = cellSlot + kCellEdgeSlotOffsets[e];
+        crossings[i] = &b.crossingAt(slots[i], [&] {
+            const Coord start = base.offsetBy(cornerBit(low, 0), cornerBit(low, 1), cornerBit(low, 2));
+            return voxelEdgeCrossing(ctx.hood, start, axis, mats[low], mats[low | (1 << axis)], ctx.voxelSize);
+        });
+    }
+    for (int l = 0, begin = 0; l < cell.loopCount; begin = cell.loopEnd[l++]) {
+        const int end = cell.loopEnd[l];
+        for (int i = begin; i < end; ++i) {
+            const EdgeCrossing& x = *crossings[i];
+            const EdgeCrossing& next = *crossings[i + 1 < end ? i + 1 : begin];
+            Vec2 onFaceX, onFaceNext;
+            if (segmentBends(x.normal, next.normal, cell.segmentAxis[i], ctx.cosSharp, onFaceX, onFaceNext)) return false;
+            for (int j = begin; j < i; ++j)
+                if (normalDot(x.normal, crossings[j]->normal) < ctx.cosSharp) return false;
+        }
+    }
+    uint32_t ids[12];
+    MaterialId materials[12];
+    std::fill_n(materials, count, material.id);
+    for (int l = 0, begin = 0; l < cell.loopCount; begin = cell.loopEnd[l++]) {
+        const int size = cell.loopEnd[l] - begin;
+        std::array<double, 3> centre{}, normalSum{};
+        for (int i = 0; i < size; ++i) {
+            const EdgeCrossing& x = *crossings[begin + i];
+            accumulate(normalSum, x.normal);
+            accumulate(centre, x.position);
+            ids[i] = b.crossingVertex(slots[begin + i], x);
+        }
+        for (double& c : centre) c /= double(size);
+        b.addFan(centre, normalSum, ids, materials, std::size_t(size));
+    }
+    return true;
+}
+
 } // namespace
 
-CubicalMarchingSquaresMesher::CubicalMarchingSquaresMesher(double voxelSize, double sharpAngleDegrees)
-    : voxelSize_(voxelSize), cosSharp_(std::cos(sharpAngleDegrees * M_PI / 180.0)), buffers_(std::make_unique<Buffers>())
+CubicalMarchingSquaresMesher::CubicalMarchingSquaresMesher(double voxelSize, double sharpAngleDegrees, bool walkEveryCell)
+    : voxelSize_(voxelSize), cosSharp_(std::cos(sharpAngleDegrees * M_PI / 180.0)), walkEveryCell_(walkEveryCell),
+      buffers_(std::make_unique<Buffers>())
 {
 }
 
@@ -781,17 +885,17 @@ MeshChunk CubicalMarchingSquaresMesher::mesh(const HermiteLeaf& leaf, ConstAcces
     const CornerGrid grid(leaf, hood);
     buffers_->startLeaf(leaf.origin());
     LeafContext ctx{hood, widths, leaf.origin(), voxelSize_, cosSharp_, *buffers_};
-    auto meshCell = [&](const Coord& base, int width, const MaterialValue mats[8]) {
-        CellMesher(ctx, base, width, mats).run();
+    auto meshVoxelCell = [&](const Coord& base, const MaterialValue mats[8], unsigned solid) {
+        ++cellsMeshed_;
+        if (!walkEveryCell_ && meshSmoothVoxelCell(ctx, base, mats, solid)) ++cellsFromCaseTable_;
+        else CellMesher(ctx, base, 1, mats).run();
     };
     const LeafCellSizes* own = widths ? widths->own() : nullptr;
     if (!own) {
-        forEachOwnedSurfaceCell(grid, hood, OwnedCells::All,
-                                [&](const Coord& base, const MaterialValue mats[8], unsigned) { meshCell(base, 1, mats); });
+        forEachOwnedSurfaceCell(grid, hood, OwnedCells::All, meshVoxelCell);
         return buffers_->finishLeaf();
     }
-    forEachOwnedSurfaceCell(grid, hood, OwnedCells::OutsideLeaf,
-                            [&](const Coord& base, const MaterialValue mats[8], unsigned) { meshCell(base, 1, mats); });
+    forEachOwnedSurfaceCell(grid, hood, OwnedCells::OutsideLeaf, meshVoxelCell);
     // The leaf's own cells, each visited at its minimum corner.
     for (int x = 0; x < kLeafDim; ++x)
         for (int y = 0; y < kLeafDim; ++y)
@@ -805,7 +909,13 @@ MeshChunk CubicalMarchingSquaresMesher::mesh(const HermiteLeaf& leaf, ConstAcces
                     if (mats[c].solid()) solid |= 1u << c;
                 }
                 if (solid == 0 || solid == 0xFF) continue;
-                meshCell(grid.origin.offsetBy(x, y, z), width, mats);
+                const Coord base = grid.origin.offsetBy(x, y, z);
+                if (width == 1) {
+                    meshVoxelCell(base, mats, solid);
+                } else {
+                    ++cellsMeshed_;
+                    CellMesher(ctx, base, width, mats).run();
+                }
             }
     return buffers_->finishLeaf();
 }

@@ -1,5 +1,5 @@
 // White-box access to a volume's Hermite tree for the tests. Light header: the OpenVDB templates stay
-// in HermiteProbe.cpp, the only test translation unit that includes HermiteGrid.h.
+// in HermiteProbe.cpp.
 #pragma once
 
 #include "vdb_hermite/Quantize.h"
