@@ -116,26 +116,32 @@ void forEachOwnedSurfaceCell(const CornerGrid& grid, const Neighbourhood& hood, 
     constexpr uint32_t kCellBits = (1u << (kSpan - 1)) - 1; // cells z = 0 .. 8
     for (int x = 0; x < kSpan - 1; ++x) {
         for (int y = 0; y < kSpan - 1; ++y) {
-            const uint32_t a = solidRow[x][y], b = solidRow[x + 1][y], c = solidRow[x][y + 1], d = solidRow[x + 1][y + 1];
-            const uint32_t all = a & b & c & d, any = a | b | c | d;
+            // The four corner rows of the cells (x, y, *), in corner order.
+            const uint32_t rows[4] = {solidRow[x][y], solidRow[x + 1][y], solidRow[x][y + 1], solidRow[x + 1][y + 1]};
+            const MaterialValue* rowMats[4] = {grid.cells[x][y], grid.cells[x + 1][y], grid.cells[x][y + 1], grid.cells[x + 1][y + 1]};
+            const uint32_t all = rows[0] & rows[1] & rows[2] & rows[3], any = rows[0] | rows[1] | rows[2] | rows[3];
             uint32_t mixed = ((any | (any >> 1)) & ~(all & (all >> 1))) & kCellBits;
             if (which == OwnedCells::OutsideLeaf && x > 0 && y > 0) mixed &= 1u; // only z = 0 lies outside
             while (mixed) {
                 const int z = __builtin_ctz(mixed);
                 mixed &= mixed - 1;
-                MaterialValue mats[8];
-                unsigned solid = 0;
                 // A cell whose minimum corner lies in the leaf is the leaf's; others go to the first
                 // of their corners that lies in a leaf.
-                int owner = x > 0 && y > 0 && z > 0 ? 0 : -1;
-                for (int corner = 0; corner < 8; ++corner) {
-                    const int cx = x + cornerBit(corner, 0), cy = y + cornerBit(corner, 1), cz = z + cornerBit(corner, 2);
-                    mats[corner] = grid.cells[cx][cy][cz];
-                    if (mats[corner].solid()) solid |= 1u << corner;
-                    if (owner < 0 && isLeaf[block(cx) + 1][block(cy) + 1][block(cz) + 1]) owner = corner;
+                if (x == 0 || y == 0 || z == 0) {
+                    int owner = 0;
+                    while (!isLeaf[block(x + cornerBit(owner, 0)) + 1][block(y + cornerBit(owner, 1)) + 1]
+                                  [block(z + cornerBit(owner, 2)) + 1])
+                        ++owner; // stops: on each axis one of the cell's two corner indices lies in this leaf
+                    const int ox = x + cornerBit(owner, 0), oy = y + cornerBit(owner, 1), oz = z + cornerBit(owner, 2);
+                    if (block(ox) != 0 || block(oy) != 0 || block(oz) != 0) continue; // owned by a neighbour
                 }
-                const int ox = x + cornerBit(owner, 0), oy = y + cornerBit(owner, 1), oz = z + cornerBit(owner, 2);
-                if (block(ox) != 0 || block(oy) != 0 || block(oz) != 0) continue; // owned by a neighbour
+                MaterialValue mats[8];
+                unsigned solid = 0;
+                for (int corner = 0; corner < 8; ++corner) {
+                    const int row = corner & 3, dz = corner >> 2;
+                    mats[corner] = rowMats[row][z + dz];
+                    solid |= ((rows[row] >> (z + dz)) & 1u) << corner;
+                }
                 fn(o.offsetBy(x - 1, y - 1, z - 1), mats, solid);
             }
         }
