@@ -271,11 +271,21 @@ using Buffers = CubicalMarchingSquaresMesher::Buffers;
 /// What every cell of one leaf shares.
 struct LeafContext {
     const Neighbourhood& hood;
+    const CornerGrid& grid;
     const CellWidthField* widths; // null: voxel cells only
     Coord origin;
     double voxelSize;
     double cosSharp;
     Buffers& buffers;
+
+    /// The material at a voxel, from the corner grid where it reaches.
+    MaterialValue material(const Coord& c) const
+    {
+        const unsigned x = unsigned(c.x() - origin.x() + 1), y = unsigned(c.y() - origin.y() + 1),
+                       z = unsigned(c.z() - origin.z() + 1);
+        constexpr unsigned kSpan = CornerGrid::kSpan;
+        return x < kSpan && y < kSpan && z < kSpan ? grid.cells[x][y][z] : hood.material(c);
+    }
 };
 
 /// The crossing on a voxel edge, decoded once per leaf; `uncached` holds it when the edge lies outside
@@ -301,7 +311,7 @@ const EdgeCrossing& crossingAlong(const LeafContext& ctx, const Coord& start, in
     for (int k = 1; k < length; ++k) {
         Coord next = at;
         next[axis] += 1;
-        const MaterialValue m = ctx.hood.material(next);
+        const MaterialValue m = ctx.material(next);
         if (m != previous) return cachedCrossing(ctx, at, axis, previous, m, uncached);
         at = next;
     }
@@ -420,7 +430,7 @@ private:
             p[u] = u0 + width * cornerBit(c, u);
             p[v] = v0 + width * cornerBit(c, v);
             sq.cellCorners[i] = c;
-            sq.mats[i] = sq.wholeFace ? mats_[c] : ctx_.hood.material(p);
+            sq.mats[i] = sq.wholeFace ? mats_[c] : ctx_.material(p);
         }
         sq.minCorner[axis] = base_[axis] + side * width_;
         sq.minCorner[u] = u0;
@@ -708,13 +718,13 @@ private:
             for (int y = 0; y < span; ++y)
                 for (int z = 0; z < span; ++z) {
                     const Coord v = base_.offsetBy(x - 1, y - 1, z - 1);
-                    const MaterialValue low = hood.material(v);
+                    const MaterialValue low = ctx_.material(v);
                     const int at[3] = {x, y, z};
                     for (int axis = 0; axis < 3; ++axis) {
                         if (at[axis] == span - 1) continue;
                         Coord w = v;
                         w[axis] += 1;
-                        const MaterialValue high = hood.material(w);
+                        const MaterialValue high = ctx_.material(w);
                         if (high.solid() == low.solid() || !hood.sample(v, axis)) continue;
                         EdgeCrossing uncached;
                         const EdgeCrossing& c = cachedCrossing(ctx_, v, axis, low, high, uncached);
@@ -884,7 +894,7 @@ MeshChunk CubicalMarchingSquaresMesher::mesh(const HermiteLeaf& leaf, ConstAcces
     const Neighbourhood hood(leaf, acc);
     const CornerGrid grid(leaf, hood);
     buffers_->startLeaf(leaf.origin());
-    LeafContext ctx{hood, widths, leaf.origin(), voxelSize_, cosSharp_, *buffers_};
+    LeafContext ctx{hood, grid, widths, leaf.origin(), voxelSize_, cosSharp_, *buffers_};
     auto meshVoxelCell = [&](const Coord& base, const MaterialValue mats[8], unsigned solid) {
         ++cellsMeshed_;
         if (!walkEveryCell_ && meshSmoothVoxelCell(ctx, base, mats, solid)) ++cellsFromCaseTable_;
