@@ -96,25 +96,25 @@ void appendSegment(std::vector<Segment>& to, const Segment& from, bool reversed)
     }
 }
 
-Vec2 project(const std::array<float, 3>& v, int axis) { return {v[(axis + 1) % 3], v[(axis + 2) % 3]}; }
+/// The crossing's coordinates on a face with normal `axis`.
+constexpr int kFaceAxes[3][2] = {{1, 2}, {2, 0}, {0, 1}};
+Vec2 project(const std::array<float, 3>& v, int axis) { return {v[kFaceAxes[axis][0]], v[kFaceAxes[axis][1]]}; }
 
-/// A normal projected onto a face with normal `axis` and normalised; false when it lies along the axis.
-bool faceNormal(const std::array<float, 3>& normal, int axis, Vec2& onFace)
+Vec2 normalized(const Vec2& v)
 {
-    const Vec2 p = project(normal, axis);
-    const double length = std::sqrt(p.x * p.x + p.y * p.y);
-    if (length < 1e-6) return false;
-    onFace = {p.x / length, p.y / length};
-    return true;
+    const double length = std::sqrt(v.x * v.x + v.y * v.y);
+    return {v.x / length, v.y / length};
 }
 
-/// Whether the normals at the two ends of a segment on a face with normal `axis` span the sharp angle
-/// on that face, which makes the segment a candidate for a 2D sharp feature; `a` and `b` get them
-/// projected onto the face.
-bool segmentBends(const std::array<float, 3>& normalA, const std::array<float, 3>& normalB, int axis, double cosSharp,
-                  Vec2& a, Vec2& b)
+/// Whether the normals at the two ends of a segment on a face with normal `axis`, projected onto the
+/// face, span the sharp angle there: the segment is then a candidate for a 2D sharp feature. A normal
+/// along the axis has no direction on the face.
+bool segmentBends(const std::array<float, 3>& normalA, const std::array<float, 3>& normalB, int axis, double cosSharp)
 {
-    return faceNormal(normalA, axis, a) && faceNormal(normalB, axis, b) && a.x * b.x + a.y * b.y <= cosSharp;
+    const Vec2 a = project(normalA, axis), b = project(normalB, axis);
+    const double aa = a.x * a.x + a.y * a.y, bb = b.x * b.x + b.y * b.y;
+    if (aa < 1e-12 || bb < 1e-12) return false;
+    return a.x * b.x + a.y * b.y <= cosSharp * std::sqrt(aa * bb);
 }
 
 double normalDot(const std::array<float, 3>& a, const std::array<float, 3>& b)
@@ -470,8 +470,8 @@ private:
         const EdgeCrossing& a = ordered ? first : second;
         const EdgeCrossing& b = ordered ? second : first;
         const int axis = sq.axis;
-        Vec2 na, nb;
-        if (!segmentBends(a.normal, b.normal, axis, ctx_.cosSharp, na, nb)) return {};
+        if (!segmentBends(a.normal, b.normal, axis, ctx_.cosSharp)) return {};
+        const Vec2 na = normalized(project(a.normal, axis)), nb = normalized(project(b.normal, axis));
         const double det = cross2(na, nb);
         if (std::fabs(det) < 1e-9) return {std::nullopt, false};
         const Vec2 pa = project(a.position, axis), pb = project(b.position, axis);
@@ -655,17 +655,27 @@ private:
     }
 
     /// The least-squares point of crossing planes (seed 004 §2.6), solved relative to `massPoint` with
-    /// singular values under a tenth of the largest truncated; `rank` is how many were kept.
-    static Eigen::Vector3d solveQef(const Eigen::Matrix3d& ata, const Eigen::Vector3d& atb,
-                                    const Eigen::Vector3d& massPoint, int& rank)
+    /// singular values under a tenth of the largest truncated.
+    struct QefSolution {
+        Eigen::Vector3d point;
+        int rank = 0;                    // singular values kept
+        double largest = 0.0;            // the largest singular value
+        double smallest = 0.0;           // the smallest singular value
+        Eigen::Vector3d weakestDirection; // its right singular vector
+    };
+    static QefSolution solveQef(const Eigen::Matrix3d& ata, const Eigen::Vector3d& atb, const Eigen::Vector3d& massPoint)
     {
         const Eigen::JacobiSVD<Eigen::Matrix3d> svd(ata, Eigen::ComputeFullU | Eigen::ComputeFullV);
         const Eigen::Vector3d sigma = svd.singularValues();
         const Eigen::Vector3d rhs = svd.matrixU().transpose() * (atb - ata * massPoint);
         Eigen::Vector3d scaled = Eigen::Vector3d::Zero();
-        rank = 0;
-        for (; rank < 3 && sigma[rank] > 0.1 * sigma[0]; ++rank) scaled[rank] = rhs[rank] / sigma[rank];
-        return massPoint + svd.matrixV() * scaled;
+        QefSolution solution;
+        for (int& rank = solution.rank; rank < 3 && sigma[rank] > 0.1 * sigma[0]; ++rank) scaled[rank] = rhs[rank] / sigma[rank];
+        solution.point = massPoint + svd.matrixV() * scaled;
+        solution.largest = sigma[0];
+        solution.smallest = sigma[2];
+        solution.weakestDirection = svd.matrixV().col(2);
+        return solution;
     }
 
     void cellBounds(Eigen::Vector3d& lo, Eigen::Vector3d& hi) const
@@ -689,49 +699,68 @@ private:
     {
         Eigen::Vector3d lo, hi;
         cellBounds(lo, hi);
-        int rank = 0;
-        const Eigen::Vector3d own = solveQef(ata, atb, massPoint, rank);
-        if (rank < 2) return std::nullopt;
-        if (rank == 2) {
+        const QefSolution own = solveQef(ata, atb, massPoint);
+        if (own.rank < 2) return std::nullopt;
+        if (own.rank == 2) {
+            // The planes around can only make a corner if they lift the weight of the own solve's
+            // weakest direction d above the truncation: the wide solve's smallest singular value is at
+            // most d's weight, own.smallest + sum (n.d)^2, and its largest at least own.largest.
             const Eigen::Vector3d facing = normalSum.normalized();
+            double weakestWeight = own.smallest;
             forEachCrossingAround([&](const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
                 if (n.dot(facing) < -0.3) return; // the far side of a thin part
                 ata += n * n.transpose();
                 atb += n * n.dot(p);
+                weakestWeight += n.dot(own.weakestDirection) * n.dot(own.weakestDirection);
             });
-            int wideRank = 0;
-            const Eigen::Vector3d corner = solveQef(ata, atb, massPoint, wideRank);
-            const double eps = 1e-6 * ctx_.voxelSize;
-            if (wideRank == 3 && (corner.array() >= lo.array() - eps).all() && (corner.array() <= hi.array() + eps).all())
-                return corner;
+            if (weakestWeight > 0.1 * own.largest) {
+                const QefSolution wide = solveQef(ata, atb, massPoint);
+                const Eigen::Vector3d& corner = wide.point;
+                const double eps = 1e-6 * ctx_.voxelSize;
+                if (wide.rank == 3 && (corner.array() >= lo.array() - eps).all() && (corner.array() <= hi.array() + eps).all())
+                    return corner;
+            }
         }
-        return Eigen::Vector3d(own.cwiseMax(lo).cwiseMin(hi));
+        return Eigen::Vector3d(own.point.cwiseMax(lo).cwiseMin(hi));
     }
 
     /// The crossings on the voxel edges of the lattice one voxel around the cell.
     template<typename Fn>
     void forEachCrossingAround(Fn&& fn) const
     {
-        const Neighbourhood& hood = ctx_.hood;
+        constexpr int kMaxSpan = kLeafDim + 3;
         const int span = width_ + 3; // voxels base-1 .. base+width+1
+        MaterialValue around[kMaxSpan][kMaxSpan][kMaxSpan];
+        uint32_t solidRows[kMaxSpan][kMaxSpan] = {}; // bit z: voxel (x, y, z) is solid
         for (int x = 0; x < span; ++x)
             for (int y = 0; y < span; ++y)
                 for (int z = 0; z < span; ++z) {
-                    const Coord v = base_.offsetBy(x - 1, y - 1, z - 1);
-                    const MaterialValue low = ctx_.material(v);
-                    const int at[3] = {x, y, z};
-                    for (int axis = 0; axis < 3; ++axis) {
-                        if (at[axis] == span - 1) continue;
-                        Coord w = v;
-                        w[axis] += 1;
-                        const MaterialValue high = ctx_.material(w);
-                        if (high.solid() == low.solid() || !hood.sample(v, axis)) continue;
-                        EdgeCrossing uncached;
-                        const EdgeCrossing& c = cachedCrossing(ctx_, v, axis, low, high, uncached);
-                        fn(Eigen::Vector3d(c.position[0], c.position[1], c.position[2]),
-                           Eigen::Vector3d(c.normal[0], c.normal[1], c.normal[2]));
-                    }
+                    const MaterialValue m = ctx_.material(base_.offsetBy(x - 1, y - 1, z - 1));
+                    around[x][y][z] = m;
+                    solidRows[x][y] |= uint32_t(m.solid()) << z;
                 }
+        // The edges whose ends differ, a row of voxels at a time: bit z of `cut` marks the edge from
+        // (x, y, z) along `axis`.
+        auto visit = [&](int x, int y, int axis, uint32_t cut) {
+            for (; cut; cut &= cut - 1) {
+                const int z = __builtin_ctz(cut);
+                const Coord v = base_.offsetBy(x - 1, y - 1, z - 1);
+                if (!ctx_.hood.sample(v, axis)) continue;
+                const MaterialValue low = around[x][y][z];
+                const MaterialValue high = around[x + (axis == 0)][y + (axis == 1)][z + (axis == 2)];
+                EdgeCrossing uncached;
+                const EdgeCrossing& c = cachedCrossing(ctx_, v, axis, low, high, uncached);
+                fn(Eigen::Vector3d(c.position[0], c.position[1], c.position[2]),
+                   Eigen::Vector3d(c.normal[0], c.normal[1], c.normal[2]));
+            }
+        };
+        for (int x = 0; x < span; ++x)
+            for (int y = 0; y < span; ++y) {
+                const uint32_t row = solidRows[x][y];
+                if (x + 1 < span) visit(x, y, 0, row ^ solidRows[x + 1][y]);
+                if (y + 1 < span) visit(x, y, 1, row ^ solidRows[x][y + 1]);
+                visit(x, y, 2, (row ^ (row >> 1)) & ((1u << (span - 1)) - 1));
+            }
     }
 
     /// The sharp vertex of a component from the planes of its crossings and of its material
@@ -855,8 +884,7 @@ bool meshSmoothVoxelCell(LeafContext& ctx, const Coord& base, const MaterialValu
         for (int i = begin; i < end; ++i) {
             const EdgeCrossing& x = *crossings[i];
             const EdgeCrossing& next = *crossings[i + 1 < end ? i + 1 : begin];
-            Vec2 onFaceX, onFaceNext;
-            if (segmentBends(x.normal, next.normal, cell.segmentAxis[i], ctx.cosSharp, onFaceX, onFaceNext)) return false;
+            if (segmentBends(x.normal, next.normal, cell.segmentAxis[i], ctx.cosSharp)) return false;
             for (int j = begin; j < i; ++j)
                 if (normalDot(x.normal, crossings[j]->normal) < ctx.cosSharp) return false;
         }

@@ -202,7 +202,10 @@ std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::arra
                         add(b, dx + (f / 2 == 0) * step, dy + (f / 2 == 1) * step, dz + (f / 2 == 2) * step);
                     }
     }
-    std::sort(out.begin(), out.end());
+    // Lexicographic like std::array's operator<, which the standard library does not inline.
+    std::sort(out.begin(), out.end(), [](const std::array<int32_t, 3>& a, const std::array<int32_t, 3>& b) {
+        return a[0] != b[0] ? a[0] < b[0] : (a[1] != b[1] ? a[1] < b[1] : a[2] < b[2]);
+    });
     out.erase(std::unique(out.begin(), out.end()), out.end());
     return out;
 }
