@@ -31,6 +31,9 @@ public:
     }
 
     const HermiteLeaf* leafOf(const Coord& c) const { return leaves_[slotOf(c)]; }
+    /// The leaf (or null) and tile value of the block at (dx, dy, dz) from the centre, each -1 .. 1.
+    const HermiteLeaf* leafAt(int dx, int dy, int dz) const { return leaves_[slot(dx, dy, dz)]; }
+    MaterialValue tileAt(int dx, int dy, int dz) const { return tiles_[slot(dx, dy, dz)]; }
 
     MaterialValue material(const Coord& c) const
     {
@@ -58,32 +61,43 @@ private:
 };
 
 /// The materials of the voxels o-1 .. o+8 per axis around a leaf at origin o: every corner a cell
-/// owned by the leaf can have, gathered once per leaf.
+/// owned by the leaf can have, gathered once per leaf, with a bit mask of the solid ones per row.
 struct CornerGrid {
     static constexpr int kSpan = kLeafDim + 2;
 
     CornerGrid(const HermiteLeaf& leaf, const Neighbourhood& hood) : origin(leaf.origin())
     {
-        // A leaf's voxels are stored z fastest, so the eight inner corners of each row are one copy.
         for (int x = 0; x < kSpan; ++x)
             for (int y = 0; y < kSpan; ++y) {
+                const int bx = blockOf(x), by = blockOf(y);
+                // A leaf's voxels are stored z fastest: a row's voxels in one block are consecutive.
+                const Index rowStart = HermiteLeaf::coordToOffset(origin.offsetBy(x - 1, y - 1, 0));
+                auto voxel = [&](int bz, Index offset) {
+                    const HermiteLeaf* blockLeaf = hood.leafAt(bx, by, bz);
+                    return blockLeaf ? blockLeaf->buffer()[offset] : hood.tileAt(bx, by, bz);
+                };
                 MaterialValue* row = cells[x][y];
-                const Coord start = origin.offsetBy(x - 1, y - 1, 0);
-                row[0] = hood.material(start.offsetBy(0, 0, -1));
-                row[kSpan - 1] = hood.material(start.offsetBy(0, 0, kLeafDim));
-                if (const HermiteLeaf* rowLeaf = hood.leafOf(start)) {
-                    std::copy_n(&rowLeaf->buffer()[HermiteLeaf::coordToOffset(start)], kLeafDim, row + 1);
-                } else {
-                    std::fill_n(row + 1, kLeafDim, hood.material(start));
-                }
+                row[0] = voxel(-1, rowStart + kLeafDim - 1);
+                row[kSpan - 1] = voxel(1, rowStart);
+                if (const HermiteLeaf* rowLeaf = hood.leafAt(bx, by, 0))
+                    std::copy_n(&rowLeaf->buffer()[rowStart], kLeafDim, row + 1);
+                else
+                    std::fill_n(row + 1, kLeafDim, hood.tileAt(bx, by, 0));
+                uint32_t bits = 0;
+                for (int z = 0; z < kSpan; ++z) bits |= uint32_t(row[z].solid()) << z;
+                solidRows[x][y] = bits;
             }
     }
+
+    /// The neighbourhood block grid index i lies in, per axis: -1 (i = 0), 0 (the leaf) or 1 (i = 9).
+    static constexpr int blockOf(int i) { return i == 0 ? -1 : (i == kSpan - 1 ? 1 : 0); }
 
     /// The material at leaf-local voxel (x, y, z), each in -1 .. 8.
     MaterialValue at(int x, int y, int z) const { return cells[x + 1][y + 1][z + 1]; }
 
     Coord origin;
     MaterialValue cells[kSpan][kSpan][kSpan];
+    uint32_t solidRows[kSpan][kSpan]; // bit z: cells[x][y][z] is solid
 };
 
 /// Which of a leaf's owned cells forEachOwnedSurfaceCell visits: all of them, or only those whose
@@ -98,26 +112,19 @@ void forEachOwnedSurfaceCell(const CornerGrid& grid, const Neighbourhood& hood, 
 {
     constexpr int kSpan = CornerGrid::kSpan;
     const Coord o = grid.origin;
-    // Whether the block holding grid index i (per axis: 0 -> the -1 block, 9 -> the +1 block) is a leaf.
-    auto block = [](int i) { return i == 0 ? -1 : (i == kSpan - 1 ? 1 : 0); };
+    auto block = CornerGrid::blockOf;
     bool isLeaf[3][3][3];
     for (int bx = -1; bx <= 1; ++bx)
         for (int by = -1; by <= 1; ++by)
             for (int bz = -1; bz <= 1; ++bz)
-                isLeaf[bx + 1][by + 1][bz + 1] = hood.leafOf(o.offsetBy(bx * kLeafDim, by * kLeafDim, bz * kLeafDim)) != nullptr;
+                isLeaf[bx + 1][by + 1][bz + 1] = hood.leafAt(bx, by, bz) != nullptr;
 
-    uint32_t solidRow[kSpan][kSpan]; // bit z: corner (x, y, z) is solid
-    for (int x = 0; x < kSpan; ++x)
-        for (int y = 0; y < kSpan; ++y) {
-            uint32_t bits = 0;
-            for (int z = 0; z < kSpan; ++z) bits |= uint32_t(grid.cells[x][y][z].solid()) << z;
-            solidRow[x][y] = bits;
-        }
     constexpr uint32_t kCellBits = (1u << (kSpan - 1)) - 1; // cells z = 0 .. 8
     for (int x = 0; x < kSpan - 1; ++x) {
         for (int y = 0; y < kSpan - 1; ++y) {
             // The four corner rows of the cells (x, y, *), in corner order.
-            const uint32_t rows[4] = {solidRow[x][y], solidRow[x + 1][y], solidRow[x][y + 1], solidRow[x + 1][y + 1]};
+            const uint32_t rows[4] = {grid.solidRows[x][y], grid.solidRows[x + 1][y], grid.solidRows[x][y + 1],
+                                      grid.solidRows[x + 1][y + 1]};
             const MaterialValue* rowMats[4] = {grid.cells[x][y], grid.cells[x + 1][y], grid.cells[x][y + 1], grid.cells[x + 1][y + 1]};
             const uint32_t all = rows[0] & rows[1] & rows[2] & rows[3], any = rows[0] | rows[1] | rows[2] | rows[3];
             uint32_t mixed = ((any | (any >> 1)) & ~(all & (all >> 1))) & kCellBits;
