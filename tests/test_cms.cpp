@@ -362,3 +362,24 @@ TEST_CASE("re-meshing reaches the leaves whose subdivision reads an edited block
     }
     requireClosed(incremental.weld());
 }
+
+TEST_CASE("leavesAffectedBy lists each block around the dirty ones once and in order near and far from the origin", "[cms][incremental]")
+{
+    // Blocks near the origin are sorted as packed keys; beyond 2^20 blocks per axis as arrays.
+    const int32_t far = 1 << 30;
+    for (const std::array<int32_t, 3> first : {std::array<int32_t, 3>{-16, 8, 0}, std::array<int32_t, 3>{far, -far, 8}}) {
+        INFO("first dirty block " << first[0] << ", " << first[1] << ", " << first[2]);
+        const std::array<int32_t, 3> second{first[0] + kLeafDim, first[1], first[2]};
+        std::vector<std::array<int32_t, 3>> expected;
+        for (const auto& b : {first, second})
+            for (int dx = -1; dx <= 1; ++dx)
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dz = -1; dz <= 1; ++dz)
+                        expected.push_back({b[0] + dx * kLeafDim, b[1] + dy * kLeafDim, b[2] + dz * kLeafDim});
+        std::sort(expected.begin(), expected.end());
+        expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
+        CHECK(expected.size() == 36u); // two 3x3x3 neighbourhoods sharing 18 blocks
+        const MeshOptions uniform = optionsFor(MesherKind::CubicalMarchingSquares, Cells::Uniform);
+        CHECK(leavesAffectedBy({second, first, second}, uniform) == expected);
+    }
+}

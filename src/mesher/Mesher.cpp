@@ -102,6 +102,37 @@ private:
     std::vector<mesher_detail::LeafCellSizes> sizes_;
 };
 
+/// Sorts block origins lexicographically and drops duplicates. Leaf-aligned blocks within 2^20 blocks
+/// of the origin per axis (far beyond the mesher's range) are sorted as packed 64-bit keys, several
+/// times faster than comparing arrays; an update's few thousand candidates would otherwise cost a
+/// tenth of its re-meshing.
+void sortUniqueBlocks(std::vector<std::array<int32_t, 3>>& blocks)
+{
+    constexpr int64_t kBias = int64_t(1) << 20;
+    const bool packable = std::all_of(blocks.begin(), blocks.end(), [](const std::array<int32_t, 3>& b) {
+        return std::all_of(b.begin(), b.end(),
+                           [](int32_t v) { return v % kLeafDim == 0 && std::abs(int64_t(v) / kLeafDim) < kBias; });
+    });
+    if (!packable) {
+        std::sort(blocks.begin(), blocks.end());
+        blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
+        return;
+    }
+    std::vector<uint64_t> keys(blocks.size());
+    for (std::size_t i = 0; i < blocks.size(); ++i) {
+        uint64_t key = 0;
+        for (const int32_t v : blocks[i]) key = (key << 21) | uint64_t(v / kLeafDim + kBias);
+        keys[i] = key;
+    }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    blocks.resize(keys.size());
+    constexpr uint64_t kMask = (uint64_t(1) << 21) - 1;
+    for (std::size_t i = 0; i < keys.size(); ++i)
+        for (int axis = 0; axis < 3; ++axis)
+            blocks[i][axis] = int32_t((int64_t((keys[i] >> (21 * (2 - axis))) & kMask) - kBias) * kLeafDim);
+}
+
 void checkRange(const Coord& origin)
 {
     using namespace mesher_detail;
@@ -183,6 +214,7 @@ std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::arra
                                                      const MeshOptions& options)
 {
     std::vector<std::array<int32_t, 3>> out;
+    out.reserve(dirtyBlocks.size() * (adaptive(options) ? 27 + 48 : 27));
     auto add = [&](const std::array<int32_t, 3>& b, int dx, int dy, int dz) {
         out.push_back({b[0] + dx * kLeafDim, b[1] + dy * kLeafDim, b[2] + dz * kLeafDim});
     };
@@ -202,11 +234,7 @@ std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::arra
                         add(b, dx + (f / 2 == 0) * step, dy + (f / 2 == 1) * step, dz + (f / 2 == 2) * step);
                     }
     }
-    // Lexicographic like std::array's operator<, which the standard library does not inline.
-    std::sort(out.begin(), out.end(), [](const std::array<int32_t, 3>& a, const std::array<int32_t, 3>& b) {
-        return a[0] != b[0] ? a[0] < b[0] : (a[1] != b[1] ? a[1] < b[1] : a[2] < b[2]);
-    });
-    out.erase(std::unique(out.begin(), out.end()), out.end());
+    sortUniqueBlocks(out);
     return out;
 }
 
