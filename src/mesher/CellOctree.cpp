@@ -93,6 +93,7 @@ public:
     bool simpleTopology(const int b[3], int width) const
     {
         if (!singleMaterial_ && !singleMaterialIn(b, width)) return false;
+        if (uniform(b, width)) return true; // most cells of a surface leaf hold no surface
         const uint32_t span = (1u << width) - 1;
         for (int axis = 0; axis < 3; ++axis) {
             const int u = (axis + 1) % 3, v = (axis + 2) % 3;
@@ -209,6 +210,18 @@ private:
                 for (int k = lo[2]; k <= hi[2]; ++k) fn((i * kCells + j) * kCells + k);
     }
 
+    /// Whether the cell's lattice points are all solid or all empty, from its lines along z.
+    bool uniform(const int b[3], int width) const
+    {
+        const uint32_t points = (1u << (width + 1)) - 1;
+        const uint32_t first = (solidLine_[2][b[0]][b[1]] >> b[2]) & points;
+        if (first != 0 && first != points) return false;
+        for (int i = 0; i <= width; ++i)
+            for (int j = 0; j <= width; ++j)
+                if (((solidLine_[2][b[0] + i][b[1] + j] >> b[2]) & points) != first) return false;
+        return true;
+    }
+
     bool singleMaterialIn(const int b[3], int width) const
     {
         MaterialId solid = kEmptyMaterial;
@@ -225,17 +238,12 @@ private:
 
     bool unambiguousFaces(const int b[3], int width) const
     {
-        for (int f = 0; f < 6; ++f) {
-            bool solid[4];
-            for (int i = 0; i < 4; ++i) {
-                const int c = kFaces[f].corners[i];
-                const int v[3] = {b[0] + width * cornerBit(c, 0), b[1] + width * cornerBit(c, 1),
-                                  b[2] + width * cornerBit(c, 2)};
-                solid[i] = material(v) != kEmptyMaterial;
-            }
-            if (solid[0] == solid[2] && solid[1] == solid[3] && solid[0] != solid[1]) return false;
+        unsigned solidCorners = 0;
+        for (int c = 0; c < 8; ++c) {
+            const int v[3] = {b[0] + width * cornerBit(c, 0), b[1] + width * cornerBit(c, 1), b[2] + width * cornerBit(c, 2)};
+            if (material(v) != kEmptyMaterial) solidCorners |= 1u << c;
         }
-        return true;
+        return !kCellCases[solidCorners].ambiguousFace;
     }
 
     MaterialId material_[kLattice][kLattice][kLattice];
@@ -273,7 +281,7 @@ LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, c
                 for (int z = 0; z < count; ++z) {
                     bool& keep = whole[level][x][y][z];
                     keep = true;
-                    for (int c = 0; c < 8 && keep; ++c)
+                    for (int c = 0; c < 8 && keep && level > 1; ++c) // every voxel cell is whole
                         keep = whole[level - 1][2 * x + cornerBit(c, 0)][2 * y + cornerBit(c, 1)][2 * z + cornerBit(c, 2)];
                     const int b[3] = {x * width, y * width, z * width};
                     if (!keep || !lattice.simpleTopology(b, width)) {
@@ -304,13 +312,15 @@ LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, c
         if (!any) break;
         finest = level;
     }
-    // Each voxel cell takes the widest whole cell containing it.
-    for (int x = 0; x < kLeafDim; ++x)
-        for (int y = 0; y < kLeafDim; ++y)
-            for (int z = 0; z < kLeafDim; ++z) {
+    // Each voxel cell takes the widest whole cell containing it; the eight voxel cells of a two-voxel
+    // cell share every cell wider than one voxel.
+    for (int x = 0; x < kLeafDim; x += 2)
+        for (int y = 0; y < kLeafDim; y += 2)
+            for (int z = 0; z < kLeafDim; z += 2) {
                 int level = finest;
                 while (level > 0 && !whole[level][x >> level][y >> level][z >> level]) --level;
-                sizes.log2Width[x][y][z] = uint8_t(level);
+                for (int c = 0; c < 8; ++c)
+                    sizes.log2Width[x + cornerBit(c, 0)][y + cornerBit(c, 1)][z + cornerBit(c, 2)] = uint8_t(level);
             }
     return sizes;
 }
