@@ -21,6 +21,7 @@
 #include <cmath>
 #include <functional>
 #include <iostream>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -276,6 +277,8 @@ struct RemeshResult {
     bool matchesFullMesh = false;
 };
 
+constexpr int kUpdateRepeats = 3;
+
 RemeshResult runRemesh(bool quick, int maxCellWidth, const std::string& key, const std::string& label)
 {
     constexpr double kStampRadius = 32.0;
@@ -300,8 +303,13 @@ RemeshResult runRemesh(bool quick, int maxCellWidth, const std::string& key, con
         CsgOp op;
         op.mode = i % 2 ? CsgMode::Add : CsgMode::Remove;
         const EditStats edit = applyCsg(volume, sphere(kStampRadius, at), op);
+        // Updating again with the same dirty blocks redoes the same work and gives the same chunks, so
+        // the best of a few updates is the stamp's least disturbed time (as for the meshing rows).
         std::size_t remeshed = 0;
-        times.push_back(timeMs([&] { remeshed = chunks.update(volume, edit.dirtyBlocks); }));
+        double best = std::numeric_limits<double>::infinity();
+        for (int repeat = 0; repeat < kUpdateRepeats; ++repeat)
+            best = std::min(best, timeMs([&] { remeshed = chunks.update(volume, edit.dirtyBlocks); }));
+        times.push_back(best);
         counts.push_back(double(remeshed));
     }
     r.medianMs = median(times);
@@ -394,6 +402,8 @@ int benchMesh(bool json, bool quick)
             remeshJson[r.key] = {{"label", r.label},
                                  {"sphere_radius", r.sphereRadius},
                                  {"stamp_radius", 32.0},
+                                 {"timing", "best of repeated updates per stamp"},
+                                 {"update_repeats", kUpdateRepeats},
                                  {"median_ms", r.medianMs},
                                  {"max_ms", r.maxMs},
                                  {"median_chunks_remeshed", r.medianChunks},
@@ -430,7 +440,8 @@ int benchMesh(bool json, bool quick)
     }
 
     std::cout << "\nRe-meshing after a radius-32 stamp on a sphere of radius " << fixed(remesh[0].sphereRadius, 0)
-              << " (MeshChunkSet::update over the stamp's dirty blocks; 9 stamps, alternately removing and adding):\n\n";
+              << " (MeshChunkSet::update over the stamp's dirty blocks, best of " << kUpdateRepeats
+              << " updates per stamp;\n9 stamps, alternately removing and adding):\n\n";
     Table table;
     table.header = {"mesher", "median ms", "max ms", "chunks re-meshed", "equals full re-mesh"};
     for (const auto& r : remesh) {
