@@ -30,7 +30,6 @@ public:
                 }
     }
 
-    const HermiteLeaf* leafOf(const Coord& c) const { return leaves_[slotOf(c)]; }
     /// The leaf (or null) and tile value of the block at (dx, dy, dz) from the centre, each -1 .. 1.
     const HermiteLeaf* leafAt(int dx, int dy, int dz) const { return leaves_[slot(dx, dy, dz)]; }
     MaterialValue tileAt(int dx, int dy, int dz) const { return tiles_[slot(dx, dy, dz)]; }

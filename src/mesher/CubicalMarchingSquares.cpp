@@ -96,8 +96,10 @@ void appendSegment(std::vector<Segment>& to, const Segment& from, bool reversed)
     }
 }
 
-/// The crossing's coordinates on a face with normal `axis`.
+/// The axes spanning a face with normal `axis`, in cyclic order.
 constexpr int kFaceAxes[3][2] = {{1, 2}, {2, 0}, {0, 1}};
+
+/// A vector's coordinates on a face with normal `axis`.
 Vec2 project(const std::array<float, 3>& v, int axis) { return {v[kFaceAxes[axis][0]], v[kFaceAxes[axis][1]]}; }
 
 Vec2 normalized(const Vec2& v)
