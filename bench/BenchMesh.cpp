@@ -317,13 +317,7 @@ RemeshResult runRemesh(bool quick, int maxCellWidth, const std::string& key, con
     r.medianChunks = median(counts);
     MeshChunkSet full(options);
     full.rebuild(volume);
-    r.matchesFullMesh = full.chunks().size() == chunks.chunks().size();
-    for (const auto& [origin, chunk] : full.chunks()) {
-        const auto it = chunks.chunks().find(origin);
-        r.matchesFullMesh = r.matchesFullMesh && it != chunks.chunks().end() &&
-                            it->second.mesh.triangles == chunk.mesh.triangles &&
-                            it->second.mesh.positions == chunk.mesh.positions;
-    }
+    r.matchesFullMesh = identical(chunks, full);
     return r;
 }
 

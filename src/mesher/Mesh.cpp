@@ -15,6 +15,14 @@ uint64_t edgeKey(int32_t i, int32_t j, int32_t k, int axis)
     return (x << 42) | (y << 22) | (z << 2) | uint64_t(axis);
 }
 
+bool identical(const MeshChunk& a, const MeshChunk& b)
+{
+    const Mesh &m = a.mesh, &n = b.mesh;
+    return a.leafOrigin == b.leafOrigin && a.vertexKeys == b.vertexKeys && m.positions == n.positions &&
+           m.normals == n.normals && m.materials == n.materials && m.triangles == n.triangles &&
+           m.triangleMaterials == n.triangleMaterials;
+}
+
 uint64_t faceKey(int32_t i, int32_t j, int32_t k, int axis, int segment, int slot)
 {
     // Bit 63 marks a face key (edge keys use bits 0-61): axis in bits 61-62, segment in 60, slot in

@@ -40,6 +40,9 @@ uint64_t faceKey(int32_t i, int32_t j, int32_t k, int axis, int segment, int slo
 /// Key of a vertex that belongs to one chunk only (a cell's inner vertex): never welded.
 constexpr uint64_t kUnsharedVertex = ~uint64_t(0);
 
+/// Bit-exact comparison: same leaf, vertex keys, positions, normals, materials and triangles in order.
+bool identical(const MeshChunk& a, const MeshChunk& b);
+
 /// Joins chunks, merging vertices with the same key (kUnsharedVertex vertices are kept apart).
 Mesh weldChunks(const std::vector<MeshChunk>& chunks);
 Mesh weldChunks(const std::vector<const MeshChunk*>& chunks);

@@ -1,5 +1,6 @@
 #include "mesher/MeshChunkSet.h"
 
+#include <algorithm>
 #include <optional>
 
 namespace vdbclay {
@@ -27,6 +28,12 @@ std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockOr
         }
     }
     return remeshed;
+}
+
+bool identical(const MeshChunkSet& a, const MeshChunkSet& b)
+{
+    return std::equal(a.chunks().begin(), a.chunks().end(), b.chunks().begin(), b.chunks().end(),
+                      [](const auto& x, const auto& y) { return x.first == y.first && identical(x.second, y.second); });
 }
 
 Mesh MeshChunkSet::weld() const

@@ -34,4 +34,7 @@ private:
     std::map<BlockOrigin, MeshChunk> chunks_;
 };
 
+/// Whether two sets hold the same leaves with identical chunks (an update against a full rebuild).
+bool identical(const MeshChunkSet& a, const MeshChunkSet& b);
+
 } // namespace vdbclay
