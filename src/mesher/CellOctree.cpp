@@ -34,7 +34,7 @@ struct NormalCone {
 /// A leaf's voxel lattice (o .. o+8) with the normals of its crossings, read once per leaf.
 class LeafLattice {
 public:
-    LeafLattice(const CornerGrid& grid, const Neighbourhood& hood)
+    LeafLattice(const CornerGrid& grid, const Neighbourhood& hood) : grid_(grid)
     {
         // Solid bits along each axis: line (u, v) of axis a holds bit t for voxel t along a, where u and
         // v are the coordinates along (a + 1) % 3 and (a + 2) % 3.
@@ -45,7 +45,6 @@ public:
             for (int y = 0; y < kLattice; ++y)
                 for (int z = 0; z < kLattice; ++z) {
                     const MaterialId m = grid.at(x, y, z).id;
-                    material_[x][y][z] = m;
                     if (m == kEmptyMaterial) continue;
                     if (solid == kEmptyMaterial) solid = m;
                     else if (m != solid) singleMaterial_ = false;
@@ -188,7 +187,7 @@ private:
         double position[3]; // leaf-local voxel units
     };
 
-    MaterialId material(const int v[3]) const { return material_[v[0]][v[1]][v[2]]; }
+    MaterialId material(const int v[3]) const { return grid_.at(v[0], v[1], v[2]).id; }
 
     /// Calls fn(cell) for each two-voxel cell that holds the crossing's voxel edge.
     template<typename Fn>
@@ -228,7 +227,7 @@ private:
         for (int x = b[0]; x <= b[0] + width; ++x)
             for (int y = b[1]; y <= b[1] + width; ++y)
                 for (int z = b[2]; z <= b[2] + width; ++z) {
-                    const MaterialId m = material_[x][y][z];
+                    const MaterialId m = grid_.at(x, y, z).id;
                     if (m == kEmptyMaterial) continue;
                     if (solid == kEmptyMaterial) solid = m;
                     else if (m != solid) return false;
@@ -246,7 +245,7 @@ private:
         return !kCellCases[solidCorners].ambiguousFace;
     }
 
-    MaterialId material_[kLattice][kLattice][kLattice];
+    const CornerGrid& grid_; // the lattice's materials are the corner grid's o .. o+8
     bool singleMaterial_;
     uint32_t solidLine_[3][kLattice][kLattice];
     std::vector<Crossing> crossings_;

@@ -713,7 +713,8 @@ private:
                 if (n.dot(facing) < -0.3) return; // the far side of a thin part
                 ata += n * n.transpose();
                 atb += n * n.dot(p);
-                weakestWeight += n.dot(own.weakestDirection) * n.dot(own.weakestDirection);
+                const double along = n.dot(own.weakestDirection);
+                weakestWeight += along * along;
             });
             if (weakestWeight > 0.1 * own.largest) {
                 const QefSolution wide = solveQef(ata, atb, massPoint);
@@ -732,15 +733,11 @@ private:
     {
         constexpr int kMaxSpan = kLeafDim + 3;
         const int span = width_ + 3; // voxels base-1 .. base+width+1
-        MaterialValue around[kMaxSpan][kMaxSpan][kMaxSpan];
         uint32_t solidRows[kMaxSpan][kMaxSpan] = {}; // bit z: voxel (x, y, z) is solid
         for (int x = 0; x < span; ++x)
             for (int y = 0; y < span; ++y)
-                for (int z = 0; z < span; ++z) {
-                    const MaterialValue m = ctx_.material(base_.offsetBy(x - 1, y - 1, z - 1));
-                    around[x][y][z] = m;
-                    solidRows[x][y] |= uint32_t(m.solid()) << z;
-                }
+                for (int z = 0; z < span; ++z)
+                    solidRows[x][y] |= uint32_t(ctx_.material(base_.offsetBy(x - 1, y - 1, z - 1)).solid()) << z;
         // The edges whose ends differ, a row of voxels at a time: bit z of `cut` marks the edge from
         // (x, y, z) along `axis`.
         auto visit = [&](int x, int y, int axis, uint32_t cut) {
@@ -748,8 +745,9 @@ private:
                 const int z = __builtin_ctz(cut);
                 const Coord v = base_.offsetBy(x - 1, y - 1, z - 1);
                 if (!ctx_.hood.sample(v, axis)) continue;
-                const MaterialValue low = around[x][y][z];
-                const MaterialValue high = around[x + (axis == 0)][y + (axis == 1)][z + (axis == 2)];
+                Coord w = v;
+                w[axis] += 1;
+                const MaterialValue low = ctx_.material(v), high = ctx_.material(w);
                 EdgeCrossing uncached;
                 const EdgeCrossing& c = cachedCrossing(ctx_, v, axis, low, high, uncached);
                 fn(Eigen::Vector3d(c.position[0], c.position[1], c.position[2]),
