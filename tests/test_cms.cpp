@@ -132,7 +132,8 @@ TEST_CASE("CMS reproduces a rotated box's corners and edges better than Marching
     const Brush rotatedBox(box(half), at(centre, rotation));
     Volume v(1.0);
     applyCsg(v, rotatedBox, op(CsgMode::Add));
-    const Mesh cms = meshWith(v, MesherKind::CubicalMarchingSquares);
+    const Cells cells = GENERATE(Cells::Uniform, Cells::Adaptive);
+    const Mesh cms = meshWith(v, MesherKind::CubicalMarchingSquares, cells);
     const Mesh mc = meshWith(v, MesherKind::MarchingCubes);
     requireClosed(cms);
 
@@ -142,11 +143,10 @@ TEST_CASE("CMS reproduces a rotated box's corners and edges better than Marching
     INFO("error: CMS max " << cmsError.max << " mean " << cmsError.mean << ", MC max " << mcError.max << " mean "
                            << mcError.mean);
     CHECK(cmsError.mean * 3.0 <= mcError.mean);
-    CHECK(cmsError.max < mcError.max);
-    // Not met (issue 3's goal): CMS's max error at most a third of MC's. The max error sits where a box
-    // edge runs nearly parallel to a grid plane less than a voxel from it: its wedge pokes through a
-    // cell face between the face's corners, crossing one voxel edge twice, which one sample per edge
-    // cannot record.
+    // Seed 000's figure: about a third of other methods' maximum error. It holds because a face segment
+    // follows a box edge's wedge out through a side of its square whose voxel edge the wedge crosses
+    // twice (tipChain); without that the maximum is about 0.45 voxel here.
+    CHECK(cmsError.max * 3.0 <= mcError.max);
 
     // Corners: CMS puts a vertex on nearly every one (a corner tip that pokes into a cell seeing only two
     // of its faces is found from the crossings around the cell, but a tip that pokes into a cell between

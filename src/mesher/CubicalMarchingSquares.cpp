@@ -3,12 +3,14 @@
 //
 // Each face of a cell is meshed on its own by marching squares. A face segment whose two crossings'
 // normals span more than the sharp angle gets a 2D sharp feature: the point where the crossings'
-// tangent lines meet, when it lies on the face. On an ambiguous face (two solid corners on a
-// diagonal) the segments that cut off each solid corner are used unless their sharp features make them
-// cross, or unless they join crossings whose normals disagree with no sharp feature on the face while
-// the other pairing's do not; then the other pairing is. Segments are linked into components; each component gets
-// one inner vertex, the least-squares point of its crossing planes (truncated SVD, clamped to the
-// cell) when its normals span the sharp angle, else the mean of its vertices, and is fanned from it.
+// tangent lines meet, when it lies on the face. The only segment of a face may instead follow a wedge
+// that pokes out through a side of the face between that side's corners (tipChain). On an ambiguous
+// face (two solid corners on a diagonal) the segments that cut off each solid corner are used unless
+// their sharp features make them cross, or unless they join crossings whose normals disagree with no
+// sharp feature on the face while the other pairing's do not; then the other pairing is. Segments are
+// linked into components; each component gets one inner vertex, the least-squares point of its
+// crossing planes (truncated SVD, clamped to the cell grown to the component's face points) when its
+// normals span the sharp angle, else the mean of its vertices, and is fanned from it.
 // A face's segments and sharp points depend on the face alone, so neighbouring cells agree on them
 // and the welded mesh is watertight.
 //
@@ -457,16 +459,23 @@ private:
         return *squareCrossings_[i];
     }
 
-    /// The shape of a segment between two crossings of a square.
+    /// The shape of a segment between two crossings of a square: the points between them.
     struct SegmentShape {
-        std::optional<Vec2> sharp; // where the crossings' tangent lines meet, when it is a feature
-        bool plausible = true;     // false: the normals span the sharp angle but meet off the square
+        static constexpr int kMaxPoints = 4;
+        Vec2 points[kMaxPoints]; // in order from the segment's first crossing to its second
+        int count = 0;
+        bool plausible = true; // false: the normals span the sharp angle but meet off the square
+
+        /// The 2D sharp feature of a segment on an ambiguous square, which has at most one point.
+        std::optional<Vec2> sharp() const { return count ? std::optional<Vec2>(points[0]) : std::nullopt; }
     };
 
     /// A segment has a 2D sharp feature where its crossings' tangent lines meet, if their normals span
     /// the sharp angle and the point lies on the square. Solved with the crossings in key order, so
-    /// both cells sharing the square get the same bits.
-    SegmentShape segmentShape(const EdgeCrossing& first, const EdgeCrossing& second, const Square& sq) const
+    /// both cells sharing the square get the same bits. The only segment of a square of one material
+    /// may also reach past the square, to the tip of a wedge that pokes out through a side (tipChain).
+    SegmentShape segmentShape(const EdgeCrossing& first, const EdgeCrossing& second, const Square& sq,
+                              bool onlySegment) const
     {
         const bool ordered = first.key < second.key;
         const EdgeCrossing& a = ordered ? first : second;
@@ -475,16 +484,179 @@ private:
         if (!segmentBends(a.normal, b.normal, axis, ctx_.cosSharp)) return {};
         const Vec2 na = normalized(project(a.normal, axis)), nb = normalized(project(b.normal, axis));
         const double det = cross2(na, nb);
-        if (std::fabs(det) < 1e-9) return {std::nullopt, false};
+        SegmentShape shape;
+        shape.plausible = false;
+        if (std::fabs(det) < 1e-9) return shape;
         const Vec2 pa = project(a.position, axis), pb = project(b.position, axis);
         const double ca = na.x * pa.x + na.y * pa.y, cb = nb.x * pb.x + nb.y * pb.y;
         const Vec2 p{(ca * nb.y - cb * na.y) / det, (na.x * cb - nb.x * ca) / det};
+        if (onlySegment && !mixedMaterials(sq)) {
+            shape.count = tipChain(sq, {pa, na, ca}, {pb, nb, cb}, p, shape.points);
+            shape.plausible = shape.count > 0;
+            if (!ordered) std::reverse(shape.points, shape.points + shape.count);
+            return shape;
+        }
         const double vs = ctx_.voxelSize, extent = sq.width * vs;
         const double lo0 = sq.minCorner[(axis + 1) % 3] * vs, lo1 = sq.minCorner[(axis + 2) % 3] * vs;
         const double eps = 1e-9 * vs;
-        if (p.x < lo0 - eps || p.x > lo0 + extent + eps || p.y < lo1 - eps || p.y > lo1 + extent + eps)
-            return {std::nullopt, false};
-        return {p, true};
+        if (p.x >= lo0 - eps && p.x <= lo0 + extent + eps && p.y >= lo1 - eps && p.y <= lo1 + extent + eps) {
+            shape.points[shape.count++] = p;
+            shape.plausible = true;
+        }
+        return shape;
+    }
+
+    /// A convex polygon in a face's plane; each vertex remembers whether it is one of the two crossings.
+    struct FacePolygon {
+        static constexpr int kCapacity = 24;
+        Vec2 at[kCapacity];
+        int crossing[kCapacity]; // 0 or 1: that crossing; -1: a point between them
+        int count = 0;
+
+        /// Keeps the part where n.x <= d; false when the polygon would outgrow its capacity.
+        bool clip(const Vec2& n, double d)
+        {
+            bool cuts = false;
+            for (int i = 0; i < count && !cuts; ++i) cuts = n.x * at[i].x + n.y * at[i].y > d;
+            if (!cuts) return true;
+            FacePolygon kept;
+            for (int i = 0; i < count; ++i) {
+                const int j = (i + 1) % count;
+                const double si = n.x * at[i].x + n.y * at[i].y - d, sj = n.x * at[j].x + n.y * at[j].y - d;
+                if (si <= 0.0) {
+                    if (kept.count == kCapacity) return false;
+                    kept.at[kept.count] = at[i];
+                    kept.crossing[kept.count++] = crossing[i];
+                }
+                if ((si < 0.0) != (sj < 0.0) && si != 0.0 && sj != 0.0) {
+                    if (kept.count == kCapacity) return false;
+                    const double t = si / (si - sj);
+                    kept.at[kept.count] = {at[i].x + t * (at[j].x - at[i].x), at[i].y + t * (at[j].y - at[i].y)};
+                    kept.crossing[kept.count++] = -1;
+                }
+            }
+            *this = kept;
+            return true;
+        }
+    };
+
+    /// A crossing's tangent line on a face.
+    struct TangentLine {
+        Vec2 through;  // the crossing
+        Vec2 normal;   // unit, pointing out of the solid
+        double offset; // normal . through
+    };
+
+    /// Where a segment's tangent lines meet, a wedge of the surface may reach past the square: out
+    /// through a side between that side's corners, where the voxel edge crosses the surface twice,
+    /// which its corner signs cannot show. The segment follows the wedge: the triangle of the two
+    /// crossings and the tip, clipped by the planes of the crossings one voxel around the square (a
+    /// third face may cut the tip off) and kept to this square and the squares beside it that the
+    /// surface does not cross. It is dropped if a voxel corner inside it has the other sign. Writes the
+    /// points from a's crossing to b's and returns their number (0: a straight segment). The inputs
+    /// depend on the square alone, so both cells sharing it agree.
+    int tipChain(const Square& sq, const TangentLine& a, const TangentLine& b, const Vec2& tip, Vec2* out) const
+    {
+        const int axis = sq.axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
+        const double vs = ctx_.voxelSize, plane = sq.minCorner[axis] * vs;
+        const Vec2 &pa = a.through, &pb = b.through;
+        auto side = [](const Vec2& q, const Vec2& n, double d) { return n.x * q.x + n.y * q.y - d; };
+        const double turn = cross2(sub2(tip, pa), sub2(pb, pa));
+        if (std::fabs(turn) < 1e-12 * vs * vs) return 0;
+        const double orientation = turn > 0.0 ? 1.0 : -1.0;
+        // The wedge is solid when the triangle's inside lies on the solid side of both tangent lines.
+        const Vec2 centroid{(pa.x + pb.x + tip.x) / 3.0, (pa.y + pb.y + tip.y) / 3.0};
+        const bool solidTip = side(centroid, a.normal, a.offset) < 0.0;
+        if (solidTip != (side(centroid, b.normal, b.offset) < 0.0)) return 0;
+
+        FacePolygon poly;
+        poly.at[0] = pa, poly.at[1] = tip, poly.at[2] = pb;
+        poly.crossing[0] = 0, poly.crossing[1] = -1, poly.crossing[2] = 1;
+        poly.count = 3;
+
+        // Kept to this square and those beside it (offset du, dv in square widths) whose voxel
+        // corners all have the other sign.
+        const int width = sq.width, u0 = sq.minCorner[u], v0 = sq.minCorner[v];
+        auto cornerSolid = [&](int i, int j) {
+            Coord corner;
+            corner[axis] = sq.minCorner[axis];
+            corner[u] = i;
+            corner[v] = j;
+            return ctx_.material(corner).solid();
+        };
+        auto clear = [&](int du, int dv) {
+            for (int i = u0 + du * width; i <= u0 + (du + 1) * width; ++i)
+                for (int j = v0 + dv * width; j <= v0 + (dv + 1) * width; ++j)
+                    if (cornerSolid(i, j) == solidTip) return false;
+            return true;
+        };
+        const double w = width * vs, lo0 = u0 * vs, lo1 = v0 * vs;
+        if (!poly.clip({1.0, 0.0}, lo0 + w * (clear(1, 0) ? 2.0 : 1.0)) ||
+            !poly.clip({-1.0, 0.0}, -(lo0 - (clear(-1, 0) ? w : 0.0))) ||
+            !poly.clip({0.0, 1.0}, lo1 + w * (clear(0, 1) ? 2.0 : 1.0)) ||
+            !poly.clip({0.0, -1.0}, -(lo1 - (clear(0, -1) ? w : 0.0))))
+            return 0;
+
+        // Clipped by each crossing plane around the square, as seen in the face's plane, on the wedge's
+        // side; a plane that would cut the segment's own crossings belongs to another part of the
+        // surface. (Where the surface is not convex this may cut a true tip; the chain then lies
+        // between the straight segment and the tip.)
+        const double tolerance = 0.05 * vs;
+        const double sign = solidTip ? 1.0 : -1.0;
+        bool overflow = false;
+        const int across = width + 3;
+        forEachCrossingIn(sq.minCorner.offsetBy(-1), {axis == 0 ? 3 : across, axis == 1 ? 3 : across, axis == 2 ? 3 : across},
+                          [&](const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
+                              // The plane n.x = n.p within the face's plane: n2.q = d. A solid wedge
+                              // keeps n2.q <= d, an empty one n2.q >= d.
+                              const Vec2 keep{sign * n[u], sign * n[v]};
+                              const double bound = sign * (n.dot(p) - n[axis] * plane) + tolerance;
+                              if (side(pa, keep, bound) > 0.0 || side(pb, keep, bound) > 0.0) return;
+                              overflow = overflow || !poly.clip(keep, bound);
+                          });
+        if (overflow) return 0;
+
+        // A voxel corner inside the chain must have the wedge's sign (only a wide square has such
+        // corners: those beside it that it may reach have the other sign), and a square beside it
+        // diagonally that the chain reaches must be clear too.
+        const double margin = 1e-6 * vs;
+        double minU = poly.at[0].x, maxU = minU, minV = poly.at[0].y, maxV = minV;
+        for (int i = 1; i < poly.count; ++i) {
+            minU = std::min(minU, poly.at[i].x), maxU = std::max(maxU, poly.at[i].x);
+            minV = std::min(minV, poly.at[i].y), maxV = std::max(maxV, poly.at[i].y);
+        }
+        const int du = minU < lo0 - margin ? -1 : (maxU > lo0 + w + margin ? 1 : 0);
+        const int dv = minV < lo1 - margin ? -1 : (maxV > lo1 + w + margin ? 1 : 0);
+        if (du != 0 && dv != 0 && !clear(du, dv)) return 0;
+        for (int i = u0 - width; i <= u0 + 2 * width; ++i)
+            for (int j = v0 - width; j <= v0 + 2 * width; ++j) {
+                const Vec2 q{i * vs, j * vs};
+                if (q.x < minU || q.x > maxU || q.y < minV || q.y > maxV) continue;
+                bool inside = true;
+                for (int e = 0; e < poly.count && inside; ++e) {
+                    const Vec2& p0 = poly.at[e];
+                    const Vec2& p1 = poly.at[(e + 1) % poly.count];
+                    inside = cross2(sub2(p1, p0), sub2(q, p0)) * orientation > margin * vs;
+                }
+                if (inside && cornerSolid(i, j) != solidTip) return 0;
+            }
+
+        // The polygon runs from a's crossing through the chain to b's, then back along the chord.
+        int start = -1;
+        for (int i = 0; i < poly.count; ++i)
+            if (poly.crossing[i] == 0) start = i;
+        if (start < 0) return 0;
+        int n = 0;
+        Vec2 previous = pa;
+        for (int k = 1; k < poly.count; ++k) {
+            const Vec2& q = poly.at[(start + k) % poly.count];
+            if (poly.crossing[(start + k) % poly.count] == 1) break;
+            if (std::hypot(q.x - previous.x, q.y - previous.y) < margin) continue;
+            if (n == SegmentShape::kMaxPoints) return 0;
+            out[n++] = previous = q;
+        }
+        if (n > 0 && std::hypot(out[n - 1].x - pb.x, out[n - 1].y - pb.y) < margin) --n;
+        return n;
     }
 
     void meshSquare(const Square& sq)
@@ -515,13 +687,13 @@ private:
             for (int i = 0; i < count; ++i) {
                 if (!entering[i]) continue;
                 const int in = sides[i], out = sides[(i + shift) % count];
-                p.segments[p.count++] = {in, out, segmentShape(squareCrossing(sq, in), squareCrossing(sq, out), sq)};
+                p.segments[p.count++] = {in, out, segmentShape(squareCrossing(sq, in), squareCrossing(sq, out), sq, count == 2)};
             }
             return p;
         };
         auto overlap = [&](const Pairings& p) {
-            return segmentsOverlap(sq, p.segments[0].in, p.segments[0].out, p.segments[0].shape.sharp,
-                                   p.segments[1].in, p.segments[1].out, p.segments[1].shape.sharp);
+            return segmentsOverlap(sq, p.segments[0].in, p.segments[0].out, p.segments[0].shape.sharp(),
+                                   p.segments[1].in, p.segments[1].out, p.segments[1].shape.sharp());
         };
         // Each entering crossing to the leaving one that follows it, so the solid corners stay apart;
         // on an ambiguous square, the other pairing (joining the solid corners) when that one's
@@ -553,8 +725,10 @@ private:
             const Pairing& pr = pairs[s];
             Segment& seg = segments_.emplace_back(squareCrossing(sq, pr.in), squareCrossing(sq, pr.out));
             SegmentPoints& points = seg.points;
-            if (const auto& sharp = pr.shape.sharp)
-                points.insert(0, FacePoint{*sharp, toWorld(*sharp), 0, false, kEmptyMaterial, kEmptyMaterial, {}});
+            for (int k = 0; k < pr.shape.count; ++k) {
+                const Vec2& q = pr.shape.points[k];
+                points.insert(k, FacePoint{q, toWorld(q), 0, false, kEmptyMaterial, kEmptyMaterial, {}});
+            }
             // A square with one segment may hold material interfaces between its solid corners.
             if (nSeg == 1 && mixedMaterials(sq)) insertTransitions(sq, pr.in, seg, toWorld);
             // Slots count along the segment from its end with the smaller key, the same in both cells.
@@ -697,10 +871,9 @@ private:
     /// therefore also reads the crossings one voxel around it, facing the same way as its own; if
     /// their planes meet in a corner inside the cell, the vertex goes there.
     std::optional<Eigen::Vector3d> sharpVertex(Eigen::Matrix3d ata, Eigen::Vector3d atb, const Eigen::Vector3d& massPoint,
-                                               const Eigen::Vector3d& normalSum) const
+                                               const Eigen::Vector3d& normalSum, const Eigen::Vector3d& lo,
+                                               const Eigen::Vector3d& hi) const
     {
-        Eigen::Vector3d lo, hi;
-        cellBounds(lo, hi);
         const QefSolution own = solveQef(ata, atb, massPoint);
         if (own.rank < 2) return std::nullopt;
         if (own.rank == 2) {
@@ -731,19 +904,26 @@ private:
     template<typename Fn>
     void forEachCrossingAround(Fn&& fn) const
     {
+        const int span = width_ + 3;
+        forEachCrossingIn(base_.offsetBy(-1), {span, span, span}, fn);
+    }
+
+    /// The crossings on the voxel edges between the voxels lo .. lo + span - 1, found a row of voxels
+    /// at a time from bit rows of their solidity.
+    template<typename Fn>
+    void forEachCrossingIn(const Coord& lo, const std::array<int, 3>& span, Fn&& fn) const
+    {
         constexpr int kMaxSpan = kLeafDim + 3;
-        const int span = width_ + 3; // voxels base-1 .. base+width+1
-        uint32_t solidRows[kMaxSpan][kMaxSpan] = {}; // bit z: voxel (x, y, z) is solid
-        for (int x = 0; x < span; ++x)
-            for (int y = 0; y < span; ++y)
-                for (int z = 0; z < span; ++z)
-                    solidRows[x][y] |= uint32_t(ctx_.material(base_.offsetBy(x - 1, y - 1, z - 1)).solid()) << z;
-        // The edges whose ends differ, a row of voxels at a time: bit z of `cut` marks the edge from
-        // (x, y, z) along `axis`.
+        uint32_t solidRows[kMaxSpan][kMaxSpan] = {}; // bit z: voxel lo + (x, y, z) is solid
+        for (int x = 0; x < span[0]; ++x)
+            for (int y = 0; y < span[1]; ++y)
+                for (int z = 0; z < span[2]; ++z)
+                    solidRows[x][y] |= uint32_t(ctx_.material(lo.offsetBy(x, y, z)).solid()) << z;
+        // The edges whose ends differ: bit z of `cut` marks the edge from (x, y, z) along `axis`.
         auto visit = [&](int x, int y, int axis, uint32_t cut) {
             for (; cut; cut &= cut - 1) {
                 const int z = __builtin_ctz(cut);
-                const Coord v = base_.offsetBy(x - 1, y - 1, z - 1);
+                const Coord v = lo.offsetBy(x, y, z);
                 if (!ctx_.hood.sample(v, axis)) continue;
                 Coord w = v;
                 w[axis] += 1;
@@ -754,12 +934,12 @@ private:
                    Eigen::Vector3d(c.normal[0], c.normal[1], c.normal[2]));
             }
         };
-        for (int x = 0; x < span; ++x)
-            for (int y = 0; y < span; ++y) {
+        for (int x = 0; x < span[0]; ++x)
+            for (int y = 0; y < span[1]; ++y) {
                 const uint32_t row = solidRows[x][y];
-                if (x + 1 < span) visit(x, y, 0, row ^ solidRows[x + 1][y]);
-                if (y + 1 < span) visit(x, y, 1, row ^ solidRows[x][y + 1]);
-                visit(x, y, 2, (row ^ (row >> 1)) & ((1u << (span - 1)) - 1));
+                if (x + 1 < span[0]) visit(x, y, 0, row ^ solidRows[x + 1][y]);
+                if (y + 1 < span[1]) visit(x, y, 1, row ^ solidRows[x][y + 1]);
+                visit(x, y, 2, (row ^ (row >> 1)) & ((1u << (span[2] - 1)) - 1));
             }
     }
 
@@ -789,7 +969,17 @@ private:
                 if (point.transition) addPlane(point.position, point.interfaceNormal);
             }
         }
-        return sharpVertex(ata, atb, massPoint / double(planes), normalSum);
+        // The vertex stays in the cell, or reaches as far as the component's face points do.
+        Eigen::Vector3d lo, hi;
+        cellBounds(lo, hi);
+        for (const int s : loop)
+            for (int k = 0; k < segments_[s].points.count; ++k) {
+                const auto& p = segments_[s].points.items[k].position;
+                const Eigen::Vector3d at(p[0], p[1], p[2]);
+                lo = lo.cwiseMin(at);
+                hi = hi.cwiseMax(at);
+            }
+        return sharpVertex(ata, atb, massPoint / double(planes), normalSum, lo, hi);
     }
 
     /// Fans one closed loop of segments from its inner vertex.
