@@ -863,13 +863,13 @@ private:
     }
 
     /// A component's sharp vertex: a corner (rank 3) or the point of a sharp edge nearest the mean
-    /// (rank 2), clamped to the cell. A lone plane (rank 1) has no feature; the caller keeps the mean
-    /// point. (Clipping an edge's line to the cell instead of clamping was tried: it measured worse on
-    /// the rotated box.)
+    /// (rank 2), clamped to the box lo .. hi (the cell, grown to the component's face points). A lone
+    /// plane (rank 1) has no feature; the caller keeps the mean point. (Clipping an edge's line to the
+    /// cell instead of clamping was tried: it measured worse on the rotated box.)
     ///
     /// A corner's tip may poke into a cell whose edges see only two of its faces. An edge cell
     /// therefore also reads the crossings one voxel around it, facing the same way as its own; if
-    /// their planes meet in a corner inside the cell, the vertex goes there.
+    /// their planes meet in a corner inside the box, the vertex goes there.
     std::optional<Eigen::Vector3d> sharpVertex(Eigen::Matrix3d ata, Eigen::Vector3d atb, const Eigen::Vector3d& massPoint,
                                                const Eigen::Vector3d& normalSum, const Eigen::Vector3d& lo,
                                                const Eigen::Vector3d& hi) const
