@@ -1,14 +1,26 @@
 #include "mesher/MeshChunkSet.h"
 
+#include "mesher/AdaptiveCellCache.h"
+
 #include <algorithm>
 #include <optional>
 
 namespace vdbclay {
 
+MeshChunkSet::MeshChunkSet(const MeshOptions& options)
+    : options_(options), cells_(std::make_unique<mesher_detail::AdaptiveCellCache>())
+{
+}
+
+MeshChunkSet::~MeshChunkSet() = default;
+MeshChunkSet::MeshChunkSet(MeshChunkSet&&) noexcept = default;
+MeshChunkSet& MeshChunkSet::operator=(MeshChunkSet&&) noexcept = default;
+
 void MeshChunkSet::rebuild(const Volume& volume)
 {
     chunks_.clear();
-    for (MeshChunk& chunk : meshVolumeChunks(volume, options_)) {
+    cells_->clear();
+    for (MeshChunk& chunk : meshVolumeChunks(volume, options_, cells_.get())) {
         const BlockOrigin origin = chunk.leafOrigin;
         chunks_[origin] = std::move(chunk);
     }
@@ -17,7 +29,8 @@ void MeshChunkSet::rebuild(const Volume& volume)
 std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockOrigin>& dirtyBlocks)
 {
     const std::vector<BlockOrigin> origins = leavesAffectedBy(dirtyBlocks, options_);
-    std::vector<std::optional<MeshChunk>> fresh = meshLeafChunks(volume, origins, options_);
+    cells_->forgetAround(dirtyBlocks);
+    std::vector<std::optional<MeshChunk>> fresh = meshLeafChunks(volume, origins, options_, cells_.get());
     std::size_t remeshed = 0;
     for (std::size_t i = 0; i < origins.size(); ++i) {
         if (fresh[i]) {

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <vector>
 
 namespace vdbclay {
@@ -15,7 +16,10 @@ class MeshChunkSet {
 public:
     using BlockOrigin = std::array<int32_t, 3>;
 
-    explicit MeshChunkSet(const MeshOptions& options = {}) : options_(options) {}
+    explicit MeshChunkSet(const MeshOptions& options = {});
+    ~MeshChunkSet();
+    MeshChunkSet(MeshChunkSet&&) noexcept;
+    MeshChunkSet& operator=(MeshChunkSet&&) noexcept;
 
     /// Meshes every leaf.
     void rebuild(const Volume& volume);
@@ -32,6 +36,8 @@ public:
 private:
     MeshOptions options_;
     std::map<BlockOrigin, MeshChunk> chunks_;
+    // Adaptive CMS: each leaf's cells, kept so that an update subdivides only the leaves it can change.
+    std::unique_ptr<mesher_detail::AdaptiveCellCache> cells_;
 };
 
 /// Whether two sets hold the same leaves with identical chunks (an update against a full rebuild).

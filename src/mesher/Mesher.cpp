@@ -1,7 +1,7 @@
 #include "mesher/Mesher.h"
 
 #include "mesher/CellGrid.h"
-#include "mesher/CellOctree.h"
+#include "mesher/AdaptiveCellCache.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -13,7 +13,6 @@
 #include <memory>
 #include <optional>
 #include <stdexcept>
-#include <unordered_map>
 
 namespace vdbclay {
 
@@ -43,64 +42,6 @@ bool adaptive(const MeshOptions& options)
 {
     return options.kind == MesherKind::CubicalMarchingSquares && (options.maxCellWidth > 1 || options.leafMaxCellWidth);
 }
-
-/// The adaptive cells of the given leaves and of their face neighbours (all a leaf's cell faces touch).
-class AdaptiveCells {
-public:
-    AdaptiveCells(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves, const MeshOptions& options)
-    {
-        using namespace mesher_detail;
-        std::vector<const HermiteLeaf*> subdivided;
-        auto add = [&](const HermiteLeaf* leaf) {
-            if (leaf && index_.emplace(leaf->origin(), subdivided.size()).second) subdivided.push_back(leaf);
-        };
-        for (const HermiteLeaf* leaf : leaves) add(leaf);
-        for (const HermiteLeaf* leaf : leaves)
-            for (int f = 0; f < 6; ++f) add(tree.probeConstLeaf(faceNeighbour(leaf->origin(), f)));
-        sizes_.resize(subdivided.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, subdivided.size(), 8), [&](const auto& range) {
-            ConstAccessor acc(tree);
-            for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                const HermiteLeaf& leaf = *subdivided[i];
-                const Neighbourhood hood(leaf, acc);
-                SubdivisionCriteria criteria;
-                criteria.maxCellSize = options.maxCellWidth;
-                if (options.leafMaxCellWidth) {
-                    const Coord o = leaf.origin();
-                    criteria.maxCellSize = std::min(criteria.maxCellSize, options.leafMaxCellWidth({o.x(), o.y(), o.z()}));
-                }
-                criteria.cosHalfSpread = std::cos(0.5 * options.subdivisionAngleDegrees * M_PI / 180.0);
-                sizes_[i] = subdivideLeaf(CornerGrid(leaf, hood), hood, criteria);
-            }
-        });
-    }
-
-    /// The cell widths around `leaf`, which must be one of the leaves given to the constructor.
-    mesher_detail::CellWidthField around(const HermiteLeaf& leaf) const
-    {
-        const mesher_detail::LeafCellSizes* blocks[7] = {find(leaf.origin())};
-        for (int f = 0; f < 6; ++f) blocks[1 + f] = find(faceNeighbour(leaf.origin(), f));
-        return mesher_detail::CellWidthField(leaf.origin(), blocks);
-    }
-
-private:
-    /// Face f in the order -x, +x, -y, +y, -z, +z.
-    static Coord faceNeighbour(const Coord& origin, int f)
-    {
-        Coord c = origin;
-        c[f / 2] += (f % 2 ? 1 : -1) * kLeafDim;
-        return c;
-    }
-
-    const mesher_detail::LeafCellSizes* find(const Coord& origin) const
-    {
-        const auto it = index_.find(origin);
-        return it == index_.end() ? nullptr : &sizes_[it->second];
-    }
-
-    std::unordered_map<Coord, std::size_t> index_;
-    std::vector<mesher_detail::LeafCellSizes> sizes_;
-};
 
 /// Sorts block origins lexicographically and drops duplicates. Leaf-aligned blocks within 2^20 blocks
 /// of the origin per axis (far beyond the mesher's range) are sorted as packed 64-bit keys, several
@@ -142,12 +83,16 @@ void checkRange(const Coord& origin)
 
 /// Meshes the given leaves in parallel, one chunk each.
 std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves,
-                                  double voxelSize, const MeshOptions& options)
+                                  double voxelSize, const MeshOptions& options, mesher_detail::AdaptiveCellCache* cache)
 {
     using namespace mesher_detail;
     std::vector<MeshChunk> chunks(leaves.size());
-    std::optional<AdaptiveCells> cells;
-    if (adaptive(options)) cells.emplace(tree, leaves, options);
+    std::optional<AdaptiveCellCache> ownCache;
+    AdaptiveCellCache* cells = nullptr;
+    if (adaptive(options)) {
+        cells = cache ? cache : &ownCache.emplace();
+        cells->prepare(tree, leaves, options);
+    }
     // One mesher per thread: its buffers span a leaf's neighbourhood and are worth keeping.
     tbb::enumerable_thread_specific<std::unique_ptr<CubicalMarchingSquaresMesher>> meshers;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 8), [&](const auto& range) {
@@ -175,7 +120,8 @@ std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<con
 
 } // namespace
 
-std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions& options)
+std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions& options,
+                                        mesher_detail::AdaptiveCellCache* cells)
 {
     validateMeshOptions(options);
     const HermiteTree& tree = volume.impl().grid->constTree();
@@ -185,12 +131,12 @@ std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions&
         checkRange(it->origin());
         leaves.push_back(it.getLeaf());
     }
-    return meshLeaves(tree, leaves, volume.voxelSize(), options);
+    return meshLeaves(tree, leaves, volume.voxelSize(), options, cells);
 }
 
 std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
                                                      const std::vector<std::array<int32_t, 3>>& leafOrigins,
-                                                     const MeshOptions& options)
+                                                     const MeshOptions& options, mesher_detail::AdaptiveCellCache* cells)
 {
     validateMeshOptions(options);
     const HermiteTree& tree = volume.impl().grid->constTree();
@@ -204,7 +150,7 @@ std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
         leaves.push_back(leaf);
         slot.push_back(i);
     }
-    std::vector<MeshChunk> chunks = meshLeaves(tree, leaves, volume.voxelSize(), options);
+    std::vector<MeshChunk> chunks = meshLeaves(tree, leaves, volume.voxelSize(), options, cells);
     std::vector<std::optional<MeshChunk>> out(leafOrigins.size());
     for (std::size_t k = 0; k < chunks.size(); ++k) out[slot[k]] = std::move(chunks[k]);
     return out;

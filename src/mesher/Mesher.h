@@ -45,11 +45,19 @@ void validateMeshOptions(const MeshOptions& options);
 std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
                                                      const MeshOptions& options);
 
-std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions& options = {});
+namespace mesher_detail {
+class AdaptiveCellCache;
+}
+
+/// `cells` (optional): adaptive cells kept from earlier calls on the same volume and options, used
+/// where present and filled in where missing (MeshChunkSet keeps one between updates).
+std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions& options = {},
+                                        mesher_detail::AdaptiveCellCache* cells = nullptr);
 /// The chunks of the leaves at the given origins (leaf-aligned); empty where there is no leaf.
 std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
                                                      const std::vector<std::array<int32_t, 3>>& leafOrigins,
-                                                     const MeshOptions& options = {});
+                                                     const MeshOptions& options = {},
+                                                     mesher_detail::AdaptiveCellCache* cells = nullptr);
 Mesh meshVolume(const Volume& volume, const MeshOptions& options = {});
 
 } // namespace vdbclay

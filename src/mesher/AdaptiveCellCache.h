@@ -1,0 +1,37 @@
+// Internal to the mesher: the adaptive cells of a volume's leaves, subdivided on demand and kept
+// between incremental updates, so that an update subdivides again only the leaves an edit can change
+// instead of every re-meshed leaf and its face neighbours. OpenVDB-heavy: include only from mesher
+// .cpp files.
+#pragma once
+
+#include "mesher/CellOctree.h"
+#include "mesher/Mesher.h"
+
+#include <array>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+namespace vdbclay::mesher_detail {
+
+class AdaptiveCellCache {
+public:
+    /// Subdivides those of `leaves` and of their face neighbours that have no cells yet (in parallel).
+    void prepare(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves, const MeshOptions& options);
+
+    /// The cell widths around `leaf`, whose face neighbours prepare() has seen.
+    CellWidthField around(const HermiteLeaf& leaf) const;
+
+    /// Drops the cells of the leaves whose subdivision reads the given leaf-sized blocks (a leaf reads
+    /// the blocks at +0 and +1 along each axis), so that the next prepare() subdivides them again.
+    void forgetAround(const std::vector<std::array<int32_t, 3>>& dirtyBlocks);
+
+    void clear() { sizes_.clear(); }
+
+private:
+    const LeafCellSizes* find(const Coord& origin) const;
+
+    std::unordered_map<Coord, LeafCellSizes> sizes_;
+};
+
+} // namespace vdbclay::mesher_detail
