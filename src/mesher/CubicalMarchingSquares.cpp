@@ -915,10 +915,19 @@ private:
     {
         constexpr int kMaxSpan = kLeafDim + 3;
         uint32_t solidRows[kMaxSpan][kMaxSpan] = {}; // bit z: voxel lo + (x, y, z) is solid
+        const CornerGrid& grid = ctx_.grid;
+        const int gx = lo.x() - grid.origin.x() + 1, gy = lo.y() - grid.origin.y() + 1, gz = lo.z() - grid.origin.z() + 1;
+        const bool inGrid = gx >= 0 && gy >= 0 && gz >= 0 && gx + span[0] <= CornerGrid::kSpan &&
+                            gy + span[1] <= CornerGrid::kSpan && gz + span[2] <= CornerGrid::kSpan;
         for (int x = 0; x < span[0]; ++x)
-            for (int y = 0; y < span[1]; ++y)
+            for (int y = 0; y < span[1]; ++y) {
+                if (inGrid) {
+                    solidRows[x][y] = (grid.solidRows[gx + x][gy + y] >> gz) & ((1u << span[2]) - 1);
+                    continue;
+                }
                 for (int z = 0; z < span[2]; ++z)
                     solidRows[x][y] |= uint32_t(ctx_.material(lo.offsetBy(x, y, z)).solid()) << z;
+            }
         // The edges whose ends differ: bit z of `cut` marks the edge from (x, y, z) along `axis`.
         auto visit = [&](int x, int y, int axis, uint32_t cut) {
             for (; cut; cut &= cut - 1) {
