@@ -5,28 +5,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_set>
 
 namespace vdbclay::mesher_detail {
-
-namespace {
-
-/// Face f in the order -x, +x, -y, +y, -z, +z.
-Coord faceNeighbour(const Coord& origin, int f)
-{
-    Coord c = origin;
-    c[f / 2] += (f % 2 ? 1 : -1) * kLeafDim;
-    return c;
-}
-
-} // namespace
 
 void AdaptiveCellCache::prepare(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves,
                                 const MeshOptions& options)
 {
     std::vector<const HermiteLeaf*> missing;
-    std::unordered_map<Coord, bool> queued;
+    std::unordered_set<Coord> queued;
     auto add = [&](const HermiteLeaf* leaf) {
-        if (leaf && !sizes_.count(leaf->origin()) && queued.emplace(leaf->origin(), true).second) missing.push_back(leaf);
+        if (leaf && !sizes_.count(leaf->origin()) && queued.insert(leaf->origin()).second) missing.push_back(leaf);
     };
     for (const HermiteLeaf* leaf : leaves) {
         add(leaf);
@@ -63,10 +52,7 @@ void AdaptiveCellCache::forgetAround(const std::vector<std::array<int32_t, 3>>& 
 {
     if (sizes_.empty()) return;
     for (const auto& b : dirtyBlocks)
-        for (int dx = -1; dx <= 0; ++dx)
-            for (int dy = -1; dy <= 0; ++dy)
-                for (int dz = -1; dz <= 0; ++dz)
-                    sizes_.erase(Coord(b[0] + dx * kLeafDim, b[1] + dy * kLeafDim, b[2] + dz * kLeafDim));
+        forEachLeafSubdividingWith(Coord(b[0], b[1], b[2]), [&](const Coord& leaf) { sizes_.erase(leaf); });
 }
 
 const LeafCellSizes* AdaptiveCellCache::find(const Coord& origin) const

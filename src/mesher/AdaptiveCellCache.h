@@ -14,6 +14,24 @@
 
 namespace vdbclay::mesher_detail {
 
+/// The origin of a leaf's face neighbour f, in the order -x, +x, -y, +y, -z, +z.
+inline Coord faceNeighbour(const Coord& origin, int f)
+{
+    Coord c = origin;
+    c[f / 2] += (f % 2 ? 1 : -1) * kLeafDim;
+    return c;
+}
+
+/// Calls fn(origin) for each leaf whose subdivision reads the leaf-sized block at `block`: a leaf's
+/// octree reads its voxel lattice o .. o+8, that is the blocks at +0 and +1 along each axis.
+template<typename Fn>
+void forEachLeafSubdividingWith(const Coord& block, Fn&& fn)
+{
+    for (int dx = -1; dx <= 0; ++dx)
+        for (int dy = -1; dy <= 0; ++dy)
+            for (int dz = -1; dz <= 0; ++dz) fn(block.offsetBy(dx * kLeafDim, dy * kLeafDim, dz * kLeafDim));
+}
+
 class AdaptiveCellCache {
 public:
     /// Subdivides those of `leaves` and of their face neighbours that have no cells yet (in parallel).
@@ -22,8 +40,8 @@ public:
     /// The cell widths around `leaf`, whose face neighbours prepare() has seen.
     CellWidthField around(const HermiteLeaf& leaf) const;
 
-    /// Drops the cells of the leaves whose subdivision reads the given leaf-sized blocks (a leaf reads
-    /// the blocks at +0 and +1 along each axis), so that the next prepare() subdivides them again.
+    /// Drops the cells of the leaves whose subdivision reads the given leaf-sized blocks
+    /// (forEachLeafSubdividingWith), so that the next prepare() subdivides them again.
     void forgetAround(const std::vector<std::array<int32_t, 3>>& dirtyBlocks);
 
     void clear() { sizes_.clear(); }

@@ -464,7 +464,7 @@ private:
         static constexpr int kMaxPoints = 4;
         Vec2 points[kMaxPoints]; // in order from the segment's first crossing to its second
         int count = 0;
-        bool plausible = true; // false: the normals span the sharp angle but meet off the square
+        bool plausible = true; // false: the normals span the sharp angle but give no point to bend at
 
         /// The 2D sharp feature of a segment on an ambiguous square, which has at most one point.
         std::optional<Vec2> sharp() const { return count ? std::optional<Vec2>(points[0]) : std::nullopt; }
@@ -969,6 +969,9 @@ private:
             massPoint += p;
             ++planes;
         };
+        // The vertex stays in the cell, or reaches as far as the component's face points do.
+        Eigen::Vector3d lo, hi;
+        cellBounds(lo, hi);
         for (const int s : loop) {
             const Segment& seg = segments_[s];
             const auto& p = seg.in.position;
@@ -976,18 +979,11 @@ private:
             for (int k = 0; k < seg.points.count; ++k) {
                 const FacePoint& point = seg.points.items[k];
                 if (point.transition) addPlane(point.position, point.interfaceNormal);
-            }
-        }
-        // The vertex stays in the cell, or reaches as far as the component's face points do.
-        Eigen::Vector3d lo, hi;
-        cellBounds(lo, hi);
-        for (const int s : loop)
-            for (int k = 0; k < segments_[s].points.count; ++k) {
-                const auto& p = segments_[s].points.items[k].position;
-                const Eigen::Vector3d at(p[0], p[1], p[2]);
+                const Eigen::Vector3d at(point.position[0], point.position[1], point.position[2]);
                 lo = lo.cwiseMin(at);
                 hi = hi.cwiseMax(at);
             }
+        }
         return sharpVertex(ata, atb, massPoint / double(planes), normalSum, lo, hi);
     }
 

@@ -159,26 +159,21 @@ std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
 std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
                                                      const MeshOptions& options)
 {
+    using namespace mesher_detail;
     std::vector<std::array<int32_t, 3>> out;
     out.reserve(dirtyBlocks.size() * (adaptive(options) ? 27 + 48 : 27));
-    auto add = [&](const std::array<int32_t, 3>& b, int dx, int dy, int dz) {
-        out.push_back({b[0] + dx * kLeafDim, b[1] + dy * kLeafDim, b[2] + dz * kLeafDim});
-    };
+    auto add = [&](const Coord& c) { out.push_back({c.x(), c.y(), c.z()}); };
     for (const auto& b : dirtyBlocks) {
+        const Coord block(b[0], b[1], b[2]);
         // A cell reads the blocks of its eight corners.
         for (int dx = -1; dx <= 1; ++dx)
             for (int dy = -1; dy <= 1; ++dy)
-                for (int dz = -1; dz <= 1; ++dz) add(b, dx, dy, dz);
+                for (int dz = -1; dz <= 1; ++dz) add(block.offsetBy(dx * kLeafDim, dy * kLeafDim, dz * kLeafDim));
         if (!adaptive(options)) continue;
-        // A leaf's subdivision reads the blocks at +0/+1 per axis, and decides how its face
-        // neighbours split their faces.
-        for (int dx = -1; dx <= 0; ++dx)
-            for (int dy = -1; dy <= 0; ++dy)
-                for (int dz = -1; dz <= 0; ++dz)
-                    for (int f = 0; f < 6; ++f) {
-                        const int step = f % 2 ? 1 : -1;
-                        add(b, dx + (f / 2 == 0) * step, dy + (f / 2 == 1) * step, dz + (f / 2 == 2) * step);
-                    }
+        // A leaf whose subdivision reads the block decides how its face neighbours split their faces.
+        forEachLeafSubdividingWith(block, [&](const Coord& leaf) {
+            for (int f = 0; f < 6; ++f) add(faceNeighbour(leaf, f));
+        });
     }
     sortUniqueBlocks(out);
     return out;
