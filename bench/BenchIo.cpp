@@ -5,6 +5,7 @@
 
 #include "sculpt/Brush.h"
 #include "sculpt/Csg.h"
+#include "vdb_hermite/AtomicFile.h"
 #include "vdb_hermite/VolumeIO.h"
 
 #include <openvdb/io/File.h>
@@ -14,11 +15,9 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
-#include <fcntl.h>
 #include <filesystem>
 #include <iostream>
 #include <stdexcept>
-#include <unistd.h>
 
 namespace vdbclay::bench {
 
@@ -51,14 +50,6 @@ public:
 private:
     fs::path path_;
 };
-
-void fsyncFile(const std::string& path)
-{
-    const int fd = ::open(path.c_str(), O_RDONLY);
-    if (fd < 0) return;
-    (void)::fsync(fd);
-    ::close(fd);
-}
 
 void writeLevelSet(const openvdb::FloatGrid::Ptr& grid, const std::string& path)
 {
@@ -112,7 +103,7 @@ int benchIo(bool json, bool quick)
         vdbSave.push_back(timeMs([&] { writeLevelSet(levelSet, vdbPath); }));
         vdbSaveSync.push_back(timeMs([&] {
             writeLevelSet(levelSet, vdbPath);
-            fsyncFile(vdbPath);
+            syncFileToDisk(vdbPath);
         }));
         openvdb::FloatGrid::Ptr back;
         vdbLoad.push_back(timeMs([&] { back = readLevelSet(vdbPath, "level_set"); }));

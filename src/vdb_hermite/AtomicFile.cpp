@@ -28,6 +28,8 @@ void syncPath(const std::string& path, bool directory)
 
 } // namespace
 
+void syncFileToDisk(const std::string& path) { syncPath(path, false); }
+
 void writeFileAtomically(const std::string& path, const std::function<void(std::ostream&)>& write,
                          const std::function<void(const std::string&, uint64_t)>& finish)
 {
@@ -48,7 +50,7 @@ void writeFileAtomically(const std::string& path, const std::function<void(std::
         os.close();
         if (!os || written < 0) throw FileWriteError("cannot write '" + path + "' (disk full?)");
         if (finish) finish(temp, uint64_t(written));
-        syncPath(temp, false);
+        syncFileToDisk(temp);
         fs::rename(temp, target, ec);
         if (ec) throw FileWriteError("cannot replace '" + path + "': " + ec.message());
     } catch (...) {

@@ -15,6 +15,9 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+/// Flushes a written file to disk (fsync); throws FileWriteError when it cannot.
+void syncFileToDisk(const std::string& path);
+
 /// Replaces `path` so that a crash leaves either its old content or the complete new one: `write`
 /// fills a temporary file beside it, `finish` (optional) may then append to that file by path, and
 /// the file is flushed to disk, renamed over `path`, and the directory flushed. The temporary file is

@@ -110,11 +110,12 @@ void saveVolume(const Volume& volume, const std::string& path)
                 stream.write(openvdb::GridCPtrVec{out});
             },
             [](const std::string& temp, uint64_t written) { appendTrailer(temp, written); });
+    } catch (const FileWriteError& e) {
+        throw VolumeIOError(e.what());
     } catch (const VolumeIOError&) {
         throw;
     } catch (const std::exception& e) {
-        throw VolumeIOError(dynamic_cast<const FileWriteError*>(&e) ? std::string(e.what())
-                                                                   : "cannot write '" + path + "': " + e.what());
+        throw VolumeIOError("cannot write '" + path + "': " + e.what());
     }
 }
 
