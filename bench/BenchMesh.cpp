@@ -278,11 +278,12 @@ struct RemeshResult {
 };
 
 constexpr int kUpdateRepeats = 3;
+constexpr double kStampRadius = 32.0;
+constexpr int kStamps = 9;
+constexpr int kAdaptiveCellWidth = 8; // the "CMS adaptive" rows: the default widest cell
 
 RemeshResult runRemesh(bool quick, int maxCellWidth, const std::string& key, const std::string& label)
 {
-    constexpr double kStampRadius = 32.0;
-    constexpr int kStamps = 9;
     RemeshResult r;
     r.key = key;
     r.label = label;
@@ -339,8 +340,8 @@ int benchMesh(bool json, bool quick)
         const openvdb::FloatGrid::Ptr levelSet = buildLevelSet(shape);
         res.levelSetActiveVoxels = levelSet->activeVoxelCount();
         res.rows.push_back(runOurs(volume, MesherKind::CubicalMarchingSquares, 1, "cms_uniform", "CMS uniform", shape));
-        res.rows.push_back(
-            runOurs(volume, MesherKind::CubicalMarchingSquares, 8, "cms_adaptive", "CMS adaptive", shape));
+        res.rows.push_back(runOurs(volume, MesherKind::CubicalMarchingSquares, kAdaptiveCellWidth, "cms_adaptive",
+                                   "CMS adaptive", shape));
         res.rows.push_back(runOurs(volume, MesherKind::MarchingCubes, 1, "mc", "MC (ours)", shape));
         res.rows.push_back(
             runOpenVdb(*levelSet, 0.0, "openvdb_adaptivity_0", "OpenVDB volumeToMesh adaptivity 0", shape));
@@ -350,7 +351,7 @@ int benchMesh(bool json, bool quick)
     }
 
     const std::vector<RemeshResult> remesh = {runRemesh(quick, 1, "cms_uniform", "CMS uniform"),
-                                              runRemesh(quick, 8, "cms_adaptive", "CMS adaptive")};
+                                              runRemesh(quick, kAdaptiveCellWidth, "cms_adaptive", "CMS adaptive")};
 
     auto ratio = [](const ShapeResult& r) {
         const double cms = cellsPerSecond(r.surfaceCells, r.rows[0].ms);
@@ -395,7 +396,8 @@ int benchMesh(bool json, bool quick)
         for (const auto& r : remesh) {
             remeshJson[r.key] = {{"label", r.label},
                                  {"sphere_radius", r.sphereRadius},
-                                 {"stamp_radius", 32.0},
+                                 {"stamp_radius", kStampRadius},
+                                 {"stamps", kStamps},
                                  {"timing", "best of repeated updates per stamp"},
                                  {"update_repeats", kUpdateRepeats},
                                  {"median_ms", r.medianMs},
@@ -414,7 +416,8 @@ int benchMesh(bool json, bool quick)
                  "the same analytic SDF. Distances: two-sided mean / max (Hausdorff) against the analytic SDF, "
                  "samples every "
               << kSampleSpacing << " voxel, margin " << kSampleMargin
-              << " voxels.\nCMS adaptive: cells up to 8 voxels wide, split at a 15 degree normal spread.\n";
+              << " voxels.\nCMS adaptive: cells up to " << kAdaptiveCellWidth << " voxels wide, split at a "
+              << MeshOptions{}.subdivisionAngleDegrees << " degree normal spread.\n";
     for (const auto& r : results) {
         std::cout << "\n" << r.shape->title << "; " << r.surfaceCells << " surface cells (ours), "
                   << r.levelSetActiveVoxels << " active level-set voxels:\n\n";
@@ -433,9 +436,11 @@ int benchMesh(bool json, bool quick)
                   << fixed(triangleRatio(r), 3) << "x uniform CMS's triangles\n";
     }
 
-    std::cout << "\nRe-meshing after a radius-32 stamp on a sphere of radius " << fixed(remesh[0].sphereRadius, 0)
+    std::cout << "\nRe-meshing after a radius-" << kStampRadius << " stamp on a sphere of radius "
+              << fixed(remesh[0].sphereRadius, 0)
               << " (MeshChunkSet::update over the stamp's dirty blocks, best of " << kUpdateRepeats
-              << " updates per stamp;\n9 stamps, alternately removing and adding):\n\n";
+              << " updates per stamp;\n"
+              << kStamps << " stamps, alternately removing and adding):\n\n";
     Table table;
     table.header = {"mesher", "median ms", "max ms", "chunks re-meshed", "equals full re-mesh"};
     for (const auto& r : remesh) {
