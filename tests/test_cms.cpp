@@ -97,8 +97,9 @@ TEST_CASE("CMS meshes of sculpted shapes are closed and lie on the analytic surf
         {"axis-aligned box", [&](Volume& v) { applyCsg(v, axisBox, op(CsgMode::Add)); },
          [&](const Vec3d& p) { return axisBox.distance(p); }, 0.02, 0.02},
         {"rotated box", [&](Volume& v) { applyCsg(v, rotatedBox, op(CsgMode::Add)); },
-         // Sub-voxel wedges along edges nearly parallel to a grid plane (see the next test).
-         [&](const Vec3d& p) { return rotatedBox.distance(p); }, 0.5, 0.5},
+         // Face segments follow sub-voxel wedges along edges nearly parallel to a grid plane (see the
+         // next test); without that the maximum is about 0.45.
+         [&](const Vec3d& p) { return rotatedBox.distance(p); }, 0.3, 0.3},
         {"sphere", [&](Volume& v) { applyCsg(v, ball, op(CsgMode::Add)); },
          [&](const Vec3d& p) { return ball.distance(p); }, 0.05, 0.15},
         {"box minus sphere",
@@ -264,8 +265,9 @@ TEST_CASE("adaptive CMS covers flat faces with a quarter of uniform CMS's triang
     };
     const std::vector<Case> cases = {
         {"axis-aligned box", Brush(box(Vec3d(20.3, 14.3, 11.3)), at(Vec3d(0.0))), 0.02},
-        // Sub-voxel wedges along edges nearly parallel to grid planes (see above) bound both meshes.
-        {"rotated box", Brush(box(Vec3d(20.0, 14.0, 11.0)), at(Vec3d(0.0), Vec3d(20, 35, 10))), 0.5},
+        // A strip of solid that crosses a square's side twice and goes on into the next square is cut
+        // straight at that side (about 0.25 voxel here) in both meshes.
+        {"rotated box", Brush(box(Vec3d(20.0, 14.0, 11.0)), at(Vec3d(0.0), Vec3d(20, 35, 10))), 0.3},
     };
     for (const Case& c : cases) {
         SECTION(c.name)
