@@ -362,22 +362,46 @@ TEST_CASE("re-meshing reaches the leaves whose subdivision reads an edited block
     requireClosed(incremental.weld());
 }
 
-TEST_CASE("leavesAffectedBy lists each block around the dirty ones once and in order near and far from the origin", "[cms][incremental]")
+TEST_CASE("leavesAffectedBy lists each block around the dirty ones once and in order, near and far, compact and scattered", "[cms][incremental]")
 {
-    // Blocks near the origin are sorted as packed keys; beyond 2^20 blocks per axis as arrays.
+    // Compact sets are marked in a grid over their bounds; scattered ones are sorted, near the origin
+    // as packed keys and beyond 2^20 blocks per axis as arrays.
     const int32_t far = 1 << 30;
-    for (const std::array<int32_t, 3> first : {std::array<int32_t, 3>{-16, 8, 0}, std::array<int32_t, 3>{far, -far, 8}}) {
-        INFO("first dirty block " << first[0] << ", " << first[1] << ", " << first[2]);
-        const std::array<int32_t, 3> second{first[0] + kLeafDim, first[1], first[2]};
-        std::vector<std::array<int32_t, 3>> expected;
-        for (const auto& b : {first, second})
-            for (int dx = -1; dx <= 1; ++dx)
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dz = -1; dz <= 1; ++dz)
-                        expected.push_back({b[0] + dx * kLeafDim, b[1] + dy * kLeafDim, b[2] + dz * kLeafDim});
-        std::sort(expected.begin(), expected.end());
-        expected.erase(std::unique(expected.begin(), expected.end()), expected.end()); // 36: 18 are shared
-        const MeshOptions uniform = optionsFor(MesherKind::CubicalMarchingSquares, Cells::Uniform);
-        CHECK(leavesAffectedBy({second, first, second}, uniform) == expected);
+    const int32_t apart = 4096 * kLeafDim;
+    struct Layout {
+        const char* name;
+        std::vector<std::array<int32_t, 3>> dirty;
+    };
+    const std::vector<Layout> layouts = {
+        {"adjacent near the origin", {{-8, 8, 0}, {-16, 8, 0}, {-8, 8, 0}}},
+        {"adjacent far away", {{far + kLeafDim, -far, 8}, {far, -far, 8}}},
+        {"scattered near the origin", {{-16, 8, 0}, {-16 + apart, 8, apart}}},
+        {"scattered far away", {{far, -far, 8}, {far - apart, -far, 8}}},
+    };
+    for (const Cells cells : {Cells::Uniform, Cells::Adaptive}) {
+        const MeshOptions options = optionsFor(MesherKind::CubicalMarchingSquares, cells);
+        for (const Layout& layout : layouts) {
+            INFO((cells == Cells::Uniform ? "uniform, " : "adaptive, ") << layout.name);
+            std::vector<std::array<int32_t, 3>> expected;
+            auto add = [&](const std::array<int32_t, 3>& b, int dx, int dy, int dz) {
+                expected.push_back({b[0] + dx * kLeafDim, b[1] + dy * kLeafDim, b[2] + dz * kLeafDim});
+            };
+            for (const auto& b : layout.dirty) {
+                for (int dx = -1; dx <= 1; ++dx)
+                    for (int dy = -1; dy <= 1; ++dy)
+                        for (int dz = -1; dz <= 1; ++dz) add(b, dx, dy, dz);
+                if (cells == Cells::Uniform) continue;
+                // The face neighbours of the leaves at -1 .. 0 blocks, whose subdivision reads b.
+                for (int dx = -1; dx <= 0; ++dx)
+                    for (int dy = -1; dy <= 0; ++dy)
+                        for (int dz = -1; dz <= 0; ++dz)
+                            for (int axis = 0; axis < 3; ++axis)
+                                for (int step : {-1, 1})
+                                    add(b, dx + (axis == 0) * step, dy + (axis == 1) * step, dz + (axis == 2) * step);
+            }
+            std::sort(expected.begin(), expected.end());
+            expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
+            CHECK(leavesAffectedBy(layout.dirty, options) == expected);
+        }
     }
 }
