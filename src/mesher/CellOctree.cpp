@@ -13,117 +13,177 @@ namespace {
 
 constexpr int kLattice = kLeafDim + 1; // voxels o .. o+8 per axis
 
-/// The spread of a set of unit normals: their sum, and the largest angle between one of them and the
-/// sum's direction. Merging bounds a parent's spread by its children's (the angle from the parent's
-/// mean to a child's mean plus the child's own spread), so each normal is read once.
+/// The spread of a set of unit normals: their sum, and the cosine of the largest angle between one of
+/// them and the sum's direction. Merging bounds a parent's spread by its children's (the angle from the
+/// parent's mean to a child's mean plus the child's own spread), so each normal is read once. Cells
+/// stay whole only within less than a right angle, so every wider spread is held as cosine -1.
 struct NormalCone {
     double sum[3] = {0.0, 0.0, 0.0};
-    double halfAngle = 0.0; // radians
+    double cosSpread = 1.0;
     int count = 0;
 
-    static double angleBetween(const double a[3], const double b[3])
+    /// The cosine of the angle between two sums: -1 where either is zero.
+    static double cosBetween(const double a[3], const double b[3])
     {
         const double la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
         const double lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
-        if (la == 0.0 || lb == 0.0) return M_PI;
-        const double c = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (la * lb);
-        return std::acos(std::clamp(c, -1.0, 1.0));
+        if (la == 0.0 || lb == 0.0) return -1.0;
+        return std::clamp((a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (la * lb), -1.0, 1.0);
+    }
+
+    /// cos(a + b) from cos a and cos b: -1 when either angle is wider than a right angle.
+    static double cosOfSum(double cosA, double cosB)
+    {
+        if (cosA < 0.0 || cosB < 0.0) return -1.0;
+        return cosA * cosB - std::sqrt((1.0 - cosA * cosA) * (1.0 - cosB * cosB));
     }
 };
 
-/// A leaf's voxel lattice (o .. o+8) with the normals of its crossings, read once per leaf.
+/// Bit k of kWindowsChangingTwice[level - 1][c]: the k-th window of 2^level consecutive bits of c
+/// (a lattice line's material changes, bit t between points t and t + 1) holds more than one change.
+constexpr std::array<std::array<uint8_t, 256>, 3> kWindowsChangingTwice = [] {
+    std::array<std::array<uint8_t, 256>, 3> table{};
+    for (int level = 1; level <= 3; ++level) {
+        const int width = 1 << level;
+        for (uint32_t changes = 0; changes < 256; ++changes)
+            for (int k = 0; k < kLeafDim / width; ++k) {
+                const uint32_t window = (changes >> (k * width)) & ((1u << width) - 1);
+                if (window & (window - 1)) table[level - 1][changes] |= uint8_t(1u << k);
+            }
+    }
+    return table;
+}();
+
+/// The cell of width 2^level at cell coordinates (x, y, z) is bit (x * count + y) * count + z of a
+/// level's cell mask, with count = 8 >> level.
+constexpr int cellBit(int level, int x, int y, int z)
+{
+    const int count = kLeafDim >> level;
+    return (x * count + y) * count + z;
+}
+
+/// A leaf's voxel lattice (o .. o+8): which points are solid, seen along each axis, and its crossings
+/// with their normals, read once per leaf.
 class LeafLattice {
 public:
-    LeafLattice(const CornerGrid& grid, const Neighbourhood& hood) : grid_(grid)
+    static constexpr int kTwoVoxelCells = (kLeafDim / 2) * (kLeafDim / 2) * (kLeafDim / 2);
+
+    LeafLattice(const CornerGrid& grid, const Neighbourhood& hood, NormalCone twoVoxelCones[kTwoVoxelCells]) : grid_(grid)
     {
-        // Solid bits along each axis: line (u, v) of axis a holds bit t for voxel t along a, where u and
-        // v are the coordinates along (a + 1) % 3 and (a + 2) % 3.
-        MaterialId solid = kEmptyMaterial;
-        singleMaterial_ = true;
+        // Solid bits along each axis: line (u, v) of axis a holds bit t for lattice point t along a, where
+        // u and v are the coordinates along (a + 1) % 3 and (a + 2) % 3. The corner grid's rows along z
+        // cover points -1 .. 9.
         std::fill(&solidLine_[0][0][0], &solidLine_[0][0][0] + 3 * kLattice * kLattice, 0u);
+        MaterialId firstSolid = kEmptyMaterial;
+        for (int x = 0; x < kLattice; ++x)
+            for (int y = 0; y < kLattice; ++y) {
+                const uint32_t line = (grid.solidRows[x + 1][y + 1] >> 1) & ((1u << kLattice) - 1);
+                solidLine_[2][x][y] = line;
+                if (line && firstSolid == kEmptyMaterial) firstSolid = grid.at(x, y, __builtin_ctz(line)).id;
+                for (uint32_t rest = line; rest; rest &= rest - 1) {
+                    const int z = __builtin_ctz(rest);
+                    solidLine_[0][y][z] |= 1u << x;
+                    solidLine_[1][z][x] |= 1u << y;
+                }
+            }
+        bool mixed = false;
         for (int x = 0; x < kLattice; ++x)
             for (int y = 0; y < kLattice; ++y)
                 for (int z = 0; z < kLattice; ++z) {
                     const MaterialId m = grid.at(x, y, z).id;
-                    if (m == kEmptyMaterial) continue;
-                    if (solid == kEmptyMaterial) solid = m;
-                    else if (m != solid) singleMaterial_ = false;
-                    solidLine_[0][y][z] |= 1u << x;
-                    solidLine_[1][z][x] |= 1u << y;
-                    solidLine_[2][x][y] |= 1u << z;
+                    mixed |= m != kEmptyMaterial && m != firstSolid;
                 }
-        // The crossings' normals (a leaf's surface holds a few hundred).
+        singleMaterial_ = !mixed;
         for (int axis = 0; axis < 3; ++axis)
             for (int u = 0; u < kLattice; ++u)
                 for (int v = 0; v < kLattice; ++v) {
-                    uint32_t changes = (solidLine_[axis][u][v] ^ (solidLine_[axis][u][v] >> 1)) & ((1u << kLeafDim) - 1);
-                    while (changes) {
-                        const int t = __builtin_ctz(changes);
-                        changes &= changes - 1;
-                        int c[3];
-                        c[axis] = t;
-                        c[(axis + 1) % 3] = u;
-                        c[(axis + 2) % 3] = v;
-                        const PackedSample* s = hood.sample(grid.origin.offsetBy(c[0], c[1], c[2]), axis);
-                        if (!s) continue;
-                        const UnpackedSample u = unpackSample(*s);
-                        double p[3] = {double(c[0]), double(c[1]), double(c[2])};
-                        p[axis] += u.offset;
-                        crossings_.push_back({{c[0], c[1], c[2]}, axis, {u.normal[0], u.normal[1], u.normal[2]}, {p[0], p[1], p[2]}});
-                    }
+                    const uint32_t line = solidLine_[axis][u][v];
+                    changes_[axis][u][v] = uint8_t((line ^ (line >> 1)) & ((1u << kLeafDim) - 1));
                 }
-        // Each two-voxel cell's crossings: a crossing counts in every such cell that holds its voxel
-        // edge (up to four, where the edge lies on cell faces).
-        std::fill(std::begin(memberStart_), std::end(memberStart_), 0);
-        for (const Crossing& x : crossings_) forEachTwoVoxelCell(x, [&](int cell) { ++memberStart_[cell + 1]; });
-        for (int cell = 0; cell < kTwoVoxelCells; ++cell) memberStart_[cell + 1] += memberStart_[cell];
-        members_.resize(memberStart_[kTwoVoxelCells]);
-        int next[kTwoVoxelCells];
-        std::copy(memberStart_, memberStart_ + kTwoVoxelCells, next);
-        for (std::size_t i = 0; i < crossings_.size(); ++i)
-            forEachTwoVoxelCell(crossings_[i], [&](int cell) { members_[next[cell]++] = &crossings_[i]; });
+        // The crossings (a leaf's surface holds a few hundred), each added to the normal sums of the
+        // two-voxel cells holding its voxel edge.
+        crossings_.reserve(256);
+        for (int axis = 0; axis < 3; ++axis)
+            for (int u = 0; u < kLattice; ++u)
+                for (int v = 0; v < kLattice; ++v)
+                    for (uint32_t changes = changes_[axis][u][v]; changes; changes &= changes - 1) {
+                        Crossing x;
+                        x.at[axis] = uint8_t(__builtin_ctz(changes));
+                        x.at[(axis + 1) % 3] = uint8_t(u);
+                        x.at[(axis + 2) % 3] = uint8_t(v);
+                        x.axis = uint8_t(axis);
+                        const PackedSample* s = hood.sample(grid.origin.offsetBy(x.at[0], x.at[1], x.at[2]), axis);
+                        if (!s) continue;
+                        const UnpackedSample sample = unpackSample(*s);
+                        std::copy(sample.normal.begin(), sample.normal.end(), x.normal);
+                        x.offset = sample.offset;
+                        x.cellCount = 0;
+                        forEachTwoVoxelCell(x, [&](int cell) {
+                            x.cells[x.cellCount++] = uint8_t(cell);
+                            NormalCone& cone = twoVoxelCones[cell];
+                            for (int a = 0; a < 3; ++a) cone.sum[a] += x.normal[a];
+                            ++cone.count;
+                        });
+                        crossings_.push_back(x);
+                    }
+        // Each cone's spread: the widest angle between one of its normals and its sum.
+        double length[kTwoVoxelCells], minCos[kTwoVoxelCells];
+        for (int cell = 0; cell < kTwoVoxelCells; ++cell) {
+            const double* sum = twoVoxelCones[cell].sum;
+            length[cell] = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+            minCos[cell] = 1.0;
+        }
+        for (const Crossing& x : crossings_)
+            for (int i = 0; i < x.cellCount; ++i) {
+                const int cell = x.cells[i];
+                const double* sum = twoVoxelCones[cell].sum;
+                const double cosine = length[cell] > 0.0
+                                          ? (x.normal[0] * sum[0] + x.normal[1] * sum[1] + x.normal[2] * sum[2]) / length[cell]
+                                          : -1.0;
+                minCos[cell] = std::min(minCos[cell], cosine);
+            }
+        for (int cell = 0; cell < kTwoVoxelCells; ++cell) twoVoxelCones[cell].cosSpread = std::clamp(minCos[cell], -1.0, 1.0);
     }
 
-    /// Two-voxel cell (i, j, k) is number (i * 4 + j) * 4 + k.
-    static constexpr int kTwoVoxelCells = (kLeafDim / 2) * (kLeafDim / 2) * (kLeafDim / 2);
-
-    /// Whether every grid line through the cell of `width` at leaf-local `b` changes material at most
-    /// once, the cell holds at most one solid material, and none of its faces is ambiguous.
-    bool simpleTopology(const int b[3], int width) const
+    /// The cells of width 2^level (cellBit order) that some lattice line through them crosses the
+    /// surface more than once in: their edges hide surface, or a face or the inside does.
+    uint64_t cellsWithLinesChangingTwice(int level) const
     {
-        if (!singleMaterial_ && !singleMaterialIn(b, width)) return false;
-        if (uniform(b, width)) return true; // most cells of a surface leaf hold no surface
-        const uint32_t span = (1u << width) - 1;
+        const int width = 1 << level, count = kLeafDim >> level;
+        const std::array<uint8_t, 256>& windows = kWindowsChangingTwice[level - 1];
+        uint64_t cells = 0;
         for (int axis = 0; axis < 3; ++axis) {
             const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-            for (int i = 0; i <= width; ++i)
-                for (int j = 0; j <= width; ++j) {
-                    const uint32_t bits = solidLine_[axis][b[u] + i][b[v] + j] >> b[axis];
-                    const uint32_t changes = (bits ^ (bits >> 1)) & span;
-                    if (changes & (changes - 1)) return false; // more than one change
+            for (int cu = 0; cu < count; ++cu)
+                for (int cv = 0; cv < count; ++cv) {
+                    uint32_t twice = 0; // bit k: the k-th cell along the axis
+                    for (int i = 0; i <= width; ++i)
+                        for (int j = 0; j <= width; ++j) twice |= windows[changes_[axis][cu * width + i][cv * width + j]];
+                    for (; twice; twice &= twice - 1) {
+                        int c[3];
+                        c[axis] = __builtin_ctz(twice);
+                        c[u] = cu;
+                        c[v] = cv;
+                        cells |= uint64_t(1) << cellBit(level, c[0], c[1], c[2]);
+                    }
                 }
         }
-        return unambiguousFaces(b, width);
+        return cells;
     }
 
-    /// The normal cones of the two-voxel cells.
-    void twoVoxelCones(NormalCone cones[kTwoVoxelCells]) const
+    /// Whether the cell of `width` at leaf-local `b`, whose lattice lines each change material at most
+    /// once, holds at most one solid material and no ambiguous face.
+    bool simpleBeyondLines(const int b[3], int width) const
     {
-        for (int cell = 0; cell < kTwoVoxelCells; ++cell) {
-            NormalCone& c = cones[cell];
-            for (int m = memberStart_[cell]; m < memberStart_[cell + 1]; ++m) {
-                for (int a = 0; a < 3; ++a) c.sum[a] += members_[m]->normal[a];
-                ++c.count;
-            }
-            if (c.count == 0) continue;
-            const double length = std::sqrt(c.sum[0] * c.sum[0] + c.sum[1] * c.sum[1] + c.sum[2] * c.sum[2]);
-            double minCos = 1.0;
-            for (int m = memberStart_[cell]; m < memberStart_[cell + 1]; ++m) {
-                const double* n = members_[m]->normal;
-                minCos = std::min(minCos, length > 0.0 ? (n[0] * c.sum[0] + n[1] * c.sum[1] + n[2] * c.sum[2]) / length : -1.0);
-            }
-            c.halfAngle = std::acos(std::clamp(minCos, -1.0, 1.0));
-        }
+        if (!singleMaterial_ && !singleMaterialIn(b, width)) return false;
+        // Corner c has bits x, y, z = c & 1, (c >> 1) & 1, c >> 2: the lines along z give corners (x, y)
+        // at bit z of the low face and bit z + width of the high face.
+        const int x0 = b[0], x1 = b[0] + width, y0 = b[1], y1 = b[1] + width, z = b[2];
+        const uint32_t lines[4] = {solidLine_[2][x0][y0], solidLine_[2][x1][y0], solidLine_[2][x0][y1], solidLine_[2][x1][y1]};
+        unsigned solidCorners = 0;
+        for (int c = 0; c < 4; ++c)
+            solidCorners |= (((lines[c] >> z) & 1u) << c) | (((lines[c] >> (z + width)) & 1u) << (c + 4));
+        return !kCellCases[solidCorners].ambiguousFace;
     }
 
     /// Whether the two-voxel cell (i, j, k) holds one straight sharp edge: its crossings' normals fall
@@ -132,19 +192,20 @@ public:
     bool holdsOneSharpEdge(int i, int j, int k, double cosHalfSpread) const
     {
         const int b[3] = {2 * i, 2 * j, 2 * k};
-        constexpr int kCells = kLeafDim / 2;
-        const int cell = (i * kCells + j) * kCells + k;
-        const Crossing* const* members = members_.data() + memberStart_[cell];
-        const int count = memberStart_[cell + 1] - memberStart_[cell];
+        const int cell = cellBit(1, i, j, k);
+        // A two-voxel cell holds at most 54 voxel edges (18 per axis).
+        std::array<const Crossing*, 54> members;
+        int count = 0;
+        for (const Crossing& x : crossings_)
+            if (std::find(x.cells, x.cells + x.cellCount, cell) != x.cells + x.cellCount && count < int(members.size()))
+                members[count++] = &x;
         if (count < 2) return false;
-        auto dot = [](const double* a, const double* c) { return a[0] * c[0] + a[1] * c[1] + a[2] * c[2]; };
-        const double* seed[2] = {members[0]->normal, members[0]->normal};
+        auto dot = [](const auto* a, const auto* c) { return double(a[0]) * c[0] + double(a[1]) * c[1] + double(a[2]) * c[2]; };
+        const float* seed[2] = {members[0]->normal, members[0]->normal};
         for (int m = 1; m < count; ++m)
             if (dot(members[m]->normal, seed[0]) < dot(seed[1], seed[0])) seed[1] = members[m]->normal;
         double mean[2][3] = {};
-        // A two-voxel cell holds at most 54 voxel edges (18 per axis).
         std::array<uint8_t, 54> group;
-        if (count > int(group.size())) return false;
         for (int m = 0; m < count; ++m) {
             group[m] = dot(members[m]->normal, seed[1]) > dot(members[m]->normal, seed[0]) ? 1 : 0;
             for (int a = 0; a < 3; ++a) mean[group[m]][a] += members[m]->normal[a];
@@ -163,7 +224,8 @@ public:
         double offset[2] = {0.0, 0.0};
         int sizes[2] = {0, 0};
         for (int m = 0; m < count; ++m) {
-            const Eigen::Vector3d p(members[m]->position[0], members[m]->position[1], members[m]->position[2]);
+            Eigen::Vector3d p(members[m]->at[0], members[m]->at[1], members[m]->at[2]);
+            p[members[m]->axis] += members[m]->offset;
             offset[group[m]] += (group[m] ? n1 : n0).dot(p);
             ++sizes[group[m]];
         }
@@ -181,13 +243,13 @@ public:
 
 private:
     struct Crossing {
-        int at[3];
-        int axis;
-        double normal[3];
-        double position[3]; // leaf-local voxel units
+        float normal[3];
+        float offset; // along the axis from `at`
+        uint8_t at[3];
+        uint8_t axis;
+        uint8_t cells[4]; // the two-voxel cells holding the voxel edge
+        uint8_t cellCount;
     };
-
-    MaterialId material(const int v[3]) const { return grid_.at(v[0], v[1], v[2]).id; }
 
     /// Calls fn(cell) for each two-voxel cell that holds the crossing's voxel edge.
     template<typename Fn>
@@ -206,19 +268,7 @@ private:
         }
         for (int i = lo[0]; i <= hi[0]; ++i)
             for (int j = lo[1]; j <= hi[1]; ++j)
-                for (int k = lo[2]; k <= hi[2]; ++k) fn((i * kCells + j) * kCells + k);
-    }
-
-    /// Whether the cell's lattice points are all solid or all empty, from its lines along z.
-    bool uniform(const int b[3], int width) const
-    {
-        const uint32_t points = (1u << (width + 1)) - 1;
-        const uint32_t first = (solidLine_[2][b[0]][b[1]] >> b[2]) & points;
-        if (first != 0 && first != points) return false;
-        for (int i = 0; i <= width; ++i)
-            for (int j = 0; j <= width; ++j)
-                if (((solidLine_[2][b[0] + i][b[1] + j] >> b[2]) & points) != first) return false;
-        return true;
+                for (int k = lo[2]; k <= hi[2]; ++k) fn(cellBit(1, i, j, k));
     }
 
     bool singleMaterialIn(const int b[3], int width) const
@@ -235,22 +285,11 @@ private:
         return true;
     }
 
-    bool unambiguousFaces(const int b[3], int width) const
-    {
-        unsigned solidCorners = 0;
-        for (int c = 0; c < 8; ++c) {
-            const int v[3] = {b[0] + width * cornerBit(c, 0), b[1] + width * cornerBit(c, 1), b[2] + width * cornerBit(c, 2)};
-            if (material(v) != kEmptyMaterial) solidCorners |= 1u << c;
-        }
-        return !kCellCases[solidCorners].ambiguousFace;
-    }
-
     const CornerGrid& grid_; // the lattice's materials are the corner grid's o .. o+8
     bool singleMaterial_;
     uint32_t solidLine_[3][kLattice][kLattice];
+    uint8_t changes_[3][kLattice][kLattice]; // bit t: the line changes material between points t and t + 1
     std::vector<Crossing> crossings_;
-    std::vector<const Crossing*> members_;
-    int memberStart_[kTwoVoxelCells + 1];
 };
 
 } // namespace
@@ -259,40 +298,33 @@ LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, c
 {
     LeafCellSizes sizes{};
     if (criteria.maxCellSize <= 1) return sizes;
-    const LeafLattice lattice(grid, hood);
-    const double halfSpread = std::acos(std::clamp(criteria.cosHalfSpread, -1.0, 1.0));
-    // whole[level][x][y][z]: whether the cell of width 2^level at (x, y, z) * 2^level stays whole,
-    // with its normals' cone.
-    bool whole[4][kLeafDim][kLeafDim][kLeafDim] = {};
-    // Normal cones of the cells of width 2, 4 and 8, at (x * count + y) * count + z with count = 8 >> level.
-    NormalCone twoVoxel[64], fourVoxel[8], eightVoxel[1];
+    // Normal cones of the cells of width 2, 4 and 8, in cellBit order.
+    NormalCone twoVoxel[LeafLattice::kTwoVoxelCells], fourVoxel[8], eightVoxel[1];
     NormalCone* const cones[4] = {nullptr, twoVoxel, fourVoxel, eightVoxel};
-    lattice.twoVoxelCones(twoVoxel);
-    for (int x = 0; x < kLeafDim; ++x)
-        for (int y = 0; y < kLeafDim; ++y)
-            for (int z = 0; z < kLeafDim; ++z) whole[0][x][y][z] = true;
+    LeafLattice lattice(grid, hood, twoVoxel);
+    // whole[level], bit cellBit(level, x, y, z): the cell of width 2^level at (x, y, z) * 2^level stays
+    // whole (voxel cells always do).
+    uint64_t whole[4] = {0, 0, 0, 0};
+    auto isWhole = [&](int level, int x, int y, int z) { return (whole[level] >> cellBit(level, x, y, z)) & 1u; };
     int finest = 0;
     for (int level = 1; (1 << level) <= criteria.maxCellSize && level <= 3; ++level) {
         const int width = 1 << level, count = kLeafDim >> level;
-        bool any = false;
+        const uint64_t linesChangingTwice = lattice.cellsWithLinesChangingTwice(level);
         for (int x = 0; x < count; ++x)
             for (int y = 0; y < count; ++y)
                 for (int z = 0; z < count; ++z) {
-                    bool& keep = whole[level][x][y][z];
-                    keep = true;
-                    for (int c = 0; c < 8 && keep && level > 1; ++c) // every voxel cell is whole
-                        keep = whole[level - 1][2 * x + cornerBit(c, 0)][2 * y + cornerBit(c, 1)][2 * z + cornerBit(c, 2)];
+                    const int bit = cellBit(level, x, y, z);
+                    if ((linesChangingTwice >> bit) & 1u) continue;
+                    bool childrenWhole = true;
+                    for (int c = 0; c < 8 && childrenWhole && level > 1; ++c)
+                        childrenWhole = isWhole(level - 1, 2 * x + cornerBit(c, 0), 2 * y + cornerBit(c, 1), 2 * z + cornerBit(c, 2));
                     const int b[3] = {x * width, y * width, z * width};
-                    if (!keep || !lattice.simpleTopology(b, width)) {
-                        keep = false;
-                        continue;
-                    }
-                    NormalCone& cone = cones[level][(x * count + y) * count + z];
+                    if (!childrenWhole || !lattice.simpleBeyondLines(b, width)) continue;
+                    NormalCone& cone = cones[level][bit];
                     if (level > 1) {
                         auto childCone = [&](int c) -> const NormalCone& {
-                            const int childCount = 2 * count;
-                            const int cx = 2 * x + cornerBit(c, 0), cy = 2 * y + cornerBit(c, 1), cz = 2 * z + cornerBit(c, 2);
-                            return cones[level - 1][(cx * childCount + cy) * childCount + cz];
+                            return cones[level - 1][cellBit(level - 1, 2 * x + cornerBit(c, 0), 2 * y + cornerBit(c, 1),
+                                                            2 * z + cornerBit(c, 2))];
                         };
                         for (int c = 0; c < 8; ++c) {
                             for (int k = 0; k < 3; ++k) cone.sum[k] += childCone(c).sum[k];
@@ -301,26 +333,30 @@ LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, c
                         for (int c = 0; c < 8; ++c) {
                             const NormalCone& child = childCone(c);
                             if (child.count == 0) continue;
-                            cone.halfAngle = std::max(cone.halfAngle, NormalCone::angleBetween(child.sum, cone.sum) + child.halfAngle);
+                            cone.cosSpread = std::min(
+                                cone.cosSpread, NormalCone::cosOfSum(NormalCone::cosBetween(child.sum, cone.sum), child.cosSpread));
                         }
                     }
-                    keep = cone.halfAngle <= halfSpread ||
-                           (level == 1 && lattice.holdsOneSharpEdge(x, y, z, criteria.cosHalfSpread));
-                    any = any || keep;
+                    if (cone.cosSpread >= criteria.cosHalfSpread ||
+                        (level == 1 && lattice.holdsOneSharpEdge(x, y, z, criteria.cosHalfSpread)))
+                        whole[level] |= uint64_t(1) << bit;
                 }
-        if (!any) break;
+        if (!whole[level]) break;
         finest = level;
     }
     // Each voxel cell takes the widest whole cell containing it; the eight voxel cells of a two-voxel
     // cell share every cell wider than one voxel.
-    for (int x = 0; x < kLeafDim; x += 2)
-        for (int y = 0; y < kLeafDim; y += 2)
-            for (int z = 0; z < kLeafDim; z += 2) {
+    uint8_t twoVoxelLevel[kLeafDim / 2][kLeafDim / 2][kLeafDim / 2];
+    for (int x = 0; x < kLeafDim / 2; ++x)
+        for (int y = 0; y < kLeafDim / 2; ++y)
+            for (int z = 0; z < kLeafDim / 2; ++z) {
                 int level = finest;
-                while (level > 0 && !whole[level][x >> level][y >> level][z >> level]) --level;
-                for (int c = 0; c < 8; ++c)
-                    sizes.log2Width[x + cornerBit(c, 0)][y + cornerBit(c, 1)][z + cornerBit(c, 2)] = uint8_t(level);
+                while (level > 0 && !isWhole(level, (2 * x) >> level, (2 * y) >> level, (2 * z) >> level)) --level;
+                twoVoxelLevel[x][y][z] = uint8_t(level);
             }
+    for (int x = 0; x < kLeafDim; ++x)
+        for (int y = 0; y < kLeafDim; ++y)
+            for (int z = 0; z < kLeafDim; ++z) sizes.log2Width[x][y][z] = twoVoxelLevel[x / 2][y / 2][z / 2];
     return sizes;
 }
 
