@@ -66,24 +66,35 @@ struct CornerGrid {
 
     CornerGrid(const HermiteLeaf& leaf, const Neighbourhood& hood) : origin(leaf.origin())
     {
+        // Each block's voxels, fetched once: a leaf buffer's element access checks for delayed loading
+        // on every call.
+        const MaterialValue* blockData[3][3][3];
+        for (int bx = 0; bx < 3; ++bx)
+            for (int by = 0; by < 3; ++by)
+                for (int bz = 0; bz < 3; ++bz) {
+                    const HermiteLeaf* blockLeaf = hood.leafAt(bx - 1, by - 1, bz - 1);
+                    blockData[bx][by][bz] = blockLeaf ? blockLeaf->buffer().data() : nullptr;
+                }
+        constexpr Index kMask = kLeafDim - 1;
         for (int x = 0; x < kSpan; ++x)
             for (int y = 0; y < kSpan; ++y) {
                 const int bx = blockOf(x), by = blockOf(y);
                 // A leaf's voxels are stored z fastest: a row's voxels in one block are consecutive.
-                const Index rowStart = HermiteLeaf::coordToOffset(origin.offsetBy(x - 1, y - 1, 0));
-                auto voxel = [&](int bz, Index offset) {
-                    const HermiteLeaf* blockLeaf = hood.leafAt(bx, by, bz);
-                    return blockLeaf ? blockLeaf->buffer()[offset] : hood.tileAt(bx, by, bz);
-                };
+                const Index rowStart = (Index(x - 1) & kMask) << (2 * kLeafLog2Dim) | (Index(y - 1) & kMask) << kLeafLog2Dim;
+                const MaterialValue* const* column = blockData[bx + 1][by + 1];
                 MaterialValue* row = cells[x][y];
-                row[0] = voxel(-1, rowStart + kLeafDim - 1);
-                row[kSpan - 1] = voxel(1, rowStart);
-                if (const HermiteLeaf* rowLeaf = hood.leafAt(bx, by, 0))
-                    std::copy_n(&rowLeaf->buffer()[rowStart], kLeafDim, row + 1);
-                else
-                    std::fill_n(row + 1, kLeafDim, hood.tileAt(bx, by, 0));
-                uint32_t bits = 0;
-                for (int z = 0; z < kSpan; ++z) bits |= uint32_t(row[z].solid()) << z;
+                row[0] = column[0] ? column[0][rowStart + kLeafDim - 1] : hood.tileAt(bx, by, -1);
+                row[kSpan - 1] = column[2] ? column[2][rowStart] : hood.tileAt(bx, by, 1);
+                // The solid bits come from the source, not from the row just written.
+                uint32_t bits = uint32_t(row[0].solid()) | uint32_t(row[kSpan - 1].solid()) << (kSpan - 1);
+                if (const MaterialValue* source = column[1] ? column[1] + rowStart : nullptr) {
+                    std::copy_n(source, kLeafDim, row + 1);
+                    for (int z = 0; z < kLeafDim; ++z) bits |= uint32_t(source[z].solid()) << (z + 1);
+                } else {
+                    const MaterialValue tile = hood.tileAt(bx, by, 0);
+                    std::fill_n(row + 1, kLeafDim, tile);
+                    if (tile.solid()) bits |= ((1u << kLeafDim) - 1) << 1;
+                }
                 solidRows[x][y] = bits;
             }
     }

@@ -30,7 +30,16 @@ std::array<double, 3> decodeOctahedral(double u, double v)
     return {x * inv, y * inv, z * inv};
 }
 
-double codeToCoord(int q) { return q / double(kNormalMax) * 2.0 - 1.0; }
+// Every code's octahedral coordinate, computed at compile time with the same IEEE operations a
+// division at run time would do: decoding sits on the mesher's hot path, a table read does not wait
+// for a division.
+constexpr std::array<double, kNormalMax + 1> kCodeCoords = [] {
+    std::array<double, kNormalMax + 1> coords{};
+    for (int q = 0; q <= kNormalMax; ++q) coords[q] = q / double(kNormalMax) * 2.0 - 1.0;
+    return coords;
+}();
+
+double codeToCoord(int q) { return kCodeCoords[q]; }
 
 } // namespace
 
