@@ -404,4 +404,19 @@ TEST_CASE("leavesAffectedBy lists each block around the dirty ones once and in o
             CHECK(leavesAffectedBy(layout.dirty, options) == expected);
         }
     }
+    // Once the changed cells are known, only their leaves' face neighbours join the blocks around.
+    const std::vector<std::array<int32_t, 3>> dirty = {{0, 0, 0}};
+    const std::vector<std::array<int32_t, 3>> changedCells = {{-8, 0, 0}, {0, -4096, 0}};
+    std::vector<std::array<int32_t, 3>> expected = leavesAffectedBy(dirty, optionsFor(MesherKind::CubicalMarchingSquares, Cells::Uniform));
+    for (const auto& leaf : changedCells)
+        for (int axis = 0; axis < 3; ++axis)
+            for (int step : {-kLeafDim, kLeafDim}) {
+                std::array<int32_t, 3> neighbour = leaf;
+                neighbour[axis] += step;
+                expected.push_back(neighbour);
+            }
+    std::sort(expected.begin(), expected.end());
+    expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
+    CHECK(expected.size() == 27 + 1 + 6); // of (-8, 0, 0)'s neighbours only (-16, 0, 0) lies outside the 27
+    CHECK(leavesAffectedBy(dirty, changedCells) == expected);
 }

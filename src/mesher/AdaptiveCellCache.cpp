@@ -5,28 +5,23 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <unordered_set>
 
 namespace vdbclay::mesher_detail {
 
-void AdaptiveCellCache::prepare(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves,
-                                const MeshOptions& options)
+namespace {
+
+/// The cells of each leaf, subdivided in parallel.
+std::vector<LeafCellSizes> subdivideLeaves(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves,
+                                           const MeshOptions& options)
 {
-    std::vector<const HermiteLeaf*> missing;
-    std::unordered_set<Coord> queued;
-    auto add = [&](const HermiteLeaf* leaf) {
-        if (leaf && !sizes_.count(leaf->origin()) && queued.insert(leaf->origin()).second) missing.push_back(leaf);
-    };
-    for (const HermiteLeaf* leaf : leaves) {
-        add(leaf);
-        for (int f = 0; f < 6; ++f) add(tree.probeConstLeaf(faceNeighbour(leaf->origin(), f)));
-    }
-    std::vector<LeafCellSizes> fresh(missing.size());
+    std::vector<LeafCellSizes> sizes(leaves.size());
     const double cosHalfSpread = std::cos(0.5 * options.subdivisionAngleDegrees * M_PI / 180.0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, missing.size(), 8), [&](const auto& range) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 8), [&](const auto& range) {
         ConstAccessor acc(tree);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            const HermiteLeaf& leaf = *missing[i];
+            const HermiteLeaf& leaf = *leaves[i];
             const Neighbourhood hood(leaf, acc);
             SubdivisionCriteria criteria;
             criteria.maxCellSize = options.maxCellWidth;
@@ -35,10 +30,58 @@ void AdaptiveCellCache::prepare(const HermiteTree& tree, const std::vector<const
                 criteria.maxCellSize = std::min(criteria.maxCellSize, options.leafMaxCellWidth({o.x(), o.y(), o.z()}));
             }
             criteria.cosHalfSpread = cosHalfSpread;
-            fresh[i] = subdivideLeaf(CornerGrid(leaf, hood), hood, criteria);
+            sizes[i] = subdivideLeaf(CornerGrid(leaf, hood), hood, criteria);
         }
     });
+    return sizes;
+}
+
+} // namespace
+
+void AdaptiveCellCache::prepare(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves,
+                                const MeshOptions& options)
+{
+    std::vector<const HermiteLeaf*> missing;
+    std::unordered_set<Coord> queued;
+    ConstAccessor acc(tree);
+    auto add = [&](const HermiteLeaf* leaf) {
+        if (leaf && !sizes_.count(leaf->origin()) && queued.insert(leaf->origin()).second) missing.push_back(leaf);
+    };
+    for (const HermiteLeaf* leaf : leaves) {
+        add(leaf);
+        for (int f = 0; f < 6; ++f) add(acc.probeConstLeaf(faceNeighbour(leaf->origin(), f)));
+    }
+    std::vector<LeafCellSizes> fresh = subdivideLeaves(tree, missing, options);
     for (std::size_t i = 0; i < missing.size(); ++i) sizes_.emplace(missing[i]->origin(), fresh[i]);
+}
+
+std::vector<std::array<int32_t, 3>> AdaptiveCellCache::refreshAround(const HermiteTree& tree,
+                                                                     const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
+                                                                     const MeshOptions& options)
+{
+    std::vector<Coord> candidates;
+    candidates.reserve(dirtyBlocks.size() * 8);
+    for (const auto& b : dirtyBlocks)
+        forEachLeafSubdividingWith(Coord(b[0], b[1], b[2]), [&](const Coord& leaf) { candidates.push_back(leaf); });
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+
+    std::vector<std::array<int32_t, 3>> changed;
+    std::vector<const HermiteLeaf*> present;
+    ConstAccessor acc(tree);
+    for (const Coord& origin : candidates) {
+        if (const HermiteLeaf* leaf = acc.probeConstLeaf(origin)) present.push_back(leaf);
+        else if (sizes_.erase(origin)) changed.push_back({origin.x(), origin.y(), origin.z()});
+    }
+    const std::vector<LeafCellSizes> fresh = subdivideLeaves(tree, present, options);
+    for (std::size_t i = 0; i < present.size(); ++i) {
+        const Coord origin = present[i]->origin();
+        const auto [it, added] = sizes_.try_emplace(origin, fresh[i]);
+        if (!added && std::memcmp(&it->second, &fresh[i], sizeof(LeafCellSizes)) == 0) continue;
+        it->second = fresh[i];
+        changed.push_back({origin.x(), origin.y(), origin.z()});
+    }
+    return changed;
 }
 
 CellWidthField AdaptiveCellCache::around(const HermiteLeaf& leaf) const
@@ -46,13 +89,6 @@ CellWidthField AdaptiveCellCache::around(const HermiteLeaf& leaf) const
     const LeafCellSizes* blocks[7] = {find(leaf.origin())};
     for (int f = 0; f < 6; ++f) blocks[1 + f] = find(faceNeighbour(leaf.origin(), f));
     return CellWidthField(leaf.origin(), blocks);
-}
-
-void AdaptiveCellCache::forgetAround(const std::vector<std::array<int32_t, 3>>& dirtyBlocks)
-{
-    if (sizes_.empty()) return;
-    for (const auto& b : dirtyBlocks)
-        forEachLeafSubdividingWith(Coord(b[0], b[1], b[2]), [&](const Coord& leaf) { sizes_.erase(leaf); });
 }
 
 const LeafCellSizes* AdaptiveCellCache::find(const Coord& origin) const

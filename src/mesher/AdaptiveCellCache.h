@@ -40,11 +40,16 @@ public:
     /// The cell widths around `leaf`, whose face neighbours prepare() has seen.
     CellWidthField around(const HermiteLeaf& leaf) const;
 
-    /// Drops the cells of the leaves whose subdivision reads the given leaf-sized blocks
-    /// (forEachLeafSubdividingWith), so that the next prepare() subdivides them again.
-    void forgetAround(const std::vector<std::array<int32_t, 3>>& dirtyBlocks);
+    /// Subdivides again the leaves whose subdivision reads the given leaf-sized blocks
+    /// (forEachLeafSubdividingWith) and drops those that no longer exist. Returns the origins of the
+    /// leaves whose cells changed, appeared or vanished: only their face neighbours can split a face
+    /// differently.
+    std::vector<std::array<int32_t, 3>> refreshAround(const HermiteTree& tree,
+                                                      const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
+                                                      const MeshOptions& options);
 
     void clear() { sizes_.clear(); }
+    bool empty() const { return sizes_.empty(); }
 
 private:
     const LeafCellSizes* find(const Coord& origin) const;

@@ -102,7 +102,6 @@ public:
                 }
         // The crossings (a leaf's surface holds a few hundred), each added to the normal sums of the
         // two-voxel cells holding its voxel edge.
-        crossings_.reserve(256);
         for (int axis = 0; axis < 3; ++axis)
             for (int u = 0; u < kLattice; ++u)
                 for (int v = 0; v < kLattice; ++v)
@@ -124,7 +123,7 @@ public:
                             for (int a = 0; a < 3; ++a) cone.sum[a] += x.normal[a];
                             ++cone.count;
                         });
-                        crossings_.push_back(x);
+                        crossings_[crossingCount_++] = x;
                     }
         // Each cone's spread: the widest angle between one of its normals and its sum.
         double length[kTwoVoxelCells], minCos[kTwoVoxelCells];
@@ -133,7 +132,7 @@ public:
             length[cell] = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
             minCos[cell] = 1.0;
         }
-        for (const Crossing& x : crossings_)
+        for (const Crossing& x : crossings())
             for (int i = 0; i < x.cellCount; ++i) {
                 const int cell = x.cells[i];
                 const double* sum = twoVoxelCones[cell].sum;
@@ -196,7 +195,7 @@ public:
         // A two-voxel cell holds at most 54 voxel edges (18 per axis).
         std::array<const Crossing*, 54> members;
         int count = 0;
-        for (const Crossing& x : crossings_)
+        for (const Crossing& x : crossings())
             if (std::find(x.cells, x.cells + x.cellCount, cell) != x.cells + x.cellCount && count < int(members.size()))
                 members[count++] = &x;
         if (count < 2) return false;
@@ -289,7 +288,19 @@ private:
     bool singleMaterial_;
     uint32_t solidLine_[3][kLattice][kLattice];
     uint8_t changes_[3][kLattice][kLattice]; // bit t: the line changes material between points t and t + 1
-    std::vector<Crossing> crossings_;
+    // A lattice line along an axis changes material at most once per voxel edge: 3 * 9 * 9 * 8 edges.
+    // Kept on the stack: an allocation per leaf cost a tenth of the subdivision.
+    static constexpr int kMaxCrossings = 3 * kLattice * kLattice * kLeafDim;
+    Crossing crossings_[kMaxCrossings];
+    int crossingCount_ = 0;
+
+    struct CrossingRange {
+        const Crossing* first;
+        const Crossing* last;
+        const Crossing* begin() const { return first; }
+        const Crossing* end() const { return last; }
+    };
+    CrossingRange crossings() const { return {crossings_, crossings_ + crossingCount_}; }
 };
 
 } // namespace

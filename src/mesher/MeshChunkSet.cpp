@@ -13,6 +13,18 @@ MeshChunkSet::MeshChunkSet(const MeshOptions& options)
 }
 
 MeshChunkSet::~MeshChunkSet() = default;
+MeshChunkSet::MeshChunkSet(const MeshChunkSet& other)
+    : options_(other.options_), chunks_(other.chunks_),
+      cells_(std::make_unique<mesher_detail::AdaptiveCellCache>(*other.cells_))
+{
+}
+
+MeshChunkSet& MeshChunkSet::operator=(const MeshChunkSet& other)
+{
+    if (this != &other) *this = MeshChunkSet(other);
+    return *this;
+}
+
 MeshChunkSet::MeshChunkSet(MeshChunkSet&&) noexcept = default;
 MeshChunkSet& MeshChunkSet::operator=(MeshChunkSet&&) noexcept = default;
 
@@ -28,8 +40,15 @@ void MeshChunkSet::rebuild(const Volume& volume)
 
 std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockOrigin>& dirtyBlocks)
 {
-    const std::vector<BlockOrigin> origins = leavesAffectedBy(dirtyBlocks, options_);
-    cells_->forgetAround(dirtyBlocks);
+    std::vector<BlockOrigin> origins;
+    if (cells_->empty()) {
+        origins = leavesAffectedBy(dirtyBlocks, options_);
+    } else {
+        // Subdividing first shows whose cells changed: a leaf whose cells did not need not make its
+        // face neighbours mesh their faces again.
+        const HermiteTree& tree = volume.impl().grid->constTree();
+        origins = leavesAffectedBy(dirtyBlocks, cells_->refreshAround(tree, dirtyBlocks, options_));
+    }
     std::vector<std::optional<MeshChunk>> fresh = meshLeafChunks(volume, origins, options_, cells_.get());
     std::size_t remeshed = 0;
     for (std::size_t i = 0; i < origins.size(); ++i) {

@@ -18,6 +18,8 @@ public:
 
     explicit MeshChunkSet(const MeshOptions& options = {});
     ~MeshChunkSet();
+    MeshChunkSet(const MeshChunkSet& other);
+    MeshChunkSet& operator=(const MeshChunkSet& other);
     MeshChunkSet(MeshChunkSet&&) noexcept;
     MeshChunkSet& operator=(MeshChunkSet&&) noexcept;
 

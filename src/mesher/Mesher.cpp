@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <iterator>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -139,6 +140,19 @@ std::optional<std::vector<std::array<int32_t, 3>>> markAround(const std::vector<
     return out;
 }
 
+/// The blocks at `offsets` (sorted, unique) from each of `blocks`, sorted and unique.
+std::vector<std::array<int32_t, 3>> blocksAround(const std::vector<std::array<int32_t, 3>>& blocks,
+                                                 const std::vector<Coord>& offsets)
+{
+    if (auto marked = markAround(blocks, offsets)) return std::move(*marked);
+    std::vector<std::array<int32_t, 3>> out;
+    out.reserve(blocks.size() * offsets.size());
+    for (const auto& b : blocks)
+        for (const Coord& d : offsets) out.push_back({b[0] + d[0], b[1] + d[1], b[2] + d[2]});
+    sortUniqueBlocks(out);
+    return out;
+}
+
 void checkRange(const Coord& origin)
 {
     using namespace mesher_detail;
@@ -224,13 +238,21 @@ std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
 std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
                                                      const MeshOptions& options)
 {
-    const std::vector<Coord> offsets = affectedOffsets(adaptive(options));
-    if (auto marked = markAround(dirtyBlocks, offsets)) return std::move(*marked);
+    return blocksAround(dirtyBlocks, affectedOffsets(adaptive(options)));
+}
+
+std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
+                                                     const std::vector<std::array<int32_t, 3>>& changedCells)
+{
+    using namespace mesher_detail;
+    std::vector<Coord> faces;
+    for (int f = 0; f < 6; ++f) faces.push_back(faceNeighbour(Coord(0), f));
+    std::sort(faces.begin(), faces.end());
+    const std::vector<std::array<int32_t, 3>> read = blocksAround(dirtyBlocks, affectedOffsets(false));
+    const std::vector<std::array<int32_t, 3>> split = blocksAround(changedCells, faces);
     std::vector<std::array<int32_t, 3>> out;
-    out.reserve(dirtyBlocks.size() * offsets.size());
-    for (const auto& b : dirtyBlocks)
-        for (const Coord& d : offsets) out.push_back({b[0] + d[0], b[1] + d[1], b[2] + d[2]});
-    sortUniqueBlocks(out);
+    out.reserve(read.size() + split.size());
+    std::set_union(read.begin(), read.end(), split.begin(), split.end(), std::back_inserter(out));
     return out;
 }
 

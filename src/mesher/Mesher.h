@@ -44,6 +44,11 @@ void validateMeshOptions(const MeshOptions& options);
 /// subdivision reads it. Sorted and unique.
 std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
                                                      const MeshOptions& options);
+/// The same for adaptive CMS once it is known whose cells the edit changed (MeshChunkSet subdivides
+/// again first): the blocks a changed voxel's cells touch, and the face neighbours of the leaves in
+/// `changedCells`. A subset of the list above. Sorted and unique.
+std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
+                                                     const std::vector<std::array<int32_t, 3>>& changedCells);
 
 namespace mesher_detail {
 class AdaptiveCellCache;
