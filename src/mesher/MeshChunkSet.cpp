@@ -13,18 +13,6 @@ MeshChunkSet::MeshChunkSet(const MeshOptions& options)
 }
 
 MeshChunkSet::~MeshChunkSet() = default;
-MeshChunkSet::MeshChunkSet(const MeshChunkSet& other)
-    : options_(other.options_), chunks_(other.chunks_),
-      cells_(std::make_unique<mesher_detail::AdaptiveCellCache>(*other.cells_))
-{
-}
-
-MeshChunkSet& MeshChunkSet::operator=(const MeshChunkSet& other)
-{
-    if (this != &other) *this = MeshChunkSet(other);
-    return *this;
-}
-
 MeshChunkSet::MeshChunkSet(MeshChunkSet&&) noexcept = default;
 MeshChunkSet& MeshChunkSet::operator=(MeshChunkSet&&) noexcept = default;
 

@@ -18,8 +18,6 @@ public:
 
     explicit MeshChunkSet(const MeshOptions& options = {});
     ~MeshChunkSet();
-    MeshChunkSet(const MeshChunkSet& other);
-    MeshChunkSet& operator=(const MeshChunkSet& other);
     MeshChunkSet(MeshChunkSet&&) noexcept;
     MeshChunkSet& operator=(MeshChunkSet&&) noexcept;
 
@@ -27,8 +25,9 @@ public:
     void rebuild(const Volume& volume);
 
     /// Re-meshes the leaves around the given leaf-sized blocks (EditStats::dirtyBlocks), as
-    /// leavesAffectedBy lists them; chunks of leaves that no longer exist are dropped. Returns the
-    /// number of chunks re-meshed.
+    /// leavesAffectedBy lists them; with adaptive cells it subdivides first and lists only the face
+    /// neighbours of leaves whose cells changed. Chunks of leaves that no longer exist are dropped.
+    /// Returns the number of chunks re-meshed.
     std::size_t update(const Volume& volume, const std::vector<BlockOrigin>& dirtyBlocks);
 
     const std::map<BlockOrigin, MeshChunk>& chunks() const { return chunks_; }
