@@ -364,8 +364,7 @@ TEST_CASE("re-meshing reaches the leaves whose subdivision reads an edited block
 
 TEST_CASE("leavesAffectedBy lists each block around the dirty ones once and in order, near and far, compact and scattered", "[cms][incremental]")
 {
-    // Compact sets are marked in a grid over their bounds; scattered ones are sorted, near the origin
-    // as packed keys and beyond 2^20 blocks per axis as arrays.
+    // Compact sets are marked in a grid over their bounds; scattered ones are sorted.
     const int32_t far = 1 << 30;
     const int32_t apart = 4096 * kLeafDim;
     struct Layout {

@@ -49,7 +49,6 @@ public:
                                                       const MeshOptions& options);
 
     void clear() { sizes_.clear(); }
-    bool empty() const { return sizes_.empty(); }
 
 private:
     const LeafCellSizes* find(const Coord& origin) const;

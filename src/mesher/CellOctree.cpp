@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <vector>
 
 namespace vdbclay::mesher_detail {
 
@@ -125,19 +124,19 @@ public:
                         });
                         crossings_[crossingCount_++] = x;
                     }
-        // Each cone's spread: the widest angle between one of its normals and its sum.
+        // Each cone's spread: the cosine of the widest angle between one of its normals and its sum.
         double length[kTwoVoxelCells], minCos[kTwoVoxelCells];
         for (int cell = 0; cell < kTwoVoxelCells; ++cell) {
             const double* sum = twoVoxelCones[cell].sum;
             length[cell] = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
             minCos[cell] = 1.0;
         }
-        for (const Crossing& x : crossings())
-            for (int i = 0; i < x.cellCount; ++i) {
-                const int cell = x.cells[i];
+        for (const Crossing* x = crossings_; x != crossings_ + crossingCount_; ++x)
+            for (int i = 0; i < x->cellCount; ++i) {
+                const int cell = x->cells[i];
                 const double* sum = twoVoxelCones[cell].sum;
                 const double cosine = length[cell] > 0.0
-                                          ? (x.normal[0] * sum[0] + x.normal[1] * sum[1] + x.normal[2] * sum[2]) / length[cell]
+                                          ? (x->normal[0] * sum[0] + x->normal[1] * sum[1] + x->normal[2] * sum[2]) / length[cell]
                                           : -1.0;
                 minCos[cell] = std::min(minCos[cell], cosine);
             }
@@ -195,9 +194,9 @@ public:
         // A two-voxel cell holds at most 54 voxel edges (18 per axis).
         std::array<const Crossing*, 54> members;
         int count = 0;
-        for (const Crossing& x : crossings())
-            if (std::find(x.cells, x.cells + x.cellCount, cell) != x.cells + x.cellCount && count < int(members.size()))
-                members[count++] = &x;
+        for (const Crossing* x = crossings_; x != crossings_ + crossingCount_; ++x)
+            if (std::find(x->cells, x->cells + x->cellCount, cell) != x->cells + x->cellCount && count < int(members.size()))
+                members[count++] = x;
         if (count < 2) return false;
         auto dot = [](const auto* a, const auto* c) { return double(a[0]) * c[0] + double(a[1]) * c[1] + double(a[2]) * c[2]; };
         const float* seed[2] = {members[0]->normal, members[0]->normal};
@@ -288,19 +287,10 @@ private:
     bool singleMaterial_;
     uint32_t solidLine_[3][kLattice][kLattice];
     uint8_t changes_[3][kLattice][kLattice]; // bit t: the line changes material between points t and t + 1
-    // A lattice line along an axis changes material at most once per voxel edge: 3 * 9 * 9 * 8 edges.
-    // Kept on the stack: an allocation per leaf cost a tenth of the subdivision.
+    // At most one per voxel edge of the lattice: 3 * 9 * 9 * 8. On the stack, so a leaf allocates nothing.
     static constexpr int kMaxCrossings = 3 * kLattice * kLattice * kLeafDim;
     Crossing crossings_[kMaxCrossings];
     int crossingCount_ = 0;
-
-    struct CrossingRange {
-        const Crossing* first;
-        const Crossing* last;
-        const Crossing* begin() const { return first; }
-        const Crossing* end() const { return last; }
-    };
-    CrossingRange crossings() const { return {crossings_, crossings_ + crossingCount_}; }
 };
 
 } // namespace

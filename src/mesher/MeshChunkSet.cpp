@@ -29,13 +29,13 @@ void MeshChunkSet::rebuild(const Volume& volume)
 std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockOrigin>& dirtyBlocks)
 {
     std::vector<BlockOrigin> origins;
-    if (cells_->empty()) {
-        origins = leavesAffectedBy(dirtyBlocks, options_);
-    } else {
+    if (meshesAdaptiveCells(options_)) {
         // Subdividing first shows whose cells changed: a leaf whose cells did not need not make its
         // face neighbours mesh their faces again.
         const HermiteTree& tree = volume.impl().grid->constTree();
         origins = leavesAffectedBy(dirtyBlocks, cells_->refreshAround(tree, dirtyBlocks, options_));
+    } else {
+        origins = leavesAffectedBy(dirtyBlocks, options_);
     }
     std::vector<std::optional<MeshChunk>> fresh = meshLeafChunks(volume, origins, options_, cells_.get());
     std::size_t remeshed = 0;

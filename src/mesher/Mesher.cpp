@@ -37,43 +37,12 @@ void validateMeshOptions(const MeshOptions& options)
         throw std::invalid_argument("the widest cell must be 1, 2, 4 or 8 voxels");
 }
 
-namespace {
-
-bool adaptive(const MeshOptions& options)
+bool meshesAdaptiveCells(const MeshOptions& options)
 {
     return options.kind == MesherKind::CubicalMarchingSquares && (options.maxCellWidth > 1 || options.leafMaxCellWidth);
 }
 
-/// Sorts block origins lexicographically and drops duplicates. Leaf-aligned blocks within 2^20 blocks
-/// of the origin per axis (far beyond the mesher's range) are sorted as packed 64-bit keys, several
-/// times faster than comparing arrays; an update's few thousand candidates would otherwise cost a
-/// tenth of its re-meshing.
-void sortUniqueBlocks(std::vector<std::array<int32_t, 3>>& blocks)
-{
-    constexpr int64_t kBias = int64_t(1) << 20;
-    const bool packable = std::all_of(blocks.begin(), blocks.end(), [](const std::array<int32_t, 3>& b) {
-        return std::all_of(b.begin(), b.end(),
-                           [](int32_t v) { return v % kLeafDim == 0 && std::abs(int64_t(v) / kLeafDim) < kBias; });
-    });
-    if (!packable) {
-        std::sort(blocks.begin(), blocks.end());
-        blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
-        return;
-    }
-    std::vector<uint64_t> keys(blocks.size());
-    for (std::size_t i = 0; i < blocks.size(); ++i) {
-        uint64_t key = 0;
-        for (const int32_t v : blocks[i]) key = (key << 21) | uint64_t(v / kLeafDim + kBias);
-        keys[i] = key;
-    }
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    blocks.resize(keys.size());
-    constexpr uint64_t kMask = (uint64_t(1) << 21) - 1;
-    for (std::size_t i = 0; i < keys.size(); ++i)
-        for (int axis = 0; axis < 3; ++axis)
-            blocks[i][axis] = int32_t((int64_t((keys[i] >> (21 * (2 - axis))) & kMask) - kBias) * kLeafDim);
-}
+namespace {
 
 /// Offsets, in voxels, from a changed block to the leaves whose chunks can change: a cell reads the
 /// blocks of its eight corners (the 27 around the block) and, for adaptive CMS, a leaf whose
@@ -140,7 +109,8 @@ std::optional<std::vector<std::array<int32_t, 3>>> markAround(const std::vector<
     return out;
 }
 
-/// The blocks at `offsets` (sorted, unique) from each of `blocks`, sorted and unique.
+/// The blocks at `offsets` (sorted, unique) from each of `blocks`, sorted and unique: marked in a grid
+/// where the blocks are compact, sorted where they are scattered (rare: one edit's blocks are compact).
 std::vector<std::array<int32_t, 3>> blocksAround(const std::vector<std::array<int32_t, 3>>& blocks,
                                                  const std::vector<Coord>& offsets)
 {
@@ -149,7 +119,8 @@ std::vector<std::array<int32_t, 3>> blocksAround(const std::vector<std::array<in
     out.reserve(blocks.size() * offsets.size());
     for (const auto& b : blocks)
         for (const Coord& d : offsets) out.push_back({b[0] + d[0], b[1] + d[1], b[2] + d[2]});
-    sortUniqueBlocks(out);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
     return out;
 }
 
@@ -168,7 +139,7 @@ std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<con
     std::vector<MeshChunk> chunks(leaves.size());
     std::optional<AdaptiveCellCache> ownCache;
     AdaptiveCellCache* cells = nullptr;
-    if (adaptive(options)) {
+    if (meshesAdaptiveCells(options)) {
         cells = cache ? cache : &ownCache.emplace();
         cells->prepare(tree, leaves, options);
     }
@@ -238,7 +209,7 @@ std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
 std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
                                                      const MeshOptions& options)
 {
-    return blocksAround(dirtyBlocks, affectedOffsets(adaptive(options)));
+    return blocksAround(dirtyBlocks, affectedOffsets(meshesAdaptiveCells(options)));
 }
 
 std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,

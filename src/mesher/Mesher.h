@@ -39,6 +39,9 @@ struct MeshOptions {
 /// first can check before.
 void validateMeshOptions(const MeshOptions& options);
 
+/// Whether the options mesh cells wider than a voxel (adaptive CMS), which need subdividing first.
+bool meshesAdaptiveCells(const MeshOptions& options);
+
 /// The leaves whose chunks can change when the given leaf-sized blocks change (EditStats::dirtyBlocks):
 /// the blocks a changed voxel's cells touch and, for adaptive CMS, the leaves whose face neighbours'
 /// subdivision reads it. Sorted and unique.
