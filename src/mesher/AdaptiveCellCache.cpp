@@ -18,7 +18,7 @@ std::vector<LeafCellSizes> subdivideLeaves(const HermiteTree& tree, const std::v
 {
     std::vector<LeafCellSizes> sizes(leaves.size());
     const double cosHalfSpread = std::cos(0.5 * options.subdivisionAngleDegrees * M_PI / 180.0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 8), [&](const auto& range) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 2), [&](const auto& range) {
         ConstAccessor acc(tree);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const HermiteLeaf& leaf = *leaves[i];

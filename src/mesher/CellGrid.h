@@ -11,6 +11,10 @@
 #include <algorithm>
 #include <memory>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace vdbclay::mesher_detail {
 
 using ConstAccessor = openvdb::tree::ValueAccessor<const HermiteTree, /*IsSafe=*/false>;
@@ -59,6 +63,34 @@ private:
     MaterialValue tiles_[27];
 };
 
+/// Bit z set where the voxel row[z] (z = 0 .. 7) is solid: one row of a leaf along z.
+inline uint32_t solidBitsOfRow(const MaterialValue* row)
+{
+    static_assert(sizeof(MaterialValue) == 2 && kLeafDim == 8 && kEmptyMaterial == 0, "a leaf row: eight 16-bit ids, 0 empty");
+#if defined(__SSE2__)
+    const __m128i ids = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row));
+    const __m128i empty = _mm_cmpeq_epi16(ids, _mm_setzero_si128());
+    return ~uint32_t(_mm_movemask_epi8(_mm_packs_epi16(empty, empty))) & 0xffu;
+#else
+    uint32_t bits = 0;
+    for (int z = 0; z < kLeafDim; ++z) bits |= uint32_t(row[z].solid()) << z;
+    return bits;
+#endif
+}
+
+/// Whether each of the voxels row[0 .. 7] is empty or holds `material`.
+inline bool rowHoldsOnly(const MaterialValue* row, MaterialId material)
+{
+#if defined(__SSE2__)
+    const __m128i ids = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row));
+    const __m128i allowed = _mm_or_si128(_mm_cmpeq_epi16(ids, _mm_setzero_si128()),
+                                         _mm_cmpeq_epi16(ids, _mm_set1_epi16(short(material))));
+    return _mm_movemask_epi8(allowed) == 0xffff;
+#else
+    return std::all_of(row, row + kLeafDim, [&](MaterialValue m) { return !m.solid() || m.id == material; });
+#endif
+}
+
 /// The materials of the voxels o-1 .. o+8 per axis around a leaf at origin o: every corner a cell
 /// owned by the leaf can have, gathered once per leaf, with a bit mask of the solid ones per row.
 struct CornerGrid {
@@ -89,7 +121,7 @@ struct CornerGrid {
                 uint32_t bits = uint32_t(row[0].solid()) | uint32_t(row[kSpan - 1].solid()) << (kSpan - 1);
                 if (const MaterialValue* source = column[1] ? column[1] + rowStart : nullptr) {
                     std::copy_n(source, kLeafDim, row + 1);
-                    for (int z = 0; z < kLeafDim; ++z) bits |= uint32_t(source[z].solid()) << (z + 1);
+                    bits |= solidBitsOfRow(source) << 1;
                 } else {
                     const MaterialValue tile = hood.tileAt(bx, by, 0);
                     std::fill_n(row + 1, kLeafDim, tile);

@@ -87,11 +87,10 @@ public:
             }
         bool mixed = false;
         for (int x = 0; x < kLattice; ++x)
-            for (int y = 0; y < kLattice; ++y)
-                for (int z = 0; z < kLattice; ++z) {
-                    const MaterialId m = grid.at(x, y, z).id;
-                    mixed |= m != kEmptyMaterial && m != firstSolid;
-                }
+            for (int y = 0; y < kLattice; ++y) {
+                const MaterialValue last = grid.at(x, y, kLeafDim);
+                mixed |= !rowHoldsOnly(&grid.cells[x + 1][y + 1][1], firstSolid) || (last.solid() && last.id != firstSolid);
+            }
         singleMaterial_ = !mixed;
         for (int axis = 0; axis < 3; ++axis)
             for (int u = 0; u < kLattice; ++u)

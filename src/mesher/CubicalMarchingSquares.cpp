@@ -148,12 +148,13 @@ struct CubicalMarchingSquaresMesher::Buffers {
     uint32_t edgeCrossing[kSpan * kSpan * kSpan * 3];
     std::vector<EdgeCrossing> crossings;
     std::vector<uint32_t> usedEdgeSlots;
-    // The segments of each one-voxel face square, by the slot of its minimum corner and normal axis,
-    // as meshed by the first cell that reached it; the cell on its other side reuses them reversed.
+    // The segments of each face square, by the slot of its minimum corner and normal axis, as meshed
+    // by the first cell that reached it; the cell on its other side reuses them reversed.
     struct SquareRecord {
         uint32_t first = kNone; // into squareSegments
         uint16_t count = 0;
-        uint8_t side = 0; // of the face for the cell that meshed it
+        uint8_t side = 0;  // of the face for the cell that meshed it
+        uint8_t width = 0; // in voxels
     };
     SquareRecord squares[kSpan * kSpan * kSpan * 3];
     std::vector<Segment> squareSegments;
@@ -390,13 +391,12 @@ private:
                 return;
             }
         }
-        if (width == 1) meshVoxelSquare(f, u0, v0);
-        else meshSquare(makeSquare(f, u0, v0, width));
+        meshSharedSquare(f, u0, v0, width);
     }
 
-    /// A one-voxel square is meshed once per leaf; the cell on its other side walks it the other
-    /// way round, so it takes the segments reversed.
-    void meshVoxelSquare(int f, int u0, int v0)
+    /// A face square is meshed once per leaf: its segments depend on the square alone, and the cell on
+    /// its other side walks it the other way round, so it takes them reversed.
+    void meshSharedSquare(int f, int u0, int v0, int width)
     {
         const int axis = f / 2, side = f % 2;
         Coord minCorner;
@@ -405,17 +405,19 @@ private:
         minCorner[(axis + 2) % 3] = v0;
         Buffers& b = ctx_.buffers;
         const int slot = Buffers::edgeSlot(ctx_.origin, minCorner, axis);
-        if (slot >= 0 && b.squares[slot].first != Buffers::kNone) {
+        if (slot >= 0 && b.squares[slot].first != Buffers::kNone && b.squares[slot].width == width) {
             const Buffers::SquareRecord& record = b.squares[slot];
             for (uint32_t i = record.first; i < record.first + record.count; ++i)
                 appendSegment(segments_, b.squareSegments[i], record.side != side);
             return;
         }
         const std::size_t before = segments_.size();
-        const Square sq = makeSquare(f, u0, v0, 1);
-        meshSquare(sq);
-        if (slot < 0) return;
-        b.squares[slot] = {uint32_t(b.squareSegments.size()), uint16_t(segments_.size() - before), uint8_t(side)};
+        meshSquare(makeSquare(f, u0, v0, width));
+        // Squares of different widths never share a minimum corner and axis: both cells split a face
+        // where the finer of them does. The check above only guards that.
+        if (slot < 0 || b.squares[slot].first != Buffers::kNone) return;
+        b.squares[slot] = {uint32_t(b.squareSegments.size()), uint16_t(segments_.size() - before), uint8_t(side),
+                           uint8_t(width)};
         b.usedSquareSlots.push_back(uint32_t(slot));
         for (std::size_t i = before; i < segments_.size(); ++i) appendSegment(b.squareSegments, segments_[i], false);
     }

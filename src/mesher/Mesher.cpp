@@ -145,7 +145,7 @@ std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<con
     }
     // One mesher per thread: its buffers span a leaf's neighbourhood and are worth keeping.
     tbb::enumerable_thread_specific<std::unique_ptr<CubicalMarchingSquaresMesher>> meshers;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 8), [&](const auto& range) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 2), [&](const auto& range) {
         ConstAccessor acc(tree);
         if (options.kind == MesherKind::MarchingCubes) {
             for (std::size_t i = range.begin(); i != range.end(); ++i)
