@@ -52,10 +52,11 @@ public:
 
 private:
     static int slot(int dx, int dy, int dz) { return (dx + 1) * 9 + (dy + 1) * 3 + (dz + 1); }
+    /// `c` lies within one block of the centre: c - origin is in -8 .. 15 per axis.
     int slotOf(const Coord& c) const
     {
-        auto block = [](int v, int o) { return v < o ? -1 : (v >= o + kLeafDim ? 1 : 0); };
-        return slot(block(c.x(), origin_.x()), block(c.y(), origin_.y()), block(c.z(), origin_.z()));
+        auto block = [](int v, int o) { return (v - o + kLeafDim) >> kLeafLog2Dim; }; // 0, 1 or 2
+        return block(c.x(), origin_.x()) * 9 + block(c.y(), origin_.y()) * 3 + block(c.z(), origin_.z());
     }
 
     Coord origin_;

@@ -1136,7 +1136,7 @@ MeshChunk CubicalMarchingSquaresMesher::mesh(const HermiteLeaf& leaf, ConstAcces
         for (int y = 0; y < kLeafDim; ++y)
             for (int z = 0; z < kLeafDim; ++z) {
                 const int width = own->widthAt(x, y, z);
-                if (x % width || y % width || z % width) continue;
+                if ((x | y | z) & (width - 1)) continue; // cells are aligned to their power-of-two width
                 MaterialValue mats[8];
                 unsigned solid = 0;
                 for (int c = 0; c < 8; ++c) {

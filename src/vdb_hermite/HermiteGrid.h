@@ -106,6 +106,20 @@ public:
 
     static constexpr int edgeBit(Index voxelOffset, int axis) { return int(voxelOffset) * 3 + axis; }
 
+    /// Set bits of a word, inline: without a POPCNT target the builtin is a library call, and this
+    /// lookup runs for every sample the mesher reads.
+    static int bitCount(uint64_t w)
+    {
+#if defined(__POPCNT__)
+        return __builtin_popcountll(w);
+#else
+        w -= (w >> 1) & 0x5555555555555555ull;
+        w = (w & 0x3333333333333333ull) + ((w >> 2) & 0x3333333333333333ull);
+        w = (w + (w >> 4)) & 0x0f0f0f0f0f0f0f0full;
+        return int((w * 0x0101010101010101ull) >> 56);
+#endif
+    }
+
     /// The sample on the positive `axis` edge of the voxel, or nullptr when that edge does not cross.
     const PackedSample* sample(Index voxelOffset, int axis) const
     {
@@ -113,7 +127,7 @@ public:
         const uint64_t word = edgeBits_[bit >> 6];
         if (!((word >> (bit & 63)) & 1u)) return nullptr;
         const uint64_t below = word & ((uint64_t(1) << (bit & 63)) - 1);
-        return &samples_[prefix_[bit >> 6] + __builtin_popcountll(below)];
+        return &samples_[prefix_[bit >> 6] + bitCount(below)];
     }
     std::size_t sampleCount() const { return samples_.size(); }
 
