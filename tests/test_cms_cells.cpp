@@ -1,6 +1,7 @@
 // The corner-case table both meshers read (CellTopology.h), and Cubical Marching Squares' shortcut for
-// smooth voxel cells checked against the full face walk. White-box: includes the mesher's internal,
-// OpenVDB-heavy CellGrid.h.
+// smooth cells, voxel-wide and adaptive, checked against the full face walk. White-box: includes the
+// mesher's internal, OpenVDB-heavy headers.
+#include "mesher/AdaptiveCellCache.h"
 #include "mesher/CellGrid.h"
 #include "support/HermiteProbe.h"
 #include "support/Sculpt.h"
@@ -111,30 +112,31 @@ TEST_CASE("each corner case's loops cross every cut cell edge once, face by face
     }
 }
 
-TEST_CASE("CMS meshes smooth voxel cells from the corner-case table exactly as the face walk does", "[cms]")
+TEST_CASE("CMS meshes smooth cells from the corner-case table exactly as the face walk does", "[cms]")
 {
     struct Case {
         const char* name;
         std::function<void(Volume&)> build;
-        double minShareFromTable; // of the surface cells
+        double minShareFromTable;         // of the surface cells, voxel cells
+        double minAdaptiveShareFromTable; // of the surface cells, adaptive (below it without wide cells' shortcut)
     };
     const std::vector<Case> cases = {
-        {"sphere", [](Volume& v) { apply(v, CsgMode::Add, sphere(14.0), at(Vec3d(0.2, -0.3, 0.1))); }, 0.95},
+        {"sphere", [](Volume& v) { apply(v, CsgMode::Add, sphere(14.0), at(Vec3d(0.2, -0.3, 0.1))); }, 0.95, 0.85},
         {"rotated box", [](Volume& v) { apply(v, CsgMode::Add, box(Vec3d(10.3, 7.2, 5.6)), at(Vec3d(0.3, 0.2, 0.1), Vec3d(20, 35, 10))); },
-         0.8},
+         0.8, 0.43},
         {"box minus sphere",
          [](Volume& v) {
              apply(v, CsgMode::Add, box(Vec3d(12.0)), at(Vec3d(0.5)));
              apply(v, CsgMode::Remove, sphere(8.0), at(Vec3d(12.5)));
          },
-         0.85},
+         0.85, 0.42},
         {"thin wall",
          [](Volume& v) {
              apply(v, CsgMode::Add, box(Vec3d(14.0)), at(Vec3d(0.2)));
              apply(v, CsgMode::Remove, sphere(7.0), at(Vec3d(-7.6, 0.3, 14.0)));
              apply(v, CsgMode::Remove, sphere(7.0), at(Vec3d(7.1, 0.3, 14.0)));
          },
-         0.85},
+         0.85, 0.6},
         {"two materials",
          [](Volume& v) {
              const MaterialId stone = defineMaterial(v, "stone", 0.9f);
@@ -142,7 +144,7 @@ TEST_CASE("CMS meshes smooth voxel cells from the corner-case table exactly as t
              apply(v, CsgMode::Add, sphere(12.0), at(Vec3d(0.3)), stone);
              apply(v, CsgMode::Paint, box(Vec3d(50.0)), at(Vec3d(0.0, 0.0, 50.3)), moss);
          },
-         0.9},
+         0.9, 0.6},
     };
     for (const Case& c : cases) {
         SECTION(c.name)
@@ -151,20 +153,31 @@ TEST_CASE("CMS meshes smooth voxel cells from the corner-case table exactly as t
             c.build(v);
             const HermiteTree& tree = v.impl().grid->tree();
             ConstAccessor acc(tree);
+            const bool adaptive = GENERATE(false, true);
+            // Adaptive: the cells of every leaf, as the mesher subdivides them.
+            AdaptiveCellCache cells;
+            if (adaptive) {
+                std::vector<const HermiteLeaf*> leaves;
+                for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) leaves.push_back(leaf.getLeaf());
+                cells.prepare(tree, leaves, MeshOptions{});
+            }
             CubicalMarchingSquaresMesher walked(v.voxelSize(), 30.0, /*walkEveryCell=*/true);
             CubicalMarchingSquaresMesher shortcut(v.voxelSize(), 30.0);
             std::size_t triangles = 0;
             for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
-                const MeshChunk expected = walked.mesh(*leaf, acc, nullptr);
-                REQUIRE(identical(expected, shortcut.mesh(*leaf, acc, nullptr)));
+                const CellWidthField widths = cells.around(*leaf);
+                const CellWidthField* field = adaptive ? &widths : nullptr;
+                const MeshChunk expected = walked.mesh(*leaf, acc, field);
+                REQUIRE(identical(expected, shortcut.mesh(*leaf, acc, field)));
                 triangles += expected.mesh.triangleCount();
             }
-            CHECK(triangles > 1000);
+            CHECK(triangles > (adaptive ? 200 : 1000));
             CHECK(walked.cellsFromCaseTable() == 0);
             REQUIRE(shortcut.cellsMeshed() == walked.cellsMeshed());
             const double share = double(shortcut.cellsFromCaseTable()) / double(shortcut.cellsMeshed());
-            INFO(shortcut.cellsFromCaseTable() << " of " << shortcut.cellsMeshed() << " cells from the table");
-            CHECK(share >= c.minShareFromTable);
+            INFO((adaptive ? "adaptive: " : "voxel cells: ") << shortcut.cellsFromCaseTable() << " of "
+                                                              << shortcut.cellsMeshed() << " cells from the table");
+            CHECK(share >= (adaptive ? c.minAdaptiveShareFromTable : c.minShareFromTable));
             CHECK(share < 1.0); // each shape also has cells the walk must take
         }
     }

@@ -112,8 +112,9 @@ Vec2 normalized(const Vec2& v)
 
 /// Whether the normals at the two ends of a segment on a face with normal `axis`, projected onto the
 /// face, span the sharp angle there: the segment is then a candidate for a 2D sharp feature. A normal
-/// along the axis has no direction on the face.
-bool segmentBends(const std::array<float, 3>& normalA, const std::array<float, 3>& normalB, int axis, double cosSharp)
+/// along the axis has no direction on the face. Forced inline: it runs for every segment of every
+/// smooth cell, and the compiler stops inlining it once the cell paths grow.
+[[gnu::always_inline]] inline bool segmentBends(const std::array<float, 3>& normalA, const std::array<float, 3>& normalB, int axis, double cosSharp)
 {
     const Vec2 a = project(normalA, axis), b = project(normalB, axis);
     const double aa = a.x * a.x + a.y * a.y, bb = b.x * b.x + b.y * b.y;
@@ -121,7 +122,7 @@ bool segmentBends(const std::array<float, 3>& normalA, const std::array<float, 3
     return a.x * b.x + a.y * b.y <= cosSharp * std::sqrt(aa * bb);
 }
 
-double normalDot(const std::array<float, 3>& a, const std::array<float, 3>& b)
+[[gnu::always_inline]] inline double normalDot(const std::array<float, 3>& a, const std::array<float, 3>& b)
 {
     return double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2];
 }
@@ -218,7 +219,7 @@ struct CubicalMarchingSquaresMesher::Buffers {
     }
 
     /// The chunk's vertex for the crossing in a slot, added on first use.
-    uint32_t crossingVertex(int slot, const EdgeCrossing& x)
+    [[gnu::always_inline]] uint32_t crossingVertex(int slot, const EdgeCrossing& x)
     {
         uint32_t& index = edgeVertex[slot];
         if (index == kNone) {
@@ -1049,11 +1050,28 @@ constexpr std::array<int, 12> kCellEdgeSlotOffsets = [] {
     return offsets;
 }();
 
-/// Most surface cells are voxel cells of one material with unambiguous faces whose crossings span no
-/// sharp angle, on a face or across the cell. The face walk gives such a cell its corner case's loops
-/// (CellTopology.h) with no face points, each fanned from its mean point; this builds exactly that
-/// straight from the table. Returns false, having added nothing, for any other cell.
-bool meshSmoothVoxelCell(LeafContext& ctx, const Coord& base, const MaterialValue mats[8], unsigned solid)
+/// Whether each face of a wide cell that the surface crosses borders cells at least as wide, so the
+/// face walk meshes it as one square (CellMesher::meshFaceRegion).
+bool facesAreWhole(const LeafContext& ctx, const Coord& base, int width, const MaterialValue mats[8])
+{
+    for (int f = 0; f < 6; ++f) {
+        const int* c = kFaces[f].corners;
+        const bool s0 = mats[c[0]].solid();
+        if (mats[c[1]].solid() == s0 && mats[c[2]].solid() == s0 && mats[c[3]].solid() == s0) continue;
+        Coord across = base;
+        across[f / 2] += f % 2 ? width : -1;
+        if (ctx.widths->widthAt(across) < width) return false;
+    }
+    return true;
+}
+
+/// Most surface cells are cells of one material with unambiguous faces whose crossings span no sharp
+/// angle, on a face or across the cell; a wide one must also have whole faces (facesAreWhole). The
+/// face walk gives such a cell its corner case's loops (CellTopology.h) with no face points, each
+/// fanned from its mean point; this builds exactly that straight from the table. Returns false,
+/// having added no vertex, for any other cell. (Voxel cells, most of them, take a path of their own.)
+template<bool Wide>
+bool meshSmoothCell(LeafContext& ctx, const Coord& base, int width, const MaterialValue mats[8], unsigned solid)
 {
     const CellCase& cell = kCellCases[solid];
     if (cell.ambiguousFace) return false;
@@ -1063,18 +1081,28 @@ bool meshSmoothVoxelCell(LeafContext& ctx, const Coord& base, const MaterialValu
         if (!material.solid()) material = mats[c];
         else if (mats[c] != material) return false;
     }
+    if (Wide && !facesAreWhole(ctx, base, width, mats)) return false;
     Buffers& b = ctx.buffers;
     const int cellSlot = Buffers::edgeSlot(ctx.origin, base, 0);
     const int count = cell.loopEnd[cell.loopCount - 1];
-    int slots[12];
+    int slots[12]; // of the voxel edge holding each crossing
     const EdgeCrossing* crossings[12];
     for (int i = 0; i < count; ++i) {
-        const int e = cell.edges[i], axis = e / 4, low = edgeLowCorner(e);
-        slots[i] = cellSlot + kCellEdgeSlotOffsets[e];
-        crossings[i] = &b.crossingAt(slots[i], [&] {
-            const Coord start = base.offsetBy(cornerBit(low, 0), cornerBit(low, 1), cornerBit(low, 2));
-            return voxelEdgeCrossing(ctx.hood, start, axis, mats[low], mats[low | (1 << axis)], ctx.voxelSize);
-        });
+        const int e = cell.edges[i], axis = e / 4, low = edgeLowCorner(e), high = low | (1 << axis);
+        if constexpr (!Wide) {
+            slots[i] = cellSlot + kCellEdgeSlotOffsets[e];
+            crossings[i] = &b.crossingAt(slots[i], [&] {
+                const Coord start = base.offsetBy(cornerBit(low, 0), cornerBit(low, 1), cornerBit(low, 2));
+                return voxelEdgeCrossing(ctx.hood, start, axis, mats[low], mats[high], ctx.voxelSize);
+            });
+        } else {
+            const Coord start = base.offsetBy(width * cornerBit(low, 0), width * cornerBit(low, 1), width * cornerBit(low, 2));
+            EdgeCrossing uncached; // a wide cell lies inside its leaf, whose crossings are all cached
+            const EdgeCrossing& x = crossingAlong(ctx, start, axis, width, mats[low], mats[high], uncached);
+            if (&x == &uncached) return false;
+            slots[i] = Buffers::edgeSlot(ctx.origin, x.start, x.axis);
+            crossings[i] = &x;
+        }
     }
     for (int l = 0, begin = 0; l < cell.loopCount; begin = cell.loopEnd[l++]) {
         const int end = cell.loopEnd[l];
@@ -1122,7 +1150,7 @@ MeshChunk CubicalMarchingSquaresMesher::mesh(const HermiteLeaf& leaf, ConstAcces
     LeafContext ctx{hood, grid, widths, leaf.origin(), voxelSize_, cosSharp_, *buffers_};
     auto meshVoxelCell = [&](const Coord& base, const MaterialValue mats[8], unsigned solid) {
         ++cellsMeshed_;
-        if (!walkEveryCell_ && meshSmoothVoxelCell(ctx, base, mats, solid)) ++cellsFromCaseTable_;
+        if (!walkEveryCell_ && meshSmoothCell<false>(ctx, base, 1, mats, solid)) ++cellsFromCaseTable_;
         else CellMesher(ctx, base, 1, mats).run();
     };
     const LeafCellSizes* own = widths ? widths->own() : nullptr;
@@ -1149,7 +1177,8 @@ MeshChunk CubicalMarchingSquaresMesher::mesh(const HermiteLeaf& leaf, ConstAcces
                     meshVoxelCell(base, mats, solid);
                 } else {
                     ++cellsMeshed_;
-                    CellMesher(ctx, base, width, mats).run();
+                    if (!walkEveryCell_ && meshSmoothCell<true>(ctx, base, width, mats, solid)) ++cellsFromCaseTable_;
+                    else CellMesher(ctx, base, width, mats).run();
                 }
             }
     return buffers_->finishLeaf();
