@@ -113,7 +113,7 @@ Vec2 normalized(const Vec2& v)
 /// Whether the normals at the two ends of a segment on a face with normal `axis`, projected onto the
 /// face, span the sharp angle there: the segment is then a candidate for a 2D sharp feature. A normal
 /// along the axis has no direction on the face. Forced inline: it runs for every segment of every
-/// smooth cell, and the compiler stops inlining it once the cell paths grow.
+/// smooth cell, and this file outgrows the compiler's inlining budget.
 [[gnu::always_inline]] inline bool segmentBends(const std::array<float, 3>& normalA, const std::array<float, 3>& normalB, int axis, double cosSharp)
 {
     const Vec2 a = project(normalA, axis), b = project(normalB, axis);
@@ -284,8 +284,9 @@ struct LeafContext {
     double cosSharp;
     Buffers& buffers;
 
-    /// The material at a voxel, from the corner grid where it reaches.
-    MaterialValue material(const Coord& c) const
+    /// The material at a voxel, from the corner grid where it reaches. Forced inline, like the other
+    /// per-crossing helpers: this file outgrows the compiler's inlining budget.
+    [[gnu::always_inline]] MaterialValue material(const Coord& c) const
     {
         const unsigned x = unsigned(c.x() - origin.x() + 1), y = unsigned(c.y() - origin.y() + 1),
                        z = unsigned(c.z() - origin.z() + 1);
@@ -931,11 +932,27 @@ private:
                 for (int z = 0; z < span[2]; ++z)
                     solidRows[x][y] |= uint32_t(ctx_.material(lo.offsetBy(x, y, z)).solid()) << z;
             }
-        // The edges whose ends differ: bit z of `cut` marks the edge from (x, y, z) along `axis`.
+        // The edges whose ends differ: bit z of `cut` marks the edge from (x, y, z) along `axis`. Edges
+        // without a sample are left out.
         auto visit = [&](int x, int y, int axis, uint32_t cut) {
             for (; cut; cut &= cut - 1) {
                 const int z = __builtin_ctz(cut);
                 const Coord v = lo.offsetBy(x, y, z);
+                if (inGrid) {
+                    // Inside the corner grid, so inside the leaf's span: materials and the cached crossing
+                    // straight from their slots. A crossing decoded without a sample has no normal.
+                    const int g[3] = {gx + x, gy + y, gz + z};
+                    int h[3] = {g[0], g[1], g[2]};
+                    ++h[axis];
+                    const MaterialValue low = grid.cells[g[0]][g[1]][g[2]], high = grid.cells[h[0]][h[1]][h[2]];
+                    const int slot = ((g[0] * CornerGrid::kSpan + g[1]) * CornerGrid::kSpan + g[2]) * 3 + axis;
+                    const EdgeCrossing& c = ctx_.buffers.crossingAt(
+                        slot, [&] { return voxelEdgeCrossing(ctx_.hood, v, axis, low, high, ctx_.voxelSize); });
+                    if (c.normal[0] == 0.f && c.normal[1] == 0.f && c.normal[2] == 0.f) continue;
+                    fn(Eigen::Vector3d(c.position[0], c.position[1], c.position[2]),
+                       Eigen::Vector3d(c.normal[0], c.normal[1], c.normal[2]));
+                    continue;
+                }
                 if (!ctx_.hood.sample(v, axis)) continue;
                 Coord w = v;
                 w[axis] += 1;
