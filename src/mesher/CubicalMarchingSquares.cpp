@@ -1086,7 +1086,8 @@ bool facesAreWhole(const LeafContext& ctx, const Coord& base, int width, const M
 /// angle, on a face or across the cell; a wide one must also have whole faces (facesAreWhole). The
 /// face walk gives such a cell its corner case's loops (CellTopology.h) with no face points, each
 /// fanned from its mean point; this builds exactly that straight from the table. Returns false,
-/// having added no vertex, for any other cell. (Voxel cells, most of them, take a path of their own.)
+/// having added no vertex, for any other cell. `Wide`: the cell is wider than a voxel, and its edges'
+/// crossings are looked up along them (voxel cells, most of them, keep the short path).
 template<bool Wide>
 bool meshSmoothCell(LeafContext& ctx, const Coord& base, int width, const MaterialValue mats[8], unsigned solid)
 {
