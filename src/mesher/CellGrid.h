@@ -55,8 +55,8 @@ private:
     /// `c` lies within one block of the centre: c - origin is in -8 .. 15 per axis.
     int slotOf(const Coord& c) const
     {
-        auto block = [](int v, int o) { return (v - o + kLeafDim) >> kLeafLog2Dim; }; // 0, 1 or 2
-        return block(c.x(), origin_.x()) * 9 + block(c.y(), origin_.y()) * 3 + block(c.z(), origin_.z());
+        auto block = [](int v, int o) { return ((v - o + kLeafDim) >> kLeafLog2Dim) - 1; }; // -1, 0 or 1
+        return slot(block(c.x(), origin_.x()), block(c.y(), origin_.y()), block(c.z(), origin_.z()));
     }
 
     Coord origin_;

@@ -112,9 +112,8 @@ Vec2 normalized(const Vec2& v)
 
 /// Whether the normals at the two ends of a segment on a face with normal `axis`, projected onto the
 /// face, span the sharp angle there: the segment is then a candidate for a 2D sharp feature. A normal
-/// along the axis has no direction on the face. Forced inline: it runs for every segment of every
-/// smooth cell, and this file outgrows the compiler's inlining budget.
-[[gnu::always_inline]] inline bool segmentBends(const std::array<float, 3>& normalA, const std::array<float, 3>& normalB, int axis, double cosSharp)
+/// along the axis has no direction on the face.
+bool segmentBends(const std::array<float, 3>& normalA, const std::array<float, 3>& normalB, int axis, double cosSharp)
 {
     const Vec2 a = project(normalA, axis), b = project(normalB, axis);
     const double aa = a.x * a.x + a.y * a.y, bb = b.x * b.x + b.y * b.y;
@@ -122,7 +121,7 @@ Vec2 normalized(const Vec2& v)
     return a.x * b.x + a.y * b.y <= cosSharp * std::sqrt(aa * bb);
 }
 
-[[gnu::always_inline]] inline double normalDot(const std::array<float, 3>& a, const std::array<float, 3>& b)
+double normalDot(const std::array<float, 3>& a, const std::array<float, 3>& b)
 {
     return double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2];
 }
@@ -219,7 +218,7 @@ struct CubicalMarchingSquaresMesher::Buffers {
     }
 
     /// The chunk's vertex for the crossing in a slot, added on first use.
-    [[gnu::always_inline]] uint32_t crossingVertex(int slot, const EdgeCrossing& x)
+    uint32_t crossingVertex(int slot, const EdgeCrossing& x)
     {
         uint32_t& index = edgeVertex[slot];
         if (index == kNone) {
@@ -284,9 +283,8 @@ struct LeafContext {
     double cosSharp;
     Buffers& buffers;
 
-    /// The material at a voxel, from the corner grid where it reaches. Forced inline, like the other
-    /// per-crossing helpers: this file outgrows the compiler's inlining budget.
-    [[gnu::always_inline]] MaterialValue material(const Coord& c) const
+    /// The material at a voxel, from the corner grid where it reaches.
+    MaterialValue material(const Coord& c) const
     {
         const unsigned x = unsigned(c.x() - origin.x() + 1), y = unsigned(c.y() - origin.y() + 1),
                        z = unsigned(c.z() - origin.z() + 1);
@@ -325,14 +323,21 @@ const EdgeCrossing& crossingAlong(const LeafContext& ctx, const Coord& start, in
     return cachedCrossing(ctx, at, axis, previous, high, uncached);
 }
 
+/// Whether the surface crosses face f of a cell: its corners are not all solid or all empty. A face
+/// whose corners agree holds no crossing (a wide cell's faces are simple).
+bool surfaceCrosses(const MaterialValue mats[8], int f)
+{
+    const int* c = kFaces[f].corners;
+    const bool s0 = mats[c[0]].solid();
+    return mats[c[1]].solid() != s0 || mats[c[2]].solid() != s0 || mats[c[3]].solid() != s0;
+}
+
 /// One square a cell face is meshed in: the whole face, or a face of a narrower cell beside it.
 struct Square {
     int axis;         // the face's normal axis
     int width;
     Coord corners[4]; // counter-clockwise seen from outside the cell being meshed
     MaterialValue mats[4];
-    int cellCorners[4]; // the cell's corner at each square corner, when the square is the whole face
-    bool wholeFace;
     Coord minCorner;
 };
 
@@ -347,10 +352,7 @@ public:
     void run()
     {
         for (int f = 0; f < 6; ++f) {
-            // A face whose corners agree holds no crossing (a wide cell's faces are simple).
-            const int* c = kFaces[f].corners;
-            const bool s0 = mats_[c[0]].solid();
-            if (mats_[c[1]].solid() == s0 && mats_[c[2]].solid() == s0 && mats_[c[3]].solid() == s0) continue;
+            if (!surfaceCrosses(mats_, f)) continue;
             const int axis = f / 2;
             meshFaceRegion(f, base_[(axis + 1) % 3], base_[(axis + 2) % 3], width_);
         }
@@ -430,15 +432,14 @@ private:
         Square sq;
         sq.axis = axis;
         sq.width = width;
-        sq.wholeFace = width == width_;
+        const bool wholeFace = width == width_;
         for (int i = 0; i < 4; ++i) {
             const int c = kFaces[f].corners[i];
             Coord& p = sq.corners[i];
             p[axis] = base_[axis] + side * width_;
             p[u] = u0 + width * cornerBit(c, u);
             p[v] = v0 + width * cornerBit(c, v);
-            sq.cellCorners[i] = c;
-            sq.mats[i] = sq.wholeFace ? mats_[c] : ctx_.material(p);
+            sq.mats[i] = wholeFace ? mats_[c] : ctx_.material(p);
         }
         sq.minCorner[axis] = base_[axis] + side * width_;
         sq.minCorner[u] = u0;
@@ -933,32 +934,16 @@ private:
                     solidRows[x][y] |= uint32_t(ctx_.material(lo.offsetBy(x, y, z)).solid()) << z;
             }
         // The edges whose ends differ: bit z of `cut` marks the edge from (x, y, z) along `axis`. Edges
-        // without a sample are left out.
+        // without a sample are left out: their crossing is decoded with no normal.
         auto visit = [&](int x, int y, int axis, uint32_t cut) {
             for (; cut; cut &= cut - 1) {
                 const int z = __builtin_ctz(cut);
                 const Coord v = lo.offsetBy(x, y, z);
-                if (inGrid) {
-                    // Inside the corner grid, so inside the leaf's span: materials and the cached crossing
-                    // straight from their slots. A crossing decoded without a sample has no normal.
-                    const int g[3] = {gx + x, gy + y, gz + z};
-                    int h[3] = {g[0], g[1], g[2]};
-                    ++h[axis];
-                    const MaterialValue low = grid.cells[g[0]][g[1]][g[2]], high = grid.cells[h[0]][h[1]][h[2]];
-                    const int slot = ((g[0] * CornerGrid::kSpan + g[1]) * CornerGrid::kSpan + g[2]) * 3 + axis;
-                    const EdgeCrossing& c = ctx_.buffers.crossingAt(
-                        slot, [&] { return voxelEdgeCrossing(ctx_.hood, v, axis, low, high, ctx_.voxelSize); });
-                    if (c.normal[0] == 0.f && c.normal[1] == 0.f && c.normal[2] == 0.f) continue;
-                    fn(Eigen::Vector3d(c.position[0], c.position[1], c.position[2]),
-                       Eigen::Vector3d(c.normal[0], c.normal[1], c.normal[2]));
-                    continue;
-                }
-                if (!ctx_.hood.sample(v, axis)) continue;
                 Coord w = v;
                 w[axis] += 1;
-                const MaterialValue low = ctx_.material(v), high = ctx_.material(w);
                 EdgeCrossing uncached;
-                const EdgeCrossing& c = cachedCrossing(ctx_, v, axis, low, high, uncached);
+                const EdgeCrossing& c = cachedCrossing(ctx_, v, axis, ctx_.material(v), ctx_.material(w), uncached);
+                if (c.normal[0] == 0.f && c.normal[1] == 0.f && c.normal[2] == 0.f) continue;
                 fn(Eigen::Vector3d(c.position[0], c.position[1], c.position[2]),
                    Eigen::Vector3d(c.normal[0], c.normal[1], c.normal[2]));
             }
@@ -1072,9 +1057,7 @@ constexpr std::array<int, 12> kCellEdgeSlotOffsets = [] {
 bool facesAreWhole(const LeafContext& ctx, const Coord& base, int width, const MaterialValue mats[8])
 {
     for (int f = 0; f < 6; ++f) {
-        const int* c = kFaces[f].corners;
-        const bool s0 = mats[c[0]].solid();
-        if (mats[c[1]].solid() == s0 && mats[c[2]].solid() == s0 && mats[c[3]].solid() == s0) continue;
+        if (!surfaceCrosses(mats, f)) continue;
         Coord across = base;
         across[f / 2] += f % 2 ? width : -1;
         if (ctx.widths->widthAt(across) < width) return false;
@@ -1101,7 +1084,7 @@ bool meshSmoothCell(LeafContext& ctx, const Coord& base, int width, const Materi
     }
     if (Wide && !facesAreWhole(ctx, base, width, mats)) return false;
     Buffers& b = ctx.buffers;
-    const int cellSlot = Buffers::edgeSlot(ctx.origin, base, 0);
+    const int cellSlot = Wide ? -1 : Buffers::edgeSlot(ctx.origin, base, 0);
     const int count = cell.loopEnd[cell.loopCount - 1];
     int slots[12]; // of the voxel edge holding each crossing
     const EdgeCrossing* crossings[12];
