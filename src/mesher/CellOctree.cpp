@@ -96,7 +96,10 @@ public:
             for (int u = 0; u < kLattice; ++u)
                 for (int v = 0; v < kLattice; ++v) {
                     const uint32_t line = solidLine_[axis][u][v];
-                    changes_[axis][u][v] = uint8_t((line ^ (line >> 1)) & ((1u << kLeafDim) - 1));
+                    const uint8_t changes = uint8_t((line ^ (line >> 1)) & ((1u << kLeafDim) - 1));
+                    changes_[axis][u][v] = changes;
+                    if (changes & (changes - 1))
+                        linesChangingTwice_[lineChangingTwiceCount_++] = {changes, uint8_t(axis), uint8_t(u), uint8_t(v)};
                 }
         // The crossings (a leaf's surface holds a few hundred), each added to the normal sums of the
         // two-voxel cells holding its voxel edge.
@@ -143,27 +146,35 @@ public:
     }
 
     /// The cells of width 2^level (cellBit order) that some lattice line through them crosses the
-    /// surface more than once in: their edges hide surface, or a face or the inside does.
+    /// surface more than once in: their edges hide surface, or a face or the inside does. Only the lines
+    /// that change more than once anywhere can mark a cell, and a smooth leaf has few or none.
     uint64_t cellsWithLinesChangingTwice(int level) const
     {
         const int width = 1 << level, count = kLeafDim >> level;
         const std::array<uint8_t, 256>& windows = kWindowsChangingTwice[level - 1];
+        // The cells along one lattice coordinate holding index i: one, or two where i is on a boundary.
+        auto cellsAt = [&](int i, int& first, int& last) {
+            last = std::min(count - 1, i >> level);
+            first = (i & (width - 1)) == 0 && i > 0 ? (i >> level) - 1 : last;
+        };
         uint64_t cells = 0;
-        for (int axis = 0; axis < 3; ++axis) {
-            const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-            for (int cu = 0; cu < count; ++cu)
-                for (int cv = 0; cv < count; ++cv) {
-                    uint32_t twice = 0; // bit k: the k-th cell along the axis
-                    for (int i = 0; i <= width; ++i)
-                        for (int j = 0; j <= width; ++j) twice |= windows[changes_[axis][cu * width + i][cv * width + j]];
-                    for (; twice; twice &= twice - 1) {
+        for (int k = 0; k < lineChangingTwiceCount_; ++k) {
+            const LineChangingTwice& line = linesChangingTwice_[k];
+            const uint32_t twice = windows[line.changes]; // bit c: the c-th cell along the axis
+            if (!twice) continue;
+            const int axis = line.axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
+            int firstU, lastU, firstV, lastV;
+            cellsAt(line.u, firstU, lastU);
+            cellsAt(line.v, firstV, lastV);
+            for (int cu = firstU; cu <= lastU; ++cu)
+                for (int cv = firstV; cv <= lastV; ++cv)
+                    for (uint32_t rest = twice; rest; rest &= rest - 1) {
                         int c[3];
-                        c[axis] = __builtin_ctz(twice);
+                        c[axis] = __builtin_ctz(rest);
                         c[u] = cu;
                         c[v] = cv;
                         cells |= uint64_t(1) << cellBit(level, c[0], c[1], c[2]);
                     }
-                }
         }
         return cells;
     }
@@ -286,6 +297,11 @@ private:
     bool singleMaterial_;
     uint32_t solidLine_[3][kLattice][kLattice];
     uint8_t changes_[3][kLattice][kLattice]; // bit t: the line changes material between points t and t + 1
+    struct LineChangingTwice {
+        uint8_t changes, axis, u, v;
+    };
+    LineChangingTwice linesChangingTwice_[3 * kLattice * kLattice];
+    int lineChangingTwiceCount_ = 0;
     // At most one per voxel edge of the lattice: 3 * 9 * 9 * 8. On the stack, so a leaf allocates nothing.
     static constexpr int kMaxCrossings = 3 * kLattice * kLattice * kLeafDim;
     Crossing crossings_[kMaxCrossings];
@@ -297,7 +313,10 @@ private:
 LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, const SubdivisionCriteria& criteria)
 {
     LeafCellSizes sizes{};
-    if (criteria.maxCellSize <= 1) return sizes;
+    if (criteria.maxCellSize <= 1) {
+        std::fill(&sizes.cellStarts[0][0], &sizes.cellStarts[0][0] + kLeafDim * kLeafDim, uint8_t(0xFF));
+        return sizes;
+    }
     // Normal cones of the cells of width 2, 4 and 8, in cellBit order.
     NormalCone twoVoxel[LeafLattice::kTwoVoxelCells], fourVoxel[8], eightVoxel[1];
     NormalCone* const cones[4] = {nullptr, twoVoxel, fourVoxel, eightVoxel};
@@ -355,8 +374,15 @@ LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, c
                 twoVoxelLevel[x][y][z] = uint8_t(level);
             }
     for (int x = 0; x < kLeafDim; ++x)
-        for (int y = 0; y < kLeafDim; ++y)
-            for (int z = 0; z < kLeafDim; ++z) sizes.log2Width[x][y][z] = twoVoxelLevel[x / 2][y / 2][z / 2];
+        for (int y = 0; y < kLeafDim; ++y) {
+            uint8_t starts = 0;
+            for (int z = 0; z < kLeafDim; ++z) {
+                const int level = twoVoxelLevel[x / 2][y / 2][z / 2];
+                sizes.log2Width[x][y][z] = uint8_t(level);
+                if (((x | y | z) & ((1 << level) - 1)) == 0) starts |= uint8_t(1u << z);
+            }
+            sizes.cellStarts[x][y] = starts;
+        }
     return sizes;
 }
 

@@ -19,6 +19,7 @@ struct SubdivisionCriteria {
 /// cell at leaf-local (x, y, z). Cells are aligned to their width.
 struct LeafCellSizes {
     uint8_t log2Width[kLeafDim][kLeafDim][kLeafDim];
+    uint8_t cellStarts[kLeafDim][kLeafDim]; // bit z: a cell has its minimum corner at (x, y, z)
 
     int widthAt(int x, int y, int z) const { return 1 << log2Width[x][y][z]; }
 };

@@ -1163,9 +1163,9 @@ MeshChunk CubicalMarchingSquaresMesher::mesh(const HermiteLeaf& leaf, ConstAcces
     // The leaf's own cells, each visited at its minimum corner.
     for (int x = 0; x < kLeafDim; ++x)
         for (int y = 0; y < kLeafDim; ++y)
-            for (int z = 0; z < kLeafDim; ++z) {
+            for (uint32_t starts = own->cellStarts[x][y]; starts; starts &= starts - 1) {
+                const int z = __builtin_ctz(starts);
                 const int width = own->widthAt(x, y, z);
-                if ((x | y | z) & (width - 1)) continue; // cells are aligned to their power-of-two width
                 MaterialValue mats[8];
                 unsigned solid = 0;
                 for (int c = 0; c < 8; ++c) {
