@@ -12,23 +12,13 @@ uint16_t quantizeOffset(double t)
     return static_cast<uint16_t>(t * 65535.0 + 0.5); // t is in [0,1]: truncation rounds to nearest
 }
 
-double dequantizeOffset(uint16_t q) { return q / 65535.0; }
-
 namespace {
 
 double signNotZero(double v) { return v >= 0.0 ? 1.0 : -1.0; }
 
-std::array<double, 3> decodeOctahedral(double u, double v)
-{
-    double x = u, y = v;
-    const double z = 1.0 - std::fabs(u) - std::fabs(v);
-    if (z < 0.0) {
-        x = (1.0 - std::fabs(v)) * signNotZero(u);
-        y = (1.0 - std::fabs(u)) * signNotZero(v);
-    }
-    const double inv = 1.0 / std::sqrt(x * x + y * y + z * z);
-    return {x * inv, y * inv, z * inv};
-}
+} // namespace
+
+namespace quantize_detail {
 
 // Every code's octahedral coordinate, computed at compile time with the same IEEE operations a
 // division at run time would do: decoding sits on the mesher's hot path, a table read does not wait
@@ -39,7 +29,11 @@ constexpr std::array<double, kNormalMax + 1> kCodeCoords = [] {
     return coords;
 }();
 
-double codeToCoord(int q) { return kCodeCoords[q]; }
+} // namespace quantize_detail
+
+namespace {
+
+double codeToCoord(int q) { return quantize_detail::kCodeCoords[q]; }
 
 } // namespace
 
@@ -60,7 +54,7 @@ std::array<uint16_t, 2> quantizeNormal(const std::array<double, 3>& nIn)
     // The nearest code is almost always good enough; only when it is not are its neighbours searched
     // for the code with the smallest worst component error (which bounds the error by 1/1782).
     auto errorOf = [&n](int qu, int qv) {
-        const auto d = decodeOctahedral(codeToCoord(qu), codeToCoord(qv));
+        const auto d = quantize_detail::decodeOctahedral(codeToCoord(qu), codeToCoord(qv));
         return std::max({std::fabs(d[0] - n[0]), std::fabs(d[1] - n[1]), std::fabs(d[2] - n[2])});
     };
     const double fu = (u + 1.0) * 0.5 * kNormalMax, fv = (v + 1.0) * 0.5 * kNormalMax;
@@ -85,12 +79,6 @@ std::array<uint16_t, 2> quantizeNormal(const std::array<double, 3>& nIn)
         }
     }
     return best;
-}
-
-std::array<float, 3> dequantizeNormal(uint16_t u, uint16_t v)
-{
-    const auto d = decodeOctahedral(codeToCoord(std::min(u, kNormalMax)), codeToCoord(std::min(v, kNormalMax)));
-    return {float(d[0]), float(d[1]), float(d[2])};
 }
 
 } // namespace vdbclay

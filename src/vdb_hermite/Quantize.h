@@ -9,7 +9,9 @@
 // octahedral codes give a measured worst component error of 1/1782; 11+11 bits give only 1/890.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 
 namespace vdbclay {
@@ -31,12 +33,37 @@ constexpr int kNormalBits = 12;
 constexpr uint16_t kNormalMax = (1u << kNormalBits) - 1;
 
 uint16_t quantizeOffset(double t);
-double dequantizeOffset(uint16_t q);
+inline double dequantizeOffset(uint16_t q) { return q / 65535.0; }
 
 /// Encodes a unit (or any non-zero) vector; picks, among the neighbouring codes, the one whose decoded
 /// normal has the smallest worst component error.
 std::array<uint16_t, 2> quantizeNormal(const std::array<double, 3>& n);
-std::array<float, 3> dequantizeNormal(uint16_t u, uint16_t v);
+
+// Decoding is inline: the mesher decodes every crossing it reads.
+namespace quantize_detail {
+
+extern const std::array<double, kNormalMax + 1> kCodeCoords; // code q: q / kNormalMax * 2 - 1
+
+inline std::array<double, 3> decodeOctahedral(double u, double v)
+{
+    double x = u, y = v;
+    const double z = 1.0 - std::fabs(u) - std::fabs(v);
+    if (z < 0.0) {
+        x = (1.0 - std::fabs(v)) * (u >= 0.0 ? 1.0 : -1.0);
+        y = (1.0 - std::fabs(u)) * (v >= 0.0 ? 1.0 : -1.0);
+    }
+    const double inv = 1.0 / std::sqrt(x * x + y * y + z * z);
+    return {x * inv, y * inv, z * inv};
+}
+
+} // namespace quantize_detail
+
+inline std::array<float, 3> dequantizeNormal(uint16_t u, uint16_t v)
+{
+    using namespace quantize_detail;
+    const auto d = decodeOctahedral(kCodeCoords[std::min(u, kNormalMax)], kCodeCoords[std::min(v, kNormalMax)]);
+    return {float(d[0]), float(d[1]), float(d[2])};
+}
 
 inline PackedSample packSample(double t, const std::array<double, 3>& normal)
 {
