@@ -164,6 +164,12 @@ struct CubicalMarchingSquaresMesher::Buffers {
     std::vector<Segment> segments;
     std::vector<int> loop;
     std::vector<uint32_t> ids;
+    // Which voxels o-2 .. o+10 (per axis) are solid, bit z of row [x][y]: every voxel the scans for sharp
+    // features read. Filled on a leaf's first sharp feature.
+    static constexpr int kAroundSpan = kLeafDim + 5;
+    static constexpr int kAroundLow = -2; // leaf-local coordinate of index 0
+    uint32_t solidAround[kAroundSpan][kAroundSpan];
+    bool solidAroundReady = false;
     std::vector<MaterialId> pieceMaterials;
     std::vector<bool> used;
 
@@ -190,6 +196,7 @@ struct CubicalMarchingSquaresMesher::Buffers {
         squareSegments.clear();
         crossings.clear();
         otherVertices.clear();
+        solidAroundReady = false;
     }
 
     /// The slot of a voxel edge in edgeVertex, or -1 when it lies outside the leaf's span.
@@ -291,16 +298,48 @@ struct LeafContext {
         constexpr unsigned kSpan = CornerGrid::kSpan;
         return x < kSpan && y < kSpan && z < kSpan ? grid.cells[x][y][z] : hood.material(c);
     }
+
+    /// Buffers::solidAround, filled from the leaves and tiles around on first use.
+    const uint32_t (&solidAround() const)[Buffers::kAroundSpan][Buffers::kAroundSpan]
+    {
+        if (!buffers.solidAroundReady) {
+            constexpr int kLow = Buffers::kAroundLow;
+            auto block = [](int local) { return local < 0 ? -1 : (local >= kLeafDim ? 1 : 0); };
+            for (int x = 0; x < Buffers::kAroundSpan; ++x)
+                for (int y = 0; y < Buffers::kAroundSpan; ++y) {
+                    const int lx = x + kLow, ly = y + kLow, bx = block(lx), by = block(ly);
+                    const Index rowStart = Index(lx - bx * kLeafDim) << (2 * kLeafLog2Dim) | Index(ly - by * kLeafDim) << kLeafLog2Dim;
+                    uint32_t bits = 0;
+                    for (int bz = -1; bz <= 1; ++bz) {
+                        const HermiteLeaf* leaf = hood.leafAt(bx, by, bz);
+                        const uint32_t blockBits =
+                            leaf ? solidBitsOfRow(leaf->buffer().data() + rowStart) : (hood.tileAt(bx, by, bz).solid() ? 0xFFu : 0u);
+                        const int shift = bz * kLeafDim - kLow; // where the block's z = 0 lands
+                        bits |= shift >= 0 ? blockBits << shift : blockBits >> -shift;
+                    }
+                    buffers.solidAround[x][y] = bits & ((1u << Buffers::kAroundSpan) - 1);
+                }
+            buffers.solidAroundReady = true;
+        }
+        return buffers.solidAround;
+    }
 };
 
 /// The crossing on a voxel edge, decoded once per leaf; `uncached` holds it when the edge lies outside
 /// the leaf's span (only the ring around an edge cell reaches that far).
+template<typename Decode>
+const EdgeCrossing& cachedCrossing(const LeafContext& ctx, const Coord& start, int axis, Decode&& decode,
+                                   EdgeCrossing& uncached)
+{
+    const int slot = Buffers::edgeSlot(ctx.origin, start, axis);
+    return slot < 0 ? uncached = decode() : ctx.buffers.crossingAt(slot, decode);
+}
+
 const EdgeCrossing& cachedCrossing(const LeafContext& ctx, const Coord& start, int axis, MaterialValue low,
                                    MaterialValue high, EdgeCrossing& uncached)
 {
-    auto decode = [&] { return voxelEdgeCrossing(ctx.hood, start, axis, low, high, ctx.voxelSize); };
-    const int slot = Buffers::edgeSlot(ctx.origin, start, axis);
-    return slot < 0 ? uncached = decode() : ctx.buffers.crossingAt(slot, decode);
+    return cachedCrossing(ctx, start, axis, [&] { return voxelEdgeCrossing(ctx.hood, start, axis, low, high, ctx.voxelSize); },
+                          uncached);
 }
 
 /// The crossing on the grid edge of `length` voxels from `start` along `axis`, whose ends hold `low`
@@ -924,25 +963,39 @@ private:
         const int gx = lo.x() - grid.origin.x() + 1, gy = lo.y() - grid.origin.y() + 1, gz = lo.z() - grid.origin.z() + 1;
         const bool inGrid = gx >= 0 && gy >= 0 && gz >= 0 && gx + span[0] <= CornerGrid::kSpan &&
                             gy + span[1] <= CornerGrid::kSpan && gz + span[2] <= CornerGrid::kSpan;
+        // Index of lo in Buffers::solidAround, which starts one voxel lower than the corner grid.
+        const int ax = gx - 1 - Buffers::kAroundLow, ay = gy - 1 - Buffers::kAroundLow, az = gz - 1 - Buffers::kAroundLow;
+        const bool inAround = ax >= 0 && ay >= 0 && az >= 0 && ax + span[0] <= Buffers::kAroundSpan &&
+                              ay + span[1] <= Buffers::kAroundSpan && az + span[2] <= Buffers::kAroundSpan;
+        const uint32_t spanBits = (1u << span[2]) - 1;
         for (int x = 0; x < span[0]; ++x)
             for (int y = 0; y < span[1]; ++y) {
                 if (inGrid) {
-                    solidRows[x][y] = (grid.solidRows[gx + x][gy + y] >> gz) & ((1u << span[2]) - 1);
-                    continue;
+                    solidRows[x][y] = (grid.solidRows[gx + x][gy + y] >> gz) & spanBits;
+                } else if (inAround) {
+                    solidRows[x][y] = (ctx_.solidAround()[ax + x][ay + y] >> az) & spanBits;
+                } else {
+                    for (int z = 0; z < span[2]; ++z)
+                        solidRows[x][y] |= uint32_t(ctx_.material(lo.offsetBy(x, y, z)).solid()) << z;
                 }
-                for (int z = 0; z < span[2]; ++z)
-                    solidRows[x][y] |= uint32_t(ctx_.material(lo.offsetBy(x, y, z)).solid()) << z;
             }
         // The edges whose ends differ: bit z of `cut` marks the edge from (x, y, z) along `axis`. Edges
-        // without a sample are left out: their crossing is decoded with no normal.
+        // without a sample are left out: their crossing is decoded with no normal. Inside the grid an
+        // edge's cache slot follows from (x, y, z) directly.
+        constexpr int kSpan = CornerGrid::kSpan;
+        const int gridSlot = ((gx * kSpan + gy) * kSpan + gz) * 3;
         auto visit = [&](int x, int y, int axis, uint32_t cut) {
             for (; cut; cut &= cut - 1) {
                 const int z = __builtin_ctz(cut);
-                const Coord v = lo.offsetBy(x, y, z);
-                Coord w = v;
-                w[axis] += 1;
+                auto decode = [&] {
+                    const Coord v = lo.offsetBy(x, y, z);
+                    Coord w = v;
+                    w[axis] += 1;
+                    return voxelEdgeCrossing(ctx_.hood, v, axis, ctx_.material(v), ctx_.material(w), ctx_.voxelSize);
+                };
                 EdgeCrossing uncached;
-                const EdgeCrossing& c = cachedCrossing(ctx_, v, axis, ctx_.material(v), ctx_.material(w), uncached);
+                const EdgeCrossing& c = inGrid ? ctx_.buffers.crossingAt(gridSlot + ((x * kSpan + y) * kSpan + z) * 3 + axis, decode)
+                                               : cachedCrossing(ctx_, lo.offsetBy(x, y, z), axis, decode, uncached);
                 if (c.normal[0] == 0.f && c.normal[1] == 0.f && c.normal[2] == 0.f) continue;
                 fn(Eigen::Vector3d(c.position[0], c.position[1], c.position[2]),
                    Eigen::Vector3d(c.normal[0], c.normal[1], c.normal[2]));
