@@ -102,13 +102,23 @@ public:
                         linesChangingTwice_[lineChangingTwiceCount_++] = {changes, uint8_t(axis), uint8_t(u), uint8_t(v)};
                 }
         // The crossings (a leaf's surface holds a few hundred), each added to the normal sums of the
-        // two-voxel cells holding its voxel edge.
-        for (int axis = 0; axis < 3; ++axis)
+        // two-voxel cells holding its voxel edge: the cell along the axis that holds the edge, and one or
+        // two across it in each other direction (two where the line lies on a boundary between cells).
+        for (int axis = 0; axis < 3; ++axis) {
+            const int strideU = kTwoVoxelStride[(axis + 1) % 3], strideV = kTwoVoxelStride[(axis + 2) % 3];
             for (int u = 0; u < kLattice; ++u)
-                for (int v = 0; v < kLattice; ++v)
-                    for (uint32_t changes = changes_[axis][u][v]; changes; changes &= changes - 1) {
+                for (int v = 0; v < kLattice; ++v) {
+                    uint32_t changes = changes_[axis][u][v];
+                    if (!changes) continue;
+                    uint8_t lineCells[4];
+                    uint8_t lineCellCount = 0;
+                    for (int cu = kTwoVoxelCellsAcross[u][0]; cu <= kTwoVoxelCellsAcross[u][1]; ++cu)
+                        for (int cv = kTwoVoxelCellsAcross[v][0]; cv <= kTwoVoxelCellsAcross[v][1]; ++cv)
+                            lineCells[lineCellCount++] = uint8_t(cu * strideU + cv * strideV);
+                    for (; changes; changes &= changes - 1) {
                         Crossing x;
-                        x.at[axis] = uint8_t(__builtin_ctz(changes));
+                        const int t = __builtin_ctz(changes);
+                        x.at[axis] = uint8_t(t);
                         x.at[(axis + 1) % 3] = uint8_t(u);
                         x.at[(axis + 2) % 3] = uint8_t(v);
                         x.axis = uint8_t(axis);
@@ -117,15 +127,19 @@ public:
                         const UnpackedSample sample = unpackSample(*s);
                         std::copy(sample.normal.begin(), sample.normal.end(), x.normal);
                         x.offset = sample.offset;
-                        x.cellCount = 0;
-                        forEachTwoVoxelCell(x, [&](int cell) {
-                            x.cells[x.cellCount++] = uint8_t(cell);
+                        x.cellCount = lineCellCount;
+                        const int along = (t >> 1) * kTwoVoxelStride[axis];
+                        for (int i = 0; i < lineCellCount; ++i) {
+                            const int cell = lineCells[i] + along;
+                            x.cells[i] = uint8_t(cell);
                             NormalCone& cone = twoVoxelCones[cell];
                             for (int a = 0; a < 3; ++a) cone.sum[a] += x.normal[a];
                             ++cone.count;
-                        });
+                        }
                         crossings_[crossingCount_++] = x;
                     }
+                }
+        }
         // Each cone's spread: the cosine of the widest angle between one of its normals and its sum.
         double length[kTwoVoxelCells], minCos[kTwoVoxelCells];
         for (int cell = 0; cell < kTwoVoxelCells; ++cell) {
@@ -259,25 +273,11 @@ private:
         uint8_t cellCount;
     };
 
-    /// Calls fn(cell) for each two-voxel cell that holds the crossing's voxel edge.
-    template<typename Fn>
-    static void forEachTwoVoxelCell(const Crossing& x, Fn&& fn)
-    {
-        constexpr int kCells = kLeafDim / 2;
-        int lo[3], hi[3];
-        for (int a = 0; a < 3; ++a) {
-            const int at = x.at[a];
-            if (a == x.axis || at % 2 == 1) {
-                lo[a] = hi[a] = std::min(kCells - 1, at / 2);
-            } else { // on the boundary between two cells (or on the leaf's face)
-                lo[a] = std::max(0, at / 2 - 1);
-                hi[a] = std::min(kCells - 1, at / 2);
-            }
-        }
-        for (int i = lo[0]; i <= hi[0]; ++i)
-            for (int j = lo[1]; j <= hi[1]; ++j)
-                for (int k = lo[2]; k <= hi[2]; ++k) fn(cellBit(1, i, j, k));
-    }
+    /// cellBit(1, x, y, z) = x * 16 + y * 4 + z.
+    static constexpr int kTwoVoxelStride[3] = {(kLeafDim / 2) * (kLeafDim / 2), kLeafDim / 2, 1};
+    /// The first and last two-voxel cell whose range (2c .. 2c + 2) holds lattice coordinate t.
+    static constexpr uint8_t kTwoVoxelCellsAcross[kLattice][2] = {{0, 0}, {0, 0}, {0, 1}, {1, 1}, {1, 2},
+                                                                  {2, 2}, {2, 3}, {3, 3}, {3, 3}};
 
     bool singleMaterialIn(const int b[3], int width) const
     {
@@ -364,25 +364,19 @@ LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, c
         finest = level;
     }
     // Each voxel cell takes the widest whole cell containing it; the eight voxel cells of a two-voxel
-    // cell share every cell wider than one voxel.
-    uint8_t twoVoxelLevel[kLeafDim / 2][kLeafDim / 2][kLeafDim / 2];
+    // cell share every cell wider than one voxel, and so does the start of the cell they lie in.
     for (int x = 0; x < kLeafDim / 2; ++x)
         for (int y = 0; y < kLeafDim / 2; ++y)
             for (int z = 0; z < kLeafDim / 2; ++z) {
                 int level = finest;
                 while (level > 0 && !isWhole(level, (2 * x) >> level, (2 * y) >> level, (2 * z) >> level)) --level;
-                twoVoxelLevel[x][y][z] = uint8_t(level);
+                for (int i = 0; i < 2; ++i)
+                    for (int j = 0; j < 2; ++j) {
+                        sizes.log2Width[2 * x + i][2 * y + j][2 * z] = sizes.log2Width[2 * x + i][2 * y + j][2 * z + 1] = uint8_t(level);
+                        if (level == 0) sizes.cellStarts[2 * x + i][2 * y + j] |= uint8_t(3u << (2 * z));
+                    }
+                if (level > 0 && ((2 * (x | y | z)) & ((1 << level) - 1)) == 0) sizes.cellStarts[2 * x][2 * y] |= uint8_t(1u << (2 * z));
             }
-    for (int x = 0; x < kLeafDim; ++x)
-        for (int y = 0; y < kLeafDim; ++y) {
-            uint8_t starts = 0;
-            for (int z = 0; z < kLeafDim; ++z) {
-                const int level = twoVoxelLevel[x / 2][y / 2][z / 2];
-                sizes.log2Width[x][y][z] = uint8_t(level);
-                if (((x | y | z) & ((1 << level) - 1)) == 0) starts |= uint8_t(1u << z);
-            }
-            sizes.cellStarts[x][y] = starts;
-        }
     return sizes;
 }
 
