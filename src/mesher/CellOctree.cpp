@@ -72,19 +72,18 @@ public:
         // Solid bits along each axis: line (u, v) of axis a holds bit t for lattice point t along a, where
         // u and v are the coordinates along (a + 1) % 3 and (a + 2) % 3. The corner grid's rows along z
         // cover points -1 .. 9.
-        std::fill(&solidLine_[0][0][0], &solidLine_[0][0][0] + 3 * kLattice * kLattice, 0u);
         MaterialId firstSolid = kEmptyMaterial;
         for (int x = 0; x < kLattice; ++x)
             for (int y = 0; y < kLattice; ++y) {
                 const uint32_t line = (grid.solidRows[x + 1][y + 1] >> 1) & ((1u << kLattice) - 1);
                 solidLine_[2][x][y] = line;
                 if (line && firstSolid == kEmptyMaterial) firstSolid = grid.at(x, y, __builtin_ctz(line)).id;
-                for (uint32_t rest = line; rest; rest &= rest - 1) {
-                    const int z = __builtin_ctz(rest);
-                    solidLine_[0][y][z] |= 1u << x;
-                    solidLine_[1][z][x] |= 1u << y;
-                }
             }
+        // The lines along x and y are the lines along z transposed, plane by plane.
+        for (int i = 0; i < kLattice; ++i) {
+            transposeLines([&](int x) { return solidLine_[2][x][i]; }, [&](int z, uint32_t xBits) { solidLine_[0][i][z] = xBits; });
+            transposeLines([&](int y) { return solidLine_[2][i][y]; }, [&](int z, uint32_t yBits) { solidLine_[1][z][i] = yBits; });
+        }
         bool mixed = false;
         for (int x = 0; x < kLattice; ++x)
             for (int y = 0; y < kLattice; ++y) {
@@ -272,6 +271,30 @@ private:
         uint8_t cells[4]; // the two-voxel cells holding the voxel edge
         uint8_t cellCount;
     };
+
+    /// Transposes a 9 x 9 bit matrix: row(r) gives bit c of row r, put(c, bits) takes bit r of column c.
+    template<typename Row, typename Put>
+    static void transposeLines(Row&& row, Put&& put)
+    {
+        // Rows and columns 0 .. 7 as an 8 x 8 byte matrix, transposed by swapping ever smaller blocks
+        // across the diagonal; the ninth row and column separately.
+        uint64_t m = 0;
+        uint32_t lastColumn = 0;
+        for (int r = 0; r < 8; ++r) {
+            const uint32_t bits = row(r);
+            m |= uint64_t(bits & 0xFFu) << (8 * r);
+            lastColumn |= ((bits >> 8) & 1u) << r;
+        }
+        uint64_t t = (m ^ (m >> 7)) & 0x00AA00AA00AA00AAull;
+        m ^= t ^ (t << 7);
+        t = (m ^ (m >> 14)) & 0x0000CCCC0000CCCCull;
+        m ^= t ^ (t << 14);
+        t = (m ^ (m >> 28)) & 0x00000000F0F0F0F0ull;
+        m ^= t ^ (t << 28);
+        const uint32_t lastRow = row(8);
+        for (int c = 0; c < 8; ++c) put(c, uint32_t((m >> (8 * c)) & 0xFFu) | ((lastRow >> c) & 1u) << 8);
+        put(8, lastColumn | ((lastRow >> 8) & 1u) << 8);
+    }
 
     /// cellBit(1, x, y, z) = x * 16 + y * 4 + z.
     static constexpr int kTwoVoxelStride[3] = {(kLeafDim / 2) * (kLeafDim / 2), kLeafDim / 2, 1};
