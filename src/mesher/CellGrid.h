@@ -108,27 +108,35 @@ struct CornerGrid {
                     const HermiteLeaf* blockLeaf = hood.leafAt(bx - 1, by - 1, bz - 1);
                     blockData[bx][by][bz] = blockLeaf ? blockLeaf->buffer().data() : nullptr;
                 }
+        // Row by row, one neighbourhood column of blocks (bx, by) at a time: rows x = 0 and 9 lie in the
+        // blocks at -1 and +1, rows 1 .. 8 in the centre's column, and likewise for y.
         constexpr Index kMask = kLeafDim - 1;
-        for (int x = 0; x < kSpan; ++x)
-            for (int y = 0; y < kSpan; ++y) {
-                const int bx = blockOf(x), by = blockOf(y);
-                // A leaf's voxels are stored z fastest: a row's voxels in one block are consecutive.
-                const Index rowStart = (Index(x - 1) & kMask) << (2 * kLeafLog2Dim) | (Index(y - 1) & kMask) << kLeafLog2Dim;
+        for (int bx = -1; bx <= 1; ++bx)
+            for (int by = -1; by <= 1; ++by) {
                 const MaterialValue* const* column = blockData[bx + 1][by + 1];
-                MaterialValue* row = cells[x][y];
-                row[0] = column[0] ? column[0][rowStart + kLeafDim - 1] : hood.tileAt(bx, by, -1);
-                row[kSpan - 1] = column[2] ? column[2][rowStart] : hood.tileAt(bx, by, 1);
-                // The solid bits come from the source, not from the row just written.
-                uint32_t bits = uint32_t(row[0].solid()) | uint32_t(row[kSpan - 1].solid()) << (kSpan - 1);
-                if (const MaterialValue* source = column[1] ? column[1] + rowStart : nullptr) {
-                    std::copy_n(source, kLeafDim, row + 1);
-                    bits |= solidBitsOfRow(source) << 1;
-                } else {
-                    const MaterialValue tile = hood.tileAt(bx, by, 0);
-                    std::fill_n(row + 1, kLeafDim, tile);
-                    if (tile.solid()) bits |= ((1u << kLeafDim) - 1) << 1;
-                }
-                solidRows[x][y] = bits;
+                const MaterialValue lowTile = hood.tileAt(bx, by, -1), midTile = hood.tileAt(bx, by, 0),
+                                    highTile = hood.tileAt(bx, by, 1);
+                const uint32_t midTileBits = midTile.solid() ? ((1u << kLeafDim) - 1) << 1 : 0u;
+                const int xBegin = bx < 0 ? 0 : (bx == 0 ? 1 : kSpan - 1), xEnd = bx < 0 ? 1 : (bx == 0 ? kSpan - 1 : kSpan);
+                const int yBegin = by < 0 ? 0 : (by == 0 ? 1 : kSpan - 1), yEnd = by < 0 ? 1 : (by == 0 ? kSpan - 1 : kSpan);
+                for (int x = xBegin; x < xEnd; ++x)
+                    for (int y = yBegin; y < yEnd; ++y) {
+                        // A leaf's voxels are stored z fastest: a row's voxels in one block are consecutive.
+                        const Index rowStart = (Index(x - 1) & kMask) << (2 * kLeafLog2Dim) | (Index(y - 1) & kMask) << kLeafLog2Dim;
+                        MaterialValue* row = cells[x][y];
+                        row[0] = column[0] ? column[0][rowStart + kLeafDim - 1] : lowTile;
+                        row[kSpan - 1] = column[2] ? column[2][rowStart] : highTile;
+                        // The solid bits come from the source, not from the row just written.
+                        uint32_t bits = uint32_t(row[0].solid()) | uint32_t(row[kSpan - 1].solid()) << (kSpan - 1);
+                        if (column[1]) {
+                            std::copy_n(column[1] + rowStart, kLeafDim, row + 1);
+                            bits |= solidBitsOfRow(column[1] + rowStart) << 1;
+                        } else {
+                            std::fill_n(row + 1, kLeafDim, midTile);
+                            bits |= midTileBits;
+                        }
+                        solidRows[x][y] = bits;
+                    }
             }
     }
 
