@@ -173,13 +173,19 @@ void forEachOwnedSurfaceCell(const CornerGrid& grid, const Neighbourhood& hood, 
     constexpr uint32_t kCellBits = (1u << (kSpan - 1)) - 1; // cells z = 0 .. 8
     for (int x = 0; x < kSpan - 1; ++x) {
         for (int y = 0; y < kSpan - 1; ++y) {
+            // A cell whose minimum corner lies in another leaf is that leaf's: only cells whose minimum
+            // corner lies in this leaf or in a tile block can be this leaf's.
+            const int bx = block(x), by = block(y);
+            const bool centreColumn = bx == 0 && by == 0;
+            uint32_t candidates = isLeaf[bx + 1][by + 1][0] ? 0u : 1u; // z = 0: the block below
+            if (!isLeaf[bx + 1][by + 1][1] || (centreColumn && which == OwnedCells::All)) candidates |= kCellBits & ~1u;
+            if (!candidates) continue;
             // The four corner rows of the cells (x, y, *), in corner order.
             const uint32_t rows[4] = {grid.solidRows[x][y], grid.solidRows[x + 1][y], grid.solidRows[x][y + 1],
                                       grid.solidRows[x + 1][y + 1]};
             const MaterialValue* rowMats[4] = {grid.cells[x][y], grid.cells[x + 1][y], grid.cells[x][y + 1], grid.cells[x + 1][y + 1]};
             const uint32_t all = rows[0] & rows[1] & rows[2] & rows[3], any = rows[0] | rows[1] | rows[2] | rows[3];
-            uint32_t mixed = ((any | (any >> 1)) & ~(all & (all >> 1))) & kCellBits;
-            if (which == OwnedCells::OutsideLeaf && x > 0 && y > 0) mixed &= 1u; // only z = 0 lies outside
+            uint32_t mixed = ((any | (any >> 1)) & ~(all & (all >> 1))) & candidates;
             while (mixed) {
                 const int z = __builtin_ctz(mixed);
                 mixed &= mixed - 1;
