@@ -1,5 +1,7 @@
 #include "mesher/AdaptiveCellCache.h"
 
+#include "mesher/BlockSets.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -59,17 +61,14 @@ std::vector<std::array<int32_t, 3>> AdaptiveCellCache::refreshAround(const Hermi
                                                                      const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
                                                                      const MeshOptions& options)
 {
-    std::vector<Coord> candidates;
-    candidates.reserve(dirtyBlocks.size() * 8);
-    for (const auto& b : dirtyBlocks)
-        forEachLeafSubdividingWith(Coord(b[0], b[1], b[2]), [&](const Coord& leaf) { candidates.push_back(leaf); });
-    std::sort(candidates.begin(), candidates.end());
-    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    std::vector<BlockOrigin> readers;
+    forEachLeafSubdividingWith(Coord(0), [&](const Coord& leaf) { readers.push_back({leaf.x(), leaf.y(), leaf.z()}); });
 
     std::vector<std::array<int32_t, 3>> changed;
     std::vector<const HermiteLeaf*> present;
     ConstAccessor acc(tree);
-    for (const Coord& origin : candidates) {
+    for (const BlockOrigin& candidate : blocksAround(dirtyBlocks, readers)) {
+        const Coord origin(candidate[0], candidate[1], candidate[2]);
         if (const HermiteLeaf* leaf = acc.probeConstLeaf(origin)) present.push_back(leaf);
         else if (sizes_.erase(origin)) changed.push_back({origin.x(), origin.y(), origin.z()});
     }

@@ -2,6 +2,7 @@
 
 #include "mesher/CellGrid.h"
 #include "mesher/AdaptiveCellCache.h"
+#include "mesher/BlockSets.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -47,78 +48,21 @@ namespace {
 /// Offsets, in voxels, from a changed block to the leaves whose chunks can change: a cell reads the
 /// blocks of its eight corners (the 27 around the block) and, for adaptive CMS, a leaf whose
 /// subdivision reads the block decides how its face neighbours split their faces. Sorted and unique.
-std::vector<Coord> affectedOffsets(bool adaptiveCells)
+std::vector<mesher_detail::BlockOrigin> affectedOffsets(bool adaptiveCells)
 {
     using namespace mesher_detail;
-    std::vector<Coord> out;
+    std::vector<BlockOrigin> out;
     for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
-            for (int dz = -1; dz <= 1; ++dz) out.push_back(Coord(dx * kLeafDim, dy * kLeafDim, dz * kLeafDim));
+            for (int dz = -1; dz <= 1; ++dz) out.push_back({dx * kLeafDim, dy * kLeafDim, dz * kLeafDim});
     if (adaptiveCells) {
         forEachLeafSubdividingWith(Coord(0), [&](const Coord& leaf) {
-            for (int f = 0; f < 6; ++f) out.push_back(faceNeighbour(leaf, f));
+            for (int f = 0; f < 6; ++f) {
+                const Coord c = faceNeighbour(leaf, f);
+                out.push_back({c.x(), c.y(), c.z()});
+            }
         });
     }
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
-    return out;
-}
-
-/// The blocks at `offsets` from the dirty blocks, marked in a grid of flags over the dirty blocks'
-/// bounds and read back in order, which gives them sorted and unique without sorting. Only for
-/// leaf-aligned blocks whose bounds are compact (a stroke's blocks): otherwise nullopt.
-std::optional<std::vector<std::array<int32_t, 3>>> markAround(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
-                                                              const std::vector<Coord>& offsets)
-{
-    if (dirtyBlocks.empty()) return std::vector<std::array<int32_t, 3>>{};
-    int64_t lo[3], hi[3]; // in blocks, grown by the offsets
-    for (int a = 0; a < 3; ++a) lo[a] = hi[a] = dirtyBlocks.front()[a] / kLeafDim;
-    for (const auto& b : dirtyBlocks)
-        for (int a = 0; a < 3; ++a) {
-            if (b[a] % kLeafDim != 0) return std::nullopt;
-            lo[a] = std::min<int64_t>(lo[a], b[a] / kLeafDim);
-            hi[a] = std::max<int64_t>(hi[a], b[a] / kLeafDim);
-        }
-    // The grid costs a pass over its cells: keep that within a small multiple of the marking work.
-    const int64_t maxCells = int64_t(dirtyBlocks.size() * offsets.size()) * 16 + 4096;
-    int64_t dim[3], cells = 1;
-    for (int a = 0; a < 3; ++a) {
-        const auto [least, most] = std::minmax_element(offsets.begin(), offsets.end(),
-                                                       [a](const Coord& p, const Coord& q) { return p[a] < q[a]; });
-        lo[a] += (*least)[a] / kLeafDim;
-        hi[a] += (*most)[a] / kLeafDim;
-        dim[a] = hi[a] - lo[a] + 1;
-        if (dim[a] > maxCells / cells) return std::nullopt;
-        cells *= dim[a];
-    }
-    std::vector<uint8_t> marked(std::size_t(cells), 0);
-    for (const auto& b : dirtyBlocks)
-        for (const Coord& d : offsets) {
-            const int64_t x = b[0] / kLeafDim + d[0] / kLeafDim - lo[0], y = b[1] / kLeafDim + d[1] / kLeafDim - lo[1],
-                          z = b[2] / kLeafDim + d[2] / kLeafDim - lo[2];
-            marked[std::size_t((x * dim[1] + y) * dim[2] + z)] = 1;
-        }
-    std::vector<std::array<int32_t, 3>> out;
-    std::size_t i = 0;
-    for (int64_t x = 0; x < dim[0]; ++x)
-        for (int64_t y = 0; y < dim[1]; ++y)
-            for (int64_t z = 0; z < dim[2]; ++z, ++i)
-                if (marked[i])
-                    out.push_back({int32_t((lo[0] + x) * kLeafDim), int32_t((lo[1] + y) * kLeafDim),
-                                   int32_t((lo[2] + z) * kLeafDim)});
-    return out;
-}
-
-/// The blocks at `offsets` (sorted, unique) from each of `blocks`, sorted and unique: marked in a grid
-/// where the blocks are compact, sorted where they are scattered (rare: one edit's blocks are compact).
-std::vector<std::array<int32_t, 3>> blocksAround(const std::vector<std::array<int32_t, 3>>& blocks,
-                                                 const std::vector<Coord>& offsets)
-{
-    if (auto marked = markAround(blocks, offsets)) return std::move(*marked);
-    std::vector<std::array<int32_t, 3>> out;
-    out.reserve(blocks.size() * offsets.size());
-    for (const auto& b : blocks)
-        for (const Coord& d : offsets) out.push_back({b[0] + d[0], b[1] + d[1], b[2] + d[2]});
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
     return out;
@@ -209,16 +153,18 @@ std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
 std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
                                                      const MeshOptions& options)
 {
-    return blocksAround(dirtyBlocks, affectedOffsets(meshesAdaptiveCells(options)));
+    return mesher_detail::blocksAround(dirtyBlocks, affectedOffsets(meshesAdaptiveCells(options)));
 }
 
 std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
                                                      const std::vector<std::array<int32_t, 3>>& changedCells)
 {
     using namespace mesher_detail;
-    std::vector<Coord> faces;
-    for (int f = 0; f < 6; ++f) faces.push_back(faceNeighbour(Coord(0), f));
-    std::sort(faces.begin(), faces.end());
+    std::vector<BlockOrigin> faces;
+    for (int f = 0; f < 6; ++f) {
+        const Coord c = faceNeighbour(Coord(0), f);
+        faces.push_back({c.x(), c.y(), c.z()});
+    }
     const std::vector<std::array<int32_t, 3>> read = blocksAround(dirtyBlocks, affectedOffsets(false));
     const std::vector<std::array<int32_t, 3>> split = blocksAround(changedCells, faces);
     std::vector<std::array<int32_t, 3>> out;
