@@ -1,19 +1,14 @@
 #include "mesher/Mesh.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
 #include <vector>
 
 namespace vdbclay {
-
-uint64_t edgeKey(int32_t i, int32_t j, int32_t k, int axis)
-{
-    // 20 bits per coordinate (offset by 2^19) and 2 bits of axis: unique for |coordinates| < 524288.
-    constexpr int64_t kBias = int64_t(1) << 19;
-    constexpr uint64_t kMask = (uint64_t(1) << 20) - 1;
-    const uint64_t x = uint64_t(int64_t(i) + kBias) & kMask;
-    const uint64_t y = uint64_t(int64_t(j) + kBias) & kMask;
-    const uint64_t z = uint64_t(int64_t(k) + kBias) & kMask;
-    return (x << 42) | (y << 22) | (z << 2) | uint64_t(axis);
-}
 
 bool identical(const MeshChunk& a, const MeshChunk& b)
 {
@@ -38,8 +33,29 @@ uint64_t faceKey(int32_t i, int32_t j, int32_t k, int axis, int segment, int slo
 
 namespace {
 
-/// Vertex keys to welded indices: open addressing with linear probing, which avoids a node
-/// allocation per vertex. kUnsharedVertex (never inserted) marks empty slots.
+/// Whether a vertex key can occur only in the chunk of the leaf at `origin`: a crossing on a voxel edge
+/// or a point on a cell face that lies inside the leaf is met only by cells the leaf owns (every cell
+/// touching it has its minimum corner in the leaf; wide cells never leave their leaf).
+bool onlyInLeaf(uint64_t key, const std::array<int32_t, 3>& origin)
+{
+    if (key == kUnsharedVertex) return true;
+    const bool face = key >> 63;
+    const int bits = face ? 19 : 20, axis = face ? int((key >> 61) & 3) : int(key & 3);
+    const int shift[3] = {face ? 38 : 42, face ? 19 : 22, face ? 0 : 2};
+    const int64_t bias = int64_t(1) << (bits - 1);
+    const uint64_t mask = (uint64_t(1) << bits) - 1;
+    for (int a = 0; a < 3; ++a) {
+        const int64_t local = int64_t((key >> shift[a]) & mask) - bias - origin[a];
+        // An edge's cells reach one voxel below it across the edge; a face's cells one voxel below it
+        // along its normal.
+        const int64_t lowest = (a == axis) == face ? 1 : 0;
+        if (local < lowest || local > 7) return false;
+    }
+    return true;
+}
+
+/// Keys of the vertices that several chunks may hold, to the first vertex holding each: open
+/// addressing with linear probing, no allocation per key. kUnsharedVertex marks empty slots.
 class KeyIndex {
 public:
     explicit KeyIndex(std::size_t count)
@@ -47,24 +63,20 @@ public:
         std::size_t capacity = 16;
         while (capacity < 2 * count) capacity *= 2;
         keys_.assign(capacity, kUnsharedVertex);
-        values_.resize(capacity);
+        holders_.resize(capacity);
         mask_ = capacity - 1;
     }
 
-    /// The index stored for `key`, storing `fresh` first if there is none; `inserted` tells which.
-    uint32_t findOrInsert(uint64_t key, uint32_t fresh, bool& inserted)
+    /// The first holder of `key`, which becomes `holder` if there is none.
+    uint32_t findOrInsert(uint64_t key, uint32_t holder)
     {
         std::size_t slot = std::size_t((key * 0x9E3779B97F4A7C15ull) >> 17) & mask_;
         while (true) {
-            if (keys_[slot] == key) {
-                inserted = false;
-                return values_[slot];
-            }
+            if (keys_[slot] == key) return holders_[slot];
             if (keys_[slot] == kUnsharedVertex) {
                 keys_[slot] = key;
-                values_[slot] = fresh;
-                inserted = true;
-                return fresh;
+                holders_[slot] = holder;
+                return holder;
             }
             slot = (slot + 1) & mask_;
         }
@@ -72,7 +84,7 @@ public:
 
 private:
     std::vector<uint64_t> keys_;
-    std::vector<uint32_t> values_;
+    std::vector<uint32_t> holders_;
     std::size_t mask_ = 0;
 };
 
@@ -88,40 +100,101 @@ Mesh weldChunks(const std::vector<MeshChunk>& chunks)
 
 Mesh weldChunks(const std::vector<const MeshChunk*>& chunks)
 {
-    Mesh out;
-    std::size_t vertices = 0, triangles = 0;
-    for (const MeshChunk* c : chunks) {
-        vertices += c->mesh.vertexCount();
-        triangles += c->mesh.triangleCount();
+    // The welded mesh is the chunks' vertices in order, each shared key at its first holder, then their
+    // triangles in order. Built in parallel: only keys on a leaf's border can be shared, and those are
+    // matched in shards by key, each shard walking the chunks in order. Vertices are numbered as in the
+    // chunks' concatenation ("global" below).
+    constexpr std::size_t kShards = 16;
+    auto shardOf = [](uint64_t key) { return std::size_t((key * 0x9E3779B97F4A7C15ull) >> 60); };
+    const std::size_t n = chunks.size();
+    std::vector<std::size_t> vertexBase(n + 1, 0), triangleBase(n + 1, 0);
+    for (std::size_t c = 0; c < n; ++c) {
+        vertexBase[c + 1] = vertexBase[c] + chunks[c]->mesh.vertexCount();
+        triangleBase[c + 1] = triangleBase[c] + chunks[c]->mesh.triangleCount();
     }
-    out.triangles.reserve(triangles);
-    out.triangleMaterials.reserve(triangles);
-    out.positions.reserve(vertices);
-    out.normals.reserve(vertices);
-    out.materials.reserve(vertices);
-    KeyIndex index(vertices);
-    std::vector<uint32_t> remap;
-    for (const MeshChunk* chunk : chunks) {
-        const MeshChunk& c = *chunk;
-        remap.resize(c.mesh.vertexCount());
-        for (std::size_t v = 0; v < c.mesh.vertexCount(); ++v) {
-            const uint32_t next = uint32_t(out.positions.size());
-            bool fresh = true;
-            if (c.vertexKeys[v] != kUnsharedVertex) {
-                remap[v] = index.findOrInsert(c.vertexKeys[v], next, fresh);
-            } else {
-                remap[v] = next;
+    if (vertexBase[n] >= std::numeric_limits<uint32_t>::max()) throw std::length_error("too many vertices to weld");
+    // first[g]: the global index of the first vertex holding g's key (g itself for an own vertex).
+    std::vector<uint32_t> first(vertexBase[n]);
+    // Each chunk's border vertices (global indices) in its own range, grouped by shard.
+    std::vector<uint32_t> border(vertexBase[n]);
+    std::vector<std::array<uint32_t, kShards + 1>> shardStart(n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8), [&](const auto& range) {
+        std::vector<uint8_t> shardOfVertex;
+        for (std::size_t c = range.begin(); c != range.end(); ++c) {
+            const MeshChunk& chunk = *chunks[c];
+            const uint32_t base = uint32_t(vertexBase[c]), count = uint32_t(chunk.mesh.vertexCount());
+            shardOfVertex.resize(count);
+            std::array<uint32_t, kShards + 1>& start = shardStart[c];
+            start.fill(0);
+            for (uint32_t v = 0; v < count; ++v) {
+                first[base + v] = base + v;
+                const uint64_t key = chunk.vertexKeys[v];
+                const bool shared = !onlyInLeaf(key, chunk.leafOrigin);
+                shardOfVertex[v] = shared ? uint8_t(shardOf(key)) : uint8_t(kShards);
+                if (shared) ++start[shardOfVertex[v] + 1];
             }
-            if (fresh) {
-                out.positions.push_back(c.mesh.positions[v]);
-                out.normals.push_back(c.mesh.normals[v]);
-                out.materials.push_back(c.mesh.materials[v]);
+            for (std::size_t s = 0; s < kShards; ++s) start[s + 1] += start[s];
+            std::array<uint32_t, kShards> fill;
+            std::copy_n(start.begin(), kShards, fill.begin());
+            for (uint32_t v = 0; v < count; ++v)
+                if (shardOfVertex[v] < kShards) border[base + fill[shardOfVertex[v]]++] = base + v;
+        }
+    });
+    tbb::parallel_for(std::size_t(0), kShards, [&](std::size_t shard) {
+        std::size_t count = 0;
+        for (std::size_t c = 0; c < n; ++c) count += shardStart[c][shard + 1] - shardStart[c][shard];
+        KeyIndex index(count);
+        for (std::size_t c = 0; c < n; ++c) {
+            const uint32_t* const held = border.data() + vertexBase[c];
+            const std::vector<uint64_t>& keys = chunks[c]->vertexKeys;
+            for (uint32_t i = shardStart[c][shard]; i < shardStart[c][shard + 1]; ++i) {
+                const uint32_t g = held[i];
+                first[g] = index.findOrInsert(keys[g - vertexBase[c]], g);
             }
         }
-        for (const auto& t : c.mesh.triangles) out.triangles.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
-        out.triangleMaterials.insert(out.triangleMaterials.end(), c.mesh.triangleMaterials.begin(),
-                                     c.mesh.triangleMaterials.end());
-    }
+    });
+    // Own vertices are numbered in order; `output` maps a global own vertex to the welded mesh.
+    std::vector<std::size_t> outputBase(n + 1, 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8), [&](const auto& range) {
+        for (std::size_t c = range.begin(); c != range.end(); ++c) {
+            std::size_t own = 0;
+            for (std::size_t g = vertexBase[c]; g < vertexBase[c + 1]; ++g) own += first[g] == g;
+            outputBase[c + 1] = own;
+        }
+    });
+    for (std::size_t c = 0; c < n; ++c) outputBase[c + 1] += outputBase[c];
+    Mesh out;
+    out.positions.resize(outputBase[n]);
+    out.normals.resize(outputBase[n]);
+    out.materials.resize(outputBase[n]);
+    out.triangles.resize(triangleBase[n]);
+    out.triangleMaterials.resize(triangleBase[n]);
+    std::vector<uint32_t>& output = border; // its border lists are no longer needed
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8), [&](const auto& range) {
+        for (std::size_t c = range.begin(); c != range.end(); ++c) {
+            const Mesh& m = chunks[c]->mesh;
+            std::size_t next = outputBase[c];
+            for (std::size_t v = 0, g = vertexBase[c]; v < m.vertexCount(); ++v, ++g) {
+                if (first[g] != g) continue;
+                output[g] = uint32_t(next);
+                out.positions[next] = m.positions[v];
+                out.normals[next] = m.normals[v];
+                out.materials[next] = m.materials[v];
+                ++next;
+            }
+        }
+    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8), [&](const auto& range) {
+        for (std::size_t c = range.begin(); c != range.end(); ++c) {
+            const Mesh& m = chunks[c]->mesh;
+            const std::size_t base = vertexBase[c];
+            std::array<uint32_t, 3>* to = out.triangles.data() + triangleBase[c];
+            for (const auto& t : m.triangles)
+                *to++ = {output[first[base + t[0]]], output[first[base + t[1]]], output[first[base + t[2]]]};
+            std::copy(m.triangleMaterials.begin(), m.triangleMaterials.end(),
+                      out.triangleMaterials.begin() + std::ptrdiff_t(triangleBase[c]));
+        }
+    });
     return out;
 }
 

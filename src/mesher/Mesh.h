@@ -31,7 +31,16 @@ struct MeshChunk {
 
 /// Key of the grid edge that starts at voxel (i,j,k) and runs along `axis` (0,1,2); unique for
 /// coordinates within +-kMaxEdgeKeyCoordinate.
-uint64_t edgeKey(int32_t i, int32_t j, int32_t k, int axis);
+inline uint64_t edgeKey(int32_t i, int32_t j, int32_t k, int axis)
+{
+    // 20 bits per coordinate (offset by 2^19) and 2 bits of axis: unique for |coordinates| < 524288.
+    constexpr int64_t kBias = int64_t(1) << 19;
+    constexpr uint64_t kMask = (uint64_t(1) << 20) - 1;
+    const uint64_t x = uint64_t(int64_t(i) + kBias) & kMask;
+    const uint64_t y = uint64_t(int64_t(j) + kBias) & kMask;
+    const uint64_t z = uint64_t(int64_t(k) + kBias) & kMask;
+    return (x << 42) | (y << 22) | (z << 2) | uint64_t(axis);
+}
 constexpr int32_t kMaxEdgeKeyCoordinate = 1 << 18;
 /// Key of a vertex inside a cell face (a 2D sharp feature or a material transition): the face's
 /// minimum corner, its normal axis, which of the face's (at most two) segments it lies on, and its
@@ -43,7 +52,10 @@ constexpr uint64_t kUnsharedVertex = ~uint64_t(0);
 /// Bit-exact comparison: same leaf, vertex keys, positions, normals, materials and triangles in order.
 bool identical(const MeshChunk& a, const MeshChunk& b);
 
-/// Joins chunks, merging vertices with the same key (kUnsharedVertex vertices are kept apart).
+/// Joins chunks, merging vertices with the same key (kUnsharedVertex vertices are kept apart): the
+/// chunks' vertices in order, a shared key where it first occurs. As the meshers guarantee, a key holds
+/// once per chunk, and a key whose edge or face lies inside a chunk's leaf (no cell of another leaf
+/// touches it) occurs in that chunk only.
 Mesh weldChunks(const std::vector<MeshChunk>& chunks);
 Mesh weldChunks(const std::vector<const MeshChunk*>& chunks);
 
