@@ -924,16 +924,20 @@ private:
             // The planes around can only make a corner if they lift the weight of the own solve's
             // weakest direction d above the truncation: the wide solve's smallest singular value is at
             // most d's weight, own.smallest + sum (n.d)^2, and its largest at least own.largest.
+            // Weighed first: most sharp edges stay edges, and then the planes need not be summed.
             const Eigen::Vector3d facing = normalSum.normalized();
             double weakestWeight = own.smallest;
-            forEachCrossingAround([&](const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
+            forEachCrossingAround([&](const Eigen::Vector3d&, const Eigen::Vector3d& n) {
                 if (n.dot(facing) < -0.3) return; // the far side of a thin part
-                ata += n * n.transpose();
-                atb += n * n.dot(p);
                 const double along = n.dot(own.weakestDirection);
                 weakestWeight += along * along;
             });
             if (weakestWeight > 0.1 * own.largest) {
+                forEachCrossingAround([&](const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
+                    if (n.dot(facing) < -0.3) return;
+                    ata += n * n.transpose();
+                    atb += n * n.dot(p);
+                });
                 const QefSolution wide = solveQef(ata, atb, massPoint);
                 const Eigen::Vector3d& corner = wide.point;
                 const double eps = 1e-6 * ctx_.voxelSize;
