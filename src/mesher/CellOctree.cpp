@@ -386,19 +386,20 @@ LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, c
         if (!whole[level]) break;
         finest = level;
     }
-    // Each voxel cell takes the widest whole cell containing it; the eight voxel cells of a two-voxel
-    // cell share every cell wider than one voxel, and so does the start of the cell they lie in.
+    // Each two-voxel block takes the widest whole cell containing it (its eight voxel cells share every
+    // cell wider than one voxel), and marks where its cells start.
     for (int x = 0; x < kLeafDim / 2; ++x)
         for (int y = 0; y < kLeafDim / 2; ++y)
             for (int z = 0; z < kLeafDim / 2; ++z) {
                 int level = finest;
                 while (level > 0 && !isWhole(level, (2 * x) >> level, (2 * y) >> level, (2 * z) >> level)) --level;
-                for (int i = 0; i < 2; ++i)
-                    for (int j = 0; j < 2; ++j) {
-                        sizes.log2Width[2 * x + i][2 * y + j][2 * z] = sizes.log2Width[2 * x + i][2 * y + j][2 * z + 1] = uint8_t(level);
-                        if (level == 0) sizes.cellStarts[2 * x + i][2 * y + j] |= uint8_t(3u << (2 * z));
-                    }
-                if (level > 0 && ((2 * (x | y | z)) & ((1 << level) - 1)) == 0) sizes.cellStarts[2 * x][2 * y] |= uint8_t(1u << (2 * z));
+                sizes.blockLog2Width[x][y][z] = uint8_t(level);
+                if (level == 0) {
+                    for (int i = 0; i < 2; ++i)
+                        for (int j = 0; j < 2; ++j) sizes.cellStarts[2 * x + i][2 * y + j] |= uint8_t(3u << (2 * z));
+                } else if (((2 * (x | y | z)) & ((1 << level) - 1)) == 0) {
+                    sizes.cellStarts[2 * x][2 * y] |= uint8_t(1u << (2 * z));
+                }
             }
     return sizes;
 }

@@ -15,13 +15,16 @@ struct SubdivisionCriteria {
                                 // spread angle from the cell's mean normal
 };
 
-/// The cells of one leaf: entry (x, y, z) holds log2 of the width of the cell containing the voxel
-/// cell at leaf-local (x, y, z). Cells are aligned to their width.
+/// The cells of one leaf, aligned to their width. A cell wider than a voxel covers whole two-voxel
+/// blocks and voxel cells come eight to a block, so the widths are kept per two-voxel block (128 bytes
+/// a leaf, which keeps a large scene's cells in cache).
 struct LeafCellSizes {
-    uint8_t log2Width[kLeafDim][kLeafDim][kLeafDim];
-    uint8_t cellStarts[kLeafDim][kLeafDim]; // bit z: a cell has its minimum corner at (x, y, z)
+    static constexpr int kBlocks = kLeafDim / 2;
+    uint8_t blockLog2Width[kBlocks][kBlocks][kBlocks]; // log2 of the width of the cells in each block
+    uint8_t cellStarts[kLeafDim][kLeafDim];            // bit z: a cell has its minimum corner at (x, y, z)
 
-    int widthAt(int x, int y, int z) const { return 1 << log2Width[x][y][z]; }
+    /// The width of the cell containing the voxel cell at leaf-local (x, y, z).
+    int widthAt(int x, int y, int z) const { return 1 << blockLog2Width[x >> 1][y >> 1][z >> 1]; }
 };
 
 /// Merges cells bottom-up: a cell wider than one voxel stays whole when its eight children stayed

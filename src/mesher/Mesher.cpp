@@ -136,9 +136,10 @@ std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
     const HermiteTree& tree = volume.impl().grid->constTree();
     std::vector<const HermiteLeaf*> leaves;
     std::vector<std::size_t> slot;
+    mesher_detail::ConstAccessor acc(tree); // origins come sorted: neighbours share internal nodes
     for (std::size_t i = 0; i < leafOrigins.size(); ++i) {
         const Coord origin(leafOrigins[i][0], leafOrigins[i][1], leafOrigins[i][2]);
-        const HermiteLeaf* leaf = tree.probeConstLeaf(origin);
+        const HermiteLeaf* leaf = acc.probeConstLeaf(origin);
         if (!leaf || leaf->origin() != origin) continue;
         checkRange(origin);
         leaves.push_back(leaf);
