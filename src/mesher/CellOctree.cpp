@@ -61,6 +61,31 @@ constexpr int cellBit(int level, int x, int y, int z)
     return (x * count + y) * count + z;
 }
 
+/// cellBit(1, x, y, z) = x * 16 + y * 4 + z.
+constexpr int kTwoVoxelStride[3] = {(kLeafDim / 2) * (kLeafDim / 2), kLeafDim / 2, 1};
+
+/// The two-voxel cells (cellBit(1, ...), less the part along the axis) that hold the lattice line
+/// (u, v) along an axis: one or two across it in each other direction, two where the line lies on a
+/// boundary between cells (a cell's range 2c .. 2c + 2 holds both ends).
+struct LineCells {
+    uint8_t count = 0;
+    uint8_t cells[4] = {};
+};
+constexpr std::array<std::array<std::array<LineCells, kLattice>, kLattice>, 3> kLineCells = [] {
+    constexpr uint8_t kCellsAcross[kLattice][2] = {{0, 0}, {0, 0}, {0, 1}, {1, 1}, {1, 2}, {2, 2}, {2, 3}, {3, 3}, {3, 3}};
+    std::array<std::array<std::array<LineCells, kLattice>, kLattice>, 3> table{};
+    for (int axis = 0; axis < 3; ++axis)
+        for (int u = 0; u < kLattice; ++u)
+            for (int v = 0; v < kLattice; ++v) {
+                LineCells& line = table[axis][u][v];
+                for (int cu = kCellsAcross[u][0]; cu <= kCellsAcross[u][1]; ++cu)
+                    for (int cv = kCellsAcross[v][0]; cv <= kCellsAcross[v][1]; ++cv)
+                        line.cells[line.count++] =
+                            uint8_t(cu * kTwoVoxelStride[(axis + 1) % 3] + cv * kTwoVoxelStride[(axis + 2) % 3]);
+            }
+    return table;
+}();
+
 /// A leaf's voxel lattice (o .. o+8): which points are solid, seen along each axis, and its crossings
 /// with their normals, read once per leaf.
 class LeafLattice {
@@ -97,47 +122,40 @@ public:
                     const uint32_t line = solidLine_[axis][u][v];
                     const uint8_t changes = uint8_t((line ^ (line >> 1)) & ((1u << kLeafDim) - 1));
                     changes_[axis][u][v] = changes;
+                    if (changes) changedLines_[changedLineCount_++] = {changes, uint8_t(axis), uint8_t(u), uint8_t(v)};
                     if (changes & (changes - 1))
                         linesChangingTwice_[lineChangingTwiceCount_++] = {changes, uint8_t(axis), uint8_t(u), uint8_t(v)};
                 }
         // The crossings (a leaf's surface holds a few hundred), each added to the normal sums of the
         // two-voxel cells holding its voxel edge: the cell along the axis that holds the edge, and one or
         // two across it in each other direction (two where the line lies on a boundary between cells).
-        for (int axis = 0; axis < 3; ++axis) {
-            const int strideU = kTwoVoxelStride[(axis + 1) % 3], strideV = kTwoVoxelStride[(axis + 2) % 3];
-            for (int u = 0; u < kLattice; ++u)
-                for (int v = 0; v < kLattice; ++v) {
-                    uint32_t changes = changes_[axis][u][v];
-                    if (!changes) continue;
-                    uint8_t lineCells[4];
-                    uint8_t lineCellCount = 0;
-                    for (int cu = kTwoVoxelCellsAcross[u][0]; cu <= kTwoVoxelCellsAcross[u][1]; ++cu)
-                        for (int cv = kTwoVoxelCellsAcross[v][0]; cv <= kTwoVoxelCellsAcross[v][1]; ++cv)
-                            lineCells[lineCellCount++] = uint8_t(cu * strideU + cv * strideV);
-                    for (; changes; changes &= changes - 1) {
-                        Crossing x;
-                        const int t = __builtin_ctz(changes);
-                        x.at[axis] = uint8_t(t);
-                        x.at[(axis + 1) % 3] = uint8_t(u);
-                        x.at[(axis + 2) % 3] = uint8_t(v);
-                        x.axis = uint8_t(axis);
-                        const PackedSample* s = hood.sample(grid.origin.offsetBy(x.at[0], x.at[1], x.at[2]), axis);
-                        if (!s) continue;
-                        const UnpackedSample sample = unpackSample(*s);
-                        std::copy(sample.normal.begin(), sample.normal.end(), x.normal);
-                        x.offset = sample.offset;
-                        x.cellCount = lineCellCount;
-                        const int along = (t >> 1) * kTwoVoxelStride[axis];
-                        for (int i = 0; i < lineCellCount; ++i) {
-                            const int cell = lineCells[i] + along;
-                            x.cells[i] = uint8_t(cell);
-                            NormalCone& cone = twoVoxelCones[cell];
-                            for (int a = 0; a < 3; ++a) cone.sum[a] += x.normal[a];
-                            ++cone.count;
-                        }
-                        crossings_[crossingCount_++] = x;
-                    }
+        for (int k = 0; k < changedLineCount_; ++k) {
+            const ChangedLine& line = changedLines_[k];
+            const int axis = line.axis, u = line.u, v = line.v;
+            const LineCells& lineCells = kLineCells[axis][u][v];
+            for (uint32_t changes = line.changes; changes; changes &= changes - 1) {
+                Crossing x;
+                const int t = __builtin_ctz(changes);
+                x.at[axis] = uint8_t(t);
+                x.at[(axis + 1) % 3] = uint8_t(u);
+                x.at[(axis + 2) % 3] = uint8_t(v);
+                x.axis = uint8_t(axis);
+                const PackedSample* s = hood.sample(grid.origin.offsetBy(x.at[0], x.at[1], x.at[2]), axis);
+                if (!s) continue;
+                const UnpackedSample sample = unpackSample(*s);
+                std::copy(sample.normal.begin(), sample.normal.end(), x.normal);
+                x.offset = sample.offset;
+                x.cellCount = lineCells.count;
+                const int along = (t >> 1) * kTwoVoxelStride[axis];
+                for (int i = 0; i < lineCells.count; ++i) {
+                    const int cell = lineCells.cells[i] + along;
+                    x.cells[i] = uint8_t(cell);
+                    NormalCone& cone = twoVoxelCones[cell];
+                    for (int a = 0; a < 3; ++a) cone.sum[a] += x.normal[a];
+                    ++cone.count;
                 }
+                crossings_[crossingCount_++] = x;
+            }
         }
         // Each cone's spread: the cosine of the widest angle between one of its normals and its sum.
         double length[kTwoVoxelCells], minCos[kTwoVoxelCells];
@@ -172,7 +190,7 @@ public:
         };
         uint64_t cells = 0;
         for (int k = 0; k < lineChangingTwiceCount_; ++k) {
-            const LineChangingTwice& line = linesChangingTwice_[k];
+            const ChangedLine& line = linesChangingTwice_[k];
             const uint32_t twice = windows[line.changes]; // bit c: the c-th cell along the axis
             if (!twice) continue;
             const int axis = line.axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
@@ -296,11 +314,6 @@ private:
         put(8, lastColumn | ((lastRow >> 8) & 1u) << 8);
     }
 
-    /// cellBit(1, x, y, z) = x * 16 + y * 4 + z.
-    static constexpr int kTwoVoxelStride[3] = {(kLeafDim / 2) * (kLeafDim / 2), kLeafDim / 2, 1};
-    /// The first and last two-voxel cell whose range (2c .. 2c + 2) holds lattice coordinate t.
-    static constexpr uint8_t kTwoVoxelCellsAcross[kLattice][2] = {{0, 0}, {0, 0}, {0, 1}, {1, 1}, {1, 2},
-                                                                  {2, 2}, {2, 3}, {3, 3}, {3, 3}};
 
     bool singleMaterialIn(const int b[3], int width) const
     {
@@ -320,11 +333,12 @@ private:
     bool singleMaterial_;
     uint32_t solidLine_[3][kLattice][kLattice];
     uint8_t changes_[3][kLattice][kLattice]; // bit t: the line changes material between points t and t + 1
-    struct LineChangingTwice {
+    struct ChangedLine {
         uint8_t changes, axis, u, v;
     };
-    LineChangingTwice linesChangingTwice_[3 * kLattice * kLattice];
-    int lineChangingTwiceCount_ = 0;
+    ChangedLine changedLines_[3 * kLattice * kLattice];   // lines that change material, in order
+    ChangedLine linesChangingTwice_[3 * kLattice * kLattice]; // those that change more than once
+    int changedLineCount_ = 0, lineChangingTwiceCount_ = 0;
     // At most one per voxel edge of the lattice: 3 * 9 * 9 * 8. On the stack, so a leaf allocates nothing.
     static constexpr int kMaxCrossings = 3 * kLattice * kLattice * kLeafDim;
     Crossing crossings_[kMaxCrossings];
