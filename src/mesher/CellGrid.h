@@ -171,14 +171,21 @@ void forEachOwnedSurfaceCell(const CornerGrid& grid, const Neighbourhood& hood, 
                 isLeaf[bx + 1][by + 1][bz + 1] = hood.leafAt(bx, by, bz) != nullptr;
 
     constexpr uint32_t kCellBits = (1u << (kSpan - 1)) - 1; // cells z = 0 .. 8
+    // A cell whose minimum corner lies in another leaf is that leaf's: only cells whose minimum corner
+    // lies in this leaf or in a tile block can be this leaf's. Per column of blocks (x = 0 or y = 0 lie
+    // in the blocks below), the cells z = 0 .. 8 that can be.
+    uint32_t candidatesIn[2][2];
+    for (int bx = -1; bx <= 0; ++bx)
+        for (int by = -1; by <= 0; ++by) {
+            const bool centreColumn = bx == 0 && by == 0;
+            uint32_t& candidates = candidatesIn[bx + 1][by + 1];
+            candidates = isLeaf[bx + 1][by + 1][0] ? 0u : 1u; // z = 0: the block below
+            if (!isLeaf[bx + 1][by + 1][1] || (centreColumn && which == OwnedCells::All)) candidates |= kCellBits & ~1u;
+        }
+    if (!(candidatesIn[0][0] | candidatesIn[0][1] | candidatesIn[1][0] | candidatesIn[1][1])) return;
     for (int x = 0; x < kSpan - 1; ++x) {
         for (int y = 0; y < kSpan - 1; ++y) {
-            // A cell whose minimum corner lies in another leaf is that leaf's: only cells whose minimum
-            // corner lies in this leaf or in a tile block can be this leaf's.
-            const int bx = block(x), by = block(y);
-            const bool centreColumn = bx == 0 && by == 0;
-            uint32_t candidates = isLeaf[bx + 1][by + 1][0] ? 0u : 1u; // z = 0: the block below
-            if (!isLeaf[bx + 1][by + 1][1] || (centreColumn && which == OwnedCells::All)) candidates |= kCellBits & ~1u;
+            const uint32_t candidates = candidatesIn[x > 0][y > 0];
             if (!candidates) continue;
             // The four corner rows of the cells (x, y, *), in corner order.
             const uint32_t rows[4] = {grid.solidRows[x][y], grid.solidRows[x + 1][y], grid.solidRows[x][y + 1],
