@@ -113,7 +113,11 @@ struct CornerGrid {
         constexpr Index kMask = kLeafDim - 1;
         for (int bx = -1; bx <= 1; ++bx)
             for (int by = -1; by <= 1; ++by) {
-                const MaterialValue* const* column = blockData[bx + 1][by + 1];
+                // The column's blocks below, at and above the leaf (null: a tile), held in locals so the
+                // row loop keeps them in registers.
+                const MaterialValue* const below = blockData[bx + 1][by + 1][0];
+                const MaterialValue* const level = blockData[bx + 1][by + 1][1];
+                const MaterialValue* const above = blockData[bx + 1][by + 1][2];
                 const MaterialValue lowTile = hood.tileAt(bx, by, -1), midTile = hood.tileAt(bx, by, 0),
                                     highTile = hood.tileAt(bx, by, 1);
                 const uint32_t midTileBits = midTile.solid() ? ((1u << kLeafDim) - 1) << 1 : 0u;
@@ -124,13 +128,14 @@ struct CornerGrid {
                         // A leaf's voxels are stored z fastest: a row's voxels in one block are consecutive.
                         const Index rowStart = (Index(x - 1) & kMask) << (2 * kLeafLog2Dim) | (Index(y - 1) & kMask) << kLeafLog2Dim;
                         MaterialValue* row = cells[x][y];
-                        row[0] = column[0] ? column[0][rowStart + kLeafDim - 1] : lowTile;
-                        row[kSpan - 1] = column[2] ? column[2][rowStart] : highTile;
-                        // The solid bits come from the source, not from the row just written.
-                        uint32_t bits = uint32_t(row[0].solid()) | uint32_t(row[kSpan - 1].solid()) << (kSpan - 1);
-                        if (column[1]) {
-                            std::copy_n(column[1] + rowStart, kLeafDim, row + 1);
-                            bits |= solidBitsOfRow(column[1] + rowStart) << 1;
+                        const MaterialValue first = below ? below[rowStart + kLeafDim - 1] : lowTile;
+                        const MaterialValue last = above ? above[rowStart] : highTile;
+                        row[0] = first;
+                        row[kSpan - 1] = last;
+                        uint32_t bits = uint32_t(first.solid()) | uint32_t(last.solid()) << (kSpan - 1);
+                        if (level) {
+                            std::copy_n(level + rowStart, kLeafDim, row + 1);
+                            bits |= solidBitsOfRow(level + rowStart) << 1;
                         } else {
                             std::fill_n(row + 1, kLeafDim, midTile);
                             bits |= midTileBits;
