@@ -50,6 +50,15 @@ public:
         return leaf ? leaf->sample(HermiteLeaf::coordToOffset(c), axis) : nullptr;
     }
 
+    /// sample() at leaf-local (x, y, z), each in 0 .. 15 (the leaf and the blocks above it).
+    const PackedSample* sampleAbove(int x, int y, int z, int axis) const
+    {
+        const HermiteLeaf* leaf = leaves_[slot(x >> kLeafLog2Dim, y >> kLeafLog2Dim, z >> kLeafLog2Dim)];
+        constexpr int kMask = kLeafDim - 1;
+        const Index offset = Index(x & kMask) << (2 * kLeafLog2Dim) | Index(y & kMask) << kLeafLog2Dim | Index(z & kMask);
+        return leaf ? leaf->sample(offset, axis) : nullptr;
+    }
+
 private:
     static int slot(int dx, int dy, int dz) { return (dx + 1) * 9 + (dy + 1) * 3 + (dz + 1); }
     /// `c` lies within one block of the centre: c - origin is in -8 .. 15 per axis.
