@@ -121,7 +121,6 @@ public:
                 for (int v = 0; v < kLattice; ++v) {
                     const uint32_t line = solidLine_[axis][u][v];
                     const uint8_t changes = uint8_t((line ^ (line >> 1)) & ((1u << kLeafDim) - 1));
-                    changes_[axis][u][v] = changes;
                     if (changes) changedLines_[changedLineCount_++] = {changes, uint8_t(axis), uint8_t(u), uint8_t(v)};
                     if (changes & (changes - 1))
                         linesChangingTwice_[lineChangingTwiceCount_++] = {changes, uint8_t(axis), uint8_t(u), uint8_t(v)};
@@ -314,7 +313,6 @@ private:
         put(8, lastColumn | ((lastRow >> 8) & 1u) << 8);
     }
 
-
     bool singleMaterialIn(const int b[3], int width) const
     {
         MaterialId solid = kEmptyMaterial;
@@ -332,9 +330,9 @@ private:
     const CornerGrid& grid_; // the lattice's materials are the corner grid's o .. o+8
     bool singleMaterial_;
     uint32_t solidLine_[3][kLattice][kLattice];
-    uint8_t changes_[3][kLattice][kLattice]; // bit t: the line changes material between points t and t + 1
     struct ChangedLine {
-        uint8_t changes, axis, u, v;
+        uint8_t changes; // bit t: the line changes material between points t and t + 1
+        uint8_t axis, u, v;
     };
     ChangedLine changedLines_[3 * kLattice * kLattice];   // lines that change material, in order
     ChangedLine linesChangingTwice_[3 * kLattice * kLattice]; // those that change more than once
