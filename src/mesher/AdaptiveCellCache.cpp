@@ -14,11 +14,15 @@ namespace vdbclay::mesher_detail {
 
 namespace {
 
-/// The cells of each leaf, subdivided in parallel.
+/// The cells of each leaf, subdivided in parallel; `keepGrids` (optional) keeps their corner grids.
 std::vector<LeafCellSizes> subdivideLeaves(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves,
-                                           const MeshOptions& options)
+                                           const MeshOptions& options, CornerGridStore* keepGrids = nullptr)
 {
     std::vector<LeafCellSizes> sizes(leaves.size());
+    if (keepGrids) {
+        keepGrids->resize(leaves.size());
+        for (std::size_t i = 0; i < leaves.size(); ++i) keepGrids->origins[i] = leaves[i]->origin();
+    }
     const double cosHalfSpread = std::cos(0.5 * options.subdivisionAngleDegrees * M_PI / 180.0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 2), [&](const auto& range) {
         ConstAccessor acc(tree);
@@ -32,7 +36,10 @@ std::vector<LeafCellSizes> subdivideLeaves(const HermiteTree& tree, const std::v
                 criteria.maxCellSize = std::min(criteria.maxCellSize, options.leafMaxCellWidth({o.x(), o.y(), o.z()}));
             }
             criteria.cosHalfSpread = cosHalfSpread;
-            sizes[i] = subdivideLeaf(CornerGrid(leaf, hood), hood, criteria);
+            CornerGrid unkept;
+            CornerGrid& grid = keepGrids ? keepGrids->grids[i] : unkept;
+            grid.fill(leaf, hood);
+            sizes[i] = subdivideLeaf(grid, hood, criteria);
         }
     });
     return sizes;
@@ -59,7 +66,7 @@ void AdaptiveCellCache::prepare(const HermiteTree& tree, const std::vector<const
 
 std::vector<std::array<int32_t, 3>> AdaptiveCellCache::refreshAround(const HermiteTree& tree,
                                                                      const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
-                                                                     const MeshOptions& options)
+                                                                     const MeshOptions& options, CornerGridStore* keepGrids)
 {
     std::vector<BlockOrigin> readers;
     forEachLeafSubdividingWith(Coord(0), [&](const Coord& leaf) { readers.push_back({leaf.x(), leaf.y(), leaf.z()}); });
@@ -72,7 +79,7 @@ std::vector<std::array<int32_t, 3>> AdaptiveCellCache::refreshAround(const Hermi
         if (const HermiteLeaf* leaf = acc.probeConstLeaf(origin)) present.push_back(leaf);
         else if (sizes_.erase(origin)) changed.push_back({origin.x(), origin.y(), origin.z()});
     }
-    const std::vector<LeafCellSizes> fresh = subdivideLeaves(tree, present, options);
+    const std::vector<LeafCellSizes> fresh = subdivideLeaves(tree, present, options, keepGrids);
     for (std::size_t i = 0; i < present.size(); ++i) {
         const Coord origin = present[i]->origin();
         const auto [it, added] = sizes_.try_emplace(origin, fresh[i]);

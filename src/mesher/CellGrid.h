@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <vector>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -106,8 +107,12 @@ inline bool rowHoldsOnly(const MaterialValue* row, MaterialId material)
 struct CornerGrid {
     static constexpr int kSpan = kLeafDim + 2;
 
-    CornerGrid(const HermiteLeaf& leaf, const Neighbourhood& hood) : origin(leaf.origin())
+    CornerGrid(const HermiteLeaf& leaf, const Neighbourhood& hood) { fill(leaf, hood); }
+    CornerGrid() {} // left unfilled (not zeroed): for arrays filled later
+
+    void fill(const HermiteLeaf& leaf, const Neighbourhood& hood)
     {
+        origin = leaf.origin();
         // Each block's voxels, fetched once: a leaf buffer's element access checks for delayed loading
         // on every call.
         const MaterialValue* blockData[3][3][3];
@@ -163,6 +168,25 @@ struct CornerGrid {
     Coord origin;
     MaterialValue cells[kSpan][kSpan][kSpan];
     uint32_t solidRows[kSpan][kSpan]; // bit z: cells[x][y][z] is solid
+};
+
+/// Corner grids kept from subdividing leaves for meshing them in the same update (the volume must not
+/// change in between): filled in the order of their origins.
+struct CornerGridStore {
+    std::vector<Coord> origins; // sorted
+    std::vector<CornerGrid> grids;
+
+    void resize(std::size_t count)
+    {
+        origins.resize(count);
+        grids.resize(count);
+    }
+
+    const CornerGrid* find(const Coord& origin) const
+    {
+        const auto it = std::lower_bound(origins.begin(), origins.end(), origin);
+        return it != origins.end() && *it == origin ? &grids[std::size_t(it - origins.begin())] : nullptr;
+    }
 };
 
 /// Which of a leaf's owned cells forEachOwnedSurfaceCell visits: all of them, or only those whose
@@ -280,8 +304,10 @@ public:
     CubicalMarchingSquaresMesher(const CubicalMarchingSquaresMesher&) = delete;
     CubicalMarchingSquaresMesher& operator=(const CubicalMarchingSquaresMesher&) = delete;
 
-    /// `widths`: the adaptive cells around the leaf (CellOctree.h); null meshes voxel cells.
-    MeshChunk mesh(const HermiteLeaf& leaf, ConstAccessor& acc, const CellWidthField* widths);
+    /// `widths`: the adaptive cells around the leaf (CellOctree.h); null meshes voxel cells. `grid`: the
+    /// leaf's corner grid if one was built already (null: built here).
+    MeshChunk mesh(const HermiteLeaf& leaf, ConstAccessor& acc, const CellWidthField* widths,
+                   const CornerGrid* grid = nullptr);
 
     /// Cells meshed so far: all of them, and those the smooth-cell shortcut took.
     std::size_t cellsMeshed() const { return cellsMeshed_; }

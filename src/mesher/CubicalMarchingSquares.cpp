@@ -1200,10 +1200,13 @@ CubicalMarchingSquaresMesher::CubicalMarchingSquaresMesher(double voxelSize, dou
 
 CubicalMarchingSquaresMesher::~CubicalMarchingSquaresMesher() = default;
 
-MeshChunk CubicalMarchingSquaresMesher::mesh(const HermiteLeaf& leaf, ConstAccessor& acc, const CellWidthField* widths)
+MeshChunk CubicalMarchingSquaresMesher::mesh(const HermiteLeaf& leaf, ConstAccessor& acc, const CellWidthField* widths,
+                                             const CornerGrid* prebuilt)
 {
     const Neighbourhood hood(leaf, acc);
-    const CornerGrid grid(leaf, hood);
+    CornerGrid built;
+    if (!prebuilt) built.fill(leaf, hood);
+    const CornerGrid& grid = prebuilt ? *prebuilt : built;
     buffers_->startLeaf(leaf.origin());
     LeafContext ctx{hood, grid, widths, leaf.origin(), voxelSize_, cosSharp_, *buffers_};
     auto meshVoxelCell = [&](const Coord& base, const MaterialValue mats[8], unsigned solid) {

@@ -77,7 +77,8 @@ void checkRange(const Coord& origin)
 
 /// Meshes the given leaves in parallel, one chunk each.
 std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves,
-                                  double voxelSize, const MeshOptions& options, mesher_detail::AdaptiveCellCache* cache)
+                                  double voxelSize, const MeshOptions& options, mesher_detail::AdaptiveCellCache* cache,
+                                  const mesher_detail::CornerGridStore* grids = nullptr)
 {
     using namespace mesher_detail;
     std::vector<MeshChunk> chunks(leaves.size());
@@ -101,11 +102,12 @@ std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<con
         CubicalMarchingSquaresMesher& cms = *local;
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const HermiteLeaf& leaf = *leaves[i];
+            const CornerGrid* grid = grids ? grids->find(leaf.origin()) : nullptr;
             if (cells) {
                 const CellWidthField widths = cells->around(leaf);
-                chunks[i] = cms.mesh(leaf, acc, &widths);
+                chunks[i] = cms.mesh(leaf, acc, &widths, grid);
             } else {
-                chunks[i] = cms.mesh(leaf, acc, nullptr);
+                chunks[i] = cms.mesh(leaf, acc, nullptr, grid);
             }
         }
     });
@@ -130,7 +132,8 @@ std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions&
 
 std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
                                                      const std::vector<std::array<int32_t, 3>>& leafOrigins,
-                                                     const MeshOptions& options, mesher_detail::AdaptiveCellCache* cells)
+                                                     const MeshOptions& options, mesher_detail::AdaptiveCellCache* cells,
+                                                     const mesher_detail::CornerGridStore* grids)
 {
     validateMeshOptions(options);
     const HermiteTree& tree = volume.impl().grid->constTree();
@@ -145,7 +148,7 @@ std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
         leaves.push_back(leaf);
         slot.push_back(i);
     }
-    std::vector<MeshChunk> chunks = meshLeaves(tree, leaves, volume.voxelSize(), options, cells);
+    std::vector<MeshChunk> chunks = meshLeaves(tree, leaves, volume.voxelSize(), options, cells, grids);
     std::vector<std::optional<MeshChunk>> out(leafOrigins.size());
     for (std::size_t k = 0; k < chunks.size(); ++k) out[slot[k]] = std::move(chunks[k]);
     return out;
