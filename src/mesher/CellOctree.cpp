@@ -209,20 +209,36 @@ public:
         return cells;
     }
 
-    /// Whether the cell of `width` at leaf-local `b`, whose lattice lines each change material at most
-    /// once, holds at most one solid material and no ambiguous face.
-    bool simpleBeyondLines(const int b[3], int width) const
+    /// The cells of width 2^level (cellBit order) with an ambiguous face: two solid corners on a
+    /// diagonal, two empty on the other. Found a column of cells along z at a time, from the four lines
+    /// along z through the column's edges.
+    uint64_t cellsWithAmbiguousFaces(int level) const
     {
-        if (!singleMaterial_ && !singleMaterialIn(b, width)) return false;
-        // Corner c has bits x, y, z = c & 1, (c >> 1) & 1, c >> 2: the lines along z give corners (x, y)
-        // at bit z of the low face and bit z + width of the high face.
-        const int x0 = b[0], x1 = b[0] + width, y0 = b[1], y1 = b[1] + width, z = b[2];
-        const uint32_t lines[4] = {solidLine_[2][x0][y0], solidLine_[2][x1][y0], solidLine_[2][x0][y1], solidLine_[2][x1][y1]};
-        unsigned solidCorners = 0;
-        for (int c = 0; c < 4; ++c)
-            solidCorners |= (((lines[c] >> z) & 1u) << c) | (((lines[c] >> (z + width)) & 1u) << (c + 4));
-        return !kCellCases[solidCorners].ambiguousFace;
+        const int width = 1 << level, count = kLeafDim >> level;
+        // Bit z: the face from z to z + width between lines p and q (corners p[z], p[z + w], q[z + w],
+        // q[z] in turn) alternates.
+        auto alternates = [width](uint32_t p, uint32_t q) {
+            const uint32_t pUp = p >> width, qUp = q >> width;
+            return ~(p ^ qUp) & ~(pUp ^ q) & (p ^ pUp);
+        };
+        uint64_t cells = 0;
+        for (int cx = 0; cx < count; ++cx)
+            for (int cy = 0; cy < count; ++cy) {
+                const int x0 = cx * width, y0 = cy * width;
+                const uint32_t l00 = solidLine_[2][x0][y0], l10 = solidLine_[2][x0 + width][y0];
+                const uint32_t l01 = solidLine_[2][x0][y0 + width], l11 = solidLine_[2][x0 + width][y0 + width];
+                // Bit z: the face across the column at z alternates (l00, l10, l11, l01 in turn).
+                const uint32_t across = ~(l00 ^ l11) & ~(l01 ^ l10) & (l00 ^ l01);
+                const uint32_t ambiguous = across | (across >> width) | alternates(l00, l01) | alternates(l10, l11) |
+                                           alternates(l00, l10) | alternates(l01, l11);
+                for (int cz = 0; cz < count; ++cz)
+                    if ((ambiguous >> (cz * width)) & 1u) cells |= uint64_t(1) << cellBit(level, cx, cy, cz);
+            }
+        return cells;
     }
+
+    /// Whether the cell of `width` at leaf-local `b` holds at most one solid material.
+    bool holdsOneMaterial(const int b[3], int width) const { return singleMaterial_ || singleMaterialIn(b, width); }
 
     /// Whether the two-voxel cell (i, j, k) holds one straight sharp edge: its crossings' normals fall
     /// into two groups, each within `cosHalfSpread` of its own mean, and the two groups' planes meet
@@ -364,16 +380,17 @@ LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, c
     for (int level = 1; (1 << level) <= criteria.maxCellSize && level <= 3; ++level) {
         const int width = 1 << level, count = kLeafDim >> level;
         const uint64_t linesChangingTwice = lattice.cellsWithLinesChangingTwice(level);
+        const uint64_t ambiguousFaces = lattice.cellsWithAmbiguousFaces(level);
         for (int x = 0; x < count; ++x)
             for (int y = 0; y < count; ++y)
                 for (int z = 0; z < count; ++z) {
                     const int bit = cellBit(level, x, y, z);
-                    if ((linesChangingTwice >> bit) & 1u) continue;
+                    if (((linesChangingTwice | ambiguousFaces) >> bit) & 1u) continue;
                     bool childrenWhole = true;
                     for (int c = 0; c < 8 && childrenWhole && level > 1; ++c)
                         childrenWhole = isWhole(level - 1, 2 * x + cornerBit(c, 0), 2 * y + cornerBit(c, 1), 2 * z + cornerBit(c, 2));
                     const int b[3] = {x * width, y * width, z * width};
-                    if (!childrenWhole || !lattice.simpleBeyondLines(b, width)) continue;
+                    if (!childrenWhole || !lattice.holdsOneMaterial(b, width)) continue;
                     NormalCone& cone = cones[level][bit];
                     if (level > 1) {
                         auto childCone = [&](int c) -> const NormalCone& {
