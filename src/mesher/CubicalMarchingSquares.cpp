@@ -102,7 +102,11 @@ void appendSegment(std::vector<Segment>& to, const Segment& from, bool reversed)
 constexpr int kFaceAxes[3][2] = {{1, 2}, {2, 0}, {0, 1}};
 
 /// A vector's coordinates on a face with normal `axis`.
-Vec2 project(const std::array<float, 3>& v, int axis) { return {v[kFaceAxes[axis][0]], v[kFaceAxes[axis][1]]}; }
+template<typename T>
+Vec2 project(const std::array<T, 3>& v, int axis)
+{
+    return {v[kFaceAxes[axis][0]], v[kFaceAxes[axis][1]]};
+}
 
 Vec2 normalized(const Vec2& v)
 {
@@ -113,7 +117,8 @@ Vec2 normalized(const Vec2& v)
 /// Whether the normals at the two ends of a segment on a face with normal `axis`, projected onto the
 /// face, span the sharp angle there: the segment is then a candidate for a 2D sharp feature. A normal
 /// along the axis has no direction on the face.
-bool segmentBends(const std::array<float, 3>& normalA, const std::array<float, 3>& normalB, int axis, double cosSharp)
+template<typename T>
+bool segmentBends(const std::array<T, 3>& normalA, const std::array<T, 3>& normalB, int axis, double cosSharp)
 {
     const Vec2 a = project(normalA, axis), b = project(normalB, axis);
     const double aa = a.x * a.x + a.y * a.y, bb = b.x * b.x + b.y * b.y;
@@ -121,7 +126,8 @@ bool segmentBends(const std::array<float, 3>& normalA, const std::array<float, 3
     return a.x * b.x + a.y * b.y <= cosSharp * std::sqrt(aa * bb);
 }
 
-double normalDot(const std::array<float, 3>& a, const std::array<float, 3>& b)
+template<typename T>
+double normalDot(const std::array<T, 3>& a, const std::array<T, 3>& b)
 {
     return double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2];
 }
@@ -1162,14 +1168,16 @@ bool meshSmoothCell(LeafContext& ctx, const Coord& base, int width, const Materi
             crossings[i] = &x;
         }
     }
+    // The normals in double once (exactly): each is tested against several others.
+    std::array<double, 3> normals[12];
+    for (int i = 0; i < count; ++i)
+        for (int a = 0; a < 3; ++a) normals[i][a] = crossings[i]->normal[a];
     for (int l = 0, begin = 0; l < cell.loopCount; begin = cell.loopEnd[l++]) {
         const int end = cell.loopEnd[l];
         for (int i = begin; i < end; ++i) {
-            const EdgeCrossing& x = *crossings[i];
-            const EdgeCrossing& next = *crossings[i + 1 < end ? i + 1 : begin];
-            if (segmentBends(x.normal, next.normal, cell.segmentAxis[i], ctx.cosSharp)) return false;
+            if (segmentBends(normals[i], normals[i + 1 < end ? i + 1 : begin], cell.segmentAxis[i], ctx.cosSharp)) return false;
             for (int j = begin; j < i; ++j)
-                if (normalDot(x.normal, crossings[j]->normal) < ctx.cosSharp) return false;
+                if (normalDot(normals[i], normals[j]) < ctx.cosSharp) return false;
         }
     }
     uint32_t ids[12];
@@ -1180,7 +1188,7 @@ bool meshSmoothCell(LeafContext& ctx, const Coord& base, int width, const Materi
         std::array<double, 3> centre{}, normalSum{};
         for (int i = 0; i < size; ++i) {
             const EdgeCrossing& x = *crossings[begin + i];
-            accumulate(normalSum, x.normal);
+            accumulate(normalSum, normals[begin + i]);
             accumulate(centre, x.position);
             ids[i] = b.crossingVertex(slots[begin + i], x);
         }
