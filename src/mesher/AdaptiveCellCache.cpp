@@ -14,21 +14,24 @@ namespace vdbclay::mesher_detail {
 
 namespace {
 
-/// The cells of each leaf, subdivided in parallel; `keepGrids` (optional) keeps their corner grids.
+/// The cells of each leaf, subdivided in parallel; `keep` (optional) keeps what they read.
 std::vector<LeafCellSizes> subdivideLeaves(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves,
-                                           const MeshOptions& options, CornerGridStore* keepGrids = nullptr)
+                                           const MeshOptions& options, LeafSurroundingsStore* keep = nullptr)
 {
     std::vector<LeafCellSizes> sizes(leaves.size());
-    if (keepGrids) {
-        keepGrids->resize(leaves.size());
-        for (std::size_t i = 0; i < leaves.size(); ++i) keepGrids->origins[i] = leaves[i]->origin();
+    if (keep) {
+        keep->resize(leaves.size());
+        for (std::size_t i = 0; i < leaves.size(); ++i) keep->origins[i] = leaves[i]->origin();
     }
     const double cosHalfSpread = std::cos(0.5 * options.subdivisionAngleDegrees * M_PI / 180.0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 2), [&](const auto& range) {
         ConstAccessor acc(tree);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const HermiteLeaf& leaf = *leaves[i];
-            const Neighbourhood hood(leaf, acc);
+            LeafSurroundings unkept;
+            LeafSurroundings& read = keep ? keep->leaves[i] : unkept;
+            read.hood = Neighbourhood(leaf, acc);
+            read.grid.fill(leaf, read.hood);
             SubdivisionCriteria criteria;
             criteria.maxCellSize = options.maxCellWidth;
             if (options.leafMaxCellWidth) {
@@ -36,10 +39,7 @@ std::vector<LeafCellSizes> subdivideLeaves(const HermiteTree& tree, const std::v
                 criteria.maxCellSize = std::min(criteria.maxCellSize, options.leafMaxCellWidth({o.x(), o.y(), o.z()}));
             }
             criteria.cosHalfSpread = cosHalfSpread;
-            CornerGrid unkept;
-            CornerGrid& grid = keepGrids ? keepGrids->grids[i] : unkept;
-            grid.fill(leaf, hood);
-            sizes[i] = subdivideLeaf(grid, hood, criteria);
+            sizes[i] = subdivideLeaf(read.grid, read.hood, criteria);
         }
     });
     return sizes;
@@ -66,7 +66,7 @@ void AdaptiveCellCache::prepare(const HermiteTree& tree, const std::vector<const
 
 std::vector<std::array<int32_t, 3>> AdaptiveCellCache::refreshAround(const HermiteTree& tree,
                                                                      const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
-                                                                     const MeshOptions& options, CornerGridStore* keepGrids)
+                                                                     const MeshOptions& options, LeafSurroundingsStore* keep)
 {
     std::vector<BlockOrigin> readers;
     forEachLeafSubdividingWith(Coord(0), [&](const Coord& leaf) { readers.push_back({leaf.x(), leaf.y(), leaf.z()}); });
@@ -79,7 +79,7 @@ std::vector<std::array<int32_t, 3>> AdaptiveCellCache::refreshAround(const Hermi
         if (const HermiteLeaf* leaf = acc.probeConstLeaf(origin)) present.push_back(leaf);
         else if (sizes_.erase(origin)) changed.push_back({origin.x(), origin.y(), origin.z()});
     }
-    const std::vector<LeafCellSizes> fresh = subdivideLeaves(tree, present, options, keepGrids);
+    const std::vector<LeafCellSizes> fresh = subdivideLeaves(tree, present, options, keep);
     for (std::size_t i = 0; i < present.size(); ++i) {
         const Coord origin = present[i]->origin();
         const auto [it, added] = sizes_.try_emplace(origin, fresh[i]);

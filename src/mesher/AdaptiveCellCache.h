@@ -44,10 +44,10 @@ public:
     /// (forEachLeafSubdividingWith) and drops those that no longer exist. Returns the origins of the
     /// leaves whose cells changed, appeared or vanished: only their face neighbours can split a face
     /// differently.
-    /// `keepGrids` (optional) receives the corner grids of the leaves subdivided, for meshing them next.
+    /// `keep` (optional) receives the surroundings of the leaves subdivided, for meshing them next.
     std::vector<std::array<int32_t, 3>> refreshAround(const HermiteTree& tree,
                                                       const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
-                                                      const MeshOptions& options, CornerGridStore* keepGrids = nullptr);
+                                                      const MeshOptions& options, LeafSurroundingsStore* keep = nullptr);
 
     void clear() { sizes_.clear(); }
 

@@ -23,6 +23,7 @@ using ConstAccessor = openvdb::tree::ValueAccessor<const HermiteTree, /*IsSafe=*
 /// The leaves around one leaf, so cells at its borders find their corners and samples quickly.
 class Neighbourhood {
 public:
+    Neighbourhood() {} // left unfilled: for arrays filled later
     Neighbourhood(const HermiteLeaf& centre, ConstAccessor& acc) : origin_(centre.origin())
     {
         for (int dx = -1; dx <= 1; ++dx)
@@ -170,22 +171,28 @@ struct CornerGrid {
     uint32_t solidRows[kSpan][kSpan]; // bit z: cells[x][y][z] is solid
 };
 
-/// Corner grids kept from subdividing leaves for meshing them in the same update (the volume must not
-/// change in between): filled in the order of their origins.
-struct CornerGridStore {
+/// What reading a leaf and its neighbours gives: built once to subdivide the leaf, kept to mesh it.
+struct LeafSurroundings {
+    Neighbourhood hood;
+    CornerGrid grid;
+};
+
+/// The surroundings of the leaves an update subdivided, for meshing them in the same update (the volume
+/// must not change in between), in the order of their origins.
+struct LeafSurroundingsStore {
     std::vector<Coord> origins; // sorted
-    std::vector<CornerGrid> grids;
+    std::vector<LeafSurroundings> leaves;
 
     void resize(std::size_t count)
     {
         origins.resize(count);
-        grids.resize(count);
+        leaves.resize(count);
     }
 
-    const CornerGrid* find(const Coord& origin) const
+    const LeafSurroundings* find(const Coord& origin) const
     {
         const auto it = std::lower_bound(origins.begin(), origins.end(), origin);
-        return it != origins.end() && *it == origin ? &grids[std::size_t(it - origins.begin())] : nullptr;
+        return it != origins.end() && *it == origin ? &leaves[std::size_t(it - origins.begin())] : nullptr;
     }
 };
 
@@ -304,10 +311,10 @@ public:
     CubicalMarchingSquaresMesher(const CubicalMarchingSquaresMesher&) = delete;
     CubicalMarchingSquaresMesher& operator=(const CubicalMarchingSquaresMesher&) = delete;
 
-    /// `widths`: the adaptive cells around the leaf (CellOctree.h); null meshes voxel cells. `grid`: the
-    /// leaf's corner grid if one was built already (null: built here).
+    /// `widths`: the adaptive cells around the leaf (CellOctree.h); null meshes voxel cells.
+    /// `surroundings`: the leaf's neighbourhood and corner grid if they were built already (null: built here).
     MeshChunk mesh(const HermiteLeaf& leaf, ConstAccessor& acc, const CellWidthField* widths,
-                   const CornerGrid* grid = nullptr);
+                   const LeafSurroundings* surroundings = nullptr);
 
     /// Cells meshed so far: all of them, and those the smooth-cell shortcut took.
     std::size_t cellsMeshed() const { return cellsMeshed_; }

@@ -1209,12 +1209,15 @@ CubicalMarchingSquaresMesher::CubicalMarchingSquaresMesher(double voxelSize, dou
 CubicalMarchingSquaresMesher::~CubicalMarchingSquaresMesher() = default;
 
 MeshChunk CubicalMarchingSquaresMesher::mesh(const HermiteLeaf& leaf, ConstAccessor& acc, const CellWidthField* widths,
-                                             const CornerGrid* prebuilt)
+                                             const LeafSurroundings* surroundings)
 {
-    const Neighbourhood hood(leaf, acc);
-    CornerGrid built;
-    if (!prebuilt) built.fill(leaf, hood);
-    const CornerGrid& grid = prebuilt ? *prebuilt : built;
+    LeafSurroundings built;
+    if (!surroundings) {
+        built.hood = Neighbourhood(leaf, acc);
+        built.grid.fill(leaf, built.hood);
+    }
+    const Neighbourhood& hood = surroundings ? surroundings->hood : built.hood;
+    const CornerGrid& grid = surroundings ? surroundings->grid : built.grid;
     buffers_->startLeaf(leaf.origin());
     LeafContext ctx{hood, grid, widths, leaf.origin(), voxelSize_, cosSharp_, *buffers_};
     auto meshVoxelCell = [&](const Coord& base, const MaterialValue mats[8], unsigned solid) {

@@ -9,7 +9,7 @@ namespace vdbclay {
 
 MeshChunkSet::MeshChunkSet(const MeshOptions& options)
     : options_(options), cells_(std::make_unique<mesher_detail::AdaptiveCellCache>()),
-      grids_(std::make_unique<mesher_detail::CornerGridStore>())
+      surroundings_(std::make_unique<mesher_detail::LeafSurroundingsStore>())
 {
 }
 
@@ -33,14 +33,14 @@ std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockOr
     const bool adaptive = meshesAdaptiveCells(options_);
     if (adaptive) {
         // Subdividing first shows whose cells changed: a leaf whose cells did not need not make its
-        // face neighbours mesh their faces again. The corner grids it builds serve meshing too.
+        // face neighbours mesh their faces again. What it reads of each leaf serves meshing too.
         const HermiteTree& tree = volume.impl().grid->constTree();
-        origins = leavesAffectedBy(dirtyBlocks, cells_->refreshAround(tree, dirtyBlocks, options_, grids_.get()));
+        origins = leavesAffectedBy(dirtyBlocks, cells_->refreshAround(tree, dirtyBlocks, options_, surroundings_.get()));
     } else {
         origins = leavesAffectedBy(dirtyBlocks, options_);
     }
     std::vector<std::optional<MeshChunk>> fresh =
-        meshLeafChunks(volume, origins, options_, cells_.get(), adaptive ? grids_.get() : nullptr);
+        meshLeafChunks(volume, origins, options_, cells_.get(), adaptive ? surroundings_.get() : nullptr);
     std::size_t remeshed = 0;
     for (std::size_t i = 0; i < origins.size(); ++i) {
         if (fresh[i]) {

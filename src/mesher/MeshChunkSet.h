@@ -39,8 +39,8 @@ private:
     std::map<BlockOrigin, MeshChunk> chunks_;
     // Adaptive CMS: each leaf's cells, kept so that an update subdivides only the leaves it can change.
     std::unique_ptr<mesher_detail::AdaptiveCellCache> cells_;
-    // The corner grids an update's subdivision builds, for its meshing (kept for their storage).
-    std::unique_ptr<mesher_detail::CornerGridStore> grids_;
+    // What an update's subdivision reads of each leaf, for its meshing (kept for the storage).
+    std::unique_ptr<mesher_detail::LeafSurroundingsStore> surroundings_;
 };
 
 /// Whether two sets hold the same leaves with identical chunks (an update against a full rebuild).

@@ -78,7 +78,7 @@ void checkRange(const Coord& origin)
 /// Meshes the given leaves in parallel, one chunk each.
 std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves,
                                   double voxelSize, const MeshOptions& options, mesher_detail::AdaptiveCellCache* cache,
-                                  const mesher_detail::CornerGridStore* grids = nullptr)
+                                  const mesher_detail::LeafSurroundingsStore* surroundings = nullptr)
 {
     using namespace mesher_detail;
     std::vector<MeshChunk> chunks(leaves.size());
@@ -102,12 +102,12 @@ std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<con
         CubicalMarchingSquaresMesher& cms = *local;
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const HermiteLeaf& leaf = *leaves[i];
-            const CornerGrid* grid = grids ? grids->find(leaf.origin()) : nullptr;
+            const LeafSurroundings* read = surroundings ? surroundings->find(leaf.origin()) : nullptr;
             if (cells) {
                 const CellWidthField widths = cells->around(leaf);
-                chunks[i] = cms.mesh(leaf, acc, &widths, grid);
+                chunks[i] = cms.mesh(leaf, acc, &widths, read);
             } else {
-                chunks[i] = cms.mesh(leaf, acc, nullptr, grid);
+                chunks[i] = cms.mesh(leaf, acc, nullptr, read);
             }
         }
     });
@@ -133,7 +133,7 @@ std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions&
 std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
                                                      const std::vector<std::array<int32_t, 3>>& leafOrigins,
                                                      const MeshOptions& options, mesher_detail::AdaptiveCellCache* cells,
-                                                     const mesher_detail::CornerGridStore* grids)
+                                                     const mesher_detail::LeafSurroundingsStore* surroundings)
 {
     validateMeshOptions(options);
     const HermiteTree& tree = volume.impl().grid->constTree();
@@ -148,7 +148,7 @@ std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
         leaves.push_back(leaf);
         slot.push_back(i);
     }
-    std::vector<MeshChunk> chunks = meshLeaves(tree, leaves, volume.voxelSize(), options, cells, grids);
+    std::vector<MeshChunk> chunks = meshLeaves(tree, leaves, volume.voxelSize(), options, cells, surroundings);
     std::vector<std::optional<MeshChunk>> out(leafOrigins.size());
     for (std::size_t k = 0; k < chunks.size(); ++k) out[slot[k]] = std::move(chunks[k]);
     return out;

@@ -55,7 +55,7 @@ std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::arra
 
 namespace mesher_detail {
 class AdaptiveCellCache;
-struct CornerGridStore;
+struct LeafSurroundingsStore;
 }
 
 /// `cells` (optional): adaptive cells kept from earlier calls on the same volume and options, used
@@ -63,13 +63,13 @@ struct CornerGridStore;
 std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions& options = {},
                                         mesher_detail::AdaptiveCellCache* cells = nullptr);
 /// The chunks of the leaves at the given origins (leaf-aligned); empty where there is no leaf.
-/// `grids` (optional): corner grids built for some of the leaves since the volume last changed
-/// (AdaptiveCellCache::refreshAround keeps them).
+/// `surroundings` (optional): what reading some of the leaves and their neighbours gave since the volume
+/// last changed (AdaptiveCellCache::refreshAround keeps it).
 std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
                                                      const std::vector<std::array<int32_t, 3>>& leafOrigins,
                                                      const MeshOptions& options = {},
                                                      mesher_detail::AdaptiveCellCache* cells = nullptr,
-                                                     const mesher_detail::CornerGridStore* grids = nullptr);
+                                                     const mesher_detail::LeafSurroundingsStore* surroundings = nullptr);
 Mesh meshVolume(const Volume& volume, const MeshOptions& options = {});
 
 } // namespace vdbclay
