@@ -20,6 +20,34 @@ namespace vdbclay::mesher_detail {
 
 using ConstAccessor = openvdb::tree::ValueAccessor<const HermiteTree, /*IsSafe=*/false>;
 
+/// Bit z set where the voxel row[z] (z = 0 .. 7) is solid: one row of a leaf along z.
+inline uint32_t solidBitsOfRow(const MaterialValue* row)
+{
+    static_assert(sizeof(MaterialValue) == 2 && kLeafDim == 8 && kEmptyMaterial == 0, "a leaf row: eight 16-bit ids, 0 empty");
+#if defined(__SSE2__)
+    const __m128i ids = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row));
+    const __m128i empty = _mm_cmpeq_epi16(ids, _mm_setzero_si128());
+    return ~uint32_t(_mm_movemask_epi8(_mm_packs_epi16(empty, empty))) & 0xffu;
+#else
+    uint32_t bits = 0;
+    for (int z = 0; z < kLeafDim; ++z) bits |= uint32_t(row[z].solid()) << z;
+    return bits;
+#endif
+}
+
+/// Whether each of the voxels row[0 .. 7] is empty or holds `material`.
+inline bool rowHoldsOnly(const MaterialValue* row, MaterialId material)
+{
+#if defined(__SSE2__)
+    const __m128i ids = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row));
+    const __m128i allowed = _mm_or_si128(_mm_cmpeq_epi16(ids, _mm_setzero_si128()),
+                                         _mm_cmpeq_epi16(ids, _mm_set1_epi16(short(material))));
+    return _mm_movemask_epi8(allowed) == 0xffff;
+#else
+    return std::all_of(row, row + kLeafDim, [&](MaterialValue m) { return !m.solid() || m.id == material; });
+#endif
+}
+
 /// The leaves around one leaf, so cells at its borders find their corners and samples quickly.
 class Neighbourhood {
 public:
@@ -48,60 +76,47 @@ public:
 
     const PackedSample* sample(const Coord& c, int axis) const
     {
-        const HermiteLeaf* leaf = leaves_[slotOf(c)];
-        return leaf ? leaf->sample(HermiteLeaf::coordToOffset(c), axis) : nullptr;
+        return localSample(c.x() - origin_.x(), c.y() - origin_.y(), c.z() - origin_.z(), axis);
     }
 
-    /// sample() at leaf-local (x, y, z), each in 0 .. 15 (the leaf and the blocks above it).
-    const PackedSample* sampleAbove(int x, int y, int z, int axis) const
+    /// sample() at leaf-local (x, y, z), each in -8 .. 15.
+    const PackedSample* localSample(int x, int y, int z, int axis) const
     {
-        const HermiteLeaf* leaf = leaves_[slot(x >> kLeafLog2Dim, y >> kLeafLog2Dim, z >> kLeafLog2Dim)];
+        const HermiteLeaf* leaf = leaves_[slot(blockOf(x), blockOf(y), blockOf(z))];
         constexpr int kMask = kLeafDim - 1;
         const Index offset = Index(x & kMask) << (2 * kLeafLog2Dim) | Index(y & kMask) << kLeafLog2Dim | Index(z & kMask);
         return leaf ? leaf->sample(offset, axis) : nullptr;
     }
 
+    /// Bit z + 8 set where the voxel at leaf-local (x, y, z) is solid, for z = -8 .. 15; x and y in -8 .. 15.
+    uint32_t solidColumn(int x, int y) const
+    {
+        const int bx = blockOf(x), by = blockOf(y);
+        constexpr int kMask = kLeafDim - 1;
+        const Index rowStart = Index(x & kMask) << (2 * kLeafLog2Dim) | Index(y & kMask) << kLeafLog2Dim;
+        uint32_t bits = 0;
+        for (int bz = -1; bz <= 1; ++bz) {
+            const HermiteLeaf* leaf = leaves_[slot(bx, by, bz)];
+            const uint32_t row = leaf ? solidBitsOfRow(leaf->buffer().data() + rowStart)
+                                      : (tiles_[slot(bx, by, bz)].solid() ? (1u << kLeafDim) - 1 : 0u);
+            bits |= row << ((bz + 1) * kLeafDim);
+        }
+        return bits;
+    }
+
 private:
     static int slot(int dx, int dy, int dz) { return (dx + 1) * 9 + (dy + 1) * 3 + (dz + 1); }
-    /// `c` lies within one block of the centre: c - origin is in -8 .. 15 per axis.
+    /// The block (-1, 0 or 1) of a leaf-local coordinate in -8 .. 15.
+    static int blockOf(int local) { return ((local + kLeafDim) >> kLeafLog2Dim) - 1; }
     int slotOf(const Coord& c) const
     {
-        auto block = [](int v, int o) { return ((v - o + kLeafDim) >> kLeafLog2Dim) - 1; }; // -1, 0 or 1
-        return slot(block(c.x(), origin_.x()), block(c.y(), origin_.y()), block(c.z(), origin_.z()));
+        return slot(blockOf(c.x() - origin_.x()), blockOf(c.y() - origin_.y()), blockOf(c.z() - origin_.z()));
     }
 
     Coord origin_;
     const HermiteLeaf* leaves_[27];
     MaterialValue tiles_[27];
 };
-
-/// Bit z set where the voxel row[z] (z = 0 .. 7) is solid: one row of a leaf along z.
-inline uint32_t solidBitsOfRow(const MaterialValue* row)
-{
-    static_assert(sizeof(MaterialValue) == 2 && kLeafDim == 8 && kEmptyMaterial == 0, "a leaf row: eight 16-bit ids, 0 empty");
-#if defined(__SSE2__)
-    const __m128i ids = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row));
-    const __m128i empty = _mm_cmpeq_epi16(ids, _mm_setzero_si128());
-    return ~uint32_t(_mm_movemask_epi8(_mm_packs_epi16(empty, empty))) & 0xffu;
-#else
-    uint32_t bits = 0;
-    for (int z = 0; z < kLeafDim; ++z) bits |= uint32_t(row[z].solid()) << z;
-    return bits;
-#endif
-}
-
-/// Whether each of the voxels row[0 .. 7] is empty or holds `material`.
-inline bool rowHoldsOnly(const MaterialValue* row, MaterialId material)
-{
-#if defined(__SSE2__)
-    const __m128i ids = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row));
-    const __m128i allowed = _mm_or_si128(_mm_cmpeq_epi16(ids, _mm_setzero_si128()),
-                                         _mm_cmpeq_epi16(ids, _mm_set1_epi16(short(material))));
-    return _mm_movemask_epi8(allowed) == 0xffff;
-#else
-    return std::all_of(row, row + kLeafDim, [&](MaterialValue m) { return !m.solid() || m.id == material; });
-#endif
-}
 
 /// The materials of the voxels o-1 .. o+8 per axis around a leaf at origin o: every corner a cell
 /// owned by the leaf can have, gathered once per leaf, with a bit mask of the solid ones per row.

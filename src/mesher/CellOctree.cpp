@@ -139,7 +139,7 @@ public:
                 x.at[(axis + 1) % 3] = uint8_t(u);
                 x.at[(axis + 2) % 3] = uint8_t(v);
                 x.axis = uint8_t(axis);
-                const PackedSample* s = hood.sampleAbove(x.at[0], x.at[1], x.at[2], axis);
+                const PackedSample* s = hood.localSample(x.at[0], x.at[1], x.at[2], axis);
                 if (!s) continue;
                 const UnpackedSample sample = unpackSample(*s);
                 std::copy(sample.normal.begin(), sample.normal.end(), x.normal);

@@ -310,21 +310,10 @@ struct LeafContext {
     {
         if (!buffers.solidAroundReady) {
             constexpr int kLow = Buffers::kAroundLow;
-            auto block = [](int local) { return local < 0 ? -1 : (local >= kLeafDim ? 1 : 0); };
             for (int x = 0; x < Buffers::kAroundSpan; ++x)
-                for (int y = 0; y < Buffers::kAroundSpan; ++y) {
-                    const int lx = x + kLow, ly = y + kLow, bx = block(lx), by = block(ly);
-                    const Index rowStart = Index(lx - bx * kLeafDim) << (2 * kLeafLog2Dim) | Index(ly - by * kLeafDim) << kLeafLog2Dim;
-                    uint32_t bits = 0;
-                    for (int bz = -1; bz <= 1; ++bz) {
-                        const HermiteLeaf* leaf = hood.leafAt(bx, by, bz);
-                        const uint32_t blockBits =
-                            leaf ? solidBitsOfRow(leaf->buffer().data() + rowStart) : (hood.tileAt(bx, by, bz).solid() ? 0xFFu : 0u);
-                        const int shift = bz * kLeafDim - kLow; // where the block's z = 0 lands
-                        bits |= shift >= 0 ? blockBits << shift : blockBits >> -shift;
-                    }
-                    buffers.solidAround[x][y] = bits & ((1u << Buffers::kAroundSpan) - 1);
-                }
+                for (int y = 0; y < Buffers::kAroundSpan; ++y)
+                    buffers.solidAround[x][y] = (hood.solidColumn(x + kLow, y + kLow) >> (kLeafDim + kLow)) &
+                                                ((1u << Buffers::kAroundSpan) - 1);
             buffers.solidAroundReady = true;
         }
         return buffers.solidAround;
