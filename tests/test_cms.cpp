@@ -13,8 +13,10 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <numeric>
 #include <set>
 #include <tuple>
+#include <unordered_map>
 
 using namespace vdbclay;
 using namespace vdbclay::test;
@@ -229,6 +231,60 @@ TEST_CASE("CMS carries materials per triangle across a material boundary", "[cms
     CHECK(mossTriangles > 100);
     INFO(boundaryVertices << " vertices on the boundary plane");
     CHECK(boundaryVertices > 50); // the boundary circle is about 75 voxels long
+}
+
+TEST_CASE("welding keeps the chunks' vertices in order, each shared key once at its first holder", "[cms][weld]")
+{
+    // weldChunks matches only keys on a leaf's border (an edge or face inside a leaf is met by that
+    // leaf's cells alone) and works in parallel shards; a plain serial weld over every key is the reference.
+    auto referenceWeld = [](const std::vector<MeshChunk>& chunks) {
+        Mesh out;
+        std::unordered_map<uint64_t, uint32_t> index;
+        for (const MeshChunk& c : chunks) {
+            std::vector<uint32_t> remap(c.mesh.vertexCount());
+            for (std::size_t v = 0; v < remap.size(); ++v) {
+                const uint32_t next = uint32_t(out.positions.size());
+                const uint64_t key = c.vertexKeys[v];
+                const bool fresh = key == kUnsharedVertex || index.emplace(key, next).second;
+                remap[v] = fresh ? next : index.at(key);
+                if (!fresh) continue;
+                out.positions.push_back(c.mesh.positions[v]);
+                out.normals.push_back(c.mesh.normals[v]);
+                out.materials.push_back(c.mesh.materials[v]);
+            }
+            for (const auto& t : c.mesh.triangles) out.triangles.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
+            out.triangleMaterials.insert(out.triangleMaterials.end(), c.mesh.triangleMaterials.begin(), c.mesh.triangleMaterials.end());
+        }
+        return out;
+    };
+    Volume v(1.0);
+    applyCsg(v, Brush(box(Vec3d(14.0)), at(Vec3d(0.4, 0.3, 0.2), Vec3d(10, 20, 5))), op(CsgMode::Add));
+    applyCsg(v, Brush(sphere(9.0), at(Vec3d(-14.0, 3.0, 12.0))), op(CsgMode::Remove));
+    applyCsg(v, Brush(sphere(6.0), at(Vec3d(14.0, -10.0, 0.0))), op(CsgMode::Add));
+    MeshOptions depths = optionsFor(MesherKind::CubicalMarchingSquares, Cells::Adaptive);
+    depths.leafMaxCellWidth = [](const std::array<int32_t, 3>& origin) {
+        return 1 << ((((origin[0] + origin[1] + origin[2]) / kLeafDim) % 4 + 4) % 4);
+    };
+    const std::vector<std::pair<const char*, MeshOptions>> meshers = {
+        {"mc", optionsFor(MesherKind::MarchingCubes)},
+        {"cms uniform", optionsFor(MesherKind::CubicalMarchingSquares, Cells::Uniform)},
+        {"cms adaptive", optionsFor(MesherKind::CubicalMarchingSquares, Cells::Adaptive)},
+        {"cms at mixed depths", depths},
+    };
+    for (const auto& [name, options] : meshers) {
+        INFO(name);
+        const std::vector<MeshChunk> chunks = meshVolumeChunks(v, options);
+        const Mesh expected = referenceWeld(chunks), welded = weldChunks(chunks);
+        REQUIRE(welded.vertexCount() == expected.vertexCount());
+        CHECK(welded.vertexCount() < std::accumulate(chunks.begin(), chunks.end(), std::size_t(0), [](std::size_t n, const MeshChunk& c) {
+                  return n + c.mesh.vertexCount();
+              })); // chunks do share vertices
+        CHECK(welded.positions == expected.positions);
+        CHECK(welded.normals == expected.normals);
+        CHECK(welded.materials == expected.materials);
+        CHECK(welded.triangles == expected.triangles);
+        CHECK(welded.triangleMaterials == expected.triangleMaterials);
+    }
 }
 
 TEST_CASE("re-meshing the leaves an edit touched gives exactly the full re-mesh", "[cms][incremental]")
