@@ -957,27 +957,22 @@ private:
     void forEachCrossingIn(const Coord& lo, const std::array<int, 3>& span, Fn&& fn) const
     {
         constexpr int kMaxSpan = kLeafDim + 3;
-        uint32_t solidRows[kMaxSpan][kMaxSpan] = {}; // bit z: voxel lo + (x, y, z) is solid
+        uint32_t solidRows[kMaxSpan][kMaxSpan]; // bit z: voxel lo + (x, y, z) is solid
         const CornerGrid& grid = ctx_.grid;
         const int gx = lo.x() - grid.origin.x() + 1, gy = lo.y() - grid.origin.y() + 1, gz = lo.z() - grid.origin.z() + 1;
         const bool inGrid = gx >= 0 && gy >= 0 && gz >= 0 && gx + span[0] <= CornerGrid::kSpan &&
                             gy + span[1] <= CornerGrid::kSpan && gz + span[2] <= CornerGrid::kSpan;
-        // Index of lo in Buffers::solidAround, which starts one voxel lower than the corner grid.
+        // Index of lo in Buffers::solidAround, which starts one voxel lower than the corner grid and
+        // holds every voxel a scan around a cell or square the leaf meshes can reach.
         const int ax = gx - 1 - Buffers::kAroundLow, ay = gy - 1 - Buffers::kAroundLow, az = gz - 1 - Buffers::kAroundLow;
         const bool inAround = ax >= 0 && ay >= 0 && az >= 0 && ax + span[0] <= Buffers::kAroundSpan &&
                               ay + span[1] <= Buffers::kAroundSpan && az + span[2] <= Buffers::kAroundSpan;
+        if (!inGrid && !inAround) throw std::logic_error("CMS: a crossing scan reaches beyond its leaf's surroundings");
         const uint32_t spanBits = (1u << span[2]) - 1;
         for (int x = 0; x < span[0]; ++x)
-            for (int y = 0; y < span[1]; ++y) {
-                if (inGrid) {
-                    solidRows[x][y] = (grid.solidRows[gx + x][gy + y] >> gz) & spanBits;
-                } else if (inAround) {
-                    solidRows[x][y] = (ctx_.solidAround()[ax + x][ay + y] >> az) & spanBits;
-                } else {
-                    for (int z = 0; z < span[2]; ++z)
-                        solidRows[x][y] |= uint32_t(ctx_.material(lo.offsetBy(x, y, z)).solid()) << z;
-                }
-            }
+            for (int y = 0; y < span[1]; ++y)
+                solidRows[x][y] = inGrid ? (grid.solidRows[gx + x][gy + y] >> gz) & spanBits
+                                         : (ctx_.solidAround()[ax + x][ay + y] >> az) & spanBits;
         // The edges whose ends differ: bit z of `cut` marks the edge from (x, y, z) along `axis`. Edges
         // without a sample are left out: their crossing is decoded with no normal. Inside the grid an
         // edge's cache slot follows from (x, y, z) directly.
