@@ -318,7 +318,7 @@ RemeshResult runRemesh(bool quick, int maxCellWidth, const std::string& key, con
         double best = std::numeric_limits<double>::infinity();
         for (auto& replica : replicas) {
             const EditStats edit = applyCsg(replica->volume, sphere(kStampRadius, at), op);
-            best = std::min(best, timeMs([&] { remeshed = replica->chunks.update(replica->volume, edit.dirtyBlocks); }));
+            best = std::min(best, timeMs([&] { remeshed = replica->chunks.update(replica->volume, edit.blockChanges); }));
         }
         times.push_back(best);
         counts.push_back(double(remeshed));

@@ -303,13 +303,84 @@ TEST_CASE("re-meshing the leaves an edit touched gives exactly the full re-mesh"
         apply(v, CsgMode::Remove, box(Vec3d(40.0)), at(Vec3d(0.0, 0.0, 44.5))), // slices the top off
     };
     std::size_t remeshed = 0;
-    for (const EditStats& e : edits) remeshed += incremental.update(v, e.dirtyBlocks);
+    for (const EditStats& e : edits) remeshed += incremental.update(v, e.blockChanges);
 
     MeshChunkSet full(options);
     full.rebuild(v);
     REQUIRE(remeshed > 0);
     requireSameChunks(incremental, full);
     requireClosed(incremental.weld());
+}
+
+TEST_CASE("small edits at leaf borders re-mesh only the leaves that read what changed, and still give the full re-mesh", "[cms][incremental]")
+{
+    // Brushes of a voxel or two change only part of a block: the leaves beside it are re-meshed only if
+    // they read a changed voxel. Sharp boxes put scans for sharp features next to the changes.
+    Volume v(1.0);
+    const MaterialId moss = defineMaterial(v, "moss", 0.2f);
+    apply(v, CsgMode::Add, box(Vec3d(14.0, 12.0, 10.0)), at(Vec3d(0.4, 0.3, 0.2), Vec3d(10, 20, 30)));
+    const MeshOptions options = optionsFor(MesherKind::CubicalMarchingSquares, GENERATE(Cells::Uniform, Cells::Adaptive));
+    MeshChunkSet incremental(options);
+    incremental.rebuild(v);
+    std::size_t remeshed = 0, remeshedFromBlocks = 0;
+    for (int i = 0; i < 16; ++i) {
+        // Centres on or beside the leaf borders at multiples of 8, on the box's surface.
+        const Vec3d centre(-8.0 + 8.0 * (i % 3) + 0.5 * (i % 4) - 0.7, 7.6 + 0.45 * i - 8.0 * (i % 2), 10.0 - 0.35 * (i % 5));
+        const CsgMode mode = i % 3 == 0 ? CsgMode::Remove : (i % 3 == 1 ? CsgMode::Add : CsgMode::Paint);
+        const Primitive shape = i % 2 ? box(Vec3d(1.2, 0.8, 1.6)) : sphere(1.3 + 0.1 * i);
+        const EditStats e = apply(v, mode, shape, at(centre, Vec3d(7.0 * i, 11.0 * i, 0.0)), mode == CsgMode::Paint ? moss : 1);
+        remeshed += incremental.update(v, e.blockChanges);
+        remeshedFromBlocks += leavesAffectedBy(e.dirtyBlocks, options).size();
+
+        MeshChunkSet full(options);
+        full.rebuild(v);
+        INFO("after edit " << i);
+        requireSameChunks(incremental, full);
+    }
+    REQUIRE(remeshed > 0);
+    CHECK(remeshed < remeshedFromBlocks);
+    requireClosed(incremental.weld());
+}
+
+TEST_CASE("a change to part of a block reaches only the leaves that read it", "[cms][incremental]")
+{
+    // Meshing a leaf reads its voxels -2 .. 10 per axis; subdividing it (adaptive CMS) reads 0 .. 8.
+    auto change = [](std::array<uint8_t, 3> lo, std::array<uint8_t, 3> hi) {
+        BlockChange c;
+        c.origin = {8, 16, -8};
+        c.min = lo;
+        c.max = hi;
+        return std::vector<BlockChange>{c};
+    };
+    auto leaves = [](std::initializer_list<int> xs, std::initializer_list<int> ys, std::initializer_list<int> zs) {
+        std::vector<std::array<int32_t, 3>> out;
+        for (int x : xs)
+            for (int y : ys)
+                for (int z : zs) out.push_back({8 + 8 * x, 16 + 8 * y, -8 + 8 * z});
+        std::sort(out.begin(), out.end());
+        return out;
+    };
+    const MeshOptions uniform = optionsFor(MesherKind::CubicalMarchingSquares, Cells::Uniform);
+    // Inside 3 .. 5 on every axis: only the block's own leaf reads it.
+    CHECK(leavesAffectedBy(change({3, 3, 3}, {5, 5, 5}), uniform) == leaves({0}, {0}, {0}));
+    // Voxels 0 .. 2 are read by the leaf below too, 6 .. 7 by the leaf above.
+    CHECK(leavesAffectedBy(change({2, 4, 4}, {4, 4, 4}), uniform) == leaves({-1, 0}, {0}, {0}));
+    CHECK(leavesAffectedBy(change({4, 4, 6}, {4, 4, 7}), uniform) == leaves({0}, {0}, {0, 1}));
+    CHECK(leavesAffectedBy(change({0, 0, 0}, {7, 7, 7}), uniform) == leaves({-1, 0, 1}, {-1, 0, 1}, {-1, 0, 1}));
+    // Adaptive CMS without subdividing first adds the face neighbours of the leaves whose subdivision
+    // reads a changed voxel: voxels 1 .. 4 are read by the block's own leaf only (the leaf below reads
+    // voxel 0), so its six face neighbours join the two leaves that mesh with them.
+    const MeshOptions adaptive = optionsFor(MesherKind::CubicalMarchingSquares, Cells::Adaptive);
+    std::vector<std::array<int32_t, 3>> faces = leaves({-1, 0, 1}, {0}, {0});
+    for (const auto& more : {leaves({0}, {-1, 1}, {0}), leaves({0}, {0}, {-1, 1})}) faces.insert(faces.end(), more.begin(), more.end());
+    std::sort(faces.begin(), faces.end());
+    CHECK(leavesAffectedBy(change({1, 4, 4}, {4, 4, 4}), adaptive) == faces);
+    // Voxel 0 on x is read by the subdivision of the leaf below as well, whose face neighbours join.
+    std::vector<std::array<int32_t, 3>> more = faces;
+    for (const auto& extra : {leaves({-2}, {0}, {0}), leaves({-1}, {-1, 1}, {0}), leaves({-1}, {0}, {-1, 1})})
+        more.insert(more.end(), extra.begin(), extra.end());
+    std::sort(more.begin(), more.end());
+    CHECK(leavesAffectedBy(change({0, 4, 4}, {4, 4, 4}), adaptive) == more);
 }
 
 TEST_CASE("adaptive CMS covers flat faces with a quarter of uniform CMS's triangles at the same error", "[cms][adaptive]")
@@ -459,19 +530,4 @@ TEST_CASE("leavesAffectedBy lists each block around the dirty ones once and in o
             CHECK(leavesAffectedBy(layout.dirty, options) == expected);
         }
     }
-    // Once the changed cells are known, only their leaves' face neighbours join the blocks around.
-    const std::vector<std::array<int32_t, 3>> dirty = {{0, 0, 0}};
-    const std::vector<std::array<int32_t, 3>> changedCells = {{-8, 0, 0}, {0, -4096, 0}};
-    std::vector<std::array<int32_t, 3>> expected = leavesAffectedBy(dirty, optionsFor(MesherKind::CubicalMarchingSquares, Cells::Uniform));
-    for (const auto& leaf : changedCells)
-        for (int axis = 0; axis < 3; ++axis)
-            for (int step : {-kLeafDim, kLeafDim}) {
-                std::array<int32_t, 3> neighbour = leaf;
-                neighbour[axis] += step;
-                expected.push_back(neighbour);
-            }
-    std::sort(expected.begin(), expected.end());
-    expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
-    CHECK(expected.size() == 27 + 1 + 6); // of (-8, 0, 0)'s neighbours only (-16, 0, 0) lies outside the 27
-    CHECK(leavesAffectedBy(dirty, changedCells) == expected);
 }

@@ -327,6 +327,60 @@ std::vector<Coord3> sortedUnique(std::vector<Coord3> blocks)
     return blocks;
 }
 
+/// EditStats::blockChanges lists the dirty blocks in order, each with the bounds of exactly the voxels
+/// whose material or samples changed where a leaf stays a leaf, and the whole block elsewhere. Returns
+/// how many changes cover only part of their block.
+std::size_t checkBlockChanges(const Volume& before, const Volume& after, const EditStats& stats)
+{
+    REQUIRE(stats.blockChanges.size() == stats.dirtyBlocks.size());
+    using EdgeId = std::tuple<int, int, int, int>;
+    auto samplesOf = [](const Volume& v) {
+        std::map<EdgeId, std::array<uint16_t, 3>> out;
+        for (const EdgeRecord& e : collectEdges(v))
+            out[{e.voxel[0], e.voxel[1], e.voxel[2], e.axis}] = {e.sample.offset, e.sample.normalU, e.sample.normalV};
+        return out;
+    };
+    const auto samplesBefore = samplesOf(before), samplesAfter = samplesOf(after);
+    auto sampleAt = [](const auto& samples, const EdgeId& id) {
+        const auto it = samples.find(id);
+        return it == samples.end() ? std::optional<std::array<uint16_t, 3>>() : it->second;
+    };
+    const std::vector<Coord3> leavesBefore = leafOrigins(before), leavesAfter = leafOrigins(after);
+    auto isLeaf = [](const std::vector<Coord3>& sorted, const Coord3& b) { return std::binary_search(sorted.begin(), sorted.end(), b); };
+    std::size_t partial = 0;
+    for (std::size_t i = 0; i < stats.blockChanges.size(); ++i) {
+        const BlockChange& change = stats.blockChanges[i];
+        const Coord3 b = change.origin;
+        REQUIRE(b == stats.dirtyBlocks[i]);
+        Coord3 lo{kLeafDim - 1, kLeafDim - 1, kLeafDim - 1}, hi{0, 0, 0};
+        if (isLeaf(leavesBefore, b) && isLeaf(leavesAfter, b)) {
+            for (int x = 0; x < kLeafDim; ++x)
+                for (int y = 0; y < kLeafDim; ++y)
+                    for (int z = 0; z < kLeafDim; ++z) {
+                        const Coord3 voxel{b[0] + x, b[1] + y, b[2] + z};
+                        bool differs = before.materialAt(voxel) != after.materialAt(voxel);
+                        for (int axis = 0; axis < 3 && !differs; ++axis) {
+                            const EdgeId id{voxel[0], voxel[1], voxel[2], axis};
+                            differs = sampleAt(samplesBefore, id) != sampleAt(samplesAfter, id);
+                        }
+                        if (!differs) continue;
+                        const Coord3 local{x, y, z};
+                        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], local[a]), hi[a] = std::max(hi[a], local[a]);
+                    }
+        } else {
+            lo = {0, 0, 0};
+            hi = {kLeafDim - 1, kLeafDim - 1, kLeafDim - 1};
+        }
+        INFO("block " << b[0] << " " << b[1] << " " << b[2]);
+        for (int a = 0; a < 3; ++a) {
+            CHECK(int(change.min[a]) == lo[a]);
+            CHECK(int(change.max[a]) == hi[a]);
+        }
+        if (hi[0] - lo[0] < kLeafDim - 1 || hi[1] - lo[1] < kLeafDim - 1 || hi[2] - lo[2] < kLeafDim - 1) ++partial;
+    }
+    return partial;
+}
+
 /// The dirty-block contract of EditStats: every listed block changed, and every changed block that was
 /// a leaf before, or has a leaf in its 3x3x3 neighbourhood after, is listed. Returns how many changed
 /// blocks the contract required to be listed.
@@ -381,10 +435,13 @@ TEST_CASE("an edit reports the blocks whose content changed and that a mesh read
         const Volume before = v.clone();
         const EditStats stats = applyCsg(v, step.brush, op(step.mode, step.mode == CsgMode::Paint ? stone : 1));
         const std::size_t required = checkDirtyBlocks(before, v, stats);
+        const std::size_t partial = checkBlockChanges(before, v, stats);
         if (std::string(step.name) == "the same remove again") {
             CHECK(stats.dirtyBlocks.empty());
         } else {
             CHECK(required > 0);
+            // A brush at the surface changes only part of some of the blocks it reaches.
+            CHECK(partial > 0);
             // Fewer blocks than the CSG kernel looked at: the brush's bounding box is not the change.
             CHECK(stats.dirtyBlocks.size() < stats.blocksComputed + stats.tilesWritten);
         }
@@ -406,6 +463,7 @@ TEST_CASE("a 128^3 node that becomes a tile reports the blocks on its faces that
     }
     CHECK(faceBlocks > 0);
     checkDirtyBlocks(before, v, stats);
+    checkBlockChanges(before, v, stats);
     // The listed blocks follow the surface: the changed tiles deep inside the sphere are left out.
     const std::size_t changed = changedBlocks(before, v).size();
     INFO(stats.dirtyBlocks.size() << " dirty of " << changed << " changed blocks");

@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <unordered_set>
 
 namespace vdbclay::mesher_detail {
@@ -45,6 +44,23 @@ std::vector<LeafCellSizes> subdivideLeaves(const HermiteTree& tree, const std::v
     return sizes;
 }
 
+/// Bit f: the cells along face f (-x, +x, -y, +y, -z, +z) differ between a and b, which is all a face
+/// neighbour's meshing reads of a leaf's cells.
+unsigned facesDiffering(const LeafCellSizes& a, const LeafCellSizes& b)
+{
+    constexpr int kLast = LeafCellSizes::kBlocks - 1;
+    unsigned faces = 0;
+    for (int i = 0; i < LeafCellSizes::kBlocks; ++i)
+        for (int j = 0; j < LeafCellSizes::kBlocks; ++j) {
+            const auto& x = a.blockLog2Width;
+            const auto& y = b.blockLog2Width;
+            faces |= unsigned(x[0][i][j] != y[0][i][j]) | unsigned(x[kLast][i][j] != y[kLast][i][j]) << 1 |
+                     unsigned(x[i][0][j] != y[i][0][j]) << 2 | unsigned(x[i][kLast][j] != y[i][kLast][j]) << 3 |
+                     unsigned(x[i][j][0] != y[i][j][0]) << 4 | unsigned(x[i][j][kLast] != y[i][j][kLast]) << 5;
+        }
+    return faces;
+}
+
 } // namespace
 
 void AdaptiveCellCache::prepare(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves,
@@ -64,30 +80,39 @@ void AdaptiveCellCache::prepare(const HermiteTree& tree, const std::vector<const
     for (std::size_t i = 0; i < missing.size(); ++i) sizes_.emplace(missing[i]->origin(), fresh[i]);
 }
 
-std::vector<std::array<int32_t, 3>> AdaptiveCellCache::refreshAround(const HermiteTree& tree,
-                                                                     const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
-                                                                     const MeshOptions& options, LeafSurroundingsStore* keep)
+std::vector<BlockOrigin> AdaptiveCellCache::refreshAround(const HermiteTree& tree, const std::vector<BlockChange>& changes,
+                                                          const MeshOptions& options, LeafSurroundingsStore* keep)
 {
-    std::vector<BlockOrigin> readers;
-    forEachLeafSubdividingWith(Coord(0), [&](const Coord& leaf) { readers.push_back({leaf.x(), leaf.y(), leaf.z()}); });
-
-    std::vector<std::array<int32_t, 3>> changed;
+    std::vector<BlockOrigin> splitAnew;
+    auto acrossFaces = [&](const Coord& origin, unsigned faces) {
+        for (int f = 0; f < 6; ++f)
+            if ((faces >> f) & 1u) {
+                const Coord c = faceNeighbour(origin, f);
+                splitAnew.push_back({c.x(), c.y(), c.z()});
+            }
+    };
+    constexpr unsigned kAllFaces = 0x3f;
     std::vector<const HermiteLeaf*> present;
     ConstAccessor acc(tree);
-    for (const BlockOrigin& candidate : blocksAround(dirtyBlocks, readers)) {
+    for (const BlockOrigin& candidate : leavesReaching(changes, kSubdivisionReach)) {
         const Coord origin(candidate[0], candidate[1], candidate[2]);
         if (const HermiteLeaf* leaf = acc.probeConstLeaf(origin)) present.push_back(leaf);
-        else if (sizes_.erase(origin)) changed.push_back({origin.x(), origin.y(), origin.z()});
+        else if (sizes_.erase(origin)) acrossFaces(origin, kAllFaces);
     }
     const std::vector<LeafCellSizes> fresh = subdivideLeaves(tree, present, options, keep);
     for (std::size_t i = 0; i < present.size(); ++i) {
         const Coord origin = present[i]->origin();
         const auto [it, added] = sizes_.try_emplace(origin, fresh[i]);
-        if (!added && std::memcmp(&it->second, &fresh[i], sizeof(LeafCellSizes)) == 0) continue;
-        it->second = fresh[i];
-        changed.push_back({origin.x(), origin.y(), origin.z()});
+        if (added) {
+            acrossFaces(origin, kAllFaces);
+        } else {
+            acrossFaces(origin, facesDiffering(it->second, fresh[i]));
+            it->second = fresh[i];
+        }
     }
-    return changed;
+    std::sort(splitAnew.begin(), splitAnew.end());
+    splitAnew.erase(std::unique(splitAnew.begin(), splitAnew.end()), splitAnew.end());
+    return splitAnew;
 }
 
 CellWidthField AdaptiveCellCache::around(const HermiteLeaf& leaf) const

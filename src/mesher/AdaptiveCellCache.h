@@ -22,16 +22,6 @@ inline Coord faceNeighbour(const Coord& origin, int f)
     return c;
 }
 
-/// Calls fn(origin) for each leaf whose subdivision reads the leaf-sized block at `block`: a leaf's
-/// octree reads its voxel lattice o .. o+8, that is the blocks at +0 and +1 along each axis.
-template<typename Fn>
-void forEachLeafSubdividingWith(const Coord& block, Fn&& fn)
-{
-    for (int dx = -1; dx <= 0; ++dx)
-        for (int dy = -1; dy <= 0; ++dy)
-            for (int dz = -1; dz <= 0; ++dz) fn(block.offsetBy(dx * kLeafDim, dy * kLeafDim, dz * kLeafDim));
-}
-
 class AdaptiveCellCache {
 public:
     /// Subdivides those of `leaves` and of their face neighbours that have no cells yet (in parallel).
@@ -40,14 +30,12 @@ public:
     /// The cell widths around `leaf`, whose face neighbours prepare() has seen.
     CellWidthField around(const HermiteLeaf& leaf) const;
 
-    /// Subdivides again the leaves whose subdivision reads the given leaf-sized blocks
-    /// (forEachLeafSubdividingWith) and drops those that no longer exist. Returns the origins of the
-    /// leaves whose cells changed, appeared or vanished: only their face neighbours can split a face
-    /// differently.
+    /// Subdivides again the leaves whose subdivision reads a changed voxel (kSubdivisionReach) and drops
+    /// those that no longer exist. Returns, sorted and unique, the leaves next to a face along which a
+    /// neighbour's cells changed, appeared or vanished: only they can split their faces anew.
     /// `keep` (optional) receives the surroundings of the leaves subdivided, for meshing them next.
-    std::vector<std::array<int32_t, 3>> refreshAround(const HermiteTree& tree,
-                                                      const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
-                                                      const MeshOptions& options, LeafSurroundingsStore* keep = nullptr);
+    std::vector<BlockOrigin> refreshAround(const HermiteTree& tree, const std::vector<BlockChange>& changes,
+                                           const MeshOptions& options, LeafSurroundingsStore* keep = nullptr);
 
     void clear() { sizes_.clear(); }
 

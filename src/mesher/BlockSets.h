@@ -2,6 +2,8 @@
 // reach), sorted and unique. Light: no OpenVDB templates.
 #pragma once
 
+#include "vdb_hermite/BlockChange.h"
+
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -10,9 +12,19 @@ namespace vdbclay::mesher_detail {
 
 using BlockOrigin = std::array<int32_t, 3>;
 
+/// The voxels a leaf's work reads, per axis in leaf-local coordinates (inclusive): an edit that changes
+/// none of them leaves that work's result as it was.
+struct LeafReach {
+    int low = 0;
+    int high = kLeafDim - 1;
+};
+
 /// The blocks at each of `offsets` (in voxels, multiples of the leaf size) from each of `blocks`
-/// (leaf-aligned origins), sorted and unique. Compact sets (one edit's blocks) are marked in a grid of
-/// flags over their bounds, which gives them in order without sorting; scattered ones are sorted.
+/// (leaf-aligned origins), sorted and unique.
 std::vector<BlockOrigin> blocksAround(const std::vector<BlockOrigin>& blocks, const std::vector<BlockOrigin>& offsets);
+
+/// The leaves whose `reach` holds a changed voxel of one of `changes`, sorted and unique (whether or not
+/// a leaf is there).
+std::vector<BlockOrigin> leavesReaching(const std::vector<BlockChange>& changes, const LeafReach& reach);
 
 } // namespace vdbclay::mesher_detail

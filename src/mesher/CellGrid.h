@@ -2,6 +2,7 @@
 // and the access to a leaf and its neighbours. OpenVDB-heavy: include only from mesher .cpp files.
 #pragma once
 
+#include "mesher/BlockSets.h"
 #include "mesher/CellTopology.h"
 #include "mesher/Mesh.h"
 #include "vdb_hermite/HermiteGrid.h"
@@ -19,6 +20,13 @@
 namespace vdbclay::mesher_detail {
 
 using ConstAccessor = openvdb::tree::ValueAccessor<const HermiteTree, /*IsSafe=*/false>;
+
+/// The voxels meshing a leaf reads: the corners of its cells (o-1 .. o+8) and the scans around sharp
+/// features, which reach one voxel further. An edit outside them leaves the leaf's chunk as it was,
+/// its neighbours' cell widths aside.
+constexpr LeafReach kMeshingReach{-2, kLeafDim + 2};
+/// The voxels subdividing a leaf into adaptive cells reads: its lattice o .. o+8.
+constexpr LeafReach kSubdivisionReach{0, kLeafDim};
 
 /// Bit z set where the voxel row[z] (z = 0 .. 7) is solid: one row of a leaf along z.
 inline uint32_t solidBitsOfRow(const MaterialValue* row)

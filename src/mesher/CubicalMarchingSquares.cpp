@@ -172,8 +172,8 @@ struct CubicalMarchingSquaresMesher::Buffers {
     std::vector<uint32_t> ids;
     // Which voxels o-2 .. o+10 (per axis) are solid, bit z of row [x][y]: every voxel the scans for sharp
     // features read. Filled on a leaf's first sharp feature.
-    static constexpr int kAroundSpan = kLeafDim + 5;
-    static constexpr int kAroundLow = -2; // leaf-local coordinate of index 0
+    static constexpr int kAroundLow = kMeshingReach.low; // leaf-local coordinate of index 0
+    static constexpr int kAroundSpan = kMeshingReach.high - kMeshingReach.low + 1;
     uint32_t solidAround[kAroundSpan][kAroundSpan];
     bool solidAroundReady = false;
     std::vector<MaterialId> pieceMaterials;

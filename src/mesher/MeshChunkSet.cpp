@@ -3,6 +3,7 @@
 #include "mesher/AdaptiveCellCache.h"
 
 #include <algorithm>
+#include <iterator>
 #include <optional>
 
 namespace vdbclay {
@@ -29,15 +30,23 @@ void MeshChunkSet::rebuild(const Volume& volume)
 
 std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockOrigin>& dirtyBlocks)
 {
+    return update(volume, wholeBlockChanges(dirtyBlocks));
+}
+
+std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockChange>& changes)
+{
     std::vector<BlockOrigin> origins;
     const bool adaptive = meshesAdaptiveCells(options_);
     if (adaptive) {
-        // Subdividing first shows whose cells changed: a leaf whose cells did not need not make its
-        // face neighbours mesh their faces again. What it reads of each leaf serves meshing too.
+        // Subdividing first shows whose cells changed along which faces: only the leaves across those
+        // faces may split theirs anew. What it reads of each leaf serves meshing too.
         const HermiteTree& tree = volume.impl().grid->constTree();
-        origins = leavesAffectedBy(dirtyBlocks, cells_->refreshAround(tree, dirtyBlocks, options_, surroundings_.get()));
+        const std::vector<BlockOrigin> read = mesher_detail::leavesReaching(changes, mesher_detail::kMeshingReach);
+        const std::vector<BlockOrigin> split = cells_->refreshAround(tree, changes, options_, surroundings_.get());
+        origins.reserve(read.size() + split.size());
+        std::set_union(read.begin(), read.end(), split.begin(), split.end(), std::back_inserter(origins));
     } else {
-        origins = leavesAffectedBy(dirtyBlocks, options_);
+        origins = leavesAffectedBy(changes, options_);
     }
     std::vector<std::optional<MeshChunk>> fresh =
         meshLeafChunks(volume, origins, options_, cells_.get(), adaptive ? surroundings_.get() : nullptr);

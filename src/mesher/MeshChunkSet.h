@@ -24,10 +24,12 @@ public:
     /// Meshes every leaf.
     void rebuild(const Volume& volume);
 
-    /// Re-meshes the leaves around the given leaf-sized blocks (EditStats::dirtyBlocks), as
-    /// leavesAffectedBy lists them; with adaptive cells it subdivides first and lists only the face
-    /// neighbours of leaves whose cells changed. Chunks of leaves that no longer exist are dropped.
-    /// Returns the number of chunks re-meshed.
+    /// Re-meshes the leaves an edit can change (EditStats::blockChanges), as leavesAffectedBy lists
+    /// them; with adaptive cells it subdivides first and lists only the face neighbours of leaves whose
+    /// cells changed. Chunks of leaves that no longer exist are dropped. Returns the number of chunks
+    /// re-meshed.
+    std::size_t update(const Volume& volume, const std::vector<BlockChange>& changes);
+    /// The same from the changed blocks alone (EditStats::dirtyBlocks), taken as changed throughout.
     std::size_t update(const Volume& volume, const std::vector<BlockOrigin>& dirtyBlocks);
 
     const std::map<BlockOrigin, MeshChunk>& chunks() const { return chunks_; }

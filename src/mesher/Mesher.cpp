@@ -45,29 +45,6 @@ bool meshesAdaptiveCells(const MeshOptions& options)
 
 namespace {
 
-/// Offsets, in voxels, from a changed block to the leaves whose chunks can change: a cell reads the
-/// blocks of its eight corners (the 27 around the block) and, for adaptive CMS, a leaf whose
-/// subdivision reads the block decides how its face neighbours split their faces. Sorted and unique.
-std::vector<mesher_detail::BlockOrigin> affectedOffsets(bool adaptiveCells)
-{
-    using namespace mesher_detail;
-    std::vector<BlockOrigin> out;
-    for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-            for (int dz = -1; dz <= 1; ++dz) out.push_back({dx * kLeafDim, dy * kLeafDim, dz * kLeafDim});
-    if (adaptiveCells) {
-        forEachLeafSubdividingWith(Coord(0), [&](const Coord& leaf) {
-            for (int f = 0; f < 6; ++f) {
-                const Coord c = faceNeighbour(leaf, f);
-                out.push_back({c.x(), c.y(), c.z()});
-            }
-        });
-    }
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
-    return out;
-}
-
 void checkRange(const Coord& origin)
 {
     using namespace mesher_detail;
@@ -157,21 +134,22 @@ std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
 std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
                                                      const MeshOptions& options)
 {
-    return mesher_detail::blocksAround(dirtyBlocks, affectedOffsets(meshesAdaptiveCells(options)));
+    return leavesAffectedBy(wholeBlockChanges(dirtyBlocks), options);
 }
 
-std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
-                                                     const std::vector<std::array<int32_t, 3>>& changedCells)
+std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<BlockChange>& changes, const MeshOptions& options)
 {
     using namespace mesher_detail;
+    const std::vector<BlockOrigin> read = leavesReaching(changes, kMeshingReach);
+    if (!meshesAdaptiveCells(options)) return read;
+    // Without subdividing first, any leaf whose subdivision reads a change may split its faces anew.
     std::vector<BlockOrigin> faces;
     for (int f = 0; f < 6; ++f) {
         const Coord c = faceNeighbour(Coord(0), f);
         faces.push_back({c.x(), c.y(), c.z()});
     }
-    const std::vector<std::array<int32_t, 3>> read = blocksAround(dirtyBlocks, affectedOffsets(false));
-    const std::vector<std::array<int32_t, 3>> split = blocksAround(changedCells, faces);
-    std::vector<std::array<int32_t, 3>> out;
+    const std::vector<BlockOrigin> split = blocksAround(leavesReaching(changes, kSubdivisionReach), faces);
+    std::vector<BlockOrigin> out;
     out.reserve(read.size() + split.size());
     std::set_union(read.begin(), read.end(), split.begin(), split.end(), std::back_inserter(out));
     return out;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "mesher/Mesh.h"
+#include "vdb_hermite/BlockChange.h"
 #include "vdb_hermite/Volume.h"
 
 #include <array>
@@ -43,16 +44,14 @@ void validateMeshOptions(const MeshOptions& options);
 bool meshesAdaptiveCells(const MeshOptions& options);
 
 /// The leaves whose chunks can change when the given leaf-sized blocks change (EditStats::dirtyBlocks):
-/// the blocks a changed voxel's cells touch and, for adaptive CMS, the leaves whose face neighbours'
-/// subdivision reads it. Sorted and unique.
+/// the leaves whose cells read a voxel of those blocks and, for adaptive CMS, the face neighbours of
+/// the leaves whose subdivision reads one. Sorted and unique.
 std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
                                                      const MeshOptions& options);
-/// The same for adaptive CMS once it is known whose cells the edit changed (MeshChunkSet subdivides
-/// again first): the blocks a changed voxel's cells touch, and the face neighbours of the leaves in
-/// `changedCells`. A subset of the list above. Sorted and unique.
-std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
-                                                     const std::vector<std::array<int32_t, 3>>& changedCells);
-
+/// The same from what changed in each block (EditStats::blockChanges): only the leaves that read a
+/// changed voxel, directly or through a face neighbour's subdivision. (MeshChunkSet::update, which
+/// subdivides first, re-meshes only the face neighbours whose shared face's cells changed.)
+std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<BlockChange>& changes, const MeshOptions& options);
 namespace mesher_detail {
 class AdaptiveCellCache;
 struct LeafSurroundingsStore;

@@ -106,6 +106,7 @@ struct BlockTask {
 struct BlockResult {
     bool uniform = false;
     bool unchanged = false; // the block keeps its old content exactly
+    BlockChange change;     // otherwise: what changed (the whole block unless a leaf stays a leaf)
     MaterialValue value{};
     HermiteLeafData data;
     uint64_t crossings = 0;
@@ -573,8 +574,14 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
             const BlockTask& task = walker.tasks[i];
             BlockResult& r = results[i] = computeBlock(ctx, task, acc);
             // A block the brush only grazes needs no write and no re-mesh.
-            r.unchanged = r.uniform ? !task.oldLeaf && task.tileValue == r.value
-                                    : task.oldLeaf && task.oldLeaf->holds(r.data);
+            r.change.origin = {task.origin.x(), task.origin.y(), task.origin.z()};
+            if (r.uniform) {
+                r.unchanged = !task.oldLeaf && task.tileValue == r.value;
+            } else if (task.oldLeaf) {
+                const std::optional<BlockChange> change = task.oldLeaf->changeTo(r.data);
+                r.unchanged = !change;
+                if (change) r.change = *change;
+            }
         }
     });
 
@@ -582,7 +589,15 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
     std::set<Coord> lowers;
     // Blocks whose content changed: those that were or become leaves are always dirty; a block that
     // stays a tile is dirty only if a leaf borders it afterwards, as only a leaf's cells read it.
-    auto addDirty = [&](const Coord& c) { stats.dirtyBlocks.push_back({c.x(), c.y(), c.z()}); };
+    auto addChange = [&](const BlockChange& change) {
+        stats.dirtyBlocks.push_back(change.origin);
+        stats.blockChanges.push_back(change);
+    };
+    auto addDirty = [&](const Coord& c) { // changed throughout
+        BlockChange whole;
+        whole.origin = {c.x(), c.y(), c.z()};
+        addChange(whole);
+    };
     std::vector<Coord> changedTiles;
     // Tiles go through the tree itself (see pruneTouched); leaves through an accessor made afterwards.
     for (const TileEdit& e : walker.edits) {
@@ -621,7 +636,7 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
         if (r.uniform) tree.addTile(1, task.origin, r.value, false);
         else writes.emplace_back(tree.touchLeaf(task.origin), i);
         if (r.uniform && !task.oldLeaf) changedTiles.push_back(task.origin);
-        else addDirty(task.origin);
+        else addChange(r.change);
     }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, writes.size(), 8), [&](const auto& range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i)

@@ -10,6 +10,7 @@
 #pragma once
 
 #include "sculpt/Brush.h"
+#include "vdb_hermite/BlockChange.h"
 #include "vdb_hermite/Volume.h"
 
 #include <array>
@@ -43,6 +44,9 @@ struct EditStats {
     /// tiles deep inside solid or empty space, are not listed: the list grows with the surface an
     /// edit touches, not with its volume.
     std::vector<std::array<int32_t, 3>> dirtyBlocks;
+    /// The same blocks in the same order, each with the bounds of the voxels that changed in it, so
+    /// that re-meshing can leave alone the leaves that read only unchanged parts of a block.
+    std::vector<BlockChange> blockChanges;
 };
 
 /// Throws std::invalid_argument for ops that make no sense (an unbounded add, a material id that is

@@ -12,6 +12,7 @@
 //  * tiles are inactive and carry a material (0 = empty, the background).
 #pragma once
 
+#include "vdb_hermite/BlockChange.h"
 #include "vdb_hermite/Materials.h"
 #include "vdb_hermite/Quantize.h"
 #include "vdb_hermite/Volume.h"
@@ -21,6 +22,7 @@
 #include <openvdb/tree/LeafNode.h>
 
 #include <array>
+#include <optional>
 #include <ostream>
 #include <type_traits>
 #include <vector>
@@ -136,8 +138,9 @@ public:
     void assign(HermiteLeafData&& data);
     /// Copies the content out, the inverse of assign().
     HermiteLeafData extract() const;
-    /// Whether assign(data) would leave this leaf as it is.
-    bool holds(const HermiteLeafData& data) const;
+    /// What assign(data) would change: the bounds of the voxels whose material or samples would differ,
+    /// or nullopt where it would leave this leaf as it is.
+    std::optional<BlockChange> changeTo(const HermiteLeafData& data) const;
 
     // Tree-facing overrides: the tree templates call these on the child node type directly.
     void readBuffers(std::istream& is, bool fromHalf = false);

@@ -46,10 +46,47 @@ HermiteLeafData HermiteLeaf::extract() const
     return data;
 }
 
-bool HermiteLeaf::holds(const HermiteLeafData& data) const
+std::optional<BlockChange> HermiteLeaf::changeTo(const HermiteLeafData& data) const
 {
-    return edgeBits_ == data.edgeBits && samples_ == data.samples &&
-           std::equal(data.material.begin(), data.material.end(), this->buffer().data());
+    const MaterialValue* materials = this->buffer().data();
+    if (edgeBits_ == data.edgeBits && samples_ == data.samples && std::equal(data.material.begin(), data.material.end(), materials))
+        return std::nullopt;
+    std::size_t expected = 0;
+    for (uint64_t w : data.edgeBits) expected += std::size_t(__builtin_popcountll(w));
+    if (expected != data.samples.size())
+        throw std::invalid_argument("HermiteLeaf::changeTo: sample count does not match the edge mask");
+    // Bit v of word v / 64: voxel v changes.
+    std::array<uint64_t, kLeafVoxels / 64> changed{};
+    auto mark = [&](Index voxel) { changed[voxel >> 6] |= uint64_t(1) << (voxel & 63); };
+    for (Index v = 0; v < Index(kLeafVoxels); ++v)
+        if (!(materials[v] == data.material[v])) mark(v);
+    // Both sample arrays in edge-bit order: an edge in one mask only changes, one in both changes if
+    // its sample does.
+    std::size_t mine = 0, theirs = 0;
+    for (int w = 0; w < kEdgeWords; ++w) {
+        const uint64_t ownBits = edgeBits_[w], newBits = data.edgeBits[w];
+        for (uint64_t bits = ownBits | newBits; bits; bits &= bits - 1) {
+            const int bit = __builtin_ctzll(bits);
+            const bool inOwn = (ownBits >> bit) & 1u, inNew = (newBits >> bit) & 1u;
+            const bool differs = !(inOwn && inNew) || samples_[mine] != data.samples[theirs];
+            mine += inOwn;
+            theirs += inNew;
+            if (differs) mark(Index((w * 64 + bit) / 3));
+        }
+    }
+    BlockChange change;
+    change.origin = {this->origin().x(), this->origin().y(), this->origin().z()};
+    change.min = {kLeafDim - 1, kLeafDim - 1, kLeafDim - 1};
+    change.max = {0, 0, 0};
+    for (int w = 0; w < int(changed.size()); ++w)
+        for (uint64_t bits = changed[w]; bits; bits &= bits - 1) {
+            const Coord c = BaseLeaf::offsetToLocalCoord(Index(w * 64 + __builtin_ctzll(bits)));
+            for (int a = 0; a < 3; ++a) {
+                change.min[a] = std::min(change.min[a], uint8_t(c[a]));
+                change.max[a] = std::max(change.max[a], uint8_t(c[a]));
+            }
+        }
+    return change;
 }
 
 void HermiteLeaf::writeBuffers(std::ostream& os, bool toHalf) const
