@@ -5,6 +5,7 @@
 #include "mesher/BlockSets.h"
 #include "mesher/CellTopology.h"
 #include "mesher/Mesh.h"
+#include "mesher/Mesher.h"
 #include "vdb_hermite/HermiteGrid.h"
 
 #include <openvdb/tree/ValueAccessor.h>
@@ -323,6 +324,14 @@ inline EdgeCrossing edgeCrossing(const Neighbourhood& hood, const Coord& base, c
 MeshChunk meshLeafMarchingCubes(const HermiteLeaf& leaf, ConstAccessor& acc, double voxelSize);
 class CellWidthField;
 
+/// Meshes `leaves` in parallel, leaf i into *chunks[i] (its storage reused). `cells` (optional): the
+/// adaptive cells kept from earlier calls, filled in where missing; `surroundings` (optional): what
+/// subdividing some of the leaves read since the volume last changed. Throws std::runtime_error for a
+/// leaf beyond the range of edge keys.
+void meshLeavesInto(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves,
+                    const std::vector<MeshChunk*>& chunks, double voxelSize, const MeshOptions& options,
+                    AdaptiveCellCache* cells = nullptr, const LeafSurroundingsStore* surroundings = nullptr);
+
 /// Cubical Marching Squares, one leaf at a time; keeps its buffers from one leaf to the next, so use
 /// one per thread.
 class CubicalMarchingSquaresMesher {
@@ -338,6 +347,9 @@ public:
     /// `surroundings`: the leaf's neighbourhood and corner grid if they were built already (null: built here).
     MeshChunk mesh(const HermiteLeaf& leaf, ConstAccessor& acc, const CellWidthField* widths,
                    const LeafSurroundings* surroundings = nullptr);
+    /// The same, written into `out` (its storage reused: a chunk set re-meshes in place).
+    void meshInto(const HermiteLeaf& leaf, ConstAccessor& acc, const CellWidthField* widths,
+                  const LeafSurroundings* surroundings, MeshChunk& out);
 
     /// Cells meshed so far: all of them, and those the smooth-cell shortcut took.
     std::size_t cellsMeshed() const { return cellsMeshed_; }

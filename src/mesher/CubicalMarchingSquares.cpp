@@ -142,7 +142,7 @@ void accumulate(std::array<double, 3>& sum, const std::array<T, 3>& v)
 
 /// Buffers reused from cell to cell and leaf to leaf.
 struct CubicalMarchingSquaresMesher::Buffers {
-    // The chunk being built; copied out at its exact size when the leaf is done.
+    // The chunk being built; copied out when the leaf is done.
     MeshChunk chunk;
     // Vertex index of each voxel edge whose lower end lies in o-1 .. o+8 (per axis) of the leaf at
     // origin o, and of the face points; both cleared per leaf.
@@ -278,8 +278,17 @@ struct CubicalMarchingSquaresMesher::Buffers {
         }
     }
 
-    /// A copy of the chunk, its vectors at their exact size; the buffers keep their capacity.
-    MeshChunk finishLeaf() const { return chunk; }
+    /// Copies the chunk into `out`, reusing out's storage; the buffers keep their capacity.
+    void finishLeaf(MeshChunk& out) const
+    {
+        out.leafOrigin = chunk.leafOrigin;
+        out.mesh.positions.assign(chunk.mesh.positions.begin(), chunk.mesh.positions.end());
+        out.mesh.normals.assign(chunk.mesh.normals.begin(), chunk.mesh.normals.end());
+        out.mesh.materials.assign(chunk.mesh.materials.begin(), chunk.mesh.materials.end());
+        out.mesh.triangles.assign(chunk.mesh.triangles.begin(), chunk.mesh.triangles.end());
+        out.mesh.triangleMaterials.assign(chunk.mesh.triangleMaterials.begin(), chunk.mesh.triangleMaterials.end());
+        out.vertexKeys.assign(chunk.vertexKeys.begin(), chunk.vertexKeys.end());
+    }
 };
 
 namespace {
@@ -1195,6 +1204,14 @@ CubicalMarchingSquaresMesher::~CubicalMarchingSquaresMesher() = default;
 MeshChunk CubicalMarchingSquaresMesher::mesh(const HermiteLeaf& leaf, ConstAccessor& acc, const CellWidthField* widths,
                                              const LeafSurroundings* surroundings)
 {
+    MeshChunk chunk;
+    meshInto(leaf, acc, widths, surroundings, chunk);
+    return chunk;
+}
+
+void CubicalMarchingSquaresMesher::meshInto(const HermiteLeaf& leaf, ConstAccessor& acc, const CellWidthField* widths,
+                                            const LeafSurroundings* surroundings, MeshChunk& out)
+{
     LeafSurroundings built;
     if (!surroundings) {
         built.hood = Neighbourhood(leaf, acc);
@@ -1212,7 +1229,8 @@ MeshChunk CubicalMarchingSquaresMesher::mesh(const HermiteLeaf& leaf, ConstAcces
     const LeafCellSizes* own = widths ? widths->own() : nullptr;
     if (!own) {
         forEachOwnedSurfaceCell(grid, hood, OwnedCells::All, meshVoxelCell);
-        return buffers_->finishLeaf();
+        buffers_->finishLeaf(out);
+        return;
     }
     forEachOwnedSurfaceCell(grid, hood, OwnedCells::OutsideLeaf, meshVoxelCell);
     // The leaf's own cells, each visited at its minimum corner.
@@ -1237,7 +1255,7 @@ MeshChunk CubicalMarchingSquaresMesher::mesh(const HermiteLeaf& leaf, ConstAcces
                     else CellMesher(ctx, base, width, mats).run();
                 }
             }
-    return buffers_->finishLeaf();
+    buffers_->finishLeaf(out);
 }
 
 } // namespace vdbclay::mesher_detail

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <iterator>
-#include <optional>
 
 namespace vdbclay {
 
@@ -35,12 +34,13 @@ std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockOr
 
 std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockChange>& changes)
 {
+    validateMeshOptions(options_);
+    const HermiteTree& tree = volume.impl().grid->constTree();
     std::vector<BlockOrigin> origins;
     const bool adaptive = meshesAdaptiveCells(options_);
     if (adaptive) {
         // Subdividing first shows whose cells changed along which faces: only the leaves across those
         // faces may split theirs anew. What it reads of each leaf serves meshing too.
-        const HermiteTree& tree = volume.impl().grid->constTree();
         const std::vector<BlockOrigin> read = mesher_detail::leavesReaching(changes, mesher_detail::kMeshingReach);
         const std::vector<BlockOrigin> split = cells_->refreshAround(tree, changes, options_, surroundings_.get());
         origins.reserve(read.size() + split.size());
@@ -48,18 +48,22 @@ std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockCh
     } else {
         origins = leavesAffectedBy(changes, options_);
     }
-    std::vector<std::optional<MeshChunk>> fresh =
-        meshLeafChunks(volume, origins, options_, cells_.get(), adaptive ? surroundings_.get() : nullptr);
-    std::size_t remeshed = 0;
-    for (std::size_t i = 0; i < origins.size(); ++i) {
-        if (fresh[i]) {
-            chunks_[origins[i]] = std::move(*fresh[i]);
-            ++remeshed;
-        } else {
-            chunks_.erase(origins[i]);
+    // Each chunk is re-meshed in place, reusing its storage; those of leaves that are gone are dropped.
+    mesher_detail::ConstAccessor acc(tree); // origins come sorted: neighbours share internal nodes
+    std::vector<const HermiteLeaf*> leaves;
+    std::vector<MeshChunk*> slots;
+    for (const BlockOrigin& origin : origins) {
+        const HermiteLeaf* leaf = acc.probeConstLeaf(Coord(origin[0], origin[1], origin[2]));
+        if (!leaf) {
+            chunks_.erase(origin);
+            continue;
         }
+        leaves.push_back(leaf);
+        slots.push_back(&chunks_[origin]);
     }
-    return remeshed;
+    mesher_detail::meshLeavesInto(tree, leaves, slots, volume.voxelSize(), options_, cells_.get(),
+                                  adaptive ? surroundings_.get() : nullptr);
+    return leaves.size();
 }
 
 bool identical(const MeshChunkSet& a, const MeshChunkSet& b)

@@ -52,13 +52,15 @@ void checkRange(const Coord& origin)
         throw std::runtime_error("the volume reaches beyond the mesher's range of +-262,144 voxels from the origin");
 }
 
-/// Meshes the given leaves in parallel, one chunk each.
-std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves,
-                                  double voxelSize, const MeshOptions& options, mesher_detail::AdaptiveCellCache* cache,
-                                  const mesher_detail::LeafSurroundingsStore* surroundings = nullptr)
+} // namespace
+
+namespace mesher_detail {
+
+void meshLeavesInto(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves,
+                    const std::vector<MeshChunk*>& chunks, double voxelSize, const MeshOptions& options,
+                    AdaptiveCellCache* cache, const LeafSurroundingsStore* surroundings)
 {
-    using namespace mesher_detail;
-    std::vector<MeshChunk> chunks(leaves.size());
+    for (const HermiteLeaf* leaf : leaves) checkRange(leaf->origin());
     std::optional<AdaptiveCellCache> ownCache;
     AdaptiveCellCache* cells = nullptr;
     if (meshesAdaptiveCells(options)) {
@@ -71,7 +73,7 @@ std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<con
         ConstAccessor acc(tree);
         if (options.kind == MesherKind::MarchingCubes) {
             for (std::size_t i = range.begin(); i != range.end(); ++i)
-                chunks[i] = meshLeafMarchingCubes(*leaves[i], acc, voxelSize);
+                *chunks[i] = meshLeafMarchingCubes(*leaves[i], acc, voxelSize);
             return;
         }
         std::unique_ptr<CubicalMarchingSquaresMesher>& local = meshers.local();
@@ -82,53 +84,30 @@ std::vector<MeshChunk> meshLeaves(const HermiteTree& tree, const std::vector<con
             const LeafSurroundings* read = surroundings ? surroundings->find(leaf.origin()) : nullptr;
             if (cells) {
                 const CellWidthField widths = cells->around(leaf);
-                chunks[i] = cms.mesh(leaf, acc, &widths, read);
+                cms.meshInto(leaf, acc, &widths, read, *chunks[i]);
             } else {
-                chunks[i] = cms.mesh(leaf, acc, nullptr, read);
+                cms.meshInto(leaf, acc, nullptr, read, *chunks[i]);
             }
         }
     });
-    return chunks;
 }
 
-} // namespace
+} // namespace mesher_detail
 
 std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions& options,
                                         mesher_detail::AdaptiveCellCache* cells)
 {
+    using namespace mesher_detail;
     validateMeshOptions(options);
     const HermiteTree& tree = volume.impl().grid->constTree();
     std::vector<const HermiteLeaf*> leaves;
     leaves.reserve(tree.leafCount());
-    for (auto it = tree.cbeginLeaf(); it; ++it) {
-        checkRange(it->origin());
-        leaves.push_back(it.getLeaf());
-    }
-    return meshLeaves(tree, leaves, volume.voxelSize(), options, cells);
-}
-
-std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
-                                                     const std::vector<std::array<int32_t, 3>>& leafOrigins,
-                                                     const MeshOptions& options, mesher_detail::AdaptiveCellCache* cells,
-                                                     const mesher_detail::LeafSurroundingsStore* surroundings)
-{
-    validateMeshOptions(options);
-    const HermiteTree& tree = volume.impl().grid->constTree();
-    std::vector<const HermiteLeaf*> leaves;
-    std::vector<std::size_t> slot;
-    mesher_detail::ConstAccessor acc(tree); // origins come sorted: neighbours share internal nodes
-    for (std::size_t i = 0; i < leafOrigins.size(); ++i) {
-        const Coord origin(leafOrigins[i][0], leafOrigins[i][1], leafOrigins[i][2]);
-        const HermiteLeaf* leaf = acc.probeConstLeaf(origin);
-        if (!leaf || leaf->origin() != origin) continue;
-        checkRange(origin);
-        leaves.push_back(leaf);
-        slot.push_back(i);
-    }
-    std::vector<MeshChunk> chunks = meshLeaves(tree, leaves, volume.voxelSize(), options, cells, surroundings);
-    std::vector<std::optional<MeshChunk>> out(leafOrigins.size());
-    for (std::size_t k = 0; k < chunks.size(); ++k) out[slot[k]] = std::move(chunks[k]);
-    return out;
+    for (auto it = tree.cbeginLeaf(); it; ++it) leaves.push_back(it.getLeaf());
+    std::vector<MeshChunk> chunks(leaves.size());
+    std::vector<MeshChunk*> into(chunks.size());
+    for (std::size_t i = 0; i < chunks.size(); ++i) into[i] = &chunks[i];
+    meshLeavesInto(tree, leaves, into, volume.voxelSize(), options, cells);
+    return chunks;
 }
 
 std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,

@@ -61,14 +61,6 @@ struct LeafSurroundingsStore;
 /// where present and filled in where missing (MeshChunkSet keeps one between updates).
 std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions& options = {},
                                         mesher_detail::AdaptiveCellCache* cells = nullptr);
-/// The chunks of the leaves at the given origins (leaf-aligned); empty where there is no leaf.
-/// `surroundings` (optional): what reading some of the leaves and their neighbours gave since the volume
-/// last changed (AdaptiveCellCache::refreshAround keeps it).
-std::vector<std::optional<MeshChunk>> meshLeafChunks(const Volume& volume,
-                                                     const std::vector<std::array<int32_t, 3>>& leafOrigins,
-                                                     const MeshOptions& options = {},
-                                                     mesher_detail::AdaptiveCellCache* cells = nullptr,
-                                                     const mesher_detail::LeafSurroundingsStore* surroundings = nullptr);
 Mesh meshVolume(const Volume& volume, const MeshOptions& options = {});
 
 } // namespace vdbclay
