@@ -7,17 +7,19 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <unordered_set>
 
 namespace vdbclay::mesher_detail {
 
 namespace {
 
-/// The cells of each leaf, subdivided in parallel; `keep` (optional) keeps what they read.
-std::vector<LeafCellSizes> subdivideLeaves(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves,
-                                           const MeshOptions& options, LeafSurroundingsStore* keep = nullptr)
+/// Subdivides each leaf in parallel and hands its cells to store(i, sizes) on the thread that made them;
+/// `keep` (optional) keeps what they read.
+template<typename Store>
+void subdivideLeaves(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves, const MeshOptions& options,
+                     LeafSurroundingsStore* keep, Store&& store)
 {
-    std::vector<LeafCellSizes> sizes(leaves.size());
     if (keep) {
         keep->resize(leaves.size());
         for (std::size_t i = 0; i < leaves.size(); ++i) keep->origins[i] = leaves[i]->origin();
@@ -38,10 +40,9 @@ std::vector<LeafCellSizes> subdivideLeaves(const HermiteTree& tree, const std::v
                 criteria.maxCellSize = std::min(criteria.maxCellSize, options.leafMaxCellWidth({o.x(), o.y(), o.z()}));
             }
             criteria.cosHalfSpread = cosHalfSpread;
-            sizes[i] = subdivideLeaf(read.grid, read.hood, criteria);
+            store(i, subdivideLeaf(read.grid, read.hood, criteria));
         }
     });
-    return sizes;
 }
 
 /// Bit f: the cells along face f (-x, +x, -y, +y, -z, +z) differ between a and b, which is all a face
@@ -66,6 +67,9 @@ unsigned facesDiffering(const LeafCellSizes& a, const LeafCellSizes& b)
 void AdaptiveCellCache::prepare(const HermiteTree& tree, const std::vector<const HermiteLeaf*>& leaves,
                                 const MeshOptions& options)
 {
+    // Every entry is a leaf's (refreshAround drops those of leaves that are gone): as many entries as
+    // leaves means every leaf has its cells.
+    if (sizes_.size() == tree.leafCount()) return;
     std::vector<const HermiteLeaf*> missing;
     std::unordered_set<Coord> queued;
     ConstAccessor acc(tree);
@@ -76,43 +80,60 @@ void AdaptiveCellCache::prepare(const HermiteTree& tree, const std::vector<const
         add(leaf);
         for (int f = 0; f < 6; ++f) add(acc.probeConstLeaf(faceNeighbour(leaf->origin(), f)));
     }
-    std::vector<LeafCellSizes> fresh = subdivideLeaves(tree, missing, options);
+    std::vector<LeafCellSizes> fresh(missing.size());
+    subdivideLeaves(tree, missing, options, nullptr, [&](std::size_t i, const LeafCellSizes& sizes) { fresh[i] = sizes; });
     for (std::size_t i = 0; i < missing.size(); ++i) sizes_.emplace(missing[i]->origin(), fresh[i]);
 }
 
 std::vector<BlockOrigin> AdaptiveCellCache::refreshAround(const HermiteTree& tree, const std::vector<BlockChange>& changes,
                                                           const MeshOptions& options, LeafSurroundingsStore* keep)
 {
-    std::vector<BlockOrigin> splitAnew;
-    auto acrossFaces = [&](const Coord& origin, unsigned faces) {
-        for (int f = 0; f < 6; ++f)
-            if ((faces >> f) & 1u) {
-                const Coord c = faceNeighbour(origin, f);
-                splitAnew.push_back({c.x(), c.y(), c.z()});
-            }
-    };
-    constexpr unsigned kAllFaces = 0x3f;
+    constexpr uint8_t kAllFaces = 0x3f;
+    std::vector<BlockOrigin> acrossFrom; // leaves whose cells changed along some face, with those faces
+    std::vector<uint8_t> acrossFaces;
     std::vector<const HermiteLeaf*> present;
     ConstAccessor acc(tree);
     for (const BlockOrigin& candidate : leavesReaching(changes, kSubdivisionReach)) {
         const Coord origin(candidate[0], candidate[1], candidate[2]);
-        if (const HermiteLeaf* leaf = acc.probeConstLeaf(origin)) present.push_back(leaf);
-        else if (sizes_.erase(origin)) acrossFaces(origin, kAllFaces);
-    }
-    const std::vector<LeafCellSizes> fresh = subdivideLeaves(tree, present, options, keep);
-    for (std::size_t i = 0; i < present.size(); ++i) {
-        const Coord origin = present[i]->origin();
-        const auto [it, added] = sizes_.try_emplace(origin, fresh[i]);
-        if (added) {
-            acrossFaces(origin, kAllFaces);
-        } else {
-            acrossFaces(origin, facesDiffering(it->second, fresh[i]));
-            it->second = fresh[i];
+        if (const HermiteLeaf* leaf = acc.probeConstLeaf(origin)) {
+            present.push_back(leaf);
+        } else if (sizes_.erase(origin)) {
+            acrossFrom.push_back(candidate);
+            acrossFaces.push_back(kAllFaces);
         }
     }
-    std::sort(splitAnew.begin(), splitAnew.end());
-    splitAnew.erase(std::unique(splitAnew.begin(), splitAnew.end()), splitAnew.end());
-    return splitAnew;
+    // Each thread compares and replaces the cells of the leaves it subdivided in place (distinct entries
+    // of a table nobody resizes meanwhile); new leaves join afterwards.
+    std::vector<uint8_t> faces(present.size(), 0);
+    std::vector<std::pair<std::size_t, LeafCellSizes>> added;
+    std::mutex addedMutex;
+    subdivideLeaves(tree, present, options, keep, [&](std::size_t i, const LeafCellSizes& fresh) {
+        const auto it = sizes_.find(present[i]->origin());
+        if (it == sizes_.end()) {
+            faces[i] = kAllFaces;
+            const std::lock_guard<std::mutex> lock(addedMutex);
+            added.emplace_back(i, fresh);
+            return;
+        }
+        faces[i] = uint8_t(facesDiffering(it->second, fresh));
+        it->second = fresh;
+    });
+    for (const auto& [i, fresh] : added) sizes_.emplace(present[i]->origin(), fresh);
+    for (std::size_t i = 0; i < present.size(); ++i)
+        if (faces[i]) {
+            const Coord o = present[i]->origin();
+            acrossFrom.push_back({o.x(), o.y(), o.z()});
+            acrossFaces.push_back(faces[i]);
+        }
+    // The leaves across those faces, sorted and unique.
+    std::vector<BlockOrigin> splitAnew;
+    for (std::size_t i = 0; i < acrossFrom.size(); ++i)
+        for (int f = 0; f < 6; ++f)
+            if ((acrossFaces[i] >> f) & 1u) {
+                const Coord c = faceNeighbour(Coord(acrossFrom[i][0], acrossFrom[i][1], acrossFrom[i][2]), f);
+                splitAnew.push_back({c.x(), c.y(), c.z()});
+            }
+    return blocksAround(splitAnew, {{0, 0, 0}});
 }
 
 CellWidthField AdaptiveCellCache::around(const HermiteLeaf& leaf) const

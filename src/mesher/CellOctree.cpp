@@ -11,6 +11,7 @@ namespace vdbclay::mesher_detail {
 namespace {
 
 constexpr int kLattice = kLeafDim + 1; // voxels o .. o+8 per axis
+constexpr int kNextAxis[3] = {1, 2, 0};
 
 /// The spread of a set of unit normals: their sum, and the cosine of the largest angle between one of
 /// them and the sum's direction. Merging bounds a parent's spread by its children's (the angle from the
@@ -130,17 +131,19 @@ public:
         // two across it in each other direction (two where the line lies on a boundary between cells).
         for (int k = 0; k < changedLineCount_; ++k) {
             const ChangedLine& line = changedLines_[k];
-            const int axis = line.axis, u = line.u, v = line.v;
-            const LineCells& lineCells = kLineCells[axis][u][v];
+            const int axis = line.axis;
+            const LineCells& lineCells = kLineCells[axis][line.u][line.v];
+            uint8_t at[3];
+            at[kNextAxis[axis]] = line.u;
+            at[kNextAxis[kNextAxis[axis]]] = line.v;
             for (uint32_t changes = line.changes; changes; changes &= changes - 1) {
-                Crossing x;
                 const int t = __builtin_ctz(changes);
-                x.at[axis] = uint8_t(t);
-                x.at[(axis + 1) % 3] = uint8_t(u);
-                x.at[(axis + 2) % 3] = uint8_t(v);
-                x.axis = uint8_t(axis);
-                const PackedSample* s = hood.localSample(x.at[0], x.at[1], x.at[2], axis);
+                at[axis] = uint8_t(t);
+                const PackedSample* s = hood.localSample(at[0], at[1], at[2], axis);
                 if (!s) continue;
+                Crossing& x = crossings_[crossingCount_++];
+                std::copy(at, at + 3, x.at);
+                x.axis = uint8_t(axis);
                 const UnpackedSample sample = unpackSample(*s);
                 std::copy(sample.normal.begin(), sample.normal.end(), x.normal);
                 x.offset = sample.offset;
@@ -153,7 +156,6 @@ public:
                     for (int a = 0; a < 3; ++a) cone.sum[a] += x.normal[a];
                     ++cone.count;
                 }
-                crossings_[crossingCount_++] = x;
             }
         }
         // Each cone's spread: the cosine of the widest angle between one of its normals and its sum.

@@ -2,6 +2,9 @@
 
 #include "mesher/AdaptiveCellCache.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <iterator>
 
@@ -48,22 +51,32 @@ std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockCh
     } else {
         origins = leavesAffectedBy(changes, options_);
     }
-    // Each chunk is re-meshed in place, reusing its storage; those of leaves that are gone are dropped.
-    mesher_detail::ConstAccessor acc(tree); // origins come sorted: neighbours share internal nodes
-    std::vector<const HermiteLeaf*> leaves;
-    std::vector<MeshChunk*> slots;
-    for (const BlockOrigin& origin : origins) {
-        const HermiteLeaf* leaf = acc.probeConstLeaf(Coord(origin[0], origin[1], origin[2]));
-        if (!leaf) {
-            chunks_.erase(origin);
+    // Each chunk is re-meshed in place, reusing its storage. The leaves and chunks are looked up in
+    // parallel; chunks of leaves that appeared are added, and those of leaves that are gone dropped, after.
+    std::vector<const HermiteLeaf*> leaves(origins.size(), nullptr);
+    std::vector<MeshChunk*> slots(origins.size(), nullptr);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, origins.size(), 64), [&](const auto& range) {
+        mesher_detail::ConstAccessor acc(tree);
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            leaves[i] = acc.probeConstLeaf(Coord(origins[i][0], origins[i][1], origins[i][2]));
+            const auto it = chunks_.find(origins[i]);
+            if (it != chunks_.end()) slots[i] = &it->second;
+        }
+    });
+    std::size_t meshed = 0;
+    for (std::size_t i = 0; i < origins.size(); ++i) {
+        if (!leaves[i]) {
+            if (slots[i]) chunks_.erase(origins[i]);
             continue;
         }
-        leaves.push_back(leaf);
-        slots.push_back(&chunks_[origin]);
+        leaves[meshed] = leaves[i];
+        slots[meshed++] = slots[i] ? slots[i] : &chunks_[origins[i]];
     }
+    leaves.resize(meshed);
+    slots.resize(meshed);
     mesher_detail::meshLeavesInto(tree, leaves, slots, volume.voxelSize(), options_, cells_.get(),
                                   adaptive ? surroundings_.get() : nullptr);
-    return leaves.size();
+    return meshed;
 }
 
 bool identical(const MeshChunkSet& a, const MeshChunkSet& b)
