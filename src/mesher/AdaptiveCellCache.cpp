@@ -125,7 +125,7 @@ std::vector<BlockOrigin> AdaptiveCellCache::refreshAround(const HermiteTree& tre
             acrossFrom.push_back({o.x(), o.y(), o.z()});
             acrossFaces.push_back(faces[i]);
         }
-    // The leaves across those faces, sorted and unique.
+    // The leaves across those faces.
     std::vector<BlockOrigin> splitAnew;
     for (std::size_t i = 0; i < acrossFrom.size(); ++i)
         for (int f = 0; f < 6; ++f)
@@ -133,7 +133,7 @@ std::vector<BlockOrigin> AdaptiveCellCache::refreshAround(const HermiteTree& tre
                 const Coord c = faceNeighbour(Coord(acrossFrom[i][0], acrossFrom[i][1], acrossFrom[i][2]), f);
                 splitAnew.push_back({c.x(), c.y(), c.z()});
             }
-    return blocksAround(splitAnew, {{0, 0, 0}});
+    return splitAnew;
 }
 
 CellWidthField AdaptiveCellCache::around(const HermiteLeaf& leaf) const

@@ -31,8 +31,8 @@ public:
     CellWidthField around(const HermiteLeaf& leaf) const;
 
     /// Subdivides again the leaves whose subdivision reads a changed voxel (kSubdivisionReach) and drops
-    /// those that no longer exist. Returns, sorted and unique, the leaves next to a face along which a
-    /// neighbour's cells changed, appeared or vanished: only they can split their faces anew.
+    /// those that no longer exist. Returns the leaves next to a face along which a neighbour's cells
+    /// changed, appeared or vanished (some more than once): only they can split their faces anew.
     /// `keep` (optional) receives the surroundings of the leaves subdivided, for meshing them next.
     std::vector<BlockOrigin> refreshAround(const HermiteTree& tree, const std::vector<BlockChange>& changes,
                                            const MeshOptions& options, LeafSurroundingsStore* keep = nullptr);

@@ -82,17 +82,23 @@ std::vector<BlockOrigin> blocksAround(const std::vector<BlockOrigin>& blocks, co
     return blocksIn(boxes);
 }
 
-std::vector<BlockOrigin> leavesReaching(const std::vector<BlockChange>& changes, const LeafReach& reach)
+std::vector<BlockOrigin> leavesReaching(const std::vector<BlockChange>& changes, const LeafReach& reach,
+                                        const std::vector<BlockOrigin>& alsoBlocks)
 {
     // A leaf at L reads L + low .. L + high: it meets the changed voxels B + min .. B + max where
     // L lies in B + min - high .. B + max - low.
-    std::vector<BlockBox> boxes(changes.size());
-    for (std::size_t i = 0; i < changes.size(); ++i) {
-        const BlockChange& c = changes[i];
+    std::vector<BlockBox> boxes;
+    boxes.reserve(changes.size() + alsoBlocks.size());
+    for (const BlockChange& c : changes) {
+        BlockBox& box = boxes.emplace_back();
         for (int a = 0; a < 3; ++a) {
-            boxes[i].lo[a] = inBlocks(int64_t(c.origin[a]) + c.min[a] - reach.high + kLeafDim - 1);
-            boxes[i].hi[a] = inBlocks(int64_t(c.origin[a]) + c.max[a] - reach.low);
+            box.lo[a] = inBlocks(int64_t(c.origin[a]) + c.min[a] - reach.high + kLeafDim - 1);
+            box.hi[a] = inBlocks(int64_t(c.origin[a]) + c.max[a] - reach.low);
         }
+    }
+    for (const BlockOrigin& b : alsoBlocks) {
+        BlockBox& box = boxes.emplace_back();
+        for (int a = 0; a < 3; ++a) box.lo[a] = box.hi[a] = inBlocks(b[a]);
     }
     return blocksIn(boxes);
 }

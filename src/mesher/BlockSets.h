@@ -23,8 +23,9 @@ struct LeafReach {
 /// (leaf-aligned origins), sorted and unique.
 std::vector<BlockOrigin> blocksAround(const std::vector<BlockOrigin>& blocks, const std::vector<BlockOrigin>& offsets);
 
-/// The leaves whose `reach` holds a changed voxel of one of `changes`, sorted and unique (whether or not
-/// a leaf is there).
-std::vector<BlockOrigin> leavesReaching(const std::vector<BlockChange>& changes, const LeafReach& reach);
+/// The leaves whose `reach` holds a changed voxel of one of `changes`, and the blocks in `alsoBlocks`
+/// (leaf-aligned origins, in any order), sorted and unique (whether or not a leaf is there).
+std::vector<BlockOrigin> leavesReaching(const std::vector<BlockChange>& changes, const LeafReach& reach,
+                                        const std::vector<BlockOrigin>& alsoBlocks = {});
 
 } // namespace vdbclay::mesher_detail

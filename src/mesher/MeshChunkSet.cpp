@@ -6,7 +6,6 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <iterator>
 
 namespace vdbclay {
 
@@ -44,10 +43,8 @@ std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockCh
     if (adaptive) {
         // Subdividing first shows whose cells changed along which faces: only the leaves across those
         // faces may split theirs anew. What it reads of each leaf serves meshing too.
-        const std::vector<BlockOrigin> read = mesher_detail::leavesReaching(changes, mesher_detail::kMeshingReach);
         const std::vector<BlockOrigin> split = cells_->refreshAround(tree, changes, options_, surroundings_.get());
-        origins.reserve(read.size() + split.size());
-        std::set_union(read.begin(), read.end(), split.begin(), split.end(), std::back_inserter(origins));
+        origins = mesher_detail::leavesReaching(changes, mesher_detail::kMeshingReach, split);
     } else {
         origins = leavesAffectedBy(changes, options_);
     }

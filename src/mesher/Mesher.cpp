@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <iterator>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -119,19 +118,14 @@ std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::arra
 std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<BlockChange>& changes, const MeshOptions& options)
 {
     using namespace mesher_detail;
-    const std::vector<BlockOrigin> read = leavesReaching(changes, kMeshingReach);
-    if (!meshesAdaptiveCells(options)) return read;
+    if (!meshesAdaptiveCells(options)) return leavesReaching(changes, kMeshingReach);
     // Without subdividing first, any leaf whose subdivision reads a change may split its faces anew.
     std::vector<BlockOrigin> faces;
     for (int f = 0; f < 6; ++f) {
         const Coord c = faceNeighbour(Coord(0), f);
         faces.push_back({c.x(), c.y(), c.z()});
     }
-    const std::vector<BlockOrigin> split = blocksAround(leavesReaching(changes, kSubdivisionReach), faces);
-    std::vector<BlockOrigin> out;
-    out.reserve(read.size() + split.size());
-    std::set_union(read.begin(), read.end(), split.begin(), split.end(), std::back_inserter(out));
-    return out;
+    return leavesReaching(changes, kMeshingReach, blocksAround(leavesReaching(changes, kSubdivisionReach), faces));
 }
 
 Mesh meshVolume(const Volume& volume, const MeshOptions& options)
