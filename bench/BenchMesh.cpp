@@ -265,7 +265,7 @@ struct ShapeResult {
     std::vector<RowResult> rows; // cms uniform, cms adaptive, mc, vdb0, vdb05
 };
 
-/// Re-meshing after brush stamps: a MeshChunkSet of a sphere is updated with the dirty blocks of each
+/// Re-meshing after brush stamps: a MeshChunkSet of a sphere is updated with the block changes of each
 /// radius-32 stamp (alternately removing and adding material on the surface).
 struct RemeshResult {
     std::string key;
@@ -450,7 +450,7 @@ int benchMesh(bool json, bool quick)
 
     std::cout << "\nRe-meshing after a radius-" << kStampRadius << " stamp on a sphere of radius "
               << fixed(remesh[0].sphereRadius, 0)
-              << " (MeshChunkSet::update over the stamp's dirty blocks, best of " << kReplicas
+              << " (MeshChunkSet::update over the stamp's block changes, best of " << kReplicas
               << " identical replicas, each updated right after its stamp;\n"
               << kStamps << " stamps, alternately removing and adding):\n\n";
     Table table;
