@@ -82,7 +82,7 @@ constexpr std::array<std::array<std::array<LineCells, kLattice>, kLattice>, 3> k
                 for (int cu = kCellsAcross[u][0]; cu <= kCellsAcross[u][1]; ++cu)
                     for (int cv = kCellsAcross[v][0]; cv <= kCellsAcross[v][1]; ++cv)
                         line.cells[line.count++] =
-                            uint8_t(cu * kTwoVoxelStride[(axis + 1) % 3] + cv * kTwoVoxelStride[(axis + 2) % 3]);
+                            uint8_t(cu * kTwoVoxelStride[kNextAxis[axis]] + cv * kTwoVoxelStride[kNextAxis[kNextAxis[axis]]]);
             }
     return table;
 }();
@@ -194,7 +194,7 @@ public:
             const ChangedLine& line = linesChangingTwice_[k];
             const uint32_t twice = windows[line.changes]; // bit c: the c-th cell along the axis
             if (!twice) continue;
-            const int axis = line.axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
+            const int axis = line.axis, u = kNextAxis[axis], v = kNextAxis[u];
             int firstU, lastU, firstV, lastV;
             cellsAt(line.u, firstU, lastU);
             cellsAt(line.v, firstV, lastV);

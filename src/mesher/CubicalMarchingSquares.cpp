@@ -278,17 +278,8 @@ struct CubicalMarchingSquaresMesher::Buffers {
         }
     }
 
-    /// Copies the chunk into `out`, reusing out's storage; the buffers keep their capacity.
-    void finishLeaf(MeshChunk& out) const
-    {
-        out.leafOrigin = chunk.leafOrigin;
-        out.mesh.positions.assign(chunk.mesh.positions.begin(), chunk.mesh.positions.end());
-        out.mesh.normals.assign(chunk.mesh.normals.begin(), chunk.mesh.normals.end());
-        out.mesh.materials.assign(chunk.mesh.materials.begin(), chunk.mesh.materials.end());
-        out.mesh.triangles.assign(chunk.mesh.triangles.begin(), chunk.mesh.triangles.end());
-        out.mesh.triangleMaterials.assign(chunk.mesh.triangleMaterials.begin(), chunk.mesh.triangleMaterials.end());
-        out.vertexKeys.assign(chunk.vertexKeys.begin(), chunk.vertexKeys.end());
-    }
+    /// Copies the chunk into `out`; copy-assignment reuses out's vectors, and the buffers keep theirs.
+    void finishLeaf(MeshChunk& out) const { out = chunk; }
 };
 
 namespace {

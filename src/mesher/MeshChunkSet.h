@@ -12,6 +12,10 @@
 
 namespace vdbclay {
 
+namespace mesher_detail {
+struct LeafSurroundingsStore;
+}
+
 class MeshChunkSet {
 public:
     using BlockOrigin = std::array<int32_t, 3>;
@@ -24,10 +28,10 @@ public:
     /// Meshes every leaf.
     void rebuild(const Volume& volume);
 
-    /// Re-meshes the leaves an edit can change (EditStats::blockChanges), as leavesAffectedBy lists
-    /// them; with adaptive cells it subdivides first and lists only the face neighbours of leaves whose
-    /// cells changed. Chunks of leaves that no longer exist are dropped. Returns the number of chunks
-    /// re-meshed.
+    /// Re-meshes the leaves an edit can change (EditStats::blockChanges): those that read a changed voxel
+    /// and, with adaptive cells, which it subdivides again first, the face neighbours of leaves whose
+    /// cells changed along their shared face. Chunks of leaves that no longer exist are dropped. Returns
+    /// the number of chunks re-meshed.
     std::size_t update(const Volume& volume, const std::vector<BlockChange>& changes);
     /// The same from the changed blocks alone (EditStats::dirtyBlocks), taken as changed throughout.
     std::size_t update(const Volume& volume, const std::vector<BlockOrigin>& dirtyBlocks);

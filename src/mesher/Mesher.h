@@ -52,9 +52,9 @@ std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::arra
 /// changed voxel, directly or through a face neighbour's subdivision. (MeshChunkSet::update, which
 /// subdivides first, re-meshes only the face neighbours whose shared face's cells changed.)
 std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<BlockChange>& changes, const MeshOptions& options);
+
 namespace mesher_detail {
 class AdaptiveCellCache;
-struct LeafSurroundingsStore;
 }
 
 /// `cells` (optional): adaptive cells kept from earlier calls on the same volume and options, used
