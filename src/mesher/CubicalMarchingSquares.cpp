@@ -997,10 +997,14 @@ private:
         };
         for (int x = 0; x < span[0]; ++x)
             for (int y = 0; y < span[1]; ++y) {
+                // Most rows hold no crossing: test before calling.
                 const uint32_t row = solidRows[x][y];
-                if (x + 1 < span[0]) visit(x, y, 0, row ^ solidRows[x + 1][y]);
-                if (y + 1 < span[1]) visit(x, y, 1, row ^ solidRows[x][y + 1]);
-                visit(x, y, 2, (row ^ (row >> 1)) & ((1u << (span[2] - 1)) - 1));
+                const uint32_t cutX = x + 1 < span[0] ? row ^ solidRows[x + 1][y] : 0u;
+                const uint32_t cutY = y + 1 < span[1] ? row ^ solidRows[x][y + 1] : 0u;
+                const uint32_t cutZ = (row ^ (row >> 1)) & ((1u << (span[2] - 1)) - 1);
+                if (cutX) visit(x, y, 0, cutX);
+                if (cutY) visit(x, y, 1, cutY);
+                if (cutZ) visit(x, y, 2, cutZ);
             }
     }
 
