@@ -20,15 +20,9 @@ bool identical(const MeshChunk& a, const MeshChunk& b)
 
 uint64_t faceKey(int32_t i, int32_t j, int32_t k, int axis, int segment, int slot)
 {
-    // Bit 63 marks a face key (edge keys use bits 0-61): axis in bits 61-62, segment in 60, slot in
-    // 57-59, and 19 bits per coordinate.
-    constexpr int64_t kBias = int64_t(1) << 18;
-    constexpr uint64_t kMask = (uint64_t(1) << 19) - 1;
-    const uint64_t x = uint64_t(int64_t(i) + kBias) & kMask;
-    const uint64_t y = uint64_t(int64_t(j) + kBias) & kMask;
-    const uint64_t z = uint64_t(int64_t(k) + kBias) & kMask;
+    const KeyCoordinateLayout& l = kFaceKeyLayout;
     return (uint64_t(1) << 63) | (uint64_t(axis & 3) << 61) | (uint64_t(segment & 1) << 60) |
-           (uint64_t(slot & 7) << 57) | (x << 38) | (y << 19) | z;
+           (uint64_t(slot & 7) << 57) | l.encode(i, 0) | l.encode(j, 1) | l.encode(k, 2);
 }
 
 namespace {
@@ -40,12 +34,10 @@ bool onlyInLeaf(uint64_t key, const std::array<int32_t, 3>& origin)
 {
     if (key == kUnsharedVertex) return true;
     const bool face = key >> 63;
-    const int bits = face ? 19 : 20, axis = face ? int((key >> 61) & 3) : int(key & 3);
-    const int shift[3] = {face ? 38 : 42, face ? 19 : 22, face ? 0 : 2};
-    const int64_t bias = int64_t(1) << (bits - 1);
-    const uint64_t mask = (uint64_t(1) << bits) - 1;
+    const int axis = face ? int((key >> 61) & 3) : int(key & 3);
+    const KeyCoordinateLayout& layout = face ? kFaceKeyLayout : kEdgeKeyLayout;
     for (int a = 0; a < 3; ++a) {
-        const int64_t local = int64_t((key >> shift[a]) & mask) - bias - origin[a];
+        const int64_t local = layout.decode(key, a) - origin[a];
         // An edge's cells reach one voxel below it across the edge; a face's cells one voxel below it
         // along its normal.
         const int64_t lowest = (a == axis) == face ? 1 : 0;

@@ -29,17 +29,32 @@ struct MeshChunk {
     std::vector<uint64_t> vertexKeys; // one per vertex
 };
 
+/// Where a vertex key keeps a corner's coordinates: `bits` per coordinate, each offset by
+/// 2^(bits - 1), x at shift[0], y at shift[1], z at shift[2]. Encoders and decoders share it.
+struct KeyCoordinateLayout {
+    int bits;
+    int shift[3];
+
+    uint64_t encode(int32_t c, int a) const
+    {
+        return (uint64_t(int64_t(c) + (int64_t(1) << (bits - 1))) & ((uint64_t(1) << bits) - 1)) << shift[a];
+    }
+    int64_t decode(uint64_t key, int a) const
+    {
+        return int64_t((key >> shift[a]) & ((uint64_t(1) << bits) - 1)) - (int64_t(1) << (bits - 1));
+    }
+};
+/// Edge keys: 20 bits per coordinate above 2 bits of axis (unique for |coordinates| < 524288).
+constexpr KeyCoordinateLayout kEdgeKeyLayout{20, {42, 22, 2}};
+/// Face keys: bit 63 set, axis in bits 61-62, segment in 60, slot in 57-59, 19 bits per coordinate.
+constexpr KeyCoordinateLayout kFaceKeyLayout{19, {38, 19, 0}};
+
 /// Key of the grid edge that starts at voxel (i,j,k) and runs along `axis` (0,1,2); unique for
 /// coordinates within +-kMaxEdgeKeyCoordinate.
 inline uint64_t edgeKey(int32_t i, int32_t j, int32_t k, int axis)
 {
-    // 20 bits per coordinate (offset by 2^19) and 2 bits of axis: unique for |coordinates| < 524288.
-    constexpr int64_t kBias = int64_t(1) << 19;
-    constexpr uint64_t kMask = (uint64_t(1) << 20) - 1;
-    const uint64_t x = uint64_t(int64_t(i) + kBias) & kMask;
-    const uint64_t y = uint64_t(int64_t(j) + kBias) & kMask;
-    const uint64_t z = uint64_t(int64_t(k) + kBias) & kMask;
-    return (x << 42) | (y << 22) | (z << 2) | uint64_t(axis);
+    const KeyCoordinateLayout& l = kEdgeKeyLayout;
+    return l.encode(i, 0) | l.encode(j, 1) | l.encode(k, 2) | uint64_t(axis);
 }
 constexpr int32_t kMaxEdgeKeyCoordinate = 1 << 18;
 /// Key of a vertex inside a cell face (a 2D sharp feature or a material transition): the face's
