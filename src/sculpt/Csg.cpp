@@ -433,7 +433,10 @@ private:
     void visitBlock(const Coord& origin, const HermiteLower* node, MaterialValue nodeTile)
     {
         const HermiteLeaf* leaf = node ? node->probeConstLeaf(origin) : nullptr;
-        const MaterialValue tile = leaf ? MaterialValue{} : (node ? node->getValue(origin) : nodeTile);
+        // Without a leaf the node's table holds the block's tile; read it there (getValue would go through
+        // the child path, which GCC then warns about as a write through a null leaf).
+        const MaterialValue tile =
+            leaf ? MaterialValue{} : (node ? node->getTable()[HermiteLower::coordToOffset(origin)].getValue() : nodeTile);
         if (untouched(leaf, tile) || settle(origin, 1, leaf, tile, classifyRegion(ctx_, origin, kLeafDim))) return;
         tasks.push_back({origin, leaf, tile});
     }
