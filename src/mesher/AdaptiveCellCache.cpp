@@ -88,19 +88,22 @@ void AdaptiveCellCache::prepare(const HermiteTree& tree, const std::vector<const
 std::vector<BlockOrigin> AdaptiveCellCache::refreshAround(const HermiteTree& tree, const std::vector<BlockChange>& changes,
                                                           const MeshOptions& options, LeafSurroundingsStore* keep)
 {
-    constexpr uint8_t kAllFaces = 0x3f;
-    std::vector<BlockOrigin> acrossFrom; // leaves whose cells changed along some face, with those faces
-    std::vector<uint8_t> acrossFaces;
+    constexpr unsigned kAllFaces = 0x3f;
+    // The leaves across the faces along which a leaf's cells changed, appeared or vanished.
+    std::vector<BlockOrigin> splitAnew;
+    auto addAcross = [&](const Coord& origin, unsigned faces) {
+        for (int f = 0; f < 6; ++f)
+            if ((faces >> f) & 1u) {
+                const Coord c = faceNeighbour(origin, f);
+                splitAnew.push_back({c.x(), c.y(), c.z()});
+            }
+    };
     std::vector<const HermiteLeaf*> present;
     ConstAccessor acc(tree);
     for (const BlockOrigin& candidate : leavesReaching(changes, kSubdivisionReach)) {
         const Coord origin(candidate[0], candidate[1], candidate[2]);
-        if (const HermiteLeaf* leaf = acc.probeConstLeaf(origin)) {
-            present.push_back(leaf);
-        } else if (sizes_.erase(origin)) {
-            acrossFrom.push_back(candidate);
-            acrossFaces.push_back(kAllFaces);
-        }
+        if (const HermiteLeaf* leaf = acc.probeConstLeaf(origin)) present.push_back(leaf);
+        else if (sizes_.erase(origin)) addAcross(origin, kAllFaces);
     }
     // Each thread compares and replaces the cells of the leaves it subdivided in place (distinct entries
     // of a table nobody resizes meanwhile); new leaves join afterwards.
@@ -119,20 +122,7 @@ std::vector<BlockOrigin> AdaptiveCellCache::refreshAround(const HermiteTree& tre
         it->second = fresh;
     });
     for (const auto& [i, fresh] : added) sizes_.emplace(present[i]->origin(), fresh);
-    for (std::size_t i = 0; i < present.size(); ++i)
-        if (faces[i]) {
-            const Coord o = present[i]->origin();
-            acrossFrom.push_back({o.x(), o.y(), o.z()});
-            acrossFaces.push_back(faces[i]);
-        }
-    // The leaves across those faces.
-    std::vector<BlockOrigin> splitAnew;
-    for (std::size_t i = 0; i < acrossFrom.size(); ++i)
-        for (int f = 0; f < 6; ++f)
-            if ((acrossFaces[i] >> f) & 1u) {
-                const Coord c = faceNeighbour(Coord(acrossFrom[i][0], acrossFrom[i][1], acrossFrom[i][2]), f);
-                splitAnew.push_back({c.x(), c.y(), c.z()});
-            }
+    for (std::size_t i = 0; i < present.size(); ++i) addAcross(present[i]->origin(), faces[i]);
     return splitAnew;
 }
 

@@ -46,7 +46,7 @@ std::size_t MeshChunkSet::update(const Volume& volume, const std::vector<BlockCh
         const std::vector<BlockOrigin> split = cells_->refreshAround(tree, changes, options_, surroundings_.get());
         origins = mesher_detail::leavesReaching(changes, mesher_detail::kMeshingReach, split);
     } else {
-        origins = leavesAffectedBy(changes, options_);
+        origins = mesher_detail::leavesReaching(changes, mesher_detail::kMeshingReach);
     }
     // Each chunk is re-meshed in place, reusing its storage. The leaves and chunks are looked up in
     // parallel; chunks of leaves that appeared are added, and those of leaves that are gone dropped, after.

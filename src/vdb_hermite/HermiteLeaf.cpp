@@ -5,8 +5,22 @@
 #include <algorithm>
 #include <mutex>
 #include <stdexcept>
+#include <string>
 
 namespace vdbclay {
+
+namespace {
+
+/// Throws std::invalid_argument unless `data` holds one sample per set bit of its edge mask.
+void requireSamplesMatchMask(const HermiteLeafData& data, const char* caller)
+{
+    std::size_t expected = 0;
+    for (uint64_t w : data.edgeBits) expected += std::size_t(__builtin_popcountll(w));
+    if (expected != data.samples.size())
+        throw std::invalid_argument(std::string(caller) + ": sample count does not match the edge mask");
+}
+
+} // namespace
 
 void HermiteLeaf::rebuildPrefixAndMask()
 {
@@ -26,10 +40,7 @@ void HermiteLeaf::rebuildPrefixAndMask()
 
 void HermiteLeaf::assign(HermiteLeafData&& data)
 {
-    std::size_t expected = 0;
-    for (uint64_t w : data.edgeBits) expected += std::size_t(__builtin_popcountll(w));
-    if (expected != data.samples.size())
-        throw std::invalid_argument("HermiteLeaf::assign: sample count does not match the edge mask");
+    requireSamplesMatchMask(data, "HermiteLeaf::assign");
     std::copy(data.material.begin(), data.material.end(), this->buffer().data());
     edgeBits_ = data.edgeBits;
     samples_ = std::move(data.samples);
@@ -51,10 +62,7 @@ std::optional<BlockChange> HermiteLeaf::changeTo(const HermiteLeafData& data) co
     const MaterialValue* materials = this->buffer().data();
     if (edgeBits_ == data.edgeBits && samples_ == data.samples && std::equal(data.material.begin(), data.material.end(), materials))
         return std::nullopt;
-    std::size_t expected = 0;
-    for (uint64_t w : data.edgeBits) expected += std::size_t(__builtin_popcountll(w));
-    if (expected != data.samples.size())
-        throw std::invalid_argument("HermiteLeaf::changeTo: sample count does not match the edge mask");
+    requireSamplesMatchMask(data, "HermiteLeaf::changeTo");
     // Bit v of word v / 64: voxel v changes.
     std::array<uint64_t, kLeafVoxels / 64> changed{};
     auto mark = [&](Index voxel) { changed[voxel >> 6] |= uint64_t(1) << (voxel & 63); };

@@ -12,12 +12,6 @@ uint16_t quantizeOffset(double t)
     return static_cast<uint16_t>(t * 65535.0 + 0.5); // t is in [0,1]: truncation rounds to nearest
 }
 
-namespace {
-
-double signNotZero(double v) { return v >= 0.0 ? 1.0 : -1.0; }
-
-} // namespace
-
 namespace quantize_detail {
 
 // Every code's octahedral coordinate, computed at compile time with the same IEEE operations a
@@ -31,14 +25,9 @@ constexpr std::array<double, kNormalMax + 1> kCodeCoords = [] {
 
 } // namespace quantize_detail
 
-namespace {
-
-double codeToCoord(int q) { return quantize_detail::kCodeCoords[q]; }
-
-} // namespace
-
 std::array<uint16_t, 2> quantizeNormal(const std::array<double, 3>& nIn)
 {
+    using namespace quantize_detail;
     double len = std::sqrt(nIn[0] * nIn[0] + nIn[1] * nIn[1] + nIn[2] * nIn[2]);
     std::array<double, 3> n = len > 0.0 && std::isfinite(len)
                                   ? std::array<double, 3>{nIn[0] / len, nIn[1] / len, nIn[2] / len}
@@ -54,7 +43,7 @@ std::array<uint16_t, 2> quantizeNormal(const std::array<double, 3>& nIn)
     // The nearest code is almost always good enough; only when it is not are its neighbours searched
     // for the code with the smallest worst component error (which bounds the error by 1/1782).
     auto errorOf = [&n](int qu, int qv) {
-        const auto d = quantize_detail::decodeOctahedral(codeToCoord(qu), codeToCoord(qv));
+        const auto d = decodeOctahedral(kCodeCoords[qu], kCodeCoords[qv]);
         return std::max({std::fabs(d[0] - n[0]), std::fabs(d[1] - n[1]), std::fabs(d[2] - n[2])});
     };
     const double fu = (u + 1.0) * 0.5 * kNormalMax, fv = (v + 1.0) * 0.5 * kNormalMax;

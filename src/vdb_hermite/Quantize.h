@@ -44,13 +44,16 @@ namespace quantize_detail {
 
 extern const std::array<double, kNormalMax + 1> kCodeCoords; // code q: q / kNormalMax * 2 - 1
 
+/// +1 or -1, never 0: the octahedral fold's sign.
+inline double signNotZero(double v) { return v >= 0.0 ? 1.0 : -1.0; }
+
 inline std::array<double, 3> decodeOctahedral(double u, double v)
 {
     double x = u, y = v;
     const double z = 1.0 - std::fabs(u) - std::fabs(v);
     if (z < 0.0) {
-        x = (1.0 - std::fabs(v)) * (u >= 0.0 ? 1.0 : -1.0);
-        y = (1.0 - std::fabs(u)) * (v >= 0.0 ? 1.0 : -1.0);
+        x = (1.0 - std::fabs(v)) * signNotZero(u);
+        y = (1.0 - std::fabs(u)) * signNotZero(v);
     }
     const double inv = 1.0 / std::sqrt(x * x + y * y + z * z);
     return {x * inv, y * inv, z * inv};
