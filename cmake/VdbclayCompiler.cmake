@@ -14,3 +14,15 @@ endif()
 
 # No code here reads errno after a math call; without this, every std::sqrt becomes a library call.
 add_compile_options(-fno-math-errno)
+
+# Sanitizer builds (the randomized checks and the fuzzers in CI): AddressSanitizer and UBSan on every
+# target; with clang, the libraries also get libFuzzer's coverage hooks so fuzz targets can link them.
+option(VDBCLAY_SANITIZE "Build with AddressSanitizer and UndefinedBehaviorSanitizer" OFF)
+if(VDBCLAY_SANITIZE)
+  set(vdbclay_sanitizers -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer)
+  if(CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    list(APPEND vdbclay_sanitizers -fsanitize=fuzzer-no-link)
+  endif()
+  add_compile_options(${vdbclay_sanitizers})
+  add_link_options(-fsanitize=address,undefined)
+endif()

@@ -613,9 +613,14 @@ private:
         poly.crossing[0] = 0, poly.crossing[1] = -1, poly.crossing[2] = 1;
         poly.count = 3;
 
-        // Kept to this square and those beside it (offset du, dv in square widths) whose voxel
-        // corners all have the other sign.
+        // Kept to this square and the bands beside it (offset du, dv) whose voxel corners all have the
+        // other sign. A band is as wide as the square but at most two voxels: a square lies in its leaf's
+        // cells, so two voxels past it stay within the meshing reach (a wider band would read past the
+        // leaves around and past what an edit's re-meshing accounts for).
         const int width = sq.width, u0 = sq.minCorner[u], v0 = sq.minCorner[v];
+        const int band = std::min(width, kMeshingReach.high - kLeafDim);
+        auto bandLow = [&](int start, int d) { return d < 0 ? start - band : (d == 0 ? start : start + width); };
+        auto bandHigh = [&](int start, int d) { return d < 0 ? start : (d == 0 ? start + width : start + width + band); };
         auto cornerSolid = [&](int i, int j) {
             Coord corner;
             corner[axis] = sq.minCorner[axis];
@@ -624,16 +629,16 @@ private:
             return ctx_.material(corner).solid();
         };
         auto clear = [&](int du, int dv) {
-            for (int i = u0 + du * width; i <= u0 + (du + 1) * width; ++i)
-                for (int j = v0 + dv * width; j <= v0 + (dv + 1) * width; ++j)
+            for (int i = bandLow(u0, du); i <= bandHigh(u0, du); ++i)
+                for (int j = bandLow(v0, dv); j <= bandHigh(v0, dv); ++j)
                     if (cornerSolid(i, j) == solidTip) return false;
             return true;
         };
-        const double w = width * vs, lo0 = u0 * vs, lo1 = v0 * vs;
-        if (!poly.clip({1.0, 0.0}, lo0 + w * (clear(1, 0) ? 2.0 : 1.0)) ||
-            !poly.clip({-1.0, 0.0}, -(lo0 - (clear(-1, 0) ? w : 0.0))) ||
-            !poly.clip({0.0, 1.0}, lo1 + w * (clear(0, 1) ? 2.0 : 1.0)) ||
-            !poly.clip({0.0, -1.0}, -(lo1 - (clear(0, -1) ? w : 0.0))))
+        const double w = width * vs, lo0 = u0 * vs, lo1 = v0 * vs, bw = band * vs;
+        if (!poly.clip({1.0, 0.0}, lo0 + w + (clear(1, 0) ? bw : 0.0)) ||
+            !poly.clip({-1.0, 0.0}, -(lo0 - (clear(-1, 0) ? bw : 0.0))) ||
+            !poly.clip({0.0, 1.0}, lo1 + w + (clear(0, 1) ? bw : 0.0)) ||
+            !poly.clip({0.0, -1.0}, -(lo1 - (clear(0, -1) ? bw : 0.0))))
             return 0;
 
         // Clipped by each crossing plane around the square, as seen in the face's plane, on the wedge's
@@ -667,8 +672,8 @@ private:
         const int du = minU < lo0 - margin ? -1 : (maxU > lo0 + w + margin ? 1 : 0);
         const int dv = minV < lo1 - margin ? -1 : (maxV > lo1 + w + margin ? 1 : 0);
         if (du != 0 && dv != 0 && !clear(du, dv)) return 0;
-        for (int i = u0 - width; i <= u0 + 2 * width; ++i)
-            for (int j = v0 - width; j <= v0 + 2 * width; ++j) {
+        for (int i = u0 - band; i <= u0 + width + band; ++i)
+            for (int j = v0 - band; j <= v0 + width + band; ++j) {
                 const Vec2 q{i * vs, j * vs};
                 if (q.x < minU || q.x > maxU || q.y < minV || q.y > maxV) continue;
                 bool inside = true;
