@@ -100,7 +100,7 @@ int runDemo(const DemoOptions& o)
     meshOptions.kind = MesherKind::CubicalMarchingSquares;
     const Mesh mesh = meshVolume(volume, meshOptions);
     const double meshSeconds = secondsSince(meshStart);
-    const MeshTopology topology = analyzeTopology(mesh);
+    const MeshTopology topology = analyzeTopology(mesh, kMergeDistanceVoxels * volume.voxelSize());
     writeMesh(mesh, volume.materials(), objPath);
     writeMesh(mesh, volume.materials(), plyPath);
     const double seconds = secondsSince(start);

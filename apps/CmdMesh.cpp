@@ -73,7 +73,7 @@ int runMesh(const MeshCommandOptions& o)
     const auto start = std::chrono::steady_clock::now();
     const Volume volume = loadVolume(o.input);
     const Mesh mesh = meshVolume(volume, options);
-    const MeshTopology topology = analyzeTopology(mesh);
+    const MeshTopology topology = analyzeTopology(mesh, kMergeDistanceVoxels * volume.voxelSize());
     writeMesh(mesh, volume.materials(), o.output);
     const double seconds = secondsSince(start);
 
@@ -84,13 +84,22 @@ int runMesh(const MeshCommandOptions& o)
                    {"vertices", mesh.vertexCount()},
                    {"triangles", mesh.triangleCount()},
                    {"watertight", topology.watertight()},
+                   {"topology",
+                    {{"boundary_edges", topology.boundaryEdges},
+                     {"non_manifold_edges", topology.nonManifoldEdges},
+                     {"misoriented_edges", topology.misorientedEdges},
+                     {"degenerate_triangles", topology.degenerateTriangles},
+                     {"pinched_vertices", topology.pinchedVertices},
+                     {"components", topology.components}}},
                    {"seconds", seconds}});
     } else {
         std::string closed = topology.watertight() ? "yes" : "no";
         if (!topology.watertight()) {
             closed += " (" + std::to_string(topology.boundaryEdges) + " boundary, " +
                       std::to_string(topology.nonManifoldEdges) + " non-manifold, " +
-                      std::to_string(topology.misorientedEdges) + " misoriented edges)";
+                      std::to_string(topology.misorientedEdges) + " misoriented edges, " +
+                      std::to_string(topology.degenerateTriangles) + " zero-area triangles, " +
+                      std::to_string(topology.pinchedVertices) + " pinched vertices)";
         }
         printFields({{"meshed", o.input + " -> " + o.output},
                      {"mesher", mesherName(options.kind)},

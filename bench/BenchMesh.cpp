@@ -227,7 +227,7 @@ RowResult measure(const std::string& key, const std::string& label, const std::v
         mesh, [&shape](const Point3d& p) { return shape.sdf(Vec3d(p[0], p[1], p[2])); }, sampling);
     r.meanDistance = q.meanDistance;
     r.maxDistance = q.maxDistance;
-    r.watertight = analyzeTopology(mesh).watertight();
+    r.watertight = analyzeTopology(mesh, kMergeDistanceVoxels * kVoxelSize).watertight();
     return r;
 }
 

@@ -70,9 +70,10 @@ void requireSameChunks(const MeshChunkSet& incremental, const MeshChunkSet& full
 
 void requireClosed(const Mesh& mesh)
 {
-    const MeshTopology topo = analyzeTopology(mesh);
+    const MeshTopology topo = analyzeTopology(mesh, kMergeDistanceVoxels); // every volume here has 1-unit voxels
     INFO("boundary " << topo.boundaryEdges << ", non-manifold " << topo.nonManifoldEdges << ", misoriented "
-                     << topo.misorientedEdges << ", degenerate " << topo.degenerateTriangles);
+                     << topo.misorientedEdges << ", degenerate " << topo.degenerateTriangles << ", pinched "
+                     << topo.pinchedVertices);
     REQUIRE(mesh.triangleCount() > 0);
     REQUIRE(topo.watertight());
     REQUIRE(topo.degenerateTriangles == 0);

@@ -34,7 +34,7 @@ MeshReport meshReport(const Volume& v)
     MeshOptions options;
     options.kind = MesherKind::MarchingCubes;
     const Mesh mesh = meshVolume(v, options);
-    return {analyzeTopology(mesh), enclosedVolume(mesh), mesh.triangleCount()};
+    return {analyzeTopology(mesh, kMergeDistanceVoxels * v.voxelSize()), enclosedVolume(mesh), mesh.triangleCount()};
 }
 
 /// The Marching Cubes mesh is closed and encloses `expected` within the relative tolerance.

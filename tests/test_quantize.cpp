@@ -39,12 +39,13 @@ TEST_CASE("offset quantization error over 1e6 random offsets", "[quantize]")
 {
     std::mt19937_64 rng(0x5eed0001);
     std::uniform_real_distribution<double> uni(0.0, 1.0);
+    const double lo = kOffsetMinCode / 65535.0, hi = kOffsetMaxCode / 65535.0; // inside the corner margin
     double worst = 0.0;
     for (int i = 0; i < 1000000; ++i) {
-        const double t = uni(rng);
+        const double t = lo + (hi - lo) * uni(rng);
         worst = std::max(worst, std::fabs(dequantizeOffset(quantizeOffset(t)) - t));
     }
-    for (double t : {0.0, 1.0, 0.5, 1.0 / 65535.0, 0.5 / 65535.0, 1.0 - 0.5 / 65535.0}) {
+    for (double t : {lo, hi, 0.5, lo + 0.5 / 65535.0, hi - 0.5 / 65535.0}) {
         worst = std::max(worst, std::fabs(dequantizeOffset(quantizeOffset(t)) - t));
     }
     INFO("worst offset error " << worst);
@@ -54,21 +55,26 @@ TEST_CASE("offset quantization error over 1e6 random offsets", "[quantize]")
     CHECK(worst <= 0.5 / 65535.0 + 1e-12);
 }
 
-TEST_CASE("offset quantization clamps out-of-range input", "[quantize]")
+TEST_CASE("offset quantization keeps crossings off the voxel corners", "[quantize]")
 {
-    CHECK(quantizeOffset(0.0) == 0);
-    CHECK(quantizeOffset(1.0) == 65535);
-    CHECK(quantizeOffset(-0.25) == 0);
-    CHECK(quantizeOffset(7.0) == 65535);
-    CHECK(quantizeOffset(std::numeric_limits<double>::quiet_NaN()) == 0);
-    CHECK(dequantizeOffset(0) == 0.0);
-    CHECK(dequantizeOffset(65535) == 1.0);
+    CHECK(quantizeOffset(0.0) == kOffsetMinCode);
+    CHECK(quantizeOffset(1.0) == kOffsetMaxCode);
+    CHECK(quantizeOffset(-0.25) == kOffsetMinCode);
+    CHECK(quantizeOffset(7.0) == kOffsetMaxCode);
+    CHECK(quantizeOffset(std::numeric_limits<double>::quiet_NaN()) == kOffsetMinCode);
+    CHECK(quantizeOffset(kOffsetMinCode / 65535.0) == kOffsetMinCode);
+    CHECK(quantizeOffset((kOffsetMinCode + 1) / 65535.0) == kOffsetMinCode + 1);
+    // Codes on or near the corners (a foreign file) decode as the nearest code inside the margin.
+    CHECK(dequantizeOffset(0) == kOffsetMinCode / 65535.0);
+    CHECK(dequantizeOffset(65535) == kOffsetMaxCode / 65535.0);
+    CHECK(dequantizeOffset(kOffsetMinCode) > 2.4e-4);
+    CHECK(dequantizeOffset(kOffsetMaxCode) < 1.0 - 2.4e-4);
 }
 
 TEST_CASE("every offset code round-trips exactly", "[quantize]")
 {
     int mismatches = 0;
-    for (int q = 0; q <= 65535; ++q) {
+    for (int q = kOffsetMinCode; q <= kOffsetMaxCode; ++q) {
         const uint16_t code = uint16_t(q);
         if (quantizeOffset(dequantizeOffset(code)) != code) ++mismatches;
         // The float the mesher sees maps back to the same code too.

@@ -20,6 +20,7 @@
 // is the crossing of the voxel edge where its material changes: the same point, with the same key, at
 // every width.
 #include "mesher/CellGrid.h"
+#include "mesher/MeshMetrics.h"
 #include "mesher/CellOctree.h"
 
 #include <Eigen/Dense>
@@ -139,6 +140,11 @@ void accumulate(std::array<double, 3>& sum, const std::array<T, 3>& v)
 }
 
 } // namespace
+
+/// Sharp feature points keep this far (in voxels) inside their square or cell, so that points of
+/// neighbouring squares and cells never meet on a shared side. Half the crossings' corner margin
+/// (kOffsetMarginCode), ten times the distance below which analyzeTopology merges vertices.
+constexpr double kFeatureInsetVoxels = 1e-4;
 
 /// Buffers reused from cell to cell and leaf to leaf.
 struct CubicalMarchingSquaresMesher::Buffers {
@@ -263,9 +269,10 @@ struct CubicalMarchingSquaresMesher::Buffers {
 
     /// Fans a loop of boundary vertices from a new inner vertex at `centre`; triangle i, from boundary
     /// vertex i to the next, gets `materials[i]`.
-    void addFan(const std::array<double, 3>& centre, const std::array<double, 3>& normalSum, const uint32_t* ids,
+    void addFan(std::array<double, 3> centre, const std::array<double, 3>& normalSum, const uint32_t* ids,
                 const MaterialId* materials, std::size_t n)
     {
+        keepFanOpen(centre, ids, n);
         const double length = std::sqrt(normalSum[0] * normalSum[0] + normalSum[1] * normalSum[1] + normalSum[2] * normalSum[2]);
         const double scale = length > 0.0 ? 1.0 / length : 0.0;
         const uint32_t c = addVertex(kUnsharedVertex, {float(centre[0]), float(centre[1]), float(centre[2])},
@@ -277,6 +284,41 @@ struct CubicalMarchingSquaresMesher::Buffers {
             mesh.triangleMaterials.push_back(materials[i]);
         }
     }
+
+    /// A sharp vertex can land on the line through two neighbouring points of its loop (a feature on a
+    /// lattice line, as where a cylinder's rim touches one), which would fan a triangle of zero area.
+    /// The vertex then moves towards the loop's mean point, a little first, until every triangle of its
+    /// fan has an area (the mean point itself leaves the loop as it is, if even that fails).
+    void keepFanOpen(std::array<double, 3>& centre, const uint32_t* ids, std::size_t n) const
+    {
+        const auto& positions = chunk.mesh.positions;
+        auto fanIsOpen = [&](const std::array<double, 3>& exact) {
+            // Judged as stored: the vertex becomes a float, which can put it back on the line.
+            const std::array<double, 3> c{float(exact[0]), float(exact[1]), float(exact[2])};
+            for (std::size_t i = 0; i < n; ++i) {
+                const auto& p = positions[ids[i]];
+                const auto& q = positions[ids[i + 1 < n ? i + 1 : 0]];
+                const double ux = p[0] - c[0], uy = p[1] - c[1], uz = p[2] - c[2];
+                const double vx = q[0] - c[0], vy = q[1] - c[1], vz = q[2] - c[2];
+                const double x = uy * vz - uz * vy, y = uz * vx - ux * vz, z = ux * vy - uy * vx;
+                if (x * x + y * y + z * z < minFanDoubledArea * minFanDoubledArea) return false;
+            }
+            return true;
+        };
+        if (fanIsOpen(centre)) return;
+        std::array<double, 3> mean{};
+        for (std::size_t i = 0; i < n; ++i)
+            for (int a = 0; a < 3; ++a) mean[a] += positions[ids[i]][a] / double(n);
+        for (double step : {0.01, 0.1, 0.5, 1.0}) {
+            std::array<double, 3> moved;
+            for (int a = 0; a < 3; ++a) moved[a] = centre[a] + step * (mean[a] - centre[a]);
+            if (fanIsOpen(moved) || step == 1.0) {
+                centre = moved;
+                return;
+            }
+        }
+    }
+    double minFanDoubledArea = 0.0; // world units squared; set by the mesher from its voxel size
 
     /// Copies the chunk into `out`; copy-assignment reuses out's vectors, and the buffers keep theirs.
     void finishLeaf(MeshChunk& out) const { out = chunk; }
@@ -537,8 +579,10 @@ private:
         }
         const double vs = ctx_.voxelSize, extent = sq.width * vs;
         const double lo0 = sq.minCorner[(axis + 1) % 3] * vs, lo1 = sq.minCorner[(axis + 2) % 3] * vs;
-        const double eps = 1e-9 * vs;
-        if (p.x >= lo0 - eps && p.x <= lo0 + extent + eps && p.y >= lo1 - eps && p.y <= lo1 + extent + eps) {
+        // Strictly inside the square: a point on its side or corner would coincide with the points of
+        // the squares around that side (a cone's apex on a lattice line gives each of them one there).
+        const double inset = kFeatureInsetVoxels * vs;
+        if (p.x > lo0 + inset && p.x < lo0 + extent - inset && p.y > lo1 + inset && p.y < lo1 + extent - inset) {
             shape.points[shape.count++] = p;
             shape.plausible = true;
         }
@@ -690,10 +734,22 @@ private:
         for (int i = 0; i < poly.count; ++i)
             if (poly.crossing[i] == 0) start = i;
         if (start < 0) return 0;
+        // A point on a lattice line of the face (where the chain is clipped at a side, or a wedge tip
+        // on a voxel edge) moves kFeatureInsetVoxels off it, towards the square's centre: the chain of a
+        // square at right angles along that line can end on the same point, and the surface would pinch
+        // there (a wall thinner than a voxel).
+        const double centreU = lo0 + 0.5 * w, centreV = lo1 + 0.5 * w;
+        auto offLatticeLines = [&](Vec2 q) {
+            const double inset = kFeatureInsetVoxels * vs;
+            const double lineU = std::round(q.x / vs) * vs, lineV = std::round(q.y / vs) * vs;
+            if (std::fabs(q.x - lineU) < inset) q.x = lineU + (centreU > lineU ? inset : -inset);
+            if (std::fabs(q.y - lineV) < inset) q.y = lineV + (centreV > lineV ? inset : -inset);
+            return q;
+        };
         int n = 0;
         Vec2 previous = pa;
         for (int k = 1; k < poly.count; ++k) {
-            const Vec2& q = poly.at[(start + k) % poly.count];
+            const Vec2 q = offLatticeLines(poly.at[(start + k) % poly.count]);
             if (poly.crossing[(start + k) % poly.count] == 1) break;
             if (std::hypot(q.x - previous.x, q.y - previous.y) < margin) continue;
             if (n == SegmentShape::kMaxPoints) return 0;
@@ -827,7 +883,12 @@ private:
                 const double fa = n.x * (poly[k].x - c.x) + n.y * (poly[k].y - c.y);
                 const double fb = n.x * (poly[k + 1].x - c.x) + n.y * (poly[k + 1].y - c.y);
                 if ((fa < 0.0) == (fb < 0.0) || fa == fb) continue;
-                const double t = fa / (fa - fb);
+                // Kept off the piece's ends, which are other vertices: an interface through a sharp
+                // point or a crossing would put two vertices at one position.
+                const double pieceLength = std::hypot(poly[k + 1].x - poly[k].x, poly[k + 1].y - poly[k].y);
+                const double keepOff = kFeatureInsetVoxels * ctx_.voxelSize / std::max(pieceLength, 1e-300);
+                if (keepOff >= 0.5) break;
+                const double t = std::clamp(fa / (fa - fb), keepOff, 1.0 - keepOff);
                 const Vec2 hit{poly[k].x + t * (poly[k + 1].x - poly[k].x), poly[k].y + t * (poly[k + 1].y - poly[k].y)};
                 points.insert(k, FacePoint{hit, toWorld(hit), 0, true, sq.mats[p].id, sq.mats[q].id, interface.normal});
                 break;
@@ -898,11 +959,14 @@ private:
         return solution;
     }
 
+    /// The cell, inset by kFeatureInsetVoxels: a sharp vertex on a face, edge or corner of its cell
+    /// (a cone's apex on a lattice line) would coincide with the vertices of the cells beside it.
     void cellBounds(Eigen::Vector3d& lo, Eigen::Vector3d& hi) const
     {
+        const double inset = kFeatureInsetVoxels * ctx_.voxelSize;
         for (int k = 0; k < 3; ++k) {
-            lo[k] = base_[k] * ctx_.voxelSize;
-            hi[k] = (base_[k] + width_) * ctx_.voxelSize;
+            lo[k] = base_[k] * ctx_.voxelSize + inset;
+            hi[k] = (base_[k] + width_) * ctx_.voxelSize - inset;
         }
     }
 
@@ -1197,6 +1261,8 @@ CubicalMarchingSquaresMesher::CubicalMarchingSquaresMesher(double voxelSize, dou
     : voxelSize_(voxelSize), cosSharp_(std::cos(sharpAngleDegrees * M_PI / 180.0)), walkEveryCell_(walkEveryCell),
       buffers_(std::make_unique<Buffers>())
 {
+    // Ten times analyzeTopology's zero-area bound, so a fan it accepts passes that test after rounding.
+    buffers_->minFanDoubledArea = 10.0 * kMergeDistanceVoxels * kMergeDistanceVoxels * voxelSize * voxelSize;
 }
 
 CubicalMarchingSquaresMesher::~CubicalMarchingSquaresMesher() = default;

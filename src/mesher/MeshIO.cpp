@@ -34,7 +34,7 @@ void writeObj(std::ostream& os, const Mesh& mesh, const MaterialTable& materials
     for (std::size_t v = 0; v < mesh.vertexCount(); ++v) {
         const auto& p = mesh.positions[v];
         const auto c = colorOf(materials, mesh.materials[v]);
-        std::snprintf(line, sizeof(line), "v %.6g %.6g %.6g %.4g %.4g %.4g\n", p[0], p[1], p[2], c[0] / 255.0,
+        std::snprintf(line, sizeof(line), "v %.9g %.9g %.9g %.4g %.4g %.4g\n", p[0], p[1], p[2], c[0] / 255.0,
                       c[1] / 255.0, c[2] / 255.0);
         os << line;
     }

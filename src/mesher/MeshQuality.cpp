@@ -163,9 +163,10 @@ Stats sampleAgainst(const Mesh& mesh, const TriangleLocator& target, double spac
     });
 }
 
-void fillCommon(const Mesh& mesh, MeshQuality& q)
+void fillCommon(const Mesh& mesh, const SurfaceSampling& sampling, double spacing, MeshQuality& q)
 {
-    const MeshTopology topo = analyzeTopology(mesh);
+    const double merge = sampling.mergeDistance > 0.0 ? sampling.mergeDistance : kMergeDistanceVoxels * spacing;
+    const MeshTopology topo = analyzeTopology(mesh, merge);
     q.triangles = mesh.triangleCount();
     q.watertight = topo.watertight();
     q.manifold = topo.nonManifoldEdges == 0;
@@ -362,9 +363,9 @@ MeshQuality measureAgainstSdf(const Mesh& mesh, const SignedDistanceFn& sdf, con
                               const SdfGradientFn& gradient)
 {
     MeshQuality q;
-    fillCommon(mesh, q);
     double h = sampling.spacing > 0.0 ? sampling.spacing : meanEdgeLength(mesh);
     if (!(h > 0.0)) h = 1.0;
+    fillCommon(mesh, sampling, h, q);
     const double triSpacing = sampling.triangleSpacing > 0.0 ? sampling.triangleSpacing : 0.5 * h;
     const double tol = sampling.projectionTolerance > 0.0 ? sampling.projectionTolerance : 1e-6 * h;
     const double step = sampling.gradientStep > 0.0 ? sampling.gradientStep : 1e-4 * h;
@@ -448,9 +449,9 @@ MeshQuality measureAgainstSdf(const Mesh& mesh, const SignedDistanceFn& sdf, con
 MeshQuality measureAgainstMesh(const Mesh& mesh, const Mesh& reference, const SurfaceSampling& sampling)
 {
     MeshQuality q;
-    fillCommon(mesh, q);
     double h = sampling.spacing > 0.0 ? sampling.spacing : meanEdgeLength(reference);
     if (!(h > 0.0)) h = 1.0;
+    fillCommon(mesh, sampling, h, q);
     const double triSpacing = sampling.triangleSpacing > 0.0 ? sampling.triangleSpacing : 0.5 * h;
     const TriangleLocator meshLocator(mesh), referenceLocator(reference);
     const Stats to = sampleAgainst(mesh, referenceLocator, triSpacing, sampling.maxTriangleSubdivisions);

@@ -39,6 +39,9 @@ struct SurfaceSampling {
     double projectionTolerance = 0.0;
     /// Step of the central differences used when no gradient function is given; 0 picks 1e-4 * spacing.
     double gradientStep = 0.0;
+    /// Vertices closer than this are one point for the closedness test (analyzeTopology); 0 picks
+    /// kMergeDistanceVoxels of `spacing` (or of the mean edge length).
+    double mergeDistance = 0.0;
 };
 
 struct MeshQuality {

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
+#include <utility>
 
 namespace vdbclay {
 
@@ -30,12 +32,25 @@ double smoothMin(double a, double b, double k)
     return std::min(a, b) - h * h * k * 0.25;
 }
 
+/// Cosine and sine of an angle in degrees, exact for multiples of 90: a box turned by 90 degrees keeps its
+/// faces on the lattice planes it was on (cos(pi / 2) is 6e-17 in floating point, not 0).
+std::pair<double, double> cosSinDegrees(double degrees)
+{
+    const double turns = degrees / 90.0;
+    if (turns == std::floor(turns) && std::fabs(turns) < 1e15) {
+        constexpr double kCos[4] = {1.0, 0.0, -1.0, 0.0}, kSin[4] = {0.0, 1.0, 0.0, -1.0};
+        const int quarter = int(((int64_t(turns) % 4) + 4) % 4);
+        return {kCos[quarter], kSin[quarter]};
+    }
+    const double r = degrees * (kPi / 180.0);
+    return {std::cos(r), std::sin(r)};
+}
+
 Mat3d rotationFromEuler(const Vec3d& degrees)
 {
-    const Vec3d r = degrees * (kPi / 180.0);
-    const double cx = std::cos(r.x()), sx = std::sin(r.x());
-    const double cy = std::cos(r.y()), sy = std::sin(r.y());
-    const double cz = std::cos(r.z()), sz = std::sin(r.z());
+    const auto [cx, sx] = cosSinDegrees(degrees.x());
+    const auto [cy, sy] = cosSinDegrees(degrees.y());
+    const auto [cz, sz] = cosSinDegrees(degrees.z());
     const Mat3d rx(1.0, 0.0, 0.0, 0.0, cx, -sx, 0.0, sx, cx);
     const Mat3d ry(cy, 0.0, sy, 0.0, 1.0, 0.0, -sy, 0.0, cy);
     const Mat3d rz(cz, -sz, 0.0, sz, cz, 0.0, 0.0, 0.0, 1.0);

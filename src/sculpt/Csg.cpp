@@ -36,12 +36,22 @@ constexpr std::array<int, 27> kCubeOffset = [] {
 
 using ConstAccessor = openvdb::tree::ValueAccessor<const HermiteTree, /*IsSafe=*/false>;
 
+/// Points whose brush distance is within this many voxels of zero lie on the brush's surface, and a
+/// point on the surface is inside: every op takes the brush as a closed set. Two solids that touch on
+/// the lattice (a face on a shared lattice plane, spheres through one lattice point) therefore share the
+/// corners on the contact and fuse, and removing or intersecting with a brush whose surface runs through
+/// corners treats those corners as the brush's own, so a difference leaves no sheet of corners behind.
+/// The band absorbs the rounding of distances at lattice points (coordinates times a voxel size like
+/// 0.1) and is far below the offset quantization.
+constexpr double kOnSurfaceVoxels = 1e-9;
+
 /// Everything a block task needs to know about the edit, read-only during the parallel phase.
 struct EditContext {
     const SdfField& field;
     CsgMode mode;
     MaterialValue material;
     double voxelSize;
+    double onSurface; // kOnSurfaceVoxels in world units
     std::vector<double> erodeOffset; // per material id; empty unless eroding
     double maxErodeOffset = 0.0;
 
@@ -76,6 +86,13 @@ struct EditContext {
     }
 
     Vec3d world(const Coord& c) const { return Vec3d(c.x(), c.y(), c.z()) * voxelSize; }
+    /// The brush distance shifted so that "inside" is "below zero" for points on the surface too.
+    double distance(const Vec3d& p) const { return field.distance(p) - onSurface; }
+    void distances(const Vec3d* points, double* out, std::size_t count) const
+    {
+        field.distances(points, out, count);
+        for (std::size_t i = 0; i < count; ++i) out[i] -= onSurface;
+    }
 };
 
 enum class RegionClass { Outside, Inside, Mixed };
@@ -135,7 +152,7 @@ double findCrossing(const EditContext& ctx, const Vec3d& p0, const Vec3d& edge, 
         if (a >= b) t = 0.5 * (a + b);
         else if (bisectNext) t = 0.5 * (a + b);
         else t = std::clamp(lo + (hi - lo) * flo / (flo - fhi), a, b);
-        const double ft = ctx.field.distance(p0 + edge * t) + offset;
+        const double ft = ctx.distance(p0 + edge * t) + offset;
         if (std::fabs(ft) < 1e-6 * len) return t;
         if ((ft < 0.0) == (flo < 0.0)) lo = t, flo = ft;
         else hi = t, fhi = ft;
@@ -181,7 +198,7 @@ bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValu
     // Two materials: two runs meeting at the old crossing, each of which the brush may split.
     struct Segment { double ta, tb, fa, fb; MaterialValue m; };
     const double tOld = old ? dequantizeOffset(old->offset) : 0.5;
-    const double dOld = ctx.field.distance(p0 + edge * tOld);
+    const double dOld = ctx.distance(p0 + edge * tOld);
     const Segment segs[2] = {{0.0, tOld, d0, dOld, m0}, {tOld, 1.0, dOld, d1, m1}};
     constexpr int segCount = 2;
 
@@ -295,7 +312,7 @@ BlockResult computeBlockFor(const EditContext& ctx, const BlockTask& task, Const
     double values[27];
     for (int n = 0; n < 27; ++n) points[n] = ctx.world(o.offsetBy(n / 9 * 3 + 1, (n / 3) % 3 * 3 + 1, n % 3 * 3 + 1));
     double cubeCentre[27];
-    ctx.field.distances(points, cubeCentre, 27);
+    ctx.distances(points, cubeCentre, 27);
     for (int c = 0; c < 27; ++c) {
         const int ci = c / 9 * 3, cj = (c / 3) % 3 * 3, ck = c % 3 * 3;
         const double dc = cubeCentre[c];
@@ -304,7 +321,7 @@ BlockResult computeBlockFor(const EditContext& ctx, const BlockTask& task, Const
             for (int n = 0; n < 27; ++n) values[n] = dc > 0.0 ? dc - offsetLength[n] : dc + offsetLength[n];
         } else {
             for (int n = 0; n < 27; ++n) points[n] = ctx.world(o.offsetBy(ci + n / 9, cj + (n / 3) % 3, ck + n % 3));
-            ctx.field.distances(points, values, 27);
+            ctx.distances(points, values, 27);
         }
         const int cubeBase = footIndex(ci, cj, ck);
         for (int n = 0; n < 27; ++n) {
@@ -524,7 +541,8 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
     if (op.mode == CsgMode::Erode && !(op.strength >= 0.0 && op.strength <= 1.0))
         throw std::invalid_argument("erode strength must lie in [0,1]");
 
-    EditContext ctx{brush, op.mode, MaterialValue{op.material}, volume.voxelSize(), {}, 0.0};
+    EditContext ctx{brush, op.mode, MaterialValue{op.material}, volume.voxelSize(), kOnSurfaceVoxels * volume.voxelSize(),
+                    {}, 0.0};
     if (op.mode == CsgMode::Erode) {
         const double depth = op.erodeDepth ? *op.erodeDepth : brush.innerRadius();
         if (!(depth > 0.0) || !std::isfinite(depth))

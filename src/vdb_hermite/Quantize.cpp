@@ -7,9 +7,10 @@ namespace vdbclay {
 
 uint16_t quantizeOffset(double t)
 {
-    if (!(t >= 0.0)) t = 0.0; // also maps NaN to 0
-    if (t > 1.0) t = 1.0;
-    return static_cast<uint16_t>(t * 65535.0 + 0.5); // t is in [0,1]: truncation rounds to nearest
+    constexpr double lo = kOffsetMinCode / 65535.0, hi = kOffsetMaxCode / 65535.0;
+    if (!(t >= lo)) t = lo; // also maps NaN to the lowest code
+    if (t > hi) t = hi;
+    return static_cast<uint16_t>(t * 65535.0 + 0.5); // t is positive: truncation rounds to nearest
 }
 
 namespace quantize_detail {

@@ -1,7 +1,8 @@
 // Quantization of Hermite samples: the crossing offset along a voxel edge and the unit normal there.
 //
 // A sample is three 16-bit words (6 bytes):
-//   offset  : t in [0,1] along the edge, t = q / 65535          (error <= 1/131070 of the edge)
+//   offset  : t along the edge, t = q / 65535 with q in [16, 65519] (error <= 1/131070 of the edge
+//             inside that range, at most 16/65535 ~ 2.4e-4 at its ends)
 //   normalU : 12-bit octahedral coordinate u, stored in 16 bits (top 4 bits zero)
 //   normalV : 12-bit octahedral coordinate v
 // Why 24 bits for a normal and not 16: covering the unit sphere with codes whose worst component
@@ -29,11 +30,23 @@ struct PackedSample {
 };
 static_assert(sizeof(PackedSample) == 6, "PackedSample is part of the file format");
 
+/// A crossing never lies on a voxel corner: its offset keeps kOffsetMarginCode / 65535 (2.4e-4 voxel)
+/// from either end. A surface through a corner (a sphere through a lattice point, a box face on a lattice
+/// plane) then gives each edge from that corner its own point, 2.4e-4 voxel from the corner and at least
+/// 3.4e-4 from the others, instead of several vertices at one position; sharp features built from those
+/// crossings (a lattice-aligned box's edges and corners) lie strictly inside their cells too. The margin
+/// stays far above float rounding for meshes within ~10,000 voxels of the origin, and far below the
+/// mesher's error.
+constexpr uint16_t kOffsetMarginCode = 16;
+constexpr uint16_t kOffsetMinCode = kOffsetMarginCode, kOffsetMaxCode = 65535 - kOffsetMarginCode;
+
 constexpr int kNormalBits = 12;
 constexpr uint16_t kNormalMax = (1u << kNormalBits) - 1;
 
+/// The nearest code in [kOffsetMinCode, kOffsetMaxCode]; NaN maps to the lowest.
 uint16_t quantizeOffset(double t);
-inline double dequantizeOffset(uint16_t q) { return q / 65535.0; }
+/// Codes outside the margin (only a foreign or older file holds them) decode as the nearest valid one.
+inline double dequantizeOffset(uint16_t q) { return std::clamp(q, kOffsetMinCode, kOffsetMaxCode) / 65535.0; }
 
 /// Encodes a unit (or any non-zero) vector; picks, among the neighbouring codes, the one whose decoded
 /// normal has the smallest worst component error.
