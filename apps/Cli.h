@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -118,5 +119,16 @@ struct BenchCommandOptions {
 };
 CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& options);
 int runBenchCommand(const BenchCommandOptions& options);
+
+struct SelftestOptions {
+    uint64_t scenes = 100;
+    uint64_t seed = 1;
+    uint64_t first = 0;
+    std::string failurePath;
+    bool keepGoing = false;
+    bool json = false;
+};
+CLI::App* addSelftestCommand(CLI::App& parent, SelftestOptions& options);
+int runSelftest(const SelftestOptions& options);
 
 } // namespace vdbclay::cli

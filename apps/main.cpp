@@ -32,6 +32,7 @@ int run(int argc, char** argv)
     InfoOptions infoOptions;
     DemoOptions demoOptions;
     BenchCommandOptions benchOptions;
+    SelftestOptions selftestOptions;
 
     CLI::App* newCmd = addNewCommand(app, newOptions);
     CLI::App* sculptCmd = addSculptCommand(app, sculptOptions);
@@ -39,6 +40,7 @@ int run(int argc, char** argv)
     CLI::App* infoCmd = addInfoCommand(app, infoOptions);
     CLI::App* demoCmd = addDemoCommand(app, demoOptions);
     CLI::App* benchCmd = addBenchCommand(app, benchOptions);
+    CLI::App* selftestCmd = addSelftestCommand(app, selftestOptions);
     for (CLI::App* cmd : {newCmd, sculptCmd, meshCmd, demoCmd, benchCmd}) addThreadsOption(*cmd, threads);
     // Set after the subcommands exist: CLI11 copies the parent's footer into subcommands created later.
     app.footer("Run 'vdbclay COMMAND --help' for the options of one command.\n"
@@ -55,7 +57,7 @@ int run(int argc, char** argv)
     } catch (const CLI::ParseError& e) {
         if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-') {
             printError(std::string("unknown command '") + argv[1] +
-                       "' (expected new, sculpt, mesh, info, demo or bench; see 'vdbclay --help')");
+                       "' (expected new, sculpt, mesh, info, demo, bench or selftest; see 'vdbclay --help')");
             return kExitUsage;
         }
         std::string hint = "vdbclay --help";
@@ -76,6 +78,7 @@ int run(int argc, char** argv)
     if (*infoCmd) return runInfo(infoOptions);
     if (*demoCmd) return runDemo(demoOptions);
     if (*benchCmd) return runBenchCommand(benchOptions);
+    if (*selftestCmd) return runSelftest(selftestOptions);
     printError("no command given (see 'vdbclay --help')");
     return kExitUsage;
 }

@@ -288,7 +288,8 @@ struct CubicalMarchingSquaresMesher::Buffers {
     /// A sharp vertex can land on the line through two neighbouring points of its loop (a feature on a
     /// lattice line, as where a cylinder's rim touches one), which would fan a triangle of zero area.
     /// The vertex then moves towards the loop's mean point, a little first, until every triangle of its
-    /// fan has an area (the mean point itself leaves the loop as it is, if even that fails).
+    /// fan has an area and the vertex keeps clear of the loop's points (the mean point itself is kept
+    /// if even that fails).
     void keepFanOpen(std::array<double, 3>& centre, const uint32_t* ids, std::size_t n) const
     {
         const auto& positions = chunk.mesh.positions;
@@ -302,6 +303,7 @@ struct CubicalMarchingSquaresMesher::Buffers {
                 const double vx = q[0] - c[0], vy = q[1] - c[1], vz = q[2] - c[2];
                 const double x = uy * vz - uz * vy, y = uz * vx - ux * vz, z = ux * vy - uy * vx;
                 if (x * x + y * y + z * z < minFanDoubledArea * minFanDoubledArea) return false;
+                if (ux * ux + uy * uy + uz * uz < minFanSpacing * minFanSpacing) return false; // on a loop point
             }
             return true;
         };
@@ -319,6 +321,7 @@ struct CubicalMarchingSquaresMesher::Buffers {
         }
     }
     double minFanDoubledArea = 0.0; // world units squared; set by the mesher from its voxel size
+    double minFanSpacing = 0.0;     // world units: the least distance of a fan's vertex from its loop
 
     /// Copies the chunk into `out`; copy-assignment reuses out's vectors, and the buffers keep theirs.
     void finishLeaf(MeshChunk& out) const { out = chunk; }
@@ -751,11 +754,13 @@ private:
         for (int k = 1; k < poly.count; ++k) {
             const Vec2 q = offLatticeLines(poly.at[(start + k) % poly.count]);
             if (poly.crossing[(start + k) % poly.count] == 1) break;
-            if (std::hypot(q.x - previous.x, q.y - previous.y) < margin) continue;
+            // Clipping can leave two corners a rounding error apart: one vertex, not two.
+            const double apart = kFeatureInsetVoxels * vs;
+            if (std::hypot(q.x - previous.x, q.y - previous.y) < apart) continue;
             if (n == SegmentShape::kMaxPoints) return 0;
             out[n++] = previous = q;
         }
-        if (n > 0 && std::hypot(out[n - 1].x - pb.x, out[n - 1].y - pb.y) < margin) --n;
+        if (n > 0 && std::hypot(out[n - 1].x - pb.x, out[n - 1].y - pb.y) < kFeatureInsetVoxels * vs) --n;
         return n;
     }
 
@@ -1263,6 +1268,7 @@ CubicalMarchingSquaresMesher::CubicalMarchingSquaresMesher(double voxelSize, dou
 {
     // Ten times analyzeTopology's zero-area bound, so a fan it accepts passes that test after rounding.
     buffers_->minFanDoubledArea = 10.0 * kMergeDistanceVoxels * kMergeDistanceVoxels * voxelSize * voxelSize;
+    buffers_->minFanSpacing = kFeatureInsetVoxels * voxelSize;
 }
 
 CubicalMarchingSquaresMesher::~CubicalMarchingSquaresMesher() = default;

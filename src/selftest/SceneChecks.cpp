@@ -1,0 +1,212 @@
+#include "selftest/SceneChecks.h"
+
+#include "mesher/MeshChunkSet.h"
+#include "mesher/MeshMetrics.h"
+#include "mesher/Mesher.h"
+#include "selftest/ExactScene.h"
+#include "sculpt/StrokeScript.h"
+#include "vdb_hermite/Volume.h"
+
+#include <nlohmann/json.hpp>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <random>
+#include <sstream>
+
+namespace vdbclay {
+
+namespace {
+
+struct SceneFailure {
+    std::string what;
+};
+
+[[noreturn]] void fail(const std::string& what) { throw SceneFailure{what}; }
+
+MeshOptions mesherOptions(MesherKind kind, int maxCellWidth)
+{
+    MeshOptions o;
+    o.kind = kind;
+    o.maxCellWidth = maxCellWidth;
+    return o;
+}
+
+struct Variant {
+    const char* name;
+    MeshOptions options;
+};
+
+const Variant kVariants[] = {{"mc", mesherOptions(MesherKind::MarchingCubes, 1)},
+                             {"cms-uniform", mesherOptions(MesherKind::CubicalMarchingSquares, 1)},
+                             {"cms-adaptive", mesherOptions(MesherKind::CubicalMarchingSquares, 8)}};
+constexpr int kVariantCount = 3;
+
+struct SceneRun {
+    Volume volume;
+    Mesh meshes[kVariantCount];
+    std::vector<MeshChunk> chunks[kVariantCount];
+};
+
+/// Runs the script op by op, keeping incrementally updated chunk sets, and meshes the result.
+SceneRun runScene(const RandomScene& scene, const StrokeScript& script)
+{
+    SceneRun run{Volume(scene.voxelSize), {}, {}};
+    std::vector<MeshChunkSet> incremental;
+    for (const Variant& v : kVariants) {
+        incremental.emplace_back(v.options);
+        incremental.back().rebuild(run.volume);
+    }
+    runStrokeScript(run.volume, script, [&](const ScriptOpReport& report) {
+        for (MeshChunkSet& set : incremental) set.update(run.volume, report.stats.blockChanges);
+    });
+    for (int i = 0; i < kVariantCount; ++i) {
+        run.chunks[i] = meshVolumeChunks(run.volume, kVariants[i].options);
+        run.meshes[i] = weldChunks(run.chunks[i]);
+        MeshChunkSet full(kVariants[i].options);
+        full.rebuild(run.volume);
+        if (!identical(incremental[std::size_t(i)], full))
+            fail(std::string(kVariants[i].name) + ": re-meshing op by op differs from a full re-mesh");
+    }
+    return run;
+}
+
+bool sameChunks(const std::vector<MeshChunk>& a, const std::vector<MeshChunk>& b)
+{
+    if (a.size() != b.size()) return false;
+    for (std::size_t i = 0; i < a.size(); ++i)
+        if (!identical(a[i], b[i])) return false;
+    return true;
+}
+
+void checkLattice(const Volume& volume, const ExactScene& exact)
+{
+    const WorldBounds b = exact.solidBounds();
+    if (!b.bounded()) return;
+    const double vs = volume.voxelSize();
+    const int lo[3] = {int(std::floor(b.min.x() / vs)) - 1, int(std::floor(b.min.y() / vs)) - 1, int(std::floor(b.min.z() / vs)) - 1};
+    const int hi[3] = {int(std::ceil(b.max.x() / vs)) + 1, int(std::ceil(b.max.y() / vs)) + 1, int(std::ceil(b.max.z() / vs)) + 1};
+    for (int x = lo[0]; x <= hi[0]; ++x)
+        for (int y = lo[1]; y <= hi[1]; ++y)
+            for (int z = lo[2]; z <= hi[2]; ++z) {
+                const MaterialId got = volume.materialAt({x, y, z});
+                const MaterialId want = exact.materialAt(Vec3d(x, y, z) * vs);
+                if (got != want) {
+                    std::ostringstream msg;
+                    msg << "voxel (" << x << ", " << y << ", " << z << ") holds material " << got
+                        << ", the exact replay gives " << want;
+                    fail(msg.str());
+                }
+            }
+}
+
+double meshArea(const Mesh& mesh)
+{
+    double area = 0.0;
+    for (const auto& t : mesh.triangles) {
+        const auto &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
+        const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
+        const double v[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
+        const double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2], z = u[0] * v[1] - u[1] * v[0];
+        area += 0.5 * std::sqrt(x * x + y * y + z * z);
+    }
+    return area;
+}
+
+void checkVolume(const SceneRun& run, const ExactScene& exact, const RandomScene& scene, std::size_t samples,
+                 SceneCheckResult& result)
+{
+    const Mesh& mesh = run.meshes[1];
+    result.volume = enclosedVolume(mesh);
+    const WorldBounds b = exact.solidBounds();
+    if (!b.bounded()) return;
+    std::mt19937_64 rng(scene.seed ^ (scene.index * 0x94D049BB133111EBull));
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::size_t inside = 0;
+    for (std::size_t i = 0; i < samples; ++i) {
+        const Vec3d p(b.min.x() + u(rng) * (b.max.x() - b.min.x()), b.min.y() + u(rng) * (b.max.y() - b.min.y()),
+                      b.min.z() + u(rng) * (b.max.z() - b.min.z()));
+        inside += exact.materialAt(p) != 0;
+    }
+    const double box = (b.max.x() - b.min.x()) * (b.max.y() - b.min.y()) * (b.max.z() - b.min.z());
+    const double p = double(inside) / double(samples);
+    result.exactVolume = box * p;
+    // Sampling error (4 sigma, at least one sample's worth) plus what a mesh on a voxel lattice may miss:
+    // features thinner than a voxel, up to half a voxel across the whole surface.
+    const double sigma = box * std::sqrt(std::max(p * (1.0 - p), 1.0 / double(samples)) / double(samples));
+    const double tolerance = 4.0 * sigma + 0.5 * scene.voxelSize * meshArea(mesh);
+    if (std::fabs(result.volume - result.exactVolume) > tolerance) {
+        std::ostringstream msg;
+        msg << "cms-uniform encloses " << result.volume << ", the exact scene about " << result.exactVolume
+            << " (tolerance " << tolerance << ")";
+        fail(msg.str());
+    }
+}
+
+} // namespace
+
+SceneCheckResult checkScene(const RandomScene& scene, const SceneCheckOptions& options)
+{
+    SceneCheckResult result;
+    try {
+        const StrokeScript script = parseStrokeScript(scene.script);
+        SceneRun run = tbb::task_arena(2).execute([&] { return runScene(scene, script); });
+        const ExactScene exact(script, run.volume.materials(), scene.voxelSize);
+        checkLattice(run.volume, exact);
+        std::size_t components[kVariantCount];
+        for (int i = 0; i < kVariantCount; ++i) {
+            const MeshTopology t = analyzeTopology(run.meshes[i], kMergeDistanceVoxels * scene.voxelSize);
+            components[i] = t.components;
+            if (!t.watertight()) {
+                std::ostringstream msg;
+                msg << kVariants[i].name << " mesh is not a closed 2-manifold: " << t.boundaryEdges << " boundary, "
+                    << t.nonManifoldEdges << " non-manifold, " << t.misorientedEdges << " misoriented edges, "
+                    << t.degenerateTriangles << " zero-area triangles, " << t.pinchedVertices << " pinched vertices";
+                fail(msg.str());
+            }
+        }
+        // Both CMS meshes walk the same squares wherever the surface is not flat, so they agree exactly.
+        // Marching Cubes separates the solid corners of every ambiguous face; CMS joins them where its
+        // sharp features cross (a thin part thinner than a voxel), and never separates what MC joins,
+        // so it may have fewer pieces than MC, never more.
+        if (components[1] != components[2] || components[1] > components[0]) {
+            std::ostringstream msg;
+            msg << "connected pieces differ: mc " << components[0] << ", cms-uniform " << components[1]
+                << ", cms-adaptive " << components[2];
+            fail(msg.str());
+        }
+        result.triangles = run.meshes[2].triangleCount();
+        checkVolume(run, exact, scene, options.volumeSamples, result);
+        if (options.compareThreads) {
+            SceneRun single = tbb::task_arena(1).execute([&] { return runScene(scene, script); });
+            if (!identical(single.volume, run.volume)) fail("one and two threads give different volumes");
+            for (int i = 0; i < kVariantCount; ++i)
+                if (!sameChunks(single.chunks[i], run.chunks[i]))
+                    fail(std::string(kVariants[i].name) + ": one and two threads give different meshes");
+        }
+    } catch (const SceneFailure& f) {
+        result.passed = false;
+        result.failure = f.what;
+    } catch (const std::exception& e) {
+        result.passed = false;
+        result.failure = std::string("exception: ") + e.what();
+    }
+    return result;
+}
+
+std::string sceneReport(const RandomScene& scene, const SceneCheckResult& result)
+{
+    nlohmann::json report;
+    report["seed"] = scene.seed;
+    report["scene"] = scene.index;
+    report["failure"] = result.failure;
+    report["voxel_size"] = scene.voxelSize;
+    std::ostringstream replay;
+    replay << "vdbclay new scene.vdb --shape sphere --size " << scene.voxelSize << " --voxel-size " << scene.voxelSize
+           << " && vdbclay sculpt scene.vdb script.json -o scene.vdb && vdbclay mesh scene.vdb -o scene.obj";
+    report["replay"] = replay.str();
+    report["script"] = nlohmann::json::parse(scene.script);
+    return report.dump(2);
+}
+
+} // namespace vdbclay
