@@ -400,8 +400,11 @@ double SweptBrush::distance(const Vec3d& x) const
         }
         const double lowerBound = toSegment - reach_;
         if (lowerBound >= best) continue;
-        if (lowerBound > 0.0) {
-            best = lowerBound; // the brush cannot reach x from this segment: a safe, positive bound
+        // The brush cannot reach x from this segment: a safe bound, used only when it is clearly positive,
+        // as a point on the surface counts as inside (a bound of 0 where the brush's farthest corner just
+        // fails to reach x would put x in the stroke).
+        if (lowerBound > 1e-6 * reach_) {
+            best = lowerBound;
             continue;
         }
         // The brush can touch x only for origins within `reach_` of the closest point: sample that window
