@@ -11,10 +11,14 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <chrono>
+#include <csignal>
+#include <fcntl.h>
 #include <random>
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include <unistd.h>
 
 using namespace vdbclay;
 using namespace vdbclay::test;
@@ -317,6 +321,61 @@ TEST_CASE("cli: bad input fails cleanly with a message", "[cli]")
         checkCleanFailure(runCli(dir, "bench nothing --quick"));
         CHECK_FALSE(std::filesystem::exists(dir.path() / "v.vdb"));
     }
+}
+
+TEST_CASE("cli: an in-place sculpt killed at random moments leaves the old or the new file, and no temporary file after the next save", "[cli][saves]")
+{
+    TempDir dir;
+    const std::string file = dir.file("scene.vdb");
+    REQUIRE(runCli(dir, "new scene.vdb --shape sphere --size 40").exitCode == 0);
+    const std::string script = R"({"ops": [
+        {"mode": "remove", "brush": {"shape": "box", "size": [12, 12, 50]}, "at": [20, 0, 0], "rotate": [0, 0, 30]},
+        {"mode": "add", "brush": {"shape": "torus", "radius": 30, "minor_radius": 6}, "at": [0, 0, 5]},
+        {"mode": "remove", "brush": {"shape": "sphere", "radius": 9}, "path": [[-30, -30, 30], [30, 30, 30]]}]})";
+    writeText(dir.file("carve.json"), script);
+    const Volume before = loadVolume(file);
+    Volume after = loadVolume(file);
+    runStrokeScript(after, parseStrokeScript(script));
+    const std::vector<char> pristine = readBytes(file);
+
+    auto startSculpt = [&] {
+        const pid_t pid = ::fork();
+        if (pid == 0) {
+            if (::chdir(dir.path().c_str()) != 0) ::_exit(127);
+            const int devnull = ::open("/dev/null", O_WRONLY);
+            ::dup2(devnull, 1), ::dup2(devnull, 2);
+            ::execl(kCli, kCli, "sculpt", "scene.vdb", "carve.json", "-o", "scene.vdb", "--threads", "1", (char*)nullptr);
+            ::_exit(127);
+        }
+        return pid;
+    };
+    // How long one run takes here, so the kills spread over all of it (the save included).
+    const auto start = std::chrono::steady_clock::now();
+    int status = 0;
+    ::waitpid(startSculpt(), &status, 0);
+    REQUIRE((WIFEXITED(status) && WEXITSTATUS(status) == 0));
+    const double runMicros = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
+    REQUIRE(identical(loadVolume(file), after));
+
+    std::mt19937 rng(20261201);
+    std::uniform_real_distribution<double> when(0.0, 1.1 * runMicros);
+    int sawOld = 0, sawNew = 0;
+    for (int trial = 0; trial < 40; ++trial) {
+        writeBytes(file, pristine.data(), pristine.size());
+        const pid_t pid = startSculpt();
+        ::usleep(useconds_t(when(rng)));
+        ::kill(pid, SIGKILL);
+        ::waitpid(pid, &status, 0);
+        INFO("trial " << trial);
+        const Volume now = loadVolume(file); // never torn: it loads
+        const bool isOld = identical(now, before), isNew = identical(now, after);
+        CHECK((isOld || isNew));
+        sawOld += isOld, sawNew += isNew;
+    }
+    CHECK(sawOld > 0); // the kills did land before the rename
+    // The next save removes whatever the killed saves left behind.
+    REQUIRE(runCli(dir, "sculpt scene.vdb carve.json -o scene.vdb").exitCode == 0);
+    for (const std::string& name : dir.entries()) CHECK(name.find(".vdbclay-tmp-") == std::string::npos);
 }
 
 #endif // VDBCLAY_CLI

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -60,6 +61,46 @@ void appendTrailer(const std::string& path, uint64_t payloadBytes)
     if (!out) throw VolumeIOError("cannot write '" + path + "' (disk full?)");
 }
 
+// OpenVDB writes a random UUID into every file header (36 ASCII characters after the magic number,
+// the file and library versions and the grid-offsets flag), so two saves of one volume would differ.
+// Saves replace it by one derived from the rest of the file: the same volume saves to the same bytes.
+constexpr std::size_t kUuidOffset = 8 + 4 + 4 + 4 + 1, kUuidLength = 36;
+
+/// A UUID (RFC 9562 version 8: custom) from two FNV-1a hashes of the file outside its UUID field.
+void replaceUuidByContentHash(const std::string& path, uint64_t bytes)
+{
+    std::fstream file(path, std::ios::binary | std::ios::in | std::ios::out);
+    std::vector<char> buffer(1 << 20);
+    uint64_t h1 = 0xcbf29ce484222325ull, h2 = 0x84222325cbf29ce4ull;
+    char uuid[kUuidLength];
+    for (uint64_t at = 0; at < bytes;) {
+        const std::size_t chunk = std::size_t(std::min<uint64_t>(bytes - at, buffer.size()));
+        file.read(buffer.data(), std::streamsize(chunk));
+        if (std::size_t(file.gcount()) != chunk) throw VolumeIOError("cannot read back '" + path + "'");
+        for (std::size_t i = 0; i < chunk; ++i, ++at) {
+            if (at >= kUuidOffset && at < kUuidOffset + kUuidLength) {
+                uuid[at - kUuidOffset] = buffer[i];
+                continue;
+            }
+            const auto byte = uint8_t(buffer[i]);
+            h1 = (h1 ^ byte) * 0x100000001b3ull;
+            h2 = (h2 ^ byte) * 0x100000001b3ull + 0x9E37u;
+        }
+    }
+    if (bytes < kUuidOffset + kUuidLength || uuid[8] != '-' || uuid[13] != '-' || uuid[18] != '-' || uuid[23] != '-')
+        throw std::logic_error("OpenVDB's file header does not hold its UUID where expected");
+    const uint64_t hi = (h1 & ~0xF000ull) | 0x8000ull;                          // version 8
+    const uint64_t lo = (h2 & ~(uint64_t(3) << 62)) | (uint64_t(2) << 62);       // RFC variant
+    char text[kUuidLength + 1];
+    std::snprintf(text, sizeof(text), "%08x-%04x-%04x-%04x-%012llx", unsigned(hi >> 32), unsigned((hi >> 16) & 0xFFFF),
+                  unsigned(hi & 0xFFFF), unsigned(lo >> 48), static_cast<unsigned long long>(lo & 0xFFFFFFFFFFFFull));
+    file.clear();
+    file.seekp(std::streamoff(kUuidOffset));
+    file.write(text, std::streamsize(kUuidLength));
+    file.flush();
+    if (!file) throw VolumeIOError("cannot write '" + path + "' (disk full?)");
+}
+
 enum class Integrity { Verified, NoTrailer };
 
 /// Checks the trailer. Throws for a trailer that does not match its file; reports files without one.
@@ -109,7 +150,10 @@ void saveVolume(const Volume& volume, const std::string& path)
                 stream.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
                 stream.write(openvdb::GridCPtrVec{out});
             },
-            [](const std::string& temp, uint64_t written) { appendTrailer(temp, written); });
+            [](const std::string& temp, uint64_t written) {
+                replaceUuidByContentHash(temp, written);
+                appendTrailer(temp, written);
+            });
     } catch (const FileWriteError& e) {
         throw VolumeIOError(e.what());
     } catch (const VolumeIOError&) {
