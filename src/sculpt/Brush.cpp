@@ -377,63 +377,101 @@ SweptBrush::SweptBrush(Brush brush, std::vector<Vec3d> path) : brush_(std::move(
     if (!std::isfinite(reach_)) throw std::invalid_argument("an unbounded brush (half-space) cannot follow a path");
     step_ = std::max(0.25 * brush_.innerRadius(), 1e-6);
     capsuleRadius_ = brush_.roundSphereRadius();
+
+    // Pieces at most one reach long; cells two reaches wide. A piece is listed in every cell within
+    // reach + half a cell of it, so a point in a cell sees every piece whose brush reaches within half
+    // a cell of it: the pieces it does not see are farther than that.
+    const double pieceLength = std::max(reach_, 1e-9);
+    cell_ = 2.0 * pieceLength;
+    for (std::size_t i = 0; i + 1 < path_.size() || i == 0; ++i) {
+        const Vec3d a = path_[i], b = path_.size() > 1 ? path_[i + 1] : path_[i];
+        const double len = (b - a).length();
+        pathLength_ += len;
+        const int count = std::max(1, int(std::ceil(len / pieceLength)));
+        const Vec3d dir = len > 1e-12 ? (b - a) / len : Vec3d(0.0);
+        for (int k = 0; k < count; ++k) {
+            const double t0 = len * k / count, t1 = len * (k + 1) / count;
+            pieces_.push_back({a + dir * t0, dir, t1 - t0});
+        }
+        if (path_.size() == 1) break;
+    }
+    const double grow = reach_ + 0.5 * cell_;
+    for (uint32_t id = 0; id < pieces_.size(); ++id) {
+        const Piece& piece = pieces_[id];
+        const Vec3d end = piece.start + piece.direction * piece.length;
+        int64_t lo[3], hi[3];
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = int64_t(std::floor((std::min(piece.start[a], end[a]) - grow) / cell_));
+            hi[a] = int64_t(std::floor((std::max(piece.start[a], end[a]) + grow) / cell_));
+        }
+        for (int64_t i = lo[0]; i <= hi[0]; ++i)
+            for (int64_t j = lo[1]; j <= hi[1]; ++j)
+                for (int64_t k = lo[2]; k <= hi[2]; ++k) grid_[cellHash(i, j, k)].push_back(id);
+    }
+}
+
+uint64_t SweptBrush::cellHash(int64_t i, int64_t j, int64_t k) const
+{
+    // Cells collide only rarely, and a collision just adds pieces to look at.
+    return uint64_t(i) * 0x9E3779B97F4A7C15ull ^ uint64_t(j) * 0xC2B2AE3D27D4EB4Full ^ uint64_t(k) * 0x165667B19E3779F9ull;
+}
+
+uint64_t SweptBrush::cellHash(const Vec3d& p) const
+{
+    return cellHash(int64_t(std::floor(p.x() / cell_)), int64_t(std::floor(p.y() / cell_)), int64_t(std::floor(p.z() / cell_)));
 }
 
 double SweptBrush::distance(const Vec3d& x) const
 {
     if (path_.size() == 1) return brush_.distanceAt(x, path_.front());
-    double best = kInf;
-    for (std::size_t i = 0; i + 1 < path_.size(); ++i) {
-        const Vec3d a = path_[i];
-        const Vec3d ab = path_[i + 1] - a;
-        const double len = ab.length();
-        if (len < 1e-12) {
-            best = std::min(best, brush_.distanceAt(x, a));
-            continue;
-        }
-        const Vec3d dir = ab / len;
-        const double along = std::clamp((x - a).dot(dir), 0.0, len);
-        const double toSegment = (x - (a + dir * along)).length();
-        if (capsuleRadius_ > 0.0) { // a swept round sphere is a capsule
-            best = std::min(best, toSegment - capsuleRadius_);
-            continue;
-        }
-        const double lowerBound = toSegment - reach_;
-        if (lowerBound >= best) continue;
-        // The brush cannot reach x from this segment: a safe bound, used only when it is clearly positive,
-        // as a point on the surface counts as inside (a bound of 0 where the brush's farthest corner just
-        // fails to reach x would put x in the stroke).
-        if (lowerBound > 1e-6 * reach_) {
-            best = lowerBound;
-            continue;
-        }
-        // The brush can touch x only for origins within `reach_` of the closest point: sample that window
-        // on a fixed grid along the segment, then refine the best sample by golden-section search.
-        const double lo = std::max(0.0, along - reach_);
-        const double hi = std::min(len, along + reach_);
-        auto eval = [&](double s) { return brush_.distanceAt(x, a + dir * s); };
-        double bestS = lo, bestD = eval(lo);
-        for (double s = std::ceil(lo / step_) * step_; s < hi; s += step_) {
-            const double d = eval(s);
-            if (d < bestD) bestD = d, bestS = s;
-        }
-        if (const double d = eval(hi); d < bestD) bestD = d, bestS = hi;
-        double left = std::max(lo, bestS - step_), right = std::min(hi, bestS + step_);
-        constexpr double kGolden = 0.6180339887498949;
-        double m1 = right - kGolden * (right - left), m2 = left + kGolden * (right - left);
-        double f1 = eval(m1), f2 = eval(m2);
-        for (int it = 0; it < 24; ++it) {
-            if (f1 < f2) {
-                right = m2, m2 = m1, f2 = f1;
-                m1 = right - kGolden * (right - left), f1 = eval(m1);
-            } else {
-                left = m1, m1 = m2, f1 = f2;
-                m2 = left + kGolden * (right - left), f2 = eval(m2);
-            }
-        }
-        best = std::min({best, bestD, f1, f2});
-    }
+    const auto found = grid_.find(cellHash(x));
+    double best = 0.5 * cell_; // every piece not listed here lies farther away
+    if (found == grid_.end()) return best;
+    for (uint32_t id : found->second) best = std::min(best, pieceDistance(pieces_[id], x, best));
     return best;
+}
+
+double SweptBrush::pieceDistance(const Piece& piece, const Vec3d& x, double best) const
+{
+    const Vec3d& a = piece.start;
+    const Vec3d& dir = piece.direction;
+    const double len = piece.length;
+    if (len < 1e-12) return brush_.distanceAt(x, a);
+    const double along = std::clamp((x - a).dot(dir), 0.0, len);
+    const double toSegment = (x - (a + dir * along)).length();
+    if (capsuleRadius_ > 0.0) return toSegment - capsuleRadius_; // a swept round sphere is a capsule
+    const double lowerBound = toSegment - reach_;
+    if (lowerBound >= best) return best;
+    // The brush cannot reach x from this piece: a safe bound, used only when it is clearly positive, as a
+    // point on the surface counts as inside (a bound of 0 where the brush's farthest corner just fails to
+    // reach x would put x in the stroke).
+    if (lowerBound > 1e-6 * reach_) return lowerBound;
+    // The brush can touch x only for origins within `reach_` of the closest point: sample that window
+    // on a fixed grid along the piece, then refine the best sample by golden-section search (exact for
+    // convex brushes, whose distance is convex along the path).
+    const double lo = std::max(0.0, along - reach_);
+    const double hi = std::min(len, along + reach_);
+    auto eval = [&](double s) { return brush_.distanceAt(x, a + dir * s); };
+    double bestS = lo, bestD = eval(lo);
+    for (double s = std::ceil(lo / step_) * step_; s < hi; s += step_) {
+        const double d = eval(s);
+        if (d < bestD) bestD = d, bestS = s;
+    }
+    if (const double d = eval(hi); d < bestD) bestD = d, bestS = hi;
+    double left = std::max(lo, bestS - step_), right = std::min(hi, bestS + step_);
+    constexpr double kGolden = 0.6180339887498949;
+    double m1 = right - kGolden * (right - left), m2 = left + kGolden * (right - left);
+    double f1 = eval(m1), f2 = eval(m2);
+    for (int it = 0; it < 24; ++it) {
+        if (f1 < f2) {
+            right = m2, m2 = m1, f2 = f1;
+            m1 = right - kGolden * (right - left), f1 = eval(m1);
+        } else {
+            left = m1, m1 = m2, f1 = f2;
+            m2 = left + kGolden * (right - left), f2 = eval(m2);
+        }
+    }
+    return std::min({bestD, f1, f2});
 }
 
 WorldBounds SweptBrush::bounds() const

@@ -9,6 +9,7 @@
 
 #include <limits>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace vdbclay {
@@ -123,19 +124,40 @@ private:
 };
 
 /// A brush swept along a polyline of origins: the union of the brush at every point of the path.
+///
+/// A distance looks only at the pieces of the path near the point: the path is cut into pieces no
+/// longer than the brush is wide, kept in a hash grid by the cells their reach overlaps, so a stroke
+/// costs about the voxels it covers whatever its number of points. Where no piece is near, the distance
+/// is the bound the grid guarantees (half a cell), which is positive and never above the true distance.
 class SweptBrush : public SdfField {
 public:
     SweptBrush(Brush brush, std::vector<Vec3d> path); // throws std::invalid_argument on an empty path
     double distance(const Vec3d& world) const override;
     WorldBounds bounds() const override;
     double innerRadius() const override { return brush_.innerRadius(); }
+    /// Length of the path (world units).
+    double pathLength() const { return pathLength_; }
+    /// Radius of a sphere about the brush origin that holds the brush (world units).
+    double reach() const { return reach_; }
 
 private:
+    struct Piece {
+        Vec3d start, direction;
+        double length;
+    };
+    double pieceDistance(const Piece& piece, const Vec3d& x, double best) const;
+
     Brush brush_;
     std::vector<Vec3d> path_;
     double reach_;  // bounding radius of the brush
     double step_;   // sampling step along the path
     double capsuleRadius_; // > 0: a round sphere swept along segments, exact capsule distances
+    double pathLength_ = 0.0;
+    std::vector<Piece> pieces_;
+    double cell_ = 1.0; // grid spacing, world units
+    std::unordered_map<uint64_t, std::vector<uint32_t>> grid_; // cell hash -> pieces within reach of it
+    uint64_t cellHash(const Vec3d& p) const;
+    uint64_t cellHash(int64_t i, int64_t j, int64_t k) const;
 };
 
 } // namespace vdbclay
