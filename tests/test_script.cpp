@@ -8,7 +8,9 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <limits>
 #include <string>
+#include <sys/stat.h>
 
 using namespace vdbclay;
 using namespace vdbclay::test;
@@ -233,4 +235,67 @@ TEST_CASE("runStrokeScript rejects unknown materials before touching the volume"
         CHECK(*v.materials().find("clay") == 2);
         CHECK(v.materials().at(2).toughness == Approx(0.7f));
     }
+}
+
+TEST_CASE("scripts that ask for absurd work are refused before any op runs, naming the op and the limit", "[script][limits]")
+{
+    Volume v(1.0);
+    apply(v, CsgMode::Add, sphere(6.0), at({0.0, 0.0, 0.0}), 1);
+    const Volume before = v.clone();
+    auto refuse = [&](const json& lastOp, const std::string& expected) {
+        json script{{"ops", json::array({{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 3}}}, {"at", {20, 0, 0}}},
+                                         lastOp})}};
+        INFO(script.dump());
+        try {
+            runStrokeScript(v, parseStrokeScript(script.dump()));
+            FAIL("accepted");
+        } catch (const ScriptError& e) {
+            CHECK_THAT(e.what(), Catch::Contains(expected));
+        }
+        CHECK(identical(v, before)); // the first, harmless op did not run either
+    };
+    refuse({{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 3}}}, {"at", {9e8, 9e8, 9e8}}},
+           "ops[1]: the brush reaches 9e+08 voxels");
+    refuse({{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 6}}}, {"path", {{-1e6, 0, 0}, {1e6, 0, 0}}}},
+           "ops[1]: the brush reaches 1e+06 voxels");
+    refuse({{"mode", "add"}, {"brush", {{"shape", "box"}, {"size", {5000, 5000, 5000}}}}}, "more than the 6e+07 an edit may make");
+    // A long stroke across the volume: its tube's surface, not its bounds' box, is what counts.
+    json path = json::array();
+    for (int i = 0; i < 4000; ++i) path.push_back({(i % 2 ? 1 : -1) * 100000.0, 0.0, i * 0.01});
+    refuse({{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 30}}}, {"path", path}}, "an edit may make");
+}
+
+TEST_CASE("scripts over the size limits of paths and blends are refused while parsing", "[script][limits]")
+{
+    json path = json::array();
+    for (std::size_t i = 0; i <= kMaxPathPoints; ++i) path.push_back({0.0, 0.0, double(i)});
+    json op{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 1}}}, {"path", path}};
+    CHECK_THROWS_WITH(parseStrokeScript(json{{"ops", {op}}}.dump()), Catch::Contains("ops[0].path: has 100001 points"));
+    json parts = json::array();
+    for (std::size_t i = 0; i <= kMaxBlendParts; ++i) parts.push_back({{"shape", "sphere"}, {"radius", 1}, {"at", {double(i), 0, 0}}});
+    json blend{{"mode", "add"}, {"brush", {{"shape", "blend"}, {"parts", parts}}}};
+    CHECK_THROWS_WITH(parseStrokeScript(json{{"ops", {blend}}}.dump()), Catch::Contains("at most 256"));
+}
+
+TEST_CASE("duplicate keys and files that are not regular are script errors", "[script][limits]")
+{
+    CHECK_THROWS_WITH(parseStrokeScript(R"({"ops": [{"mode": "add", "brush": {"shape": "sphere", "radius": 1}, "at": [0,0,0], "at": [1,1,1]}]})"),
+                      Catch::Contains("'at' appears twice"));
+    CHECK_THROWS_WITH(parseStrokeScript(R"({"ops": [], "ops": []})"), Catch::Contains("'ops' appears twice"));
+    // The same key in two different objects is fine.
+    CHECK_NOTHROW(parseStrokeScript(R"({"ops": [{"mode": "add", "brush": {"shape": "sphere", "radius": 1}},
+                                                {"mode": "add", "brush": {"shape": "sphere", "radius": 2}}]})"));
+    TempDir dir;
+    REQUIRE(::mkfifo(dir.file("pipe.json").c_str(), 0644) == 0);
+    CHECK_THROWS_WITH(loadStrokeScript(dir.file("pipe.json")), Catch::Contains("not a regular file"));
+    CHECK_THROWS_WITH(loadStrokeScript("/dev/zero"), Catch::Contains("not a regular file"));
+}
+
+TEST_CASE("voxel sizes outside 1e-5 .. 1e6 are refused", "[script][limits]")
+{
+    CHECK_THROWS_AS(Volume(1e300), std::invalid_argument);
+    CHECK_THROWS_AS(Volume(1e-9), std::invalid_argument);
+    CHECK_THROWS_AS(Volume(std::numeric_limits<double>::quiet_NaN()), std::invalid_argument);
+    CHECK_NOTHROW(Volume(1e-5));
+    CHECK_NOTHROW(Volume(1e6));
 }

@@ -305,6 +305,20 @@ void Brush::distances(const Vec3d* points, double* out, std::size_t count) const
     for (std::size_t i = 0; i < count; ++i) out[i] = distanceAtOrigin(points[i] - translation_);
 }
 
+double SdfField::surfaceAreaBound() const
+{
+    const WorldBounds b = bounds();
+    if (!b.bounded()) return kInf;
+    const Vec3d d = b.max - b.min;
+    return 2.0 * (d.x() * d.y() + d.y() * d.z() + d.z() * d.x());
+}
+
+double SweptBrush::surfaceAreaBound() const
+{
+    const double tube = 2.0 * kPi * reach_ * pathLength_ + 4.0 * kPi * reach_ * reach_;
+    return std::min(tube, SdfField::surfaceAreaBound());
+}
+
 Vec3d SdfField::gradient(const Vec3d& p, double h) const
 {
     const Vec3d points[4] = {p + Vec3d(h, -h, -h), p + Vec3d(-h, -h, h), p + Vec3d(-h, h, -h), p + Vec3d(h, h, h)};

@@ -69,6 +69,11 @@ public:
     virtual WorldBounds bounds() const = 0;
     /// Depth of the deepest inside point (world units): erosion scales with it.
     virtual double innerRadius() const = 0;
+    /// An upper bound of the brush's surface area (world units squared): edits cost about that many
+    /// voxels. The default is the area of the bounds' box (infinite when unbounded).
+    virtual double surfaceAreaBound() const;
+    /// Primitive distances one distance() evaluates (a blend evaluates each of its parts).
+    virtual double evaluationCost() const { return 1.0; }
 };
 
 enum class PartOp { Add, Remove };
@@ -91,6 +96,7 @@ public:
     Vec3d gradient(const Vec3d& world, double step) const override;
     WorldBounds bounds() const override;
     double innerRadius() const override;
+    double evaluationCost() const override { return double(parts_.size()); }
 
     /// Distance with the brush's own translation replaced by `origin`.
     double distanceAt(const Vec3d& world, const Vec3d& origin) const { return distanceAtOrigin(world - origin); }
@@ -135,6 +141,10 @@ public:
     double distance(const Vec3d& world) const override;
     WorldBounds bounds() const override;
     double innerRadius() const override { return brush_.innerRadius(); }
+    /// The tube around the path the brush's reach sweeps, or the bounds' box where that is smaller.
+    double surfaceAreaBound() const override;
+    /// The brush evaluated along the pieces near a point (about four, with a window search each).
+    double evaluationCost() const override { return brush_.evaluationCost() * (capsuleRadius_ > 0.0 ? 4.0 : 200.0); }
     /// Length of the path (world units).
     double pathLength() const { return pathLength_; }
     /// Radius of a sphere about the brush origin that holds the brush (world units).

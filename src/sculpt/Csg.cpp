@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <set>
@@ -530,16 +531,53 @@ CsgMode parseCsgMode(const std::string& name)
     throw std::invalid_argument("unknown mode '" + name + "' (expected add, remove, intersect, paint or erode)");
 }
 
-EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
+void checkCsgLimits(double vs, const MaterialTable& materials, const SdfField& brush, const CsgOp& op)
 {
-    HermiteGrid& grid = *volume.impl().grid;
-    HermiteTree& tree = grid.tree();
-    const MaterialTable& materials = volume.materials();
     const bool needsMaterial = op.mode == CsgMode::Add || op.mode == CsgMode::Paint;
     if (needsMaterial && (op.material == kEmptyMaterial || op.material > materials.size()))
         throw std::invalid_argument("material id " + std::to_string(op.material) + " is not in the volume's table");
     if (op.mode == CsgMode::Erode && !(op.strength >= 0.0 && op.strength <= 1.0))
         throw std::invalid_argument("erode strength must lie in [0,1]");
+    const WorldBounds wb = brush.bounds();
+    if (op.mode == CsgMode::Add && !wb.bounded()) throw std::invalid_argument("cannot add an unbounded brush (half-space)");
+    if (!wb.bounded()) return; // it works within the solid's bounds, which the limits below already held to
+    for (int i = 0; i < 3; ++i) {
+        const double reach = std::max(std::fabs(wb.min[i]), std::fabs(wb.max[i])) / vs;
+        if (!(reach <= kMaxReachVoxels)) {
+            char text[200];
+            std::snprintf(text, sizeof(text),
+                          "the brush reaches %.4g voxels from the origin; volumes span at most %.0f voxels each way "
+                          "(move it closer or raise the voxel size)",
+                          reach, kMaxReachVoxels);
+            throw std::invalid_argument(text);
+        }
+    }
+    const double surface = brush.surfaceAreaBound() / (vs * vs);
+    if (!(surface <= kMaxSurfaceVoxels)) {
+        char text[200];
+        std::snprintf(text, sizeof(text),
+                      "the brush's surface spans about %.3g voxels, more than the %.0e an edit may make (about 9 GB "
+                      "of leaves); raise the voxel size or use a smaller brush",
+                      surface, kMaxSurfaceVoxels);
+        throw std::invalid_argument(text);
+    }
+    const double evaluations = 30.0 * surface * brush.evaluationCost();
+    if (!(evaluations <= kMaxDistanceEvaluations)) {
+        char text[240];
+        std::snprintf(text, sizeof(text),
+                      "the edit would take about %.3g distance evaluations (%.3g surface voxels, %.3g per evaluation: "
+                      "blend parts, stroke search), more than the %.0e allowed; use fewer parts or a shorter stroke",
+                      evaluations, surface, brush.evaluationCost(), kMaxDistanceEvaluations);
+        throw std::invalid_argument(text);
+    }
+}
+
+EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
+{
+    checkCsgLimits(volume.voxelSize(), volume.materials(), brush, op);
+    HermiteGrid& grid = *volume.impl().grid;
+    HermiteTree& tree = grid.tree();
+    const MaterialTable& materials = volume.materials();
 
     EditContext ctx{brush, op.mode, MaterialValue{op.material}, volume.voxelSize(), kOnSurfaceVoxels * volume.voxelSize(),
                     {}, 0.0};
@@ -561,19 +599,12 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
     CoordBBox region;
     const WorldBounds wb = brush.bounds();
     if (op.mode == CsgMode::Intersect || !wb.bounded()) {
-        if (op.mode == CsgMode::Add) throw std::invalid_argument("cannot add an unbounded brush (half-space)");
         region = solidBounds(tree);
         if (region.empty()) return {};
         region.expand(1);
     }
     if (op.mode != CsgMode::Intersect && wb.bounded()) {
         const double vs = ctx.voxelSize;
-        constexpr double kLimit = 1e9;
-        for (int i = 0; i < 3; ++i) {
-            if (std::fabs(wb.min[i] / vs) > kLimit || std::fabs(wb.max[i] / vs) > kLimit)
-                throw std::invalid_argument("the brush reaches beyond a billion voxels from the origin "
-                                            "(too large or too far away for this voxel size)");
-        }
         const CoordBBox brushBox(Coord(int(std::floor(wb.min.x() / vs)) - 1, int(std::floor(wb.min.y() / vs)) - 1,
                                        int(std::floor(wb.min.z() / vs)) - 1),
                                  Coord(int(std::ceil(wb.max.x() / vs)), int(std::ceil(wb.max.y() / vs)),
@@ -582,8 +613,6 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
         else region.intersect(brushBox);
     }
     if (region.empty()) return {};
-    const double nodes = double(region.dim().x()) * region.dim().y() * region.dim().z() / double(kLowerDim * kLowerDim * kLowerDim);
-    if (nodes > 2e6) throw std::invalid_argument("the brush covers too many voxels for this voxel size");
 
     RegionWalker walker(ctx, tree, region);
     walker.walk();

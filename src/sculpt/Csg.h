@@ -49,8 +49,24 @@ struct EditStats {
     std::vector<BlockChange> blockChanges;
 };
 
-/// Throws std::invalid_argument for ops that make no sense (an unbounded add, a material id that is
-/// not in the volume's table, strength out of range).
+/// What one edit may ask for, checked before any work starts (checkCsgLimits):
+/// - the brush stays within kMaxReachVoxels of the origin on every axis: the meshers' vertex keys and
+///   the lattice arithmetic cover +-262,144 voxels;
+/// - its surface (SdfField::surfaceAreaBound, in voxels squared) is at most kMaxSurfaceVoxels: an edit
+///   makes about one leaf of 6 KB per 40 surface voxels, so this caps the new leaves near 9 GB;
+/// - its work, surface voxels times the primitive distances per evaluation (a blend's parts, a stroke's
+///   window search) times the ~30 evaluations per surface voxel, is at most kMaxDistanceEvaluations
+///   (about half a minute on one core).
+constexpr double kMaxReachVoxels = 250000.0;
+constexpr double kMaxSurfaceVoxels = 6e7;
+constexpr double kMaxDistanceEvaluations = 5e9;
+
+/// Throws std::invalid_argument, naming the limit, when the edit exceeds one of the limits above or
+/// makes no sense (an unbounded add, a material id that is not in the volume's table, strength out of
+/// range). Changes nothing.
+void checkCsgLimits(double voxelSize, const MaterialTable& materials, const SdfField& brush, const CsgOp& op);
+
+/// Checks the op (checkCsgLimits), then applies it.
 EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op);
 
 } // namespace vdbclay

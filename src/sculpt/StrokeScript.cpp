@@ -3,6 +3,10 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <memory>
+#include <sys/stat.h>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -122,6 +126,9 @@ Brush parseBrush(const json& b, const std::string& where, const Placement& place
         if (smoothness < 0.0) fail(where + ".smoothness", "must be zero or positive");
         if (!b.contains("parts") || !b.at("parts").is_array() || b.at("parts").empty())
             fail(where, "a blend brush needs a non-empty 'parts' array");
+        if (b.at("parts").size() > kMaxBlendParts)
+            fail(where + ".parts", "has " + std::to_string(b.at("parts").size()) + " parts; a blend may have at most " +
+                                       std::to_string(kMaxBlendParts));
         std::vector<BrushPart> parts;
         for (std::size_t i = 0; i < b.at("parts").size(); ++i) {
             const json& pj = b.at("parts")[i];
@@ -174,6 +181,9 @@ ScriptOp parseOp(const json& o, const std::string& where)
     if (o.contains("path")) {
         const json& p = o.at("path");
         if (!p.is_array() || p.empty()) fail(where + ".path", "must be a non-empty array of points");
+        if (p.size() > kMaxPathPoints)
+            fail(where + ".path", "has " + std::to_string(p.size()) + " points; a stroke may have at most " +
+                                      std::to_string(kMaxPathPoints));
         for (std::size_t i = 0; i < p.size(); ++i) op.path.push_back(vec3(p[i], where + ".path[" + std::to_string(i) + "]"));
     }
     const Vec3d at = op.path.empty() ? vec3Or(o, "at", where, Vec3d(0.0)) : op.path.front();
@@ -200,11 +210,24 @@ ScriptOp parseOp(const json& o, const std::string& where)
 StrokeScript parseStrokeScript(const std::string& jsonText)
 {
     json root;
+    // JSON allows a key twice in an object and keeps the last; in a script that is a typo or a merge
+    // gone wrong, so it is an error. The parser reports each object's keys as it reads them.
+    std::vector<std::set<std::string>> openObjects;
+    std::string duplicate;
+    const json::parser_callback_t noDuplicateKeys = [&](int, json::parse_event_t event, json& parsed) {
+        if (event == json::parse_event_t::object_start) openObjects.emplace_back();
+        else if (event == json::parse_event_t::object_end && !openObjects.empty()) openObjects.pop_back();
+        else if (event == json::parse_event_t::key && !openObjects.empty() &&
+                 !openObjects.back().insert(parsed.get<std::string>()).second && duplicate.empty())
+            duplicate = parsed.get<std::string>();
+        return true;
+    };
     try {
-        root = json::parse(jsonText);
+        root = json::parse(jsonText, noDuplicateKeys);
     } catch (const json::parse_error& e) {
         throw ScriptError(std::string("script is not valid JSON: ") + e.what());
     }
+    if (!duplicate.empty()) throw ScriptError("script: the key '" + duplicate + "' appears twice in one object");
     checkKeys(root, "script", {"materials", "ops"});
     StrokeScript script;
     if (root.contains("materials")) {
@@ -240,6 +263,13 @@ StrokeScript parseStrokeScript(const std::string& jsonText)
 
 StrokeScript loadStrokeScript(const std::string& path)
 {
+    // A FIFO or a device would be read forever; a huge file is not a script.
+    struct stat st;
+    if (::stat(path.c_str(), &st) != 0) throw ScriptError("cannot open script '" + path + "': " + std::strerror(errno));
+    if (!S_ISREG(st.st_mode)) throw ScriptError("script '" + path + "' is not a regular file");
+    if (uint64_t(st.st_size) > kMaxScriptBytes)
+        throw ScriptError("script '" + path + "' is " + std::to_string(st.st_size) + " bytes; scripts may have at most " +
+                          std::to_string(kMaxScriptBytes));
     std::ifstream in(path, std::ios::binary);
     if (!in) throw ScriptError("cannot open script '" + path + "'");
     std::ostringstream text;
@@ -270,6 +300,17 @@ std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& 
         }
         csgOps.push_back(op);
     }
+    // Every op's limits are checked before the first one runs: a script is refused whole, not half done.
+    std::vector<std::unique_ptr<SweptBrush>> strokes(script.ops.size());
+    for (std::size_t i = 0; i < script.ops.size(); ++i) {
+        const ScriptOp& s = script.ops[i];
+        if (s.path.size() > 1) strokes[i] = std::make_unique<SweptBrush>(s.brush, s.path);
+        try {
+            checkCsgLimits(volume.voxelSize(), table, strokes[i] ? static_cast<const SdfField&>(*strokes[i]) : s.brush, csgOps[i]);
+        } catch (const std::invalid_argument& e) {
+            throw ScriptError("ops[" + std::to_string(i) + "]: " + e.what());
+        }
+    }
     volume.materials() = table;
 
     std::vector<ScriptOpReport> reports;
@@ -279,8 +320,7 @@ std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& 
         ScriptOpReport report;
         report.index = i;
         report.mode = s.mode;
-        if (s.path.size() > 1) report.stats = applyCsg(volume, SweptBrush(s.brush, s.path), csgOps[i]);
-        else report.stats = applyCsg(volume, s.brush, csgOps[i]);
+        report.stats = applyCsg(volume, strokes[i] ? static_cast<const SdfField&>(*strokes[i]) : s.brush, csgOps[i]);
         report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (onOp) onOp(report);
         reports.push_back(std::move(report));

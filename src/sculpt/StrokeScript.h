@@ -20,6 +20,11 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+/// Limits of what a script may hold; checked while parsing.
+constexpr std::size_t kMaxPathPoints = 100000;
+constexpr std::size_t kMaxBlendParts = 256;
+constexpr uint64_t kMaxScriptBytes = 64ull << 20;
+
 struct ScriptOp {
     CsgMode mode = CsgMode::Add;
     Brush brush;                 // placed at "at" (or at the first path point)
@@ -44,8 +49,9 @@ struct ScriptOpReport {
     double seconds = 0.0;
 };
 
-/// Defines the script's materials in the volume, checks every op's material, then applies the ops in
-/// order. Throws ScriptError (before touching the volume) when an op names an unknown material.
+/// Defines the script's materials in the volume, checks every op's material and limits
+/// (checkCsgLimits), then applies the ops in order. Throws ScriptError, before touching the volume, when
+/// an op names an unknown material or asks for more than the limits allow.
 std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& script,
                                             const std::function<void(const ScriptOpReport&)>& onOp = {});
 

@@ -30,9 +30,14 @@ struct VolumeStats {
     uint64_t memoryBytes = 0;
 };
 
+/// Voxel sizes a volume may have (world units): a volume spans +-250,000 voxels, and positions, sizes
+/// and distances stay well inside double precision throughout this range.
+constexpr double kMinVoxelSize = 1e-5, kMaxVoxelSize = 1e6;
+
 class Volume {
 public:
-    explicit Volume(double voxelSize = 1.0); // throws std::invalid_argument unless voxelSize > 0
+    /// Throws std::invalid_argument unless kMinVoxelSize <= voxelSize <= kMaxVoxelSize.
+    explicit Volume(double voxelSize = 1.0);
     ~Volume();
     Volume(Volume&&) noexcept;
     Volume& operator=(Volume&&) noexcept;
