@@ -82,7 +82,7 @@ int runNew(const NewOptions& o)
     if (!(o.size > 0.0) || !std::isfinite(o.size)) throw UsageError("--size: must be a positive number");
     if (!(o.voxelSize > 0.0) || !std::isfinite(o.voxelSize)) throw UsageError("--voxel-size: must be a positive number");
     if (!(o.voxelSize >= kMinVoxelSize && o.voxelSize <= kMaxVoxelSize))
-        throw UsageError("--voxel-size: " + formatNumber(o.voxelSize) + " is outside the supported range 1e-05 .. 1e+06");
+        throw UsageError("--voxel-size: " + formatNumber(o.voxelSize) + " is outside the supported range 0.0001 .. 1e+06");
     if (o.size / o.voxelSize > kMaxExtentVoxels) {
         throw UsageError("--size: " + formatNumber(o.size) + " is " + formatNumber(o.size / o.voxelSize) +
                          " voxels; at most " + formatNumber(kMaxExtentVoxels) +

@@ -291,11 +291,12 @@ TEST_CASE("duplicate keys and files that are not regular are script errors", "[s
     CHECK_THROWS_WITH(loadStrokeScript("/dev/zero"), Catch::Contains("not a regular file"));
 }
 
-TEST_CASE("voxel sizes outside 1e-5 .. 1e6 are refused", "[script][limits]")
+TEST_CASE("voxel sizes outside 1e-4 .. 1e6 are refused", "[script][limits]")
 {
     CHECK_THROWS_AS(Volume(1e300), std::invalid_argument);
     CHECK_THROWS_AS(Volume(1e-9), std::invalid_argument);
     CHECK_THROWS_AS(Volume(std::numeric_limits<double>::quiet_NaN()), std::invalid_argument);
-    CHECK_NOTHROW(Volume(1e-5));
+    CHECK_NOTHROW(Volume(1e-4));
+    CHECK_THROWS_AS(Volume(5e-5), std::invalid_argument);
     CHECK_NOTHROW(Volume(1e6));
 }

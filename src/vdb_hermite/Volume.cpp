@@ -14,7 +14,7 @@ Volume::Volume(detail::VolumeGrid*) : impl_(std::make_unique<detail::VolumeGrid>
 Volume::Volume(double voxelSize) : Volume(nullptr)
 {
     if (!(voxelSize >= kMinVoxelSize && voxelSize <= kMaxVoxelSize))
-        throw std::invalid_argument("the voxel size must lie between 1e-05 and 1e+06 world units");
+        throw std::invalid_argument("the voxel size must lie between 0.0001 and 1e+06 world units");
     impl_->grid = HermiteGrid::create(MaterialValue{});
     impl_->grid->setName("hermite");
     impl_->grid->setTransform(openvdb::math::Transform::createLinearTransform(voxelSize));
