@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <csignal>
+#include <cstring>
 #include <random>
 #include <set>
 #include <sys/resource.h>
@@ -423,4 +424,52 @@ TEST_CASE("a failed save leaves the existing file intact and no temporary files"
     CHECK(sameBytes(readBytes(path), before));
     CHECK(identical(loadVolume(path), small));
     CHECK(dir.entries() == std::vector<std::string>{"vol.vdb"});
+}
+
+// Files whose payload was changed and whose trailer was recomputed (what anyone can craft): every one
+// loads or is refused with one printable line, and none may crash, hang or allocate gigabytes. The
+// sanitizer build in CI runs this with ASan, which turns any out-of-bounds access into a failure.
+TEST_CASE("crafted files under a valid trailer load or are refused cleanly", "[io][fuzz]")
+{
+    TempDir dir;
+    saveVolume(makeSculpted(), dir.file("good.vdb"));
+    std::vector<char> bytes = readBytes(dir.file("good.vdb"));
+    bytes.resize(bytes.size() - 24); // the payload, without its trailer
+    std::mt19937_64 rng(0x5eed0201);
+    const int64_t interesting[] = {0, 1, -1, 2, 255, 65535, 0x7fffffff, -0x7fffffffll - 1, 0x7fffffffffffffffll, 4096, -4096};
+    int loaded = 0, refused = 0;
+    for (int trial = 0; trial < 1500; ++trial) {
+        std::vector<char> bad = bytes;
+        const int mutations = 1 + int(rng() % 3);
+        for (int m = 0; m < mutations; ++m) {
+            const std::size_t at = std::size_t(rng() % bad.size());
+            switch (rng() % 5) {
+            case 0: bad[at] ^= char(1 + rng() % 255); break;
+            case 1: { // a count or size replaced by an extreme value
+                const int64_t v = interesting[rng() % std::size(interesting)];
+                const std::size_t width = rng() % 2 ? 4 : 8;
+                if (at + width <= bad.size()) std::memcpy(&bad[at], &v, width);
+                break;
+            }
+            case 2: bad.resize(at + 1); break;                               // truncated
+            case 3: bad.insert(bad.begin() + long(at), rng() % 64, char(rng())); break; // inserted junk
+            default: bad.erase(bad.begin() + long(at), bad.begin() + long(std::min(bad.size(), at + rng() % 64))); break;
+            }
+        }
+        const std::string path = dir.file("crafted.vdb");
+        writeBytes(path, bad.data(), bad.size());
+        appendIntegrityTrailer(path);
+        try {
+            (void)loadVolume(path);
+            ++loaded;
+        } catch (const VolumeIOError& e) {
+            ++refused;
+            const std::string what = e.what();
+            INFO("trial " << trial << ": " << what);
+            CHECK(what.find('\n') == std::string::npos);
+            CHECK(std::all_of(what.begin(), what.end(), [](char c) { return c >= 32 && c < 127; }));
+        }
+    }
+    CHECK(loaded + refused == 1500);
+    CHECK(refused > 1000);
 }

@@ -214,21 +214,55 @@ void writeGlb(std::ostream& os, const Mesh& mesh, const MaterialTable& materials
 
 } // namespace
 
-void writeMesh(const Mesh& mesh, const MaterialTable& materials, const std::string& path)
+MeshFormat meshFormatOf(const std::string& path)
 {
     std::string ext = fs::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    if (ext != ".obj" && ext != ".ply" && ext != ".glb")
-        throw MeshIOError("cannot tell the mesh format of '" + path + "': use a .obj, .ply or .glb file name");
-    if (mesh.normals.size() != mesh.positions.size())
-        throw MeshIOError("cannot write '" + path + "': the mesh has " + std::to_string(mesh.normals.size()) +
-                          " normals for " + std::to_string(mesh.positions.size()) + " vertices");
+    if (ext == ".obj") return MeshFormat::Obj;
+    if (ext == ".ply") return MeshFormat::Ply;
+    if (ext == ".glb") return MeshFormat::Glb;
+    throw MeshIOError("cannot tell the mesh format of '" + path + "': use a .obj, .ply or .glb file name");
+}
+
+void validateMesh(const Mesh& mesh)
+{
+    const std::size_t n = mesh.positions.size();
+    if (mesh.normals.size() != n || mesh.materials.size() != n)
+        throw MeshIOError("the mesh has " + std::to_string(mesh.normals.size()) + " normals and " +
+                          std::to_string(mesh.materials.size()) + " materials for " + std::to_string(n) + " vertices");
+    if (!mesh.triangleMaterials.empty() && mesh.triangleMaterials.size() != mesh.triangles.size())
+        throw MeshIOError("the mesh has " + std::to_string(mesh.triangleMaterials.size()) + " triangle materials for " +
+                          std::to_string(mesh.triangles.size()) + " triangles");
+    if (n > std::numeric_limits<uint32_t>::max()) throw MeshIOError("the mesh has more vertices than 32-bit indices reach");
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+        for (uint32_t v : mesh.triangles[t])
+            if (v >= n) throw MeshIOError("triangle " + std::to_string(t) + " names vertex " + std::to_string(v) + " of " + std::to_string(n));
+    for (std::size_t v = 0; v < n; ++v)
+        for (int a = 0; a < 3; ++a)
+            if (!std::isfinite(mesh.positions[v][a]) || !std::isfinite(mesh.normals[v][a]))
+                throw MeshIOError("vertex " + std::to_string(v) + " has a position or normal that is not a finite number");
+}
+
+void writeMesh(const Mesh& mesh, const MaterialTable& materials, MeshFormat format, std::ostream& out)
+{
+    validateMesh(mesh);
+    switch (format) {
+    case MeshFormat::Obj: writeObj(out, mesh, materials); break;
+    case MeshFormat::Ply: writePly(out, mesh, materials); break;
+    case MeshFormat::Glb: writeGlb(out, mesh, materials); break;
+    }
+}
+
+void writeMesh(const Mesh& mesh, const MaterialTable& materials, const std::string& path)
+{
+    const MeshFormat format = meshFormatOf(path);
     try {
-        writeFileAtomically(path, [&](std::ostream& os) {
-            if (ext == ".obj") writeObj(os, mesh, materials);
-            else if (ext == ".ply") writePly(os, mesh, materials);
-            else writeGlb(os, mesh, materials);
-        });
+        validateMesh(mesh);
+    } catch (const MeshIOError& e) {
+        throw MeshIOError("cannot write '" + path + "': " + e.what());
+    }
+    try {
+        writeFileAtomically(path, [&](std::ostream& os) { writeMesh(mesh, materials, format, os); });
     } catch (const FileWriteError& e) {
         throw MeshIOError(e.what());
     }

@@ -18,7 +18,18 @@ public:
     using std::runtime_error::runtime_error;
 };
 
-/// Picks the format from the extension (.obj, .ply or .glb, any case); throws MeshIOError otherwise.
+enum class MeshFormat { Obj, Ply, Glb };
+
+/// The format named by a path's extension (.obj, .ply or .glb, any case); throws MeshIOError otherwise.
+MeshFormat meshFormatOf(const std::string& path);
+
+/// Throws MeshIOError unless the mesh can be written: one normal and one material per vertex, triangle
+/// corners that name vertices, per-triangle materials for all triangles or none, finite positions.
+void validateMesh(const Mesh& mesh);
+
+/// Picks the format from the extension; validates the mesh first; the file is replaced atomically.
 void writeMesh(const Mesh& mesh, const MaterialTable& materials, const std::string& path);
+/// Writes a validated mesh to a stream.
+void writeMesh(const Mesh& mesh, const MaterialTable& materials, MeshFormat format, std::ostream& out);
 
 } // namespace vdbclay

@@ -30,9 +30,8 @@ struct VolumeStats {
     uint64_t memoryBytes = 0;
 };
 
-/// Voxel sizes a volume may have (world units): OpenVDB refuses transforms below ~2e-5, a volume spans
-/// +-250,000 voxels, and positions, sizes
-/// and distances stay well inside double precision throughout this range.
+/// Voxel sizes a volume may have (world units): OpenVDB refuses transforms below about 2e-5, and with a
+/// volume spanning +-250,000 voxels, positions, sizes and distances stay well inside double precision.
 constexpr double kMinVoxelSize = 1e-4, kMaxVoxelSize = 1e6;
 
 class Volume {

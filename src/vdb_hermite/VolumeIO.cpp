@@ -2,6 +2,7 @@
 
 #include "vdb_hermite/AtomicFile.h"
 #include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/PayloadCheck.h"
 
 #include <openvdb/io/Stream.h>
 #include <zlib.h>
@@ -177,6 +178,17 @@ Volume loadVolume(const std::string& path)
         if (checkIntegrity(path) != Integrity::Verified) {
             throw VolumeIOError("'" + path + "' is not a VDBClay volume: it has no VDBClay checksum trailer "
                                 "(a .vdb from another tool, or a truncated or damaged VDBClay file)");
+        }
+        // Every count and size OpenVDB will trust is checked first (PayloadCheck.h), and what it will
+        // allocate is held to a small multiple of the file's size.
+        const uint64_t payloadBytes = fs::file_size(path) - kTrailerBytes;
+        {
+            std::ifstream check(path, std::ios::binary);
+            const PayloadSummary summary = checkPayload(check, payloadBytes, path, HermiteGrid::gridType());
+            if (summary.estimatedMemoryBytes > 64 * payloadBytes + (64u << 20))
+                throw VolumeIOError("'" + path + "' is corrupt: its tree would take " +
+                                    std::to_string(summary.estimatedMemoryBytes >> 20) + " MiB for a " +
+                                    std::to_string(payloadBytes >> 10) + " KiB file");
         }
         // Parsed from a stream we own, so a read past the end (a payload that is shorter than its
         // structure says) shows up as a failed stream or a wrong end position.

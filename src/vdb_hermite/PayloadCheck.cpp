@@ -1,0 +1,275 @@
+#include "vdb_hermite/PayloadCheck.h"
+
+#include "vdb_hermite/VolumeIO.h"
+
+#include <openvdb/io/Compression.h>
+#include <openvdb/version.h>
+
+#include <array>
+#include <bitset>
+#include <cstring>
+#include <istream>
+#include <set>
+#include <tuple>
+#include <vector>
+
+namespace vdbclay {
+
+namespace {
+
+/// A bounded view of the payload: every read states what it reads, and nothing reads past the end.
+class PayloadReader {
+public:
+    PayloadReader(std::istream& in, uint64_t size, const std::string& path) : in_(in), size_(size), path_(path) {}
+
+    [[noreturn]] void fail(const std::string& what) const
+    {
+        throw VolumeIOError("'" + path_ + "' is corrupt: " + what + " (at byte " + std::to_string(pos_) + ")");
+    }
+    uint64_t remaining() const { return size_ - pos_; }
+    uint64_t position() const { return pos_; }
+
+    void read(void* out, uint64_t n, const char* what)
+    {
+        if (n > remaining()) fail(std::string(what) + " runs past the end of the payload");
+        in_.read(static_cast<char*>(out), std::streamsize(n));
+        if (!in_) fail(std::string("cannot read ") + what);
+        pos_ += n;
+    }
+    void skip(uint64_t n, const char* what)
+    {
+        if (n > remaining()) fail(std::string(what) + " runs past the end of the payload");
+        in_.seekg(std::streamoff(n), std::ios::cur);
+        if (!in_) fail(std::string("cannot read ") + what);
+        pos_ += n;
+    }
+    template<typename T>
+    T value(const char* what)
+    {
+        T v;
+        read(&v, sizeof(T), what);
+        return v;
+    }
+    /// A length-prefixed string (uint32 length), at most `maxLength` bytes.
+    std::string text(const char* what, uint32_t maxLength)
+    {
+        const uint32_t length = value<uint32_t>(what);
+        if (length > maxLength) fail(std::string(what) + " is " + std::to_string(length) + " bytes long");
+        if (length > remaining()) fail(std::string(what) + " runs past the end of the payload");
+        std::string s(length, '\0');
+        read(s.data(), length, what);
+        return s;
+    }
+
+private:
+    std::istream& in_;
+    uint64_t size_;
+    uint64_t pos_ = 0;
+    const std::string& path_;
+};
+
+/// A string from the file as it may appear in a message: printable ASCII, at most 64 characters.
+std::string printable(const std::string& s)
+{
+    std::string out;
+    for (char c : s.substr(0, 64)) out += (c >= 32 && c < 127) ? c : '?';
+    return s.size() > 64 ? out + "..." : out;
+}
+
+/// Metadata of the file or of a grid (MetaMap): each value's size must match its type, whose reader
+/// ignores the stored size for fixed-size types.
+void checkMetadata(PayloadReader& r)
+{
+    const uint32_t count = r.value<uint32_t>("the metadata count");
+    if (uint64_t(count) * 12 > r.remaining()) r.fail("the metadata count " + std::to_string(count) + " does not fit the file");
+    static const std::array<std::pair<const char*, uint32_t>, 9> kFixed{{{"bool", 1}, {"int32", 4}, {"int64", 8},
+                                                                         {"float", 4}, {"double", 8}, {"vec3i", 12},
+                                                                         {"vec3s", 12}, {"vec3d", 24}, {"vec2i", 8}}};
+    for (uint32_t i = 0; i < count; ++i) {
+        const std::string name = r.text("a metadata name", 4096);
+        const std::string type = r.text("a metadata type name", 256);
+        const uint32_t bytes = r.value<uint32_t>("a metadata size");
+        bool known = type == "string";
+        for (const auto& [fixedType, size] : kFixed) {
+            if (type != fixedType) continue;
+            known = true;
+            if (bytes != size) r.fail("metadata '" + printable(name) + "' of type " + type + " has " + std::to_string(bytes) + " bytes");
+        }
+        if (!known) r.fail("metadata '" + printable(name) + "' has a type VDBClay does not read ('" + printable(type) + "')");
+        r.skip(bytes, "a metadata value");
+    }
+}
+
+constexpr uint32_t kSupportedCompression = openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK;
+
+/// One block of `expectedBytes` values as io::readData writes them with this compression.
+void checkDataBlock(PayloadReader& r, uint64_t expectedBytes, uint32_t compression)
+{
+    if (!(compression & openvdb::io::COMPRESS_BLOSC)) {
+        r.skip(expectedBytes, "an uncompressed block");
+        return;
+    }
+    const int64_t stored = r.value<int64_t>("a compressed block's size");
+    if (stored <= 0) {
+        // Stored uncompressed: OpenVDB reads -stored bytes into a buffer of expectedBytes before it checks.
+        if (uint64_t(-stored) != expectedBytes)
+            r.fail("an uncompressed block of " + std::to_string(-stored) + " bytes where " + std::to_string(expectedBytes) + " belong");
+        r.skip(expectedBytes, "an uncompressed block");
+        return;
+    }
+    if (uint64_t(stored) > r.remaining()) r.fail("a compressed block of " + std::to_string(stored) + " bytes runs past the end of the payload");
+    // Blosc's header: version, versionlz, flags, typesize, then nbytes, blocksize, cbytes (uint32 each).
+    unsigned char header[16];
+    if (stored < 16) r.fail("a compressed block is shorter than its header");
+    r.read(header, sizeof(header), "a compressed block's header");
+    uint32_t nbytes, blocksize, cbytes;
+    std::memcpy(&nbytes, header + 4, 4);
+    std::memcpy(&blocksize, header + 8, 4);
+    std::memcpy(&cbytes, header + 12, 4);
+    if (nbytes != expectedBytes) r.fail("a compressed block expands to " + std::to_string(nbytes) + " bytes where " + std::to_string(expectedBytes) + " belong");
+    if (cbytes != uint64_t(stored)) r.fail("a compressed block's header disagrees with its size");
+    if (nbytes > 0 && blocksize == 0) r.fail("a compressed block has no block size");
+    r.skip(uint64_t(stored) - sizeof(header), "a compressed block");
+}
+
+/// A node's values as io::readCompressedValues reads them, for a node of `count` values with the given
+/// value mask (bit i: value i is active).
+template<std::size_t N>
+void checkCompressedValues(PayloadReader& r, const std::bitset<N>& valueMask, uint32_t compression)
+{
+    using openvdb::io::MASK_AND_NO_INACTIVE_VALS;
+    using openvdb::io::MASK_AND_ONE_INACTIVE_VAL;
+    using openvdb::io::MASK_AND_TWO_INACTIVE_VALS;
+    using openvdb::io::NO_MASK_AND_ALL_VALS;
+    using openvdb::io::NO_MASK_AND_ONE_INACTIVE_VAL;
+    const int8_t metadata = r.value<int8_t>("a node's compression flag");
+    if (metadata < 0 || metadata > NO_MASK_AND_ALL_VALS) r.fail("a node's compression flag is " + std::to_string(metadata));
+    constexpr uint64_t kValueBytes = 2; // MaterialValue
+    if (metadata == NO_MASK_AND_ONE_INACTIVE_VAL || metadata == MASK_AND_ONE_INACTIVE_VAL) r.skip(kValueBytes, "an inactive value");
+    if (metadata == MASK_AND_TWO_INACTIVE_VALS) r.skip(2 * kValueBytes, "two inactive values");
+    if (metadata == MASK_AND_NO_INACTIVE_VALS || metadata == MASK_AND_ONE_INACTIVE_VAL || metadata == MASK_AND_TWO_INACTIVE_VALS)
+        r.skip(N / 8, "a selection mask");
+    const bool maskCompressed = compression & openvdb::io::COMPRESS_ACTIVE_MASK;
+    const uint64_t count = maskCompressed && metadata != NO_MASK_AND_ALL_VALS ? valueMask.count() : N;
+    checkDataBlock(r, count * kValueBytes, compression);
+}
+
+template<std::size_t N>
+std::bitset<N> readMask(PayloadReader& r, const char* what)
+{
+    std::array<uint64_t, N / 64> words;
+    r.read(words.data(), sizeof(words), what);
+    std::bitset<N> mask;
+    for (std::size_t w = 0; w < words.size(); ++w)
+        for (int b = 0; b < 64; ++b)
+            if ((words[w] >> b) & 1u) mask.set(w * 64 + std::size_t(b));
+    return mask;
+}
+
+// The tree: Tree<Root, Internal<5>, Internal<4>, HermiteLeaf<3>>.
+constexpr std::size_t kUpperSize = 1u << 15, kLowerSize = 1u << 12, kLeafSize = 1u << 9;
+constexpr uint64_t kUpperBytes = 8 * kUpperSize + 2 * kUpperSize / 8 + 64; // node table, masks, header
+constexpr uint64_t kLowerBytes = 8 * kLowerSize + 2 * kLowerSize / 8 + 64;
+constexpr uint64_t kLeafBytes = 2 * kLeafSize + 64 + 192 + 48 + 64; // materials, masks, edge mask, prefix, header
+
+void checkTree(PayloadReader& r, uint32_t compression, PayloadSummary& summary)
+{
+    const uint32_t buffers = r.value<uint32_t>("the tree's buffer count");
+    if (buffers != 1) r.fail("the tree has " + std::to_string(buffers) + " buffers per node (VDBClay writes one)");
+    const uint16_t background = r.value<uint16_t>("the background value");
+    if (background != 0) r.fail("the background is material " + std::to_string(background) + ", not empty");
+    const uint32_t tiles = r.value<uint32_t>("the root's tile count");
+    const uint32_t children = r.value<uint32_t>("the root's child count");
+    if (uint64_t(tiles) * 15 > r.remaining()) r.fail(std::to_string(tiles) + " root tiles do not fit the file");
+    if (uint64_t(children) * (12 + kUpperSize / 4) > r.remaining()) r.fail(std::to_string(children) + " root children do not fit the file");
+    std::set<std::tuple<int32_t, int32_t, int32_t>> origins;
+    auto checkOrigin = [&](const int32_t c[3], const char* what) {
+        for (int a = 0; a < 3; ++a)
+            if (c[a] % 4096 != 0) r.fail(std::string(what) + " at a position that is not a multiple of 4096");
+        if (!origins.insert({c[0], c[1], c[2]}).second) r.fail(std::string("two ") + what + "s at one position");
+    };
+    for (uint32_t t = 0; t < tiles; ++t) {
+        int32_t origin[3];
+        r.read(origin, sizeof(origin), "a root tile's position");
+        checkOrigin(origin, "root tile");
+        r.skip(2, "a root tile's value");
+        const uint8_t active = r.value<uint8_t>("a root tile's state");
+        if (active > 1) r.fail("a root tile's state is neither on nor off");
+    }
+    for (uint32_t c = 0; c < children; ++c) {
+        int32_t origin[3];
+        r.read(origin, sizeof(origin), "a root child's position");
+        checkOrigin(origin, "root child");
+        ++summary.upperNodes;
+        const auto upperChildren = readMask<kUpperSize>(r, "an upper node's child mask");
+        const auto upperValues = readMask<kUpperSize>(r, "an upper node's value mask");
+        checkCompressedValues(r, upperValues, compression);
+        if (upperChildren.count() * (kLowerSize / 4) > r.remaining()) r.fail("an upper node's children do not fit the file");
+        for (std::size_t i = 0; i < upperChildren.count(); ++i) {
+            ++summary.lowerNodes;
+            const auto lowerChildren = readMask<kLowerSize>(r, "a lower node's child mask");
+            const auto lowerValues = readMask<kLowerSize>(r, "a lower node's value mask");
+            checkCompressedValues(r, lowerValues, compression);
+            const std::size_t leaves = lowerChildren.count();
+            if (leaves * (kLeafSize / 8) > r.remaining()) r.fail("a lower node's leaves do not fit the file");
+            r.skip(leaves * (kLeafSize / 8), "leaf value masks");
+            summary.leaves += leaves;
+        }
+    }
+    // The buffers: each leaf's value mask, materials, edge mask, sample count and samples.
+    for (uint64_t leaf = 0; leaf < summary.leaves; ++leaf) {
+        const auto values = readMask<kLeafSize>(r, "a leaf's value mask");
+        checkCompressedValues(r, values, compression);
+        std::array<uint64_t, 24> edges;
+        r.read(edges.data(), sizeof(edges), "a leaf's edge mask");
+        uint64_t crossings = 0;
+        for (uint64_t w : edges) crossings += uint64_t(__builtin_popcountll(w));
+        const uint32_t samples = r.value<uint32_t>("a leaf's sample count");
+        if (samples != crossings) r.fail("a leaf holds " + std::to_string(samples) + " samples for " + std::to_string(crossings) + " crossing edges");
+        if (samples > 0) checkDataBlock(r, uint64_t(samples) * 6, compression);
+    }
+    summary.estimatedMemoryBytes =
+        summary.upperNodes * kUpperBytes + summary.lowerNodes * kLowerBytes + summary.leaves * kLeafBytes;
+}
+
+} // namespace
+
+PayloadSummary checkPayload(std::istream& in, uint64_t payloadBytes, const std::string& path, const std::string& hermiteGridType)
+{
+    PayloadReader r(in, payloadBytes, path);
+    PayloadSummary summary;
+    if (r.value<int64_t>("the file's magic number") != openvdb::OPENVDB_MAGIC) r.fail("not a .vdb file");
+    const uint32_t fileVersion = r.value<uint32_t>("the file format version");
+    if (fileVersion != openvdb::OPENVDB_FILE_VERSION)
+        r.fail("OpenVDB file format " + std::to_string(fileVersion) + " where VDBClay writes " + std::to_string(openvdb::OPENVDB_FILE_VERSION));
+    r.skip(4 + 4, "the library version");
+    r.skip(1, "the grid-offsets flag");
+    r.skip(36, "the file's UUID");
+    checkMetadata(r);
+    const uint32_t grids = r.value<uint32_t>("the grid count");
+    if (grids == 0) r.fail("the file holds no grid");
+    if (grids > 1024) r.fail("the grid count is " + std::to_string(grids));
+    for (uint32_t g = 0; g < grids; ++g) {
+        const std::string name = r.text("a grid name", 4096);
+        const std::string type = r.text("a grid type name", 256);
+        if (type != hermiteGridType)
+            throw VolumeIOError("'" + path + "' is a .vdb file without a VDBClay Hermite grid; it holds: " + printable(name) +
+                                " (" + printable(type) + ")");
+        if (!r.text("a grid's instance parent", 4096).empty()) r.fail("an instanced grid (VDBClay writes none)");
+        r.skip(3 * 8, "a grid's stream positions");
+        const uint32_t compression = r.value<uint32_t>("a grid's compression flags");
+        if (compression & ~kSupportedCompression) r.fail("compression flags " + std::to_string(compression) + " VDBClay does not write");
+        checkMetadata(r);
+        const std::string map = r.text("the transform's map type", 256);
+        uint64_t doubles = 0;
+        if (map == "UniformScaleMap") doubles = 15;
+        else if (map == "UniformScaleTranslateMap") doubles = 18;
+        else r.fail("a transform of type '" + printable(map) + "' (VDBClay writes uniform scales)");
+        r.skip(doubles * 8, "the transform");
+        checkTree(r, compression, summary);
+    }
+    if (r.remaining() != 0) r.fail("the grids end " + std::to_string(r.remaining()) + " bytes before the checksum");
+    return summary;
+}
+
+} // namespace vdbclay
