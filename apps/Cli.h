@@ -126,6 +126,8 @@ struct SelftestOptions {
     uint64_t first = 0;
     std::string failurePath;
     bool keepGoing = false;
+    bool sweep = false;
+    double sweepFrom = 40.0, sweepTo = 100.0, sweepStep = 0.25;
     bool json = false;
 };
 CLI::App* addSelftestCommand(CLI::App& parent, SelftestOptions& options);

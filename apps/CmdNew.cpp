@@ -17,31 +17,6 @@ namespace {
 /// Largest primitive extent, in voxels, that `new` accepts (keeps a typo from eating all memory).
 constexpr double kMaxExtentVoxels = 2048.0;
 
-Primitive primitiveFor(Shape shape, double s)
-{
-    Primitive p;
-    p.shape = shape;
-    switch (shape) {
-    case Shape::Sphere: p.radius = s; break;
-    case Shape::Box: p.size = Vec3d(s); break;
-    case Shape::Cylinder:
-    case Shape::Cone:
-        p.radius = s;
-        p.height = 2.0 * s;
-        break;
-    case Shape::Capsule:
-        p.radius = s;
-        p.length = s;
-        break;
-    case Shape::Torus:
-        p.radius = s;
-        p.minorRadius = s / 4.0;
-        break;
-    case Shape::HalfSpace: break;
-    }
-    return p;
-}
-
 } // namespace
 
 CLI::App* addNewCommand(CLI::App& parent, NewOptions& o)
@@ -106,7 +81,7 @@ int runNew(const NewOptions& o)
     } else {
         op.material = *volume.materials().find("default");
     }
-    const Primitive primitive = primitiveFor(shape, o.size);
+    const Primitive primitive = primitiveOfSize(shape, o.size);
     try {
         primitive.validate();
     } catch (const std::invalid_argument& e) {

@@ -14,10 +14,14 @@ Usage: bash scripts/bootstrap.sh demo|test
        bash scripts/bootstrap.sh --help
 
   demo   install missing packages, build, then run `build/bin/vdbclay demo --out demo-out`
-  test   install missing packages, build, then run the tests (`ctest --test-dir build`)
+  test   install missing packages, build, then run every test:
+           1. the Catch2 suite on the Release build (`ctest --test-dir build`);
+           2. the same suite built with AddressSanitizer and UBSan by clang (build-asan/);
+           3. each libFuzzer target (.vdb reader, stroke scripts, mesh writers) for FUZZ_SECONDS.
 
 Every step is skipped when it is already done, so a second run only rebuilds what changed.
-Environment: BUILD_JOBS (default 2) sets the parallel build and test jobs.
+Environment: BUILD_JOBS (default 2) sets the parallel build and test jobs; FUZZ_SECONDS (default 60)
+the time per fuzz target; SANITIZER_TESTS=0 skips steps 2 and 3.
 USAGE
 }
 
@@ -43,6 +47,7 @@ packages=(
     cmake ninja-build g++ ccache
     libopenvdb-dev libtbb-dev libblosc-dev libboost-iostreams-dev libimath-dev zlib1g-dev
     libeigen3-dev catch2 nlohmann-json3-dev libcli11-dev
+    clang-14 libclang-rt-14-dev
 )
 
 installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q 'install ok installed'; }
@@ -85,5 +90,19 @@ case "$action" in
     test)
         step "test: ctest --test-dir build --output-on-failure -j${jobs}"
         ctest --test-dir build --output-on-failure -j"${jobs}"
+        if [[ "${SANITIZER_TESTS:-1}" != 0 ]]; then
+            if [[ ! -f build-asan/build.ninja ]]; then
+                step "configure: build-asan/ (clang, AddressSanitizer + UBSan, libFuzzer targets)"
+                cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++-14 \
+                    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DVDBCLAY_SANITIZE=ON
+            fi
+            step "build: ninja -C build-asan -j${jobs}"
+            ninja -C build-asan -j"${jobs}"
+            step "test: the suite under AddressSanitizer and UBSan"
+            ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+                ctest --test-dir build-asan --output-on-failure -j"${jobs}"
+            step "test: fuzzers, ${FUZZ_SECONDS:-60} s each"
+            bash scripts/run-fuzzers.sh build-asan "${FUZZ_SECONDS:-60}"
+        fi
         ;;
 esac

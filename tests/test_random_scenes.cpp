@@ -18,6 +18,7 @@ void checkScenes(uint64_t seed, uint64_t count)
     }
 }
 
+
 } // namespace
 
 TEST_CASE("random scenes: the same seed and index give the same scene", "[random]")
@@ -36,3 +37,33 @@ TEST_CASE("random scenes, seed 2: lattice, closed meshes, volume, pieces, re-mes
 {
     checkScenes(2, 150);
 }
+
+// Every primitive of `vdbclay new`, every quarter voxel from 40 to 100 voxels (integer sizes put faces
+// on lattice planes and spheres through lattice points), meshed by the default mesher: closed
+// 2-manifold and the exact volume. `vdbclay selftest --sweep` runs it with every mesher.
+namespace {
+
+void sweepSizes(const char* shape)
+{
+    SceneCheckOptions options;
+    options.checkLattice = false;
+    options.compareThreads = false;
+    options.checkIncremental = false;
+    options.adaptiveOnly = true;
+    options.volumeSamples = 4000;
+    for (double size = 40.0; size <= 100.0; size += 0.25) {
+        const RandomScene scene = primitiveScene(shape, size, 1.0);
+        const SceneCheckResult result = checkScene(scene, options);
+        INFO(shape << " of size " << size << ": " << sceneReport(scene, result));
+        REQUIRE(result.passed);
+    }
+}
+
+} // namespace
+
+TEST_CASE("size sweep 40 .. 100 voxels: spheres", "[random][sweep]") { sweepSizes("sphere"); }
+TEST_CASE("size sweep 40 .. 100 voxels: boxes", "[random][sweep]") { sweepSizes("box"); }
+TEST_CASE("size sweep 40 .. 100 voxels: cylinders", "[random][sweep]") { sweepSizes("cylinder"); }
+TEST_CASE("size sweep 40 .. 100 voxels: capsules", "[random][sweep]") { sweepSizes("capsule"); }
+TEST_CASE("size sweep 40 .. 100 voxels: tori", "[random][sweep]") { sweepSizes("torus"); }
+TEST_CASE("size sweep 40 .. 100 voxels: cones", "[random][sweep]") { sweepSizes("cone"); }

@@ -117,6 +117,31 @@ Shape parseShape(const std::string& name)
                                 "' (expected sphere, box, cylinder, capsule, torus, cone or half-space)");
 }
 
+Primitive primitiveOfSize(Shape shape, double s)
+{
+    Primitive p;
+    p.shape = shape;
+    switch (shape) {
+    case Shape::Sphere: p.radius = s; break;
+    case Shape::Box: p.size = Vec3d(s); break;
+    case Shape::Cylinder:
+    case Shape::Cone:
+        p.radius = s;
+        p.height = 2.0 * s;
+        break;
+    case Shape::Capsule:
+        p.radius = s;
+        p.length = s;
+        break;
+    case Shape::Torus:
+        p.radius = s;
+        p.minorRadius = s / 4.0;
+        break;
+    case Shape::HalfSpace: break;
+    }
+    return p;
+}
+
 bool WorldBounds::bounded() const
 {
     for (int i = 0; i < 3; ++i) {

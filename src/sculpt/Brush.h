@@ -40,6 +40,10 @@ struct Primitive {
     void validate() const;
 };
 
+/// The primitive `vdbclay new --size S` makes: a sphere of radius S, a box of half-extent S, a cylinder or
+/// cone of radius S and height 2S, a capsule of radius S and length S, a torus of radii S and S/4.
+Primitive primitiveOfSize(Shape shape, double size);
+
 /// Translation, rotation (Euler degrees about world axes, x first: R = Rz*Ry*Rx) and per-axis scale.
 struct Placement {
     Vec3d translation{0.0, 0.0, 0.0};

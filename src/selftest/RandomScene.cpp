@@ -1,10 +1,13 @@
 #include "selftest/RandomScene.h"
 
+#include "sculpt/Brush.h"
+
 #include <nlohmann/json.hpp>
 
 #include <array>
 #include <cmath>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 namespace vdbclay {
@@ -185,6 +188,29 @@ RandomScene randomScene(uint64_t seed, uint64_t index)
     }
     script["ops"] = ops;
     scene.script = script.dump();
+    return scene;
+}
+
+RandomScene primitiveScene(const std::string& shape, double size, double voxelSize, uint64_t index)
+{
+    RandomScene scene;
+    scene.index = index;
+    scene.voxelSize = voxelSize;
+    const Primitive p = primitiveOfSize(parseShape(shape), size);
+    json brush{{"shape", shape}};
+    switch (p.shape) {
+    case Shape::Sphere: brush["radius"] = p.radius; break;
+    case Shape::Box: brush["size"] = json::array({p.size.x(), p.size.y(), p.size.z()}); break;
+    case Shape::Cylinder:
+    case Shape::Cone: brush["radius"] = p.radius, brush["height"] = p.height; break;
+    case Shape::Capsule: brush["radius"] = p.radius, brush["length"] = p.length; break;
+    case Shape::Torus: brush["radius"] = p.radius, brush["minor_radius"] = p.minorRadius; break;
+    case Shape::HalfSpace: throw std::invalid_argument("a half-space has no size");
+    }
+    json ops = json::array();
+    ops.push_back({{"mode", "remove"}, {"brush", {{"shape", "half-space"}, {"normal", {0, 1, 0}}}}, {"at", {0, 1e6, 0}}});
+    ops.push_back({{"mode", "add"}, {"brush", brush}});
+    scene.script = json{{"ops", ops}}.dump();
     return scene;
 }
 

@@ -19,4 +19,8 @@ struct RandomScene {
 /// Scene `index` of the sequence `seed`: the same pair always gives the same scene.
 RandomScene randomScene(uint64_t seed, uint64_t index);
 
+/// One primitive of `vdbclay new --shape NAME --size S` (primitiveOfSize) at the origin, for sweeps of
+/// sizes; `index` only labels the scene.
+RandomScene primitiveScene(const std::string& shape, double size, double voxelSize, uint64_t index = 0);
+
 } // namespace vdbclay

@@ -19,13 +19,16 @@ struct SceneCheckResult {
     bool passed = true;
     std::string failure;      // the first check that failed, in words
     std::size_t triangles = 0; // of the adaptive CMS mesh
-    double volume = 0.0;      // enclosed by the uniform CMS mesh, world units cubed
+    double volume = 0.0;      // enclosed by the uniform (or, adaptiveOnly, adaptive) CMS mesh
     double exactVolume = 0.0; // the Monte Carlo estimate
 };
 
 struct SceneCheckOptions {
     std::size_t volumeSamples = 20000; // Monte Carlo points for the exact volume
     bool compareThreads = true;        // also run on one and two threads
+    bool checkIncremental = true;      // re-mesh op by op and compare with a full re-mesh
+    bool checkLattice = true;          // every voxel corner against the exact replay
+    bool adaptiveOnly = false;         // mesh with the default mesher (adaptive CMS) only
 };
 
 SceneCheckResult checkScene(const RandomScene& scene, const SceneCheckOptions& options = {});

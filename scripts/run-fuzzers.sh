@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Runs each libFuzzer target of a sanitizer build for a bounded time on a copy of its seed corpus.
+#   bash scripts/run-fuzzers.sh BUILD_DIR [SECONDS_PER_TARGET]
+# A crash, a leak, a sanitizer report or a timeout fails the run; the input that caused it is left in
+# BUILD_DIR/fuzz-artifacts/.
+set -euo pipefail
+build="${1:?usage: run-fuzzers.sh BUILD_DIR [SECONDS]}"
+seconds="${2:-60}"
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+artifacts="$build/fuzz-artifacts"
+mkdir -p "$artifacts"
+for target in vdb_reader script_parser mesh_writers; do
+    corpus_name="${target%%_*}"
+    case "$target" in
+        vdb_reader) corpus_name=vdb ;;
+        script_parser) corpus_name=script ;;
+        mesh_writers) corpus_name=mesh ;;
+    esac
+    work="$build/fuzz-corpus/$target"
+    mkdir -p "$work"
+    cp -n "$repo/tests/fuzz/corpus/$corpus_name/"* "$work/" 2>/dev/null || true
+    printf '==> fuzz %s for %ss\n' "$target" "$seconds"
+    ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+        "$build/tests/fuzz/fuzz_$target" "$work" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=2048 \
+        -max_len=65536 -print_final_stats=1 -artifact_prefix="$artifacts/$target-" 2>&1 | tail -n 12
+    status=${PIPESTATUS[0]}
+    if [[ $status -ne 0 ]]; then
+        printf 'fuzz %s failed (exit %s); inputs in %s\n' "$target" "$status" "$artifacts" >&2
+        exit 1
+    fi
+done
