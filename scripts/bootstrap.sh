@@ -42,7 +42,7 @@ repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$repo"
 jobs="${BUILD_JOBS:-2}"
 
-# --- packages (Debian 12 bookworm; see docs/ARCHITECTURE.md and /work/shared/docs/PLATFORM.md) -----
+# --- packages (Debian 12 bookworm; docs/ARCHITECTURE.md says what each is for) ---------------------
 packages=(
     cmake ninja-build g++ ccache
     libopenvdb-dev libtbb-dev libblosc-dev libboost-iostreams-dev libimath-dev zlib1g-dev
