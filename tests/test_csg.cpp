@@ -581,7 +581,8 @@ TEST_CASE("a fast stroke leaves no gaps", "[csg][stroke]")
         {{-20.0, 0.3, 0.2}, {20.0, 0.3, 0.2}},                          // along x
         {{-11.0, -13.0, 7.0}, {-11.0 + 23.0, -13.0 + 28.0, 7.0 + 18.0}}, // oblique, length ~40.6
     };
-    for (const auto& [a, b] : paths) {
+    for (const auto& path : paths) {
+        const Vec3d a = path.first, b = path.second; // plain variables: lambdas below capture them
         INFO("path " << a << " -> " << b);
         const double L = (b - a).length();
         REQUIRE(L >= 40.0);

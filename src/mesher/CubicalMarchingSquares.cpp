@@ -1099,9 +1099,12 @@ private:
             massPoint += p;
             ++planes;
         };
-        // The vertex stays in the cell, or reaches as far as the component's face points do.
+        // The vertex stays in the cell, or reaches as far as the component's face points do within
+        // their faces' planes; across a face it stays inset, or the cell beside it could put its vertex
+        // at the same place (a cone's apex on a lattice plane).
         Eigen::Vector3d lo, hi;
         cellBounds(lo, hi);
+        const double vs = ctx_.voxelSize, onPlane = 1e-9 * vs;
         for (const int s : loop) {
             const Segment& seg = segments_[s];
             const auto& p = seg.in.position;
@@ -1109,9 +1112,13 @@ private:
             for (int k = 0; k < seg.points.count; ++k) {
                 const FacePoint& point = seg.points.items[k];
                 if (point.transition) addPlane(point.position, point.interfaceNormal);
-                const Eigen::Vector3d at(point.position[0], point.position[1], point.position[2]);
-                lo = lo.cwiseMin(at);
-                hi = hi.cwiseMax(at);
+                for (int a = 0; a < 3; ++a) {
+                    const double c = point.position[a];
+                    const double cellLo = base_[a] * vs, cellHi = (base_[a] + width_) * vs;
+                    if (std::fabs(c - cellLo) < onPlane || std::fabs(c - cellHi) < onPlane) continue;
+                    lo[a] = std::min(lo[a], c);
+                    hi[a] = std::max(hi[a], c);
+                }
             }
         }
         return sharpVertex(ata, atb, massPoint / double(planes), normalSum, lo, hi);

@@ -3,7 +3,7 @@
 //   - every voxel corner holds the material the exact replay of the ops gives it (ExactScene);
 //   - Marching Cubes, uniform CMS and adaptive CMS each give a closed 2-manifold (analyzeTopology);
 //   - the CMS mesh encloses the scene's exact volume, estimated by Monte Carlo, within its error bound;
-//   - uniform and adaptive CMS have the same number of connected pieces, and no more than MC has;
+//   - uniform and adaptive CMS have the same number of connected pieces;
 //   - re-meshing after each op (MeshChunkSet::update) gives exactly the full re-mesh;
 //   - one and two threads give bit-identical volumes and meshes.
 #pragma once
