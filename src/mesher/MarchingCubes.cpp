@@ -5,9 +5,41 @@
 // case come from that face walk, done once at compile time (CellTopology.h).
 #include "mesher/CellGrid.h"
 
+#include <array>
+#include <cmath>
 #include <unordered_map>
 
 namespace vdbclay::mesher_detail {
+
+namespace {
+
+/// Whether two cell edges lie on one face of the cell.
+constexpr bool edgesShareFace(int e1, int e2)
+{
+    for (int axis = 0; axis < 3; ++axis) {
+        if (e1 / 4 == axis || e2 / 4 == axis) continue;
+        if (cornerBit(edgeLowCorner(e1), axis) == cornerBit(edgeLowCorner(e2), axis)) return true;
+    }
+    return false;
+}
+
+/// The loop position to fan from: one whose diagonals all cross the cell's inside. A diagonal between
+/// two crossings of one face (a loop that visits an ambiguous face twice) would lie in that face, where
+/// the cell beside it can fan the same edge: four triangles on one edge. -1 when every position has one.
+int fanApex(const uint8_t* edges, int size)
+{
+    for (int k = 0; k < size; ++k) {
+        bool clear = true;
+        for (int j = 0; j < size && clear; ++j) {
+            const int gap = (j - k + size) % size;
+            if (gap > 1 && gap < size - 1) clear = !edgesShareFace(edges[k], edges[j]);
+        }
+        if (clear) return k;
+    }
+    return -1;
+}
+
+} // namespace
 
 MeshChunk meshLeafMarchingCubes(const HermiteLeaf& leaf, ConstAccessor& acc, double voxelSize)
 {
@@ -32,9 +64,32 @@ MeshChunk meshLeafMarchingCubes(const HermiteLeaf& leaf, ConstAccessor& acc, dou
                 }
                 ids[v] = it->second;
             }
-            for (int v = 1; v + 1 < size; ++v) {
-                chunk.mesh.triangles.push_back({ids[0], ids[v], ids[v + 1]});
-                chunk.mesh.triangleMaterials.push_back(chunk.mesh.materials[ids[0]]);
+            const int apex = fanApex(&cell.edges[begin], size);
+            if (apex >= 0) {
+                for (int v = 1; v + 1 < size; ++v) {
+                    const uint32_t a = ids[apex], b = ids[(apex + v) % size], c = ids[(apex + v + 1) % size];
+                    chunk.mesh.triangles.push_back({a, b, c});
+                    chunk.mesh.triangleMaterials.push_back(chunk.mesh.materials[a]);
+                }
+                continue;
+            }
+            // No such position: fan from the loop's mean point, a vertex of this cell alone.
+            std::array<float, 3> centre{0.0f, 0.0f, 0.0f}, normal{0.0f, 0.0f, 0.0f};
+            for (int v = 0; v < size; ++v)
+                for (int a = 0; a < 3; ++a) {
+                    centre[a] += chunk.mesh.positions[ids[v]][a] / float(size);
+                    normal[a] += chunk.mesh.normals[ids[v]][a];
+                }
+            const float length = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+            for (float& n : normal) n = length > 0.0f ? n / length : 0.0f;
+            const uint32_t c = uint32_t(chunk.mesh.positions.size());
+            chunk.mesh.positions.push_back(centre);
+            chunk.mesh.normals.push_back(normal);
+            chunk.mesh.materials.push_back(chunk.mesh.materials[ids[0]]);
+            chunk.vertexKeys.push_back(kUnsharedVertex);
+            for (int v = 0; v < size; ++v) {
+                chunk.mesh.triangles.push_back({c, ids[v], ids[(v + 1) % size]});
+                chunk.mesh.triangleMaterials.push_back(chunk.mesh.materials[ids[v]]);
             }
         }
     });
