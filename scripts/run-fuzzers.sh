@@ -20,7 +20,7 @@ for target in vdb_reader script_parser mesh_writers; do
     mkdir -p "$work"
     cp -n "$repo/tests/fuzz/corpus/$corpus_name/"* "$work/" 2>/dev/null || true
     printf '==> fuzz %s for %ss\n' "$target" "$seconds"
-    ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+    ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=$repo/tests/sanitizer/ubsan.supp" \
         "$build/tests/fuzz/fuzz_$target" "$work" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=2048 \
         -max_len=65536 -print_final_stats=1 -artifact_prefix="$artifacts/$target-" 2>&1 | tail -n 12
     status=${PIPESTATUS[0]}

@@ -541,35 +541,28 @@ void checkCsgLimits(double vs, const MaterialTable& materials, const SdfField& b
     const WorldBounds wb = brush.bounds();
     if (op.mode == CsgMode::Add && !wb.bounded()) throw std::invalid_argument("cannot add an unbounded brush (half-space)");
     if (!wb.bounded()) return; // it works within the solid's bounds, which the limits below already held to
-    for (int i = 0; i < 3; ++i) {
-        const double reach = std::max(std::fabs(wb.min[i]), std::fabs(wb.max[i])) / vs;
-        if (!(reach <= kMaxReachVoxels)) {
-            char text[200];
-            std::snprintf(text, sizeof(text),
-                          "the brush reaches %.4g voxels from the origin; volumes span at most %.0f voxels each way "
-                          "(move it closer or raise the voxel size)",
-                          reach, kMaxReachVoxels);
-            throw std::invalid_argument(text);
-        }
-    }
+    // Numbers in messages: three significant digits ("9e+08", "6.1e+07").
+    auto n = [](double v) {
+        char text[32];
+        std::snprintf(text, sizeof(text), "%.3g", v);
+        return std::string(text);
+    };
+    double reach = 0.0;
+    for (int i = 0; i < 3; ++i) reach = std::max({reach, std::fabs(wb.min[i]) / vs, std::fabs(wb.max[i]) / vs});
+    if (!(reach <= kMaxReachVoxels))
+        throw std::invalid_argument("the brush reaches " + n(reach) + " voxels from the origin; volumes span at most " +
+                                    n(kMaxReachVoxels) + " voxels each way (move it closer or raise the voxel size)");
     const double surface = brush.surfaceAreaBound() / (vs * vs);
-    if (!(surface <= kMaxSurfaceVoxels)) {
-        char text[200];
-        std::snprintf(text, sizeof(text),
-                      "the brush's surface spans about %.3g voxels, more than the %.0e an edit may make (about 9 GB "
-                      "of leaves); raise the voxel size or use a smaller brush",
-                      surface, kMaxSurfaceVoxels);
-        throw std::invalid_argument(text);
-    }
+    if (!(surface <= kMaxSurfaceVoxels))
+        throw std::invalid_argument("the brush's surface covers about " + n(surface) + " square voxels, more than the " +
+                                    n(kMaxSurfaceVoxels) + " an edit may make (about 9 GB of leaves); raise the "
+                                    "voxel size or use a smaller brush");
     const double evaluations = 30.0 * surface * brush.evaluationCost();
-    if (!(evaluations <= kMaxDistanceEvaluations)) {
-        char text[240];
-        std::snprintf(text, sizeof(text),
-                      "the edit would take about %.3g distance evaluations (%.3g surface voxels, %.3g per evaluation: "
-                      "blend parts, stroke search), more than the %.0e allowed; use fewer parts or a shorter stroke",
-                      evaluations, surface, brush.evaluationCost(), kMaxDistanceEvaluations);
-        throw std::invalid_argument(text);
-    }
+    if (!(evaluations <= kMaxDistanceEvaluations))
+        throw std::invalid_argument("the edit would take about " + n(evaluations) + " distance evaluations (" +
+                                    n(surface) + " surface voxels, " + n(brush.evaluationCost()) +
+                                    " per evaluation: blend parts, stroke search), more than the " +
+                                    n(kMaxDistanceEvaluations) + " allowed; use fewer parts or a shorter stroke");
 }
 
 EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
