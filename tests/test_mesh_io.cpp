@@ -8,6 +8,7 @@
 
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
@@ -254,4 +255,30 @@ TEST_CASE("GLB primitives follow per-triangle materials when the mesh has them",
         indices += count;
     }
     CHECK(indices == 3 * mesh.triangleCount());
+}
+
+TEST_CASE("OBJ positions round-trip to float precision far from the origin", "[meshio]")
+{
+    Mesh mesh;
+    mesh.positions = {{10000.123f, -9999.877f, 0.3f}, {10000.5f, -9999.5f, 1.0f}, {10001.25f, -9998.75f, 2.0f}};
+    mesh.normals.assign(3, {0.0f, 0.0f, 1.0f});
+    mesh.materials.assign(3, 1);
+    mesh.triangles = {{0, 1, 2}};
+    TempDir dir;
+    writeMesh(mesh, MaterialTable{}, dir.file("far.obj"));
+    std::ifstream in(dir.file("far.obj"));
+    std::string line;
+    std::size_t v = 0;
+    while (std::getline(in, line)) {
+        if (line.rfind("v ", 0) != 0) continue;
+        std::istringstream fields(line.substr(2));
+        float x, y, z;
+        fields >> x >> y >> z;
+        REQUIRE(v < 3);
+        CHECK(x == mesh.positions[v][0]); // bit-exact: 9 significant digits
+        CHECK(y == mesh.positions[v][1]);
+        CHECK(z == mesh.positions[v][2]);
+        ++v;
+    }
+    CHECK(v == 3);
 }

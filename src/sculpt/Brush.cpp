@@ -338,6 +338,11 @@ double SdfField::surfaceAreaBound() const
     return 2.0 * (d.x() * d.y() + d.y() * d.z() + d.z() * d.x());
 }
 
+Vec3d SweptBrush::gradient(const Vec3d& world, double step) const
+{
+    return SdfField::gradient(world, capsuleRadius_ > 0.0 ? step : std::max(step, 1e-3 * reach_));
+}
+
 double SweptBrush::surfaceAreaBound() const
 {
     const double tube = 2.0 * kPi * reach_ * pathLength_ + 4.0 * kPi * reach_ * reach_;

@@ -145,6 +145,9 @@ public:
     double distance(const Vec3d& world) const override;
     WorldBounds bounds() const override;
     double innerRadius() const override { return brush_.innerRadius(); }
+    /// Finite differences no finer than the window search's precision (a thousandth of the reach), except
+    /// for a swept sphere, whose distance is exact.
+    Vec3d gradient(const Vec3d& world, double step) const override;
     /// The tube around the path the brush's reach sweeps, or the bounds' box where that is smaller.
     double surfaceAreaBound() const override;
     /// The brush evaluated along the pieces near a point (about four, with a window search each).

@@ -163,9 +163,14 @@ double findCrossing(const EditContext& ctx, const Vec3d& p0, const Vec3d& edge, 
     return denom != 0.0 ? std::clamp(lo + (hi - lo) * flo / denom, lo, hi) : 0.5 * (lo + hi);
 }
 
+/// The offset a crossing at t is stored with (kept off the voxel corners).
+double storedOffset(double t) { return dequantizeOffset(quantizeOffset(t)); }
+
 Vec3d brushGradient(const EditContext& ctx, const Vec3d& p, int axis)
 {
-    const Vec3d g = ctx.field.gradient(p, 1e-3 * ctx.voxelSize);
+    // A tiny step: a crossing can lie 2.4e-4 voxel from a box's edge (a face on a lattice plane), and a
+    // stencil wider than that mixes the two faces' normals there.
+    const Vec3d g = ctx.field.gradient(p, 1e-6 * ctx.voxelSize);
     if (g.lengthSqr() > 0.0) return g;
     Vec3d fallback(0.0);
     fallback[axis] = 1.0;
@@ -188,7 +193,9 @@ bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValu
         const bool inA = d0 + off < 0.0, inB = d1 + off < 0.0;
         const MaterialValue before = ctx.apply(m0, inA), after = ctx.apply(m0, inB);
         if (before == after) return false;
-        const double t = findCrossing(ctx, p0, edge, 0.0, 1.0, d0 + off, d1 + off, off);
+        // The normal is taken where the crossing is stored: kept off the corner, as a box edge through the
+        // corner has no single normal there.
+        const double t = storedOffset(findCrossing(ctx, p0, edge, 0.0, 1.0, d0 + off, d1 + off, off));
         ++crossings;
         Vec3d normal = brushGradient(ctx, p0 + edge * t, axis); // points out of the brush
         if (!(inA ? before : after).solid()) normal = -normal; // surface normals point into empty space
@@ -241,7 +248,7 @@ bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValu
         out = *old;
         return true;
     }
-    double t = b.t;
+    double t = storedOffset(b.t);
     Vec3d normal;
     if (b.kind == Kind::Brush) {
         normal = brushGradient(ctx, p0 + edge * t, axis); // points out of the brush
