@@ -259,10 +259,14 @@ TEST_CASE("scripts that ask for absurd work are refused before any op runs, nami
     refuse({{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 6}}}, {"path", {{-1e6, 0, 0}, {1e6, 0, 0}}}},
            "ops[1]: the brush reaches 1e+06 voxels");
     refuse({{"mode", "add"}, {"brush", {{"shape", "box"}, {"size", {5000, 5000, 5000}}}}}, "more than the 6e+07 an edit may make");
-    // A long stroke across the volume: its tube's surface, not its bounds' box, is what counts.
+    // Long strokes across the volume: too many brush widths, or a tube with too much surface (its
+    // tube's surface, not its bounds' box, is what counts). Both are refused before anything is built.
     json path = json::array();
     for (int i = 0; i < 4000; ++i) path.push_back({(i % 2 ? 1 : -1) * 100000.0, 0.0, i * 0.01});
-    refuse({{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 30}}}, {"path", path}}, "an edit may make");
+    refuse({{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 30}}}, {"path", path}},
+           "brush reaches long, more than the 1000000 allowed");
+    path.erase(path.begin() + 400, path.end());
+    refuse({{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 300}}}, {"path", path}}, "an edit may make");
 }
 
 TEST_CASE("scripts over the size limits of paths and blends are refused while parsing", "[script][limits]")

@@ -422,36 +422,53 @@ SweptBrush::SweptBrush(Brush brush, std::vector<Vec3d> path) : brush_(std::move(
     step_ = std::max(0.25 * brush_.innerRadius(), 1e-6);
     capsuleRadius_ = brush_.roundSphereRadius();
 
-    // Pieces at most one reach long; cells two reaches wide. A piece is listed in every cell within
-    // reach + half a cell of it, so a point in a cell sees every piece whose brush reaches within half
-    // a cell of it: the pieces it does not see are farther than that.
+    // Pieces at most one reach long; cells two reaches wide (built in grid()).
     const double pieceLength = std::max(reach_, 1e-9);
     cell_ = 2.0 * pieceLength;
-    for (std::size_t i = 0; i + 1 < path_.size() || i == 0; ++i) {
-        const Vec3d a = path_[i], b = path_.size() > 1 ? path_[i + 1] : path_[i];
-        const double len = (b - a).length();
+    double pieces = 0.0;
+    for (std::size_t i = 0; i + 1 < path_.size(); ++i) {
+        const double len = (path_[i + 1] - path_[i]).length();
         pathLength_ += len;
-        const int count = std::max(1, int(std::ceil(len / pieceLength)));
-        const Vec3d dir = len > 1e-12 ? (b - a) / len : Vec3d(0.0);
-        for (int k = 0; k < count; ++k) {
-            const double t0 = len * k / count, t1 = len * (k + 1) / count;
-            pieces_.push_back({a + dir * t0, dir, t1 - t0});
-        }
-        if (path_.size() == 1) break;
+        pieces += std::max(1.0, std::ceil(len / pieceLength));
     }
-    const double grow = reach_ + 0.5 * cell_;
-    for (uint32_t id = 0; id < pieces_.size(); ++id) {
-        const Piece& piece = pieces_[id];
-        const Vec3d end = piece.start + piece.direction * piece.length;
-        int64_t lo[3], hi[3];
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = int64_t(std::floor((std::min(piece.start[a], end[a]) - grow) / cell_));
-            hi[a] = int64_t(std::floor((std::max(piece.start[a], end[a]) + grow) / cell_));
+    if (!(pieces <= kMaxPieces))
+        throw std::invalid_argument("the stroke is " + std::to_string(int64_t(std::min(pieces, 1e18))) +
+                                    " brush reaches long, more than the 1000000 allowed (use a larger brush or a "
+                                    "shorter path)");
+}
+
+const SweptBrush::PieceGrid& SweptBrush::grid() const
+{
+    // A piece is listed in every cell within reach + half a cell of it, so a point in a cell sees every
+    // piece whose brush reaches within half a cell of it: the pieces it does not see are farther away.
+    std::call_once(grid_->built, [this] {
+        PieceGrid& g = *grid_;
+        const double pieceLength = 0.5 * cell_;
+        for (std::size_t i = 0; i + 1 < path_.size(); ++i) {
+            const Vec3d a = path_[i], b = path_[i + 1];
+            const double len = (b - a).length();
+            const int count = std::max(1, int(std::ceil(len / pieceLength)));
+            const Vec3d dir = len > 1e-12 ? (b - a) / len : Vec3d(0.0);
+            for (int k = 0; k < count; ++k) {
+                const double t0 = len * k / count, t1 = len * (k + 1) / count;
+                g.pieces.push_back({a + dir * t0, dir, t1 - t0});
+            }
         }
-        for (int64_t i = lo[0]; i <= hi[0]; ++i)
-            for (int64_t j = lo[1]; j <= hi[1]; ++j)
-                for (int64_t k = lo[2]; k <= hi[2]; ++k) grid_[cellHash(i, j, k)].push_back(id);
-    }
+        const double grow = reach_ + 0.5 * cell_;
+        for (uint32_t id = 0; id < g.pieces.size(); ++id) {
+            const Piece& piece = g.pieces[id];
+            const Vec3d end = piece.start + piece.direction * piece.length;
+            int64_t lo[3], hi[3];
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = int64_t(std::floor((std::min(piece.start[a], end[a]) - grow) / cell_));
+                hi[a] = int64_t(std::floor((std::max(piece.start[a], end[a]) + grow) / cell_));
+            }
+            for (int64_t i = lo[0]; i <= hi[0]; ++i)
+                for (int64_t j = lo[1]; j <= hi[1]; ++j)
+                    for (int64_t k = lo[2]; k <= hi[2]; ++k) g.cells[cellHash(i, j, k)].push_back(id);
+        }
+    });
+    return *grid_;
 }
 
 uint64_t SweptBrush::cellHash(int64_t i, int64_t j, int64_t k) const
@@ -468,10 +485,11 @@ uint64_t SweptBrush::cellHash(const Vec3d& p) const
 double SweptBrush::distance(const Vec3d& x) const
 {
     if (path_.size() == 1) return brush_.distanceAt(x, path_.front());
-    const auto found = grid_.find(cellHash(x));
+    const PieceGrid& g = grid();
+    const auto found = g.cells.find(cellHash(x));
     double best = 0.5 * cell_; // every piece not listed here lies farther away
-    if (found == grid_.end()) return best;
-    for (uint32_t id : found->second) best = std::min(best, pieceDistance(pieces_[id], x, best));
+    if (found == g.cells.end()) return best;
+    for (uint32_t id : found->second) best = std::min(best, pieceDistance(g.pieces[id], x, best));
     return best;
 }
 

@@ -8,6 +8,8 @@
 #include <openvdb/math/Vec3.h>
 
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -139,9 +141,14 @@ private:
 /// longer than the brush is wide, kept in a hash grid by the cells their reach overlaps, so a stroke
 /// costs about the voxels it covers whatever its number of points. Where no piece is near, the distance
 /// is the bound the grid guarantees (half a cell), which is positive and never above the true distance.
+/// The grid is built on the first distance, so a stroke refused by the limits costs nothing; copies
+/// share it.
 class SweptBrush : public SdfField {
 public:
-    SweptBrush(Brush brush, std::vector<Vec3d> path); // throws std::invalid_argument on an empty path
+    /// A stroke may be at most this many brush reaches long (pieces of the path).
+    static constexpr double kMaxPieces = 1e6;
+    /// Throws std::invalid_argument on an empty path, an unbounded brush or a path over kMaxPieces.
+    SweptBrush(Brush brush, std::vector<Vec3d> path);
     double distance(const Vec3d& world) const override;
     WorldBounds bounds() const override;
     double innerRadius() const override { return brush_.innerRadius(); }
@@ -162,7 +169,15 @@ private:
         Vec3d start, direction;
         double length;
     };
+    struct PieceGrid {
+        std::once_flag built;
+        std::vector<Piece> pieces;
+        std::unordered_map<uint64_t, std::vector<uint32_t>> cells; // cell hash -> pieces within reach of it
+    };
     double pieceDistance(const Piece& piece, const Vec3d& x, double best) const;
+    const PieceGrid& grid() const;
+    uint64_t cellHash(const Vec3d& p) const;
+    uint64_t cellHash(int64_t i, int64_t j, int64_t k) const;
 
     Brush brush_;
     std::vector<Vec3d> path_;
@@ -170,11 +185,8 @@ private:
     double step_;   // sampling step along the path
     double capsuleRadius_; // > 0: a round sphere swept along segments, exact capsule distances
     double pathLength_ = 0.0;
-    std::vector<Piece> pieces_;
     double cell_ = 1.0; // grid spacing, world units
-    std::unordered_map<uint64_t, std::vector<uint32_t>> grid_; // cell hash -> pieces within reach of it
-    uint64_t cellHash(const Vec3d& p) const;
-    uint64_t cellHash(int64_t i, int64_t j, int64_t k) const;
+    std::shared_ptr<PieceGrid> grid_ = std::make_shared<PieceGrid>();
 };
 
 } // namespace vdbclay

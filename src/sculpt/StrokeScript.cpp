@@ -304,8 +304,8 @@ std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& 
     std::vector<std::unique_ptr<SweptBrush>> strokes(script.ops.size());
     for (std::size_t i = 0; i < script.ops.size(); ++i) {
         const ScriptOp& s = script.ops[i];
-        if (s.path.size() > 1) strokes[i] = std::make_unique<SweptBrush>(s.brush, s.path);
         try {
+            if (s.path.size() > 1) strokes[i] = std::make_unique<SweptBrush>(s.brush, s.path);
             checkCsgLimits(volume.voxelSize(), table, strokes[i] ? static_cast<const SdfField&>(*strokes[i]) : s.brush, csgOps[i]);
         } catch (const std::invalid_argument& e) {
             throw ScriptError("ops[" + std::to_string(i) + "]: " + e.what());
