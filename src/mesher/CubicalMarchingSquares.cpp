@@ -20,8 +20,8 @@
 // is the crossing of the voxel edge where its material changes: the same point, with the same key, at
 // every width.
 #include "mesher/CellGrid.h"
-#include "mesher/MeshMetrics.h"
 #include "mesher/CellOctree.h"
+#include "mesher/MeshMetrics.h"
 
 #include <Eigen/Dense>
 
@@ -142,8 +142,8 @@ void accumulate(std::array<double, 3>& sum, const std::array<T, 3>& v)
 } // namespace
 
 /// Sharp feature points keep this far (in voxels) inside their square or cell, so that points of
-/// neighbouring squares and cells never meet on a shared side. Half the crossings' corner margin
-/// (kOffsetMarginCode), ten times the distance below which analyzeTopology merges vertices.
+/// neighbouring squares and cells never meet on a shared side. Under half the crossings' corner margin
+/// (kOffsetMarginCode, 2.4e-4), ten times the distance below which analyzeTopology merges vertices.
 constexpr double kFeatureInsetVoxels = 1e-4;
 
 /// Buffers reused from cell to cell and leaf to leaf.
