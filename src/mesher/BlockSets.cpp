@@ -56,8 +56,8 @@ std::vector<BlockOrigin> blocksIn(const std::vector<BlockBox>& boxes)
     for (const BlockBox& box : boxes)
         for (int64_t x = box.lo[0]; x <= box.hi[0]; ++x)
             for (int64_t y = box.lo[1]; y <= box.hi[1]; ++y) {
-                uint8_t* row = &marked[std::size_t(((x - lo[0]) * dim[1] + (y - lo[1])) * dim[2] - lo[2])];
-                std::fill(row + box.lo[2], row + box.hi[2] + 1, uint8_t(1));
+                uint8_t* row = marked.data() + ((x - lo[0]) * dim[1] + (y - lo[1])) * dim[2];
+                std::fill(row + (box.lo[2] - lo[2]), row + (box.hi[2] - lo[2]) + 1, uint8_t(1));
             }
     std::size_t i = 0;
     for (int64_t x = 0; x < dim[0]; ++x)
