@@ -61,7 +61,35 @@ struct CellCase {
     uint8_t loopEnd[4] = {};      // loop k is edges[loopEnd[k - 1] .. loopEnd[k]), loopEnd[-1] = 0
     uint8_t edges[12] = {};       // each loop's cell edges in walk order
     uint8_t segmentAxis[12] = {}; // the normal axis of the face whose segment runs from edges[i] to the next
+    /// Per loop, the position to fan it from whose diagonals all cross the cell's inside, or -1 where
+    /// every position has a diagonal between two crossings of one face (see fanApexOf).
+    int8_t fanApex[4] = {};
 };
+
+/// Whether two cell edges lie on one face of the cell.
+constexpr bool edgesShareFace(int e1, int e2)
+{
+    for (int axis = 0; axis < 3; ++axis) {
+        if (e1 / 4 == axis || e2 / 4 == axis) continue;
+        if (cornerBit(edgeLowCorner(e1), axis) == cornerBit(edgeLowCorner(e2), axis)) return true;
+    }
+    return false;
+}
+
+/// A diagonal of a fan between two crossings of one face (a loop that visits an ambiguous face twice)
+/// lies in that face, where the cell beside it can fan the same edge: four triangles on one edge.
+constexpr int8_t fanApexOf(const uint8_t* edges, int size)
+{
+    for (int k = 0; k < size; ++k) {
+        bool clear = true;
+        for (int j = 0; j < size && clear; ++j) {
+            const int gap = (j - k + size) % size;
+            if (gap > 1 && gap < size - 1) clear = !edgesShareFace(edges[k], edges[j]);
+        }
+        if (clear) return int8_t(k);
+    }
+    return -1;
+}
 
 /// Loops are listed as the face walk finds them: faces in order, each loop starting at the first
 /// segment not yet in a loop.
@@ -98,6 +126,8 @@ constexpr CellCase makeCellCase(unsigned solidMask)
             cell.segmentAxis[size] = uint8_t(axisOf[e]);
             ++size;
         }
+        const int begin = cell.loopCount ? cell.loopEnd[cell.loopCount - 1] : 0;
+        cell.fanApex[cell.loopCount] = fanApexOf(cell.edges + begin, size - begin);
         cell.loopEnd[cell.loopCount++] = uint8_t(size);
     }
     return cell;

@@ -268,11 +268,12 @@ struct CubicalMarchingSquaresMesher::Buffers {
     }
 
     /// Fans a loop of boundary vertices from a new inner vertex at `centre`; triangle i, from boundary
-    /// vertex i to the next, gets `materials[i]`.
+    /// vertex i to the next, gets `materials[i]`. A sharp vertex (`sharp`) is first kept off its loop;
+    /// a loop's mean point lies inside it.
     void addFan(std::array<double, 3> centre, const std::array<double, 3>& normalSum, const uint32_t* ids,
-                const MaterialId* materials, std::size_t n)
+                const MaterialId* materials, std::size_t n, bool sharp)
     {
-        keepFanOpen(centre, ids, n);
+        if (sharp) keepFanOpen(centre, ids, n);
         const double length = std::sqrt(normalSum[0] * normalSum[0] + normalSum[1] * normalSum[1] + normalSum[2] * normalSum[2]);
         const double scale = length > 0.0 ? 1.0 / length : 0.0;
         const uint32_t c = addVertex(kUnsharedVertex, {float(centre[0]), float(centre[1]), float(centre[2])},
@@ -1159,11 +1160,14 @@ private:
         const std::size_t n = ids.size();
         for (double& c : centre) c /= double(n); // the mean point
 
+        bool sharp = false;
         if (minDot < ctx_.cosSharp || hasTransition) {
-            if (const auto feature = componentFeature(loop, Eigen::Vector3d(normalSum[0], normalSum[1], normalSum[2])))
+            if (const auto feature = componentFeature(loop, Eigen::Vector3d(normalSum[0], normalSum[1], normalSum[2]))) {
                 centre = {feature->x(), feature->y(), feature->z()};
+                sharp = true;
+            }
         }
-        ctx_.buffers.addFan(centre, normalSum, ids.data(), pieceMaterials.data(), n);
+        ctx_.buffers.addFan(centre, normalSum, ids.data(), pieceMaterials.data(), n, sharp);
     }
 
     LeafContext& ctx_;
@@ -1262,7 +1266,7 @@ bool meshSmoothCell(LeafContext& ctx, const Coord& base, int width, const Materi
             ids[i] = b.crossingVertex(slots[begin + i], x);
         }
         for (double& c : centre) c /= double(size);
-        b.addFan(centre, normalSum, ids, materials, std::size_t(size));
+        b.addFan(centre, normalSum, ids, materials, std::size_t(size), false);
     }
     return true;
 }

@@ -11,35 +11,6 @@
 
 namespace vdbclay::mesher_detail {
 
-namespace {
-
-/// Whether two cell edges lie on one face of the cell.
-constexpr bool edgesShareFace(int e1, int e2)
-{
-    for (int axis = 0; axis < 3; ++axis) {
-        if (e1 / 4 == axis || e2 / 4 == axis) continue;
-        if (cornerBit(edgeLowCorner(e1), axis) == cornerBit(edgeLowCorner(e2), axis)) return true;
-    }
-    return false;
-}
-
-/// The loop position to fan from: one whose diagonals all cross the cell's inside. A diagonal between
-/// two crossings of one face (a loop that visits an ambiguous face twice) would lie in that face, where
-/// the cell beside it can fan the same edge: four triangles on one edge. -1 when every position has one.
-int fanApex(const uint8_t* edges, int size)
-{
-    for (int k = 0; k < size; ++k) {
-        bool clear = true;
-        for (int j = 0; j < size && clear; ++j) {
-            const int gap = (j - k + size) % size;
-            if (gap > 1 && gap < size - 1) clear = !edgesShareFace(edges[k], edges[j]);
-        }
-        if (clear) return k;
-    }
-    return -1;
-}
-
-} // namespace
 
 MeshChunk meshLeafMarchingCubes(const HermiteLeaf& leaf, ConstAccessor& acc, double voxelSize)
 {
@@ -64,7 +35,7 @@ MeshChunk meshLeafMarchingCubes(const HermiteLeaf& leaf, ConstAccessor& acc, dou
                 }
                 ids[v] = it->second;
             }
-            const int apex = fanApex(&cell.edges[begin], size);
+            const int apex = cell.fanApex[l];
             if (apex >= 0) {
                 for (int v = 1; v + 1 < size; ++v) {
                     const uint32_t a = ids[apex], b = ids[(apex + v) % size], c = ids[(apex + v + 1) % size];
