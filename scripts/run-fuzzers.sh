@@ -10,7 +10,6 @@ repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 artifacts="$build/fuzz-artifacts"
 mkdir -p "$artifacts"
 for target in vdb_reader script_parser mesh_writers; do
-    corpus_name="${target%%_*}"
     case "$target" in
         vdb_reader) corpus_name=vdb ;;
         script_parser) corpus_name=script ;;
@@ -20,11 +19,14 @@ for target in vdb_reader script_parser mesh_writers; do
     mkdir -p "$work"
     cp -n "$repo/tests/fuzz/corpus/$corpus_name/"* "$work/" 2>/dev/null || true
     printf '==> fuzz %s for %ss\n' "$target" "$seconds"
+    log="$artifacts/$target.log"
+    status=0
     ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=$repo/tests/sanitizer/ubsan.supp" \
-        "$build/tests/fuzz/fuzz_$target" "$work" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=2048 \
-        -max_len=65536 -print_final_stats=1 -artifact_prefix="$artifacts/$target-" 2>&1 | tail -n 12
-    status=${PIPESTATUS[0]}
+        "$build/bin/fuzz_$target" "$work" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=2048 \
+        -max_len=65536 -print_final_stats=1 -artifact_prefix="$artifacts/$target-" >"$log" 2>&1 || status=$?
+    grep -E '^#[0-9]+.*(DONE|pulse)|stat::number_of_executed_units|stat::peak_rss_mb' "$log" | tail -n 3 || true
     if [[ $status -ne 0 ]]; then
+        tail -n 60 "$log" >&2
         printf 'fuzz %s failed (exit %s); inputs in %s\n' "$target" "$status" "$artifacts" >&2
         exit 1
     fi

@@ -102,6 +102,15 @@ void replaceUuidByContentHash(const std::string& path, uint64_t bytes)
     if (!file) throw VolumeIOError("cannot write '" + path + "' (disk full?)");
 }
 
+/// A message from a library about a crafted file as one printable line: bytes of the file that the
+/// library quotes (nlohmann::json does) become '?'.
+std::string printableLine(const std::string& text)
+{
+    std::string out;
+    for (char c : text.substr(0, 400)) out += (c >= 32 && c < 127) ? c : '?';
+    return out;
+}
+
 enum class Integrity { Verified, NoTrailer };
 
 /// Checks the trailer. Throws for a trailer that does not match its file; reports files without one.
@@ -245,7 +254,7 @@ Volume loadVolume(const std::string& path)
         std::string what = e.what();
         if (what.find("not a VDB file") != std::string::npos || what.find("magic number") != std::string::npos)
             throw VolumeIOError("'" + path + "' is not a .vdb file");
-        throw VolumeIOError("'" + path + "' cannot be read: " + what);
+        throw VolumeIOError("'" + path + "' cannot be read: " + printableLine(what));
     }
 }
 
