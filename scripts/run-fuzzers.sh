@@ -2,7 +2,8 @@
 # Runs each libFuzzer target of a sanitizer build for a bounded time on a copy of its seed corpus.
 #   bash scripts/run-fuzzers.sh BUILD_DIR [SECONDS_PER_TARGET]
 # A crash, a leak, a sanitizer report or a timeout fails the run; the input that caused it is left in
-# BUILD_DIR/fuzz-artifacts/.
+# BUILD_DIR/fuzz-artifacts/. The mutation seed is fixed (FUZZ_SEED, default 20261201) so that a run
+# explores the same inputs each time; set another to explore further.
 set -euo pipefail
 build="${1:?usage: run-fuzzers.sh BUILD_DIR [SECONDS]}"
 seconds="${2:-60}"
@@ -22,7 +23,7 @@ for target in vdb_reader script_parser mesh_writers; do
     log="$artifacts/$target.log"
     status=0
     ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=$repo/tests/sanitizer/ubsan.supp" \
-        "$build/bin/fuzz_$target" "$work" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=2048 \
+        "$build/bin/fuzz_$target" "$work" -seed="${FUZZ_SEED:-20261201}" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=2048 \
         -max_len=65536 -print_final_stats=1 -artifact_prefix="$artifacts/$target-" >"$log" 2>&1 || status=$?
     grep -E '^#[0-9]+.*(DONE|pulse)|stat::number_of_executed_units|stat::peak_rss_mb' "$log" | tail -n 3 || true
     if [[ $status -ne 0 ]]; then

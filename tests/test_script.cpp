@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <limits>
 #include <string>
 #include <sys/stat.h>
@@ -303,4 +304,18 @@ TEST_CASE("voxel sizes outside 1e-4 .. 1e6 are refused", "[script][limits]")
     CHECK_NOTHROW(Volume(1e-4));
     CHECK_THROWS_AS(Volume(5e-5), std::invalid_argument);
     CHECK_NOTHROW(Volume(1e6));
+}
+
+TEST_CASE("numbers too large for a double and raw bytes in a script are clean script errors", "[script]")
+{
+    // Found by fuzz_script_parser: nlohmann::json throws out_of_range, not parse_error, for 98E9889898798989.
+    CHECK_THROWS_AS(parseStrokeScript(R"({"ops": [{"mode": "add", "brush": {"shape": "sphere", "radius": 98E9889898798989}}]})"),
+                    ScriptError);
+    try {
+        parseStrokeScript(std::string("{\"ops\": [\xff\xfe\x01]}"));
+        FAIL("accepted");
+    } catch (const ScriptError& e) {
+        const std::string what = e.what();
+        CHECK(std::all_of(what.begin(), what.end(), [](char c) { return c >= 32 && c < 127; }));
+    }
 }
