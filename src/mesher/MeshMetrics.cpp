@@ -57,9 +57,9 @@ std::vector<uint32_t> mergeClosePoints(const std::vector<std::array<float, 3>>& 
                 }
         cells.emplace(hashOf(c), v);
     }
-    for (uint32_t v = 0; v < positions.size(); ++v) sets.find(v);
-    for (uint32_t v = 0; v < positions.size(); ++v) sets.parent[v] = sets.parent[sets.parent[v]];
-    return sets.parent;
+    std::vector<uint32_t> representative(positions.size());
+    for (uint32_t v = 0; v < positions.size(); ++v) representative[v] = sets.find(v);
+    return representative;
 }
 
 double doubledArea(const std::array<float, 3>& a, const std::array<float, 3>& b, const std::array<float, 3>& c)
@@ -142,6 +142,13 @@ MeshTopology analyzeTopology(const Mesh& mesh, double mergeDistance)
         if (!root[r]) root[r] = 1, ++topo.components;
     }
     return topo;
+}
+
+double surfaceArea(const Mesh& mesh)
+{
+    double doubled = 0.0;
+    for (const auto& t : mesh.triangles) doubled += doubledArea(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]);
+    return 0.5 * doubled;
 }
 
 double enclosedVolume(const Mesh& mesh)

@@ -36,6 +36,9 @@ struct MeshTopology {
 /// mergeDistance squared.
 MeshTopology analyzeTopology(const Mesh& mesh, double mergeDistance);
 
+/// Total area of the triangles, world units squared.
+double surfaceArea(const Mesh& mesh);
+
 /// Signed volume enclosed by a closed, outward-oriented mesh (divergence theorem), world units cubed.
 double enclosedVolume(const Mesh& mesh);
 

@@ -1,5 +1,7 @@
 #include "sculpt/StrokeScript.h"
 
+#include "vdb_hermite/PrintableText.h"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -225,11 +227,8 @@ StrokeScript parseStrokeScript(const std::string& jsonText)
     try {
         root = json::parse(jsonText, noDuplicateKeys);
     } catch (const json::exception& e) { // a syntax error, or a number too large for a double
-        // The parser quotes the text it stopped at, which may be any bytes: printed as '?'.
-        std::string what = e.what();
-        for (char& c : what)
-            if (c < 32 || c > 126) c = '?';
-        throw ScriptError("script is not valid JSON: " + what);
+        // The parser quotes the text it stopped at, which may be any bytes.
+        throw ScriptError("script is not valid JSON: " + printableText(e.what()));
     }
     if (!duplicate.empty()) throw ScriptError("script: the key '" + duplicate + "' appears twice in one object");
     checkKeys(root, "script", {"materials", "ops"});

@@ -172,9 +172,7 @@ RandomScene randomScene(uint64_t seed, uint64_t index)
             axisAligned = axisAligned && quarterTurns;
         }
         if (r.chance(0.1)) {
-            op["scale"] = json::array({r.voxels(0.5, 2.0), r.voxels(0.5, 2.0), r.voxels(0.5, 2.0)});
-            for (auto& s : op["scale"])
-                if (!(s.get<double>() > 0.0)) s = 1.0;
+            op["scale"] = json::array({r.voxels(0.5, 2.0), r.voxels(0.5, 2.0), r.voxels(0.5, 2.0)}); // all >= 0.5
             axisAligned = false;
         }
         if (add || std::string(mode) == "paint") op["material"] = materials[r.integer(add ? 0 : 1, 2)];

@@ -42,6 +42,9 @@ const Variant kVariants[] = {{"mc", mesherOptions(MesherKind::MarchingCubes, 1)}
                              {"cms-adaptive", mesherOptions(MesherKind::CubicalMarchingSquares, 8)}};
 constexpr int kVariantCount = 3;
 
+/// The first variant a scene is meshed with: all three, or adaptive CMS (the last) alone.
+int firstVariant(const SceneCheckOptions& options) { return options.adaptiveOnly ? kVariantCount - 1 : 0; }
+
 struct SceneRun {
     Volume volume;
     Mesh meshes[kVariantCount];
@@ -52,7 +55,7 @@ struct SceneRun {
 SceneRun runScene(const RandomScene& scene, const StrokeScript& script, const SceneCheckOptions& options)
 {
     SceneRun run{Volume(scene.voxelSize), {}, {}};
-    const int first = options.adaptiveOnly ? kVariantCount - 1 : 0;
+    const int first = firstVariant(options);
     std::vector<MeshChunkSet> incremental;
     for (int i = first; i < kVariantCount && options.checkIncremental; ++i) {
         incremental.emplace_back(kVariants[i].options);
@@ -102,19 +105,6 @@ void checkLattice(const Volume& volume, const ExactScene& exact)
             }
 }
 
-double meshArea(const Mesh& mesh)
-{
-    double area = 0.0;
-    for (const auto& t : mesh.triangles) {
-        const auto &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
-        const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
-        const double v[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
-        const double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2], z = u[0] * v[1] - u[1] * v[0];
-        area += 0.5 * std::sqrt(x * x + y * y + z * z);
-    }
-    return area;
-}
-
 void checkVolume(const Mesh& mesh, const ExactScene& exact, const RandomScene& scene, std::size_t samples,
                  SceneCheckResult& result)
 {
@@ -140,7 +130,7 @@ void checkVolume(const Mesh& mesh, const ExactScene& exact, const RandomScene& s
     // within half a voxel of one, a band one voxel thick).
     const double sigma = box * std::sqrt(std::max(p * (1.0 - p), 1.0 / double(samples)) / double(samples));
     const double exactArea = box * double(nearSurface) / double(samples) / scene.voxelSize;
-    const double tolerance = 4.0 * sigma + 0.5 * scene.voxelSize * std::max(meshArea(mesh), exactArea);
+    const double tolerance = 4.0 * sigma + 0.5 * scene.voxelSize * std::max(surfaceArea(mesh), exactArea);
     if (std::fabs(result.volume - result.exactVolume) > tolerance) {
         std::ostringstream msg;
         msg << "the CMS mesh encloses " << result.volume << ", the exact scene about " << result.exactVolume
@@ -160,7 +150,7 @@ SceneCheckResult checkScene(const RandomScene& scene, const SceneCheckOptions& o
         const ExactScene exact(script, run.volume.materials(), scene.voxelSize);
         if (options.checkLattice) checkLattice(run.volume, exact);
         std::size_t components[kVariantCount] = {};
-        const int first = options.adaptiveOnly ? kVariantCount - 1 : 0;
+        const int first = firstVariant(options);
         for (int i = first; i < kVariantCount; ++i) {
             const MeshTopology t = analyzeTopology(run.meshes[i], kMergeDistanceVoxels * scene.voxelSize);
             components[i] = t.components;
@@ -183,7 +173,7 @@ SceneCheckResult checkScene(const RandomScene& scene, const SceneCheckOptions& o
             fail(msg.str());
         }
         result.triangles = run.meshes[2].triangleCount();
-        checkVolume(run.meshes[options.adaptiveOnly ? 2 : 1], exact, scene, options.volumeSamples, result);
+        checkVolume(run.meshes[options.adaptiveOnly ? kVariantCount - 1 : 1], exact, scene, options.volumeSamples, result);
         if (options.compareThreads) {
             SceneRun single = tbb::task_arena(1).execute([&] { return runScene(scene, script, options); });
             if (!identical(single.volume, run.volume)) fail("one and two threads give different volumes");

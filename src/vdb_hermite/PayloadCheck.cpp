@@ -1,5 +1,6 @@
 #include "vdb_hermite/PayloadCheck.h"
 
+#include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/VolumeIO.h"
 
 #include <openvdb/io/Compression.h>
@@ -68,13 +69,8 @@ private:
     const std::string& path_;
 };
 
-/// A string from the file as it may appear in a message: printable ASCII, at most 64 characters.
-std::string printable(const std::string& s)
-{
-    std::string out;
-    for (char c : s.substr(0, 64)) out += (c >= 32 && c < 127) ? c : '?';
-    return s.size() > 64 ? out + "..." : out;
-}
+/// A name from the file as it may appear in a message.
+std::string printable(const std::string& s) { return printableText(s, 64); }
 
 /// Metadata of the file or of a grid (MetaMap): each value's size must match its type, whose reader
 /// ignores the stored size for fixed-size types.

@@ -3,6 +3,7 @@
 #include "vdb_hermite/AtomicFile.h"
 #include "vdb_hermite/HermiteGrid.h"
 #include "vdb_hermite/PayloadCheck.h"
+#include "vdb_hermite/PrintableText.h"
 
 #include <openvdb/io/Stream.h>
 #include <zlib.h>
@@ -100,15 +101,6 @@ void replaceUuidByContentHash(const std::string& path, uint64_t bytes)
     file.write(text, std::streamsize(kUuidLength));
     file.flush();
     if (!file) throw VolumeIOError("cannot write '" + path + "' (disk full?)");
-}
-
-/// A message from a library about a crafted file as one printable line: bytes of the file that the
-/// library quotes (nlohmann::json does) become '?'.
-std::string printableLine(const std::string& text)
-{
-    std::string out;
-    for (char c : text.substr(0, 400)) out += (c >= 32 && c < 127) ? c : '?';
-    return out;
 }
 
 enum class Integrity { Verified, NoTrailer };
@@ -254,7 +246,7 @@ Volume loadVolume(const std::string& path)
         std::string what = e.what();
         if (what.find("not a VDB file") != std::string::npos || what.find("magic number") != std::string::npos)
             throw VolumeIOError("'" + path + "' is not a .vdb file");
-        throw VolumeIOError("'" + path + "' cannot be read: " + printableLine(what));
+        throw VolumeIOError("'" + path + "' cannot be read: " + printableText(what)); // libraries quote the file's bytes
     }
 }
 
