@@ -20,11 +20,8 @@ namespace {
 
 constexpr int kFoot = kLeafDim + 1; // a block plus the first layer of its +x/+y/+z neighbours
 constexpr int kFootVoxels = kFoot * kFoot * kFoot;
-constexpr int kLowerDim = 128;      // voxels per side of a HermiteLower node
-constexpr int kUpperDim = 4096;
 
 /// The origin of the node of side `dim` (a power of two) that holds `c`.
-inline Coord alignDown(const Coord& c, int dim) { return Coord(c.x() & ~(dim - 1), c.y() & ~(dim - 1), c.z() & ~(dim - 1)); }
 
 inline int footIndex(int i, int j, int k) { return (i * kFoot + j) * kFoot + k; }
 constexpr int kFootStride[3] = {kFoot * kFoot, kFoot, 1}; // +x, +y, +z neighbours in the footprint
@@ -491,31 +488,6 @@ CoordBBox solidBounds(const HermiteTree& tree)
     return box;
 }
 
-/// Folds HermiteLower/HermiteUpper nodes that became uniform into tiles of their parents. Works on the
-/// tree directly: OpenVDB 10's ValueAccessor::addTile ignores levels above the node it has cached.
-void pruneTouched(HermiteTree& tree, const std::set<Coord>& lowers)
-{
-    std::set<Coord> uppers;
-    for (const Coord& o : lowers) {
-        uppers.insert(alignDown(o, kUpperDim));
-        const HermiteLower* node = tree.probeConstNode<HermiteLower>(o);
-        MaterialValue value;
-        bool state = false;
-        if (node && node->isConstant(value, state, MaterialValue{}) && !state) tree.addTile(2, o, value, false);
-    }
-    bool erased = false;
-    for (const Coord& o : uppers) {
-        const HermiteUpper* node = tree.probeConstNode<HermiteUpper>(o);
-        MaterialValue value;
-        bool state = false;
-        if (node && node->isConstant(value, state, MaterialValue{}) && !state) {
-            tree.addTile(3, o, value, false);
-            erased = erased || !value.solid();
-        }
-    }
-    if (erased) tree.root().eraseBackgroundTiles();
-}
-
 } // namespace
 
 const char* csgModeName(CsgMode mode)
@@ -649,7 +621,7 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
         addChange(whole);
     };
     std::vector<Coord> changedTiles;
-    // Tiles go through the tree itself (see pruneTouched); leaves through an accessor made afterwards.
+    // Tiles go through the tree itself (see pruneNodes); leaves through an accessor made afterwards.
     for (const TileEdit& e : walker.edits) {
         if (e.level == 2) {
             // The node's leaves change, and so do the blocks on its faces, which the cells of
@@ -692,7 +664,7 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             writes[i].first->assign(std::move(results[writes[i].second].data));
     });
-    pruneTouched(tree, lowers);
+    pruneNodes(tree, lowers);
     openvdb::tree::ValueAccessor<const HermiteTree> acc(tree);
     for (const Coord& c : changedTiles)
         if (hasLeafAround(acc, c)) addDirty(c);

@@ -24,6 +24,7 @@
 #include <array>
 #include <optional>
 #include <ostream>
+#include <set>
 #include <type_traits>
 #include <vector>
 
@@ -244,6 +245,16 @@ void forEachTile(const HermiteTree& tree, Fn&& fn)
         fn(box, *it);
     }
 }
+
+constexpr int kLowerDim = 128;  // voxels per side of a HermiteLower node
+constexpr int kUpperDim = 4096; // voxels per side of a HermiteUpper node
+inline Coord alignDown(const Coord& c, int dim) { return Coord(c.x() & ~(dim - 1), c.y() & ~(dim - 1), c.z() & ~(dim - 1)); }
+
+/// Folds the HermiteLower nodes at `lowers` (their origins) and their HermiteUpper parents that became
+/// uniform into tiles, and erases empty root entries. Works on the tree directly: OpenVDB 10's
+/// ValueAccessor::addTile ignores levels above the node it has cached. Not openvdb::tools::prune, which
+/// would fold a leaf of one material whose border edges carry samples.
+void pruneNodes(HermiteTree& tree, const std::set<Coord>& lowers);
 
 /// Metadata keys stored on the grid.
 constexpr const char* kFormatVersionKey = "vdbclay_format_version";

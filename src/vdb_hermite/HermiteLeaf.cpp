@@ -178,4 +178,28 @@ void initializeHermiteGrid()
     });
 }
 
+void pruneNodes(HermiteTree& tree, const std::set<Coord>& lowers)
+{
+    std::set<Coord> uppers;
+    for (const Coord& o : lowers) {
+        uppers.insert(alignDown(o, kUpperDim));
+        const HermiteLower* node = tree.probeConstNode<HermiteLower>(o);
+        MaterialValue value;
+        bool state = false;
+        if (node && node->isConstant(value, state, MaterialValue{}) && !state) tree.addTile(2, o, value, false);
+    }
+    bool erased = false;
+    for (const Coord& o : uppers) {
+        const HermiteUpper* node = tree.probeConstNode<HermiteUpper>(o);
+        MaterialValue value;
+        bool state = false;
+        if (node && node->isConstant(value, state, MaterialValue{}) && !state) {
+            tree.addTile(3, o, value, false);
+            erased = erased || !value.solid();
+        }
+    }
+    if (erased) tree.root().eraseBackgroundTiles();
+}
+
+
 } // namespace vdbclay
