@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -61,6 +62,10 @@ std::string lowerExtension(const std::string& path);
 /// Throws UsageError unless `path` ends in .obj, .ply or .glb (any case).
 void requireMeshExtension(const std::string& path, const char* optionName);
 
+/// A progress bar on stderr ("label [=====     ] 52%"), redrawn in place, when stderr is a terminal and
+/// `enabled`; otherwise a function that does nothing. Call with done == total to end the line.
+std::function<void(uint64_t done, uint64_t total)> terminalProgress(const std::string& label, bool enabled);
+
 /// Adds "--threads N" (worker threads for TBB; 0 or absent: all cores) to a subcommand.
 void addThreadsOption(CLI::App& command, int& threads);
 
@@ -93,6 +98,7 @@ struct MeshCommandOptions {
     std::optional<double> angleDegrees;            // CMS only; MeshOptions' default when absent
     std::optional<double> subdivisionAngleDegrees; // adaptive CMS only
     bool uniform = false;
+    std::optional<int> lod;
     bool json = false;
 };
 CLI::App* addMeshCommand(CLI::App& parent, MeshCommandOptions& options);
@@ -111,6 +117,35 @@ struct DemoOptions {
 };
 CLI::App* addDemoCommand(CLI::App& parent, DemoOptions& options);
 int runDemo(const DemoOptions& options);
+
+struct ImportOptions {
+    std::string input;
+    std::string output;
+    bool json = false;
+};
+CLI::App* addImportCommand(CLI::App& parent, ImportOptions& options);
+int runImport(const ImportOptions& options);
+
+struct ExportOptions {
+    std::string input;
+    std::string output;
+    bool json = false;
+};
+CLI::App* addExportCommand(CLI::App& parent, ExportOptions& options);
+int runExport(const ExportOptions& options);
+
+struct LodOptions {
+    std::string scene;
+    int levels = 0;
+    bool json = false;
+};
+struct LodCommands {
+    CLI::App* build = nullptr;
+    CLI::App* info = nullptr;
+};
+LodCommands addLodCommand(CLI::App& parent, LodOptions& options);
+int runLodBuild(const LodOptions& options);
+int runLodInfo(const LodOptions& options);
 
 struct BenchCommandOptions {
     std::string which;

@@ -1,6 +1,7 @@
 // vdbclay info: what a volume file holds.
 #include "Cli.h"
 
+#include "scene/SceneStore.h"
 #include "vdb_hermite/VolumeIO.h"
 
 #include <CLI/CLI.hpp>
@@ -19,15 +20,54 @@ std::string coordText(const std::array<int32_t, 3>& c)
 CLI::App* addInfoCommand(CLI::App& parent, InfoOptions& o)
 {
     CLI::App* cmd = parent.add_subcommand("info", "Describe a volume file");
-    cmd->add_option("input", o.input, "Volume file (.vdb)")->required()->type_name("IN.vdb");
+    cmd->add_option("input", o.input, "Scene: a volume file (.vdb) or a store (.vdbclay)")->required()->type_name("IN");
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text");
     cmd->footer("bbox_min/bbox_max are index-space voxel coordinates of the solid and surface voxels\n"
                 "(both (0, 0, 0) for an empty volume); memory_bytes is the in-memory size of the tree.");
     return cmd;
 }
 
+namespace {
+
+int storeInfo(const InfoOptions& o)
+{
+    const SceneStore scene = SceneStore::open(o.input, StoreAccess::ReadOnly);
+    const std::vector<std::string> materials = scene.materials().names();
+    nlohmann::json levels = nlohmann::json::array();
+    std::vector<std::pair<std::string, std::string>> rows{{"file", o.input},
+                                                          {"form", "store (bricks of 64^3 voxels)"},
+                                                          {"voxel_size", formatNumber(scene.voxelSize())}};
+    for (int k = 0; k <= scene.lodLevels(); ++k) {
+        const LevelSummary s = scene.summary(k);
+        levels.push_back({{"level", k}, {"bricks", s.bricks}, {"leaves", s.leaves}, {"bytes", s.bytes}});
+        rows.push_back({"level " + std::to_string(k),
+                        std::to_string(s.bricks) + " bricks, " + std::to_string(s.leaves) + " leaves, " + formatBytes(double(s.bytes))});
+    }
+    const LevelSummary fine = scene.summary(0);
+    if (o.json) {
+        printJson({{"form", "store"},
+                   {"voxel_size", scene.voxelSize()},
+                   {"leaf_count", fine.leaves},
+                   {"bricks", fine.bricks},
+                   {"materials", materials},
+                   {"levels", levels},
+                   {"lod_stale", scene.lodStale()},
+                   {"format_version", 1}});
+        return kExitOk;
+    }
+    std::string names;
+    for (const auto& n : materials) names += (names.empty() ? "" : ", ") + n;
+    rows.push_back({"materials", std::to_string(materials.size()) + ": " + names});
+    if (scene.lodStale()) rows.push_back({"lod", "stale (edited since 'vdbclay lod build')"});
+    printFields(rows, 0);
+    return kExitOk;
+}
+
+} // namespace
+
 int runInfo(const InfoOptions& o)
 {
+    if (isStorePath(o.input)) return storeInfo(o);
     const Volume volume = loadVolume(o.input);
     const VolumeStats s = volume.stats();
     const std::vector<std::string> materials = volume.materials().names();

@@ -3,19 +3,26 @@
 
 #include "mesher/MeshIO.h"
 #include "mesher/MeshMetrics.h"
+#include "mesher/LodMesh.h"
 #include "mesher/Mesher.h"
+#include "scene/SceneStore.h"
 #include "vdb_hermite/VolumeIO.h"
+#include "wavelet/LodPyramid.h"
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <chrono>
+#include <iostream>
 
 namespace vdbclay::cli {
 
 CLI::App* addMeshCommand(CLI::App& parent, MeshCommandOptions& o)
 {
     CLI::App* cmd = parent.add_subcommand("mesh", "Extract a triangle mesh from a volume (OBJ, PLY or glTF binary)");
-    cmd->add_option("input", o.input, "Volume to mesh (.vdb)")->required()->type_name("IN.vdb");
+    cmd->add_option("input", o.input, "Scene to mesh: a volume (.vdb) or a store (.vdbclay)")
+        ->required()
+        ->type_name("IN.vdb|IN.vdbclay");
     cmd->add_option("-o,--output", o.output, "Mesh file to write; the extension picks the format (.obj, .ply or .glb)")
         ->required()
         ->type_name("OUT.obj|OUT.ply|OUT.glb");
@@ -33,6 +40,11 @@ CLI::App* addMeshCommand(CLI::App& parent, MeshCommandOptions& o)
         ->type_name("DEG");
     cmd->add_flag("--uniform", o.uniform,
                   "CMS: mesh every voxel cell instead of adaptive cells (up to 8 voxels wide on flat surface)");
+    cmd->add_option("--lod", o.lod,
+                    "Mesh level of detail K (voxels 2^K times larger): a store's built level ('vdbclay lod build'), "
+                    "or for a .vdb a pyramid built on the fly")
+        ->type_name("K")
+        ->check(CLI::Range(0, wavelet::kMaxLodLevels));
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text");
     return cmd;
 }
@@ -71,16 +83,44 @@ int runMesh(const MeshCommandOptions& o)
     requireMeshExtension(o.output, "--output");
 
     const auto start = std::chrono::steady_clock::now();
-    const Volume volume = loadVolume(o.input);
-    const Mesh mesh = meshVolume(volume, options);
-    const MeshTopology topology = analyzeTopology(mesh, kMergeDistanceVoxels * volume.voxelSize());
-    writeMesh(mesh, volume.materials(), o.output);
+    const int level = o.lod.value_or(0);
+    Mesh mesh;
+    MaterialTable materials;
+    double voxelSize = 1.0;
+    if (isStorePath(o.input)) {
+        const SceneStore scene = SceneStore::open(o.input, StoreAccess::ReadOnly);
+        if (level > scene.lodLevels())
+            throw UsageError("'" + o.input + "' has " + std::to_string(scene.lodLevels()) + " coarse levels; run 'vdbclay lod build " +
+                             o.input + "' (with --levels " + std::to_string(level) + " or more)");
+        if (level > 0 && scene.lodStale())
+            std::cerr << "vdbclay: warning: the levels of detail predate the last edit; 'vdbclay lod build' refreshes them\n";
+        const Volume volume = scene.loadLevel(level);
+        mesh = meshVolume(volume, options);
+        const double shift = wavelet::LodPyramid::levelOffset(level) * scene.voxelSize();
+        translateMesh(mesh, {shift, shift, shift});
+        materials = scene.materials();
+        voxelSize = volume.voxelSize();
+    } else {
+        const Volume volume = loadVolume(o.input);
+        if (level == 0) {
+            mesh = meshVolume(volume, options);
+        } else {
+            wavelet::LodPyramid pyramid(std::max(level, wavelet::LodPyramid::levelsFor(volume)));
+            pyramid.build(volume);
+            mesh = meshLevel(volume, pyramid, level, options);
+        }
+        materials = volume.materials();
+        voxelSize = volume.voxelSize() * double(1 << level);
+    }
+    const MeshTopology topology = analyzeTopology(mesh, kMergeDistanceVoxels * voxelSize);
+    writeMesh(mesh, materials, o.output);
     const double seconds = secondsSince(start);
 
     if (o.json) {
         printJson({{"output", o.output},
                    {"mesher", mesherName(options.kind)},
                    {"cells", cellsName(options)},
+                   {"lod", level},
                    {"vertices", mesh.vertexCount()},
                    {"triangles", mesh.triangleCount()},
                    {"watertight", topology.watertight()},

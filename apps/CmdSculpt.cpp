@@ -1,6 +1,8 @@
 // vdbclay sculpt: apply a JSON stroke script to a volume file.
 #include "Cli.h"
 
+#include "scene/SceneStore.h"
+#include "scene/StoreSculpt.h"
 #include "sculpt/StrokeScript.h"
 #include "vdb_hermite/VolumeIO.h"
 
@@ -14,32 +16,73 @@ namespace vdbclay::cli {
 CLI::App* addSculptCommand(CLI::App& parent, SculptOptions& o)
 {
     CLI::App* cmd = parent.add_subcommand("sculpt", "Apply a JSON stroke script to a volume");
-    cmd->add_option("input", o.input, "Volume to start from (.vdb)")->required()->type_name("IN.vdb");
-    cmd->add_option("script", o.script, "Stroke script (JSON, see docs/SCRIPTS.md)")->required()->type_name("SCRIPT.json");
-    cmd->add_option("-o,--output", o.output, "Volume file to write; may be IN.vdb itself (saving is atomic)")
+    cmd->add_option("input", o.input, "Scene to start from: a volume (.vdb) or a store (.vdbclay), which is edited in place")
         ->required()
-        ->type_name("OUT.vdb");
+        ->type_name("IN.vdb|IN.vdbclay");
+    cmd->add_option("script", o.script, "Stroke script (JSON, see docs/SCRIPTS.md)")->required()->type_name("SCRIPT.json");
+    cmd->add_option("-o,--output", o.output,
+                    "Scene to write (.vdb or .vdbclay); may be IN itself (saving is atomic). Required for a .vdb input; "
+                    "a store is edited in place")
+        ->type_name("OUT.vdb|OUT.vdbclay");
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text (no progress lines)");
     cmd->footer("Without --json, one progress line per op goes to stderr, e.g. \"op 3/7 remove: 120 blocks, 0.8 ms\".\n"
-                "The script is checked completely before the volume is touched.");
+                "The script is checked completely before the volume is touched. On a store only the bricks the\n"
+                "brushes reach are read, and the changed ones written in one transaction.");
     return cmd;
 }
+
+namespace {
+
+int sculptStoreInPlace(const SculptOptions& o, const StrokeScript& script,
+                       const std::function<void(const ScriptOpReport&)>& progress)
+{
+    const auto start = std::chrono::steady_clock::now();
+    SceneStore scene = SceneStore::open(o.input, StoreAccess::ReadWrite);
+    const StoreSculptReport report = sculptStore(scene, script, progress);
+    const double seconds = secondsSince(start);
+    if (o.json) {
+        nlohmann::json ops = nlohmann::json::array();
+        for (const auto& r : report.ops) ops.push_back(opReportJson(r));
+        printJson({{"input", o.input},
+                   {"output", o.input},
+                   {"ops", report.ops.size()},
+                   {"seconds", seconds},
+                   {"bricks_read", report.bricksRead},
+                   {"bricks_written", report.bricksWritten},
+                   {"op_reports", ops}});
+    } else {
+        printFields({{"sculpted", o.input + " (in place)"},
+                     {"ops", std::to_string(report.ops.size())},
+                     {"bricks", std::to_string(report.bricksRead) + " read, " + std::to_string(report.bricksWritten) + " written"},
+                     {"total time", formatSeconds(seconds)}},
+                    0);
+    }
+    return kExitOk;
+}
+
+} // namespace
 
 int runSculpt(const SculptOptions& o)
 {
     const auto start = std::chrono::steady_clock::now();
+    const bool store = isStorePath(o.input);
+    if (!store && o.output.empty()) throw UsageError("--output is required for a .vdb input");
+    if (store && !o.output.empty() && o.output != o.input)
+        throw UsageError("a store is sculpted in place: leave out --output (or make a copy with 'vdbclay import' first)");
     // Parse the script first: a typo in it should not cost a large volume load.
     const StrokeScript script = loadStrokeScript(o.script);
-    Volume volume = loadVolume(o.input);
-
     const std::size_t total = script.ops.size();
     auto progress = [&](const ScriptOpReport& r) {
         if (o.json) return;
         std::cerr << "op " << (r.index + 1) << '/' << total << ' ' << csgModeName(r.mode) << ": "
                   << r.stats.blocksComputed << " blocks, " << formatSeconds(r.seconds) << std::endl;
     };
+    if (store) return sculptStoreInPlace(o, script, progress);
+
+    Volume volume = loadVolume(o.input);
     const std::vector<ScriptOpReport> reports = runStrokeScript(volume, script, progress);
-    saveVolume(volume, o.output);
+    if (isStorePath(o.output)) writeStoreFile(volume, o.output);
+    else saveVolume(volume, o.output);
     const double seconds = secondsSince(start);
 
     const VolumeStats stats = volume.stats();

@@ -4,8 +4,12 @@
 
 #include <CLI/CLI.hpp>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
+#include <iostream>
+#include <memory>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -87,6 +91,21 @@ void requireMeshExtension(const std::string& path, const char* optionName)
         throw UsageError(std::string(optionName) + ": '" + path +
                          "' has an unknown mesh format; the file name must end in .obj, .ply or .glb");
     }
+}
+
+std::function<void(uint64_t, uint64_t)> terminalProgress(const std::string& label, bool enabled)
+{
+    if (!enabled || !::isatty(STDERR_FILENO)) return [](uint64_t, uint64_t) {};
+    auto last = std::make_shared<int>(-1);
+    return [label, last](uint64_t done, uint64_t total) {
+        const int percent = total == 0 ? 100 : int(std::min<uint64_t>(100, done * 100 / total));
+        if (percent == *last) return;
+        *last = percent;
+        constexpr int kWidth = 30;
+        const int filled = percent * kWidth / 100;
+        std::cerr << '\r' << label << " [" << std::string(std::size_t(filled), '=') << std::string(std::size_t(kWidth - filled), ' ')
+                  << "] " << percent << '%' << (percent == 100 ? "\n" : "") << std::flush;
+    };
 }
 
 void addThreadsOption(CLI::App& command, int& threads)

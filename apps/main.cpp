@@ -33,6 +33,9 @@ int run(int argc, char** argv)
     DemoOptions demoOptions;
     BenchCommandOptions benchOptions;
     SelftestOptions selftestOptions;
+    ImportOptions importOptions;
+    ExportOptions exportOptions;
+    LodOptions lodOptions;
 
     CLI::App* newCmd = addNewCommand(app, newOptions);
     CLI::App* sculptCmd = addSculptCommand(app, sculptOptions);
@@ -41,7 +44,10 @@ int run(int argc, char** argv)
     CLI::App* demoCmd = addDemoCommand(app, demoOptions);
     CLI::App* benchCmd = addBenchCommand(app, benchOptions);
     CLI::App* selftestCmd = addSelftestCommand(app, selftestOptions);
-    for (CLI::App* cmd : {newCmd, sculptCmd, meshCmd, demoCmd, benchCmd}) addThreadsOption(*cmd, threads);
+    CLI::App* importCmd = addImportCommand(app, importOptions);
+    CLI::App* exportCmd = addExportCommand(app, exportOptions);
+    const LodCommands lodCmds = addLodCommand(app, lodOptions);
+    for (CLI::App* cmd : {newCmd, sculptCmd, meshCmd, demoCmd, benchCmd, importCmd, exportCmd, lodCmds.build}) addThreadsOption(*cmd, threads);
     // Set after the subcommands exist: CLI11 copies the parent's footer into subcommands created later.
     app.footer("Run 'vdbclay COMMAND --help' for the options of one command.\n"
                "Exit codes: 0 success, 1 the command failed, 2 wrong command line.");
@@ -57,11 +63,15 @@ int run(int argc, char** argv)
     } catch (const CLI::ParseError& e) {
         if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-') {
             printError(std::string("unknown command '") + argv[1] +
-                       "' (expected new, sculpt, mesh, info, demo, bench or selftest; see 'vdbclay --help')");
+                       "' (expected new, sculpt, mesh, info, import, export, lod, demo, bench or selftest; see 'vdbclay --help')");
             return kExitUsage;
         }
         std::string hint = "vdbclay --help";
-        for (CLI::App* sub : app.get_subcommands()) hint = "vdbclay " + sub->get_name() + " --help";
+        for (CLI::App* sub : app.get_subcommands()) {
+            hint = "vdbclay " + sub->get_name();
+            for (CLI::App* leaf : sub->get_subcommands()) hint += " " + leaf->get_name();
+            hint += " --help";
+        }
         printError(std::string(e.what()) + " (see '" + hint + "')");
         return kExitUsage;
     }
@@ -79,6 +89,10 @@ int run(int argc, char** argv)
     if (*demoCmd) return runDemo(demoOptions);
     if (*benchCmd) return runBenchCommand(benchOptions);
     if (*selftestCmd) return runSelftest(selftestOptions);
+    if (*importCmd) return runImport(importOptions);
+    if (*exportCmd) return runExport(exportOptions);
+    if (*lodCmds.build) return runLodBuild(lodOptions);
+    if (*lodCmds.info) return runLodInfo(lodOptions);
     printError("no command given (see 'vdbclay --help')");
     return kExitUsage;
 }

@@ -15,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 namespace vdbclay {
 
@@ -35,32 +36,32 @@ struct Trailer {
 static_assert(sizeof(Trailer) == 24, "the trailer is part of the file format");
 constexpr uint64_t kTrailerBytes = sizeof(Trailer);
 
-/// CRC-32 of the first `bytes` bytes of a file.
-uint32_t crcOfFile(const std::string& path, uint64_t bytes)
+/// CRC-32 of the next `bytes` bytes of a stream.
+uint32_t crcOfStream(std::istream& in, uint64_t bytes, const std::string& name)
 {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw VolumeIOError("cannot open '" + path + "': " + std::strerror(errno));
-    std::vector<char> buffer(1 << 20);
+    std::vector<char> buffer(std::size_t(std::min<uint64_t>(bytes, 1 << 20)) + 1);
     uLong crc = crc32(0L, Z_NULL, 0);
     while (bytes > 0) {
         const std::size_t chunk = std::size_t(std::min<uint64_t>(bytes, buffer.size()));
         in.read(buffer.data(), std::streamsize(chunk));
-        if (std::size_t(in.gcount()) != chunk) throw VolumeIOError("cannot read '" + path + "'");
+        if (std::size_t(in.gcount()) != chunk) throw VolumeIOError("cannot read '" + name + "'");
         crc = crc32(crc, reinterpret_cast<const Bytef*>(buffer.data()), uInt(chunk));
         bytes -= chunk;
     }
     return uint32_t(crc);
 }
 
-void appendTrailer(const std::string& path, uint64_t payloadBytes)
+/// Appends the trailer to a stream that holds `payloadBytes` bytes of payload.
+void appendTrailer(std::iostream& io, uint64_t payloadBytes, const std::string& name)
 {
-    if (std::filesystem::file_size(path) != payloadBytes)
-        throw VolumeIOError("cannot write '" + path + "' completely (disk full?)");
-    const Trailer trailer{kTrailerMagic, payloadBytes, crcOfFile(path, payloadBytes), uint32_t(kFormatVersion)};
-    std::ofstream out(path, std::ios::binary | std::ios::app);
-    out.write(reinterpret_cast<const char*>(&trailer), sizeof(trailer));
-    out.flush();
-    if (!out) throw VolumeIOError("cannot write '" + path + "' (disk full?)");
+    io.clear();
+    io.seekg(0);
+    const Trailer trailer{kTrailerMagic, payloadBytes, crcOfStream(io, payloadBytes, name), uint32_t(kFormatVersion)};
+    io.clear();
+    io.seekp(std::streamoff(payloadBytes));
+    io.write(reinterpret_cast<const char*>(&trailer), sizeof(trailer));
+    io.flush();
+    if (!io) throw VolumeIOError("cannot write '" + name + "' (disk full?)");
 }
 
 // OpenVDB writes a random UUID into every file header (36 ASCII characters after the magic number,
@@ -69,10 +70,11 @@ void appendTrailer(const std::string& path, uint64_t payloadBytes)
 constexpr std::size_t kUuidOffset = 8 + 4 + 4 + 4 + 1, kUuidLength = 36;
 
 /// A UUID (RFC 9562 version 8: custom) from two FNV-1a hashes of the file outside its UUID field.
-void replaceUuidByContentHash(const std::string& path, uint64_t bytes)
+void replaceUuidByContentHash(std::iostream& file, uint64_t bytes, const std::string& path)
 {
-    std::fstream file(path, std::ios::binary | std::ios::in | std::ios::out);
-    std::vector<char> buffer(1 << 20);
+    file.clear();
+    file.seekg(0);
+    std::vector<char> buffer(std::size_t(std::min<uint64_t>(bytes, 1 << 20)) + 1);
     uint64_t h1 = 0xcbf29ce484222325ull, h2 = 0x84222325cbf29ce4ull;
     char uuid[kUuidLength];
     for (uint64_t at = 0; at < bytes;) {
@@ -105,56 +107,167 @@ void replaceUuidByContentHash(const std::string& path, uint64_t bytes)
 
 enum class Integrity { Verified, NoTrailer };
 
-/// Checks the trailer. Throws for a trailer that does not match its file; reports files without one.
-Integrity checkIntegrity(const std::string& path)
+/// Checks the trailer of a stream of `size` bytes. Throws for a trailer that does not match its
+/// payload; reports streams without one.
+Integrity checkIntegrity(std::istream& in, uint64_t size, const std::string& path)
 {
-    const uint64_t size = std::filesystem::file_size(path);
     if (size < sizeof(Trailer)) return Integrity::NoTrailer;
     Trailer trailer{};
-    {
-        std::ifstream in(path, std::ios::binary);
-        in.seekg(std::streamoff(size - sizeof(Trailer)));
-        in.read(reinterpret_cast<char*>(&trailer), sizeof(trailer));
-        if (!in) throw VolumeIOError("cannot read '" + path + "'");
-    }
+    in.clear();
+    in.seekg(std::streamoff(size - sizeof(Trailer)));
+    in.read(reinterpret_cast<char*>(&trailer), sizeof(trailer));
+    if (!in) throw VolumeIOError("cannot read '" + path + "'");
     if (trailer.magic != kTrailerMagic) return Integrity::NoTrailer;
     if (trailer.formatVersion > uint32_t(kFormatVersion))
         throw VolumeIOError("'" + path + "' has VDBClay format version " + std::to_string(trailer.formatVersion) +
                             "; this build reads versions 1 to " + std::to_string(kFormatVersion));
-    if (trailer.payloadBytes != size - sizeof(Trailer) || crcOfFile(path, trailer.payloadBytes) != trailer.crc)
+    in.seekg(0);
+    if (trailer.payloadBytes != size - sizeof(Trailer) || crcOfStream(in, trailer.payloadBytes, path) != trailer.crc)
         throw VolumeIOError("'" + path + "' is damaged (its checksum does not match its content)");
     return Integrity::Verified;
 }
 
-bool hasVdbMagic(const std::string& path)
+bool hasVdbMagic(std::istream& in)
 {
-    std::ifstream in(path, std::ios::binary);
     int32_t magic = 0;
+    in.clear();
+    in.seekg(0);
     in.read(reinterpret_cast<char*>(&magic), sizeof(magic));
     return in && magic == openvdb::OPENVDB_MAGIC;
 }
 
-} // namespace
-
-void saveVolume(const Volume& volume, const std::string& path)
+/// OpenVDB's data for a volume, Blosc-compressed: everything but the UUID fix and the trailer.
+void writePayload(const Volume& volume, std::ostream& os)
 {
     initializeHermiteGrid();
     HermiteGrid::Ptr out = openvdb::gridPtrCast<HermiteGrid>(volume.impl().grid->copyGrid()); // shares the tree
     out->insertMeta(kFormatVersionKey, openvdb::Int32Metadata(kFormatVersion));
     out->insertMeta(kMaterialsKey, openvdb::StringMetadata(volume.materials().toJson()));
+    openvdb::io::Stream stream(os);
+    stream.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
+    stream.write(openvdb::GridCPtrVec{out});
+}
+
+/// Reads a volume from `in`, which holds `size` bytes of what saveVolume writes; `path` names the
+/// source in messages. The stream is checked before OpenVDB parses any of it.
+Volume readVolume(std::istream& in, uint64_t size, const std::string& path)
+{
+    if (!hasVdbMagic(in)) throw VolumeIOError("'" + path + "' is not a .vdb file");
+    // Without a trailer the file is foreign or damaged; it never reaches OpenVDB's parser, which
+    // trusts the sizes it reads (junk can make it allocate gigabytes or corrupt memory).
+    if (checkIntegrity(in, size, path) != Integrity::Verified) {
+        throw VolumeIOError("'" + path + "' is not a VDBClay volume: it has no VDBClay checksum trailer "
+                            "(a .vdb from another tool, or a truncated or damaged VDBClay file)");
+    }
+    // Every count and size OpenVDB will trust is checked first (PayloadCheck.h), and what it will
+    // allocate is held to a small multiple of the file's size.
+    const uint64_t payloadBytes = size - kTrailerBytes;
+    in.clear();
+    in.seekg(0);
+    const PayloadSummary summary = checkPayload(in, payloadBytes, path, HermiteGrid::gridType());
+    if (summary.estimatedMemoryBytes > 64 * payloadBytes + (64u << 20))
+        throw VolumeIOError("'" + path + "' is corrupt: its tree would take " +
+                            std::to_string(summary.estimatedMemoryBytes >> 20) + " MiB for a " +
+                            std::to_string(payloadBytes >> 10) + " KiB file");
+    // Parsed from a stream we own, so a read past the end (a payload that is shorter than its
+    // structure says) shows up as a failed stream or a wrong end position.
+    in.clear();
+    in.seekg(0);
+    openvdb::io::Stream stream(in, /*delayLoad=*/false);
+    if (in.fail() || in.tellg() != std::streamoff(payloadBytes))
+        throw VolumeIOError("'" + path + "' is damaged: its grids do not end where its checksum says");
+    HermiteGrid::Ptr grid;
+    std::string found;
+    for (const auto& g : *stream.getGrids()) {
+        found += (found.empty() ? "" : ", ") + g->getName() + " (" + g->type() + ")";
+        if (g->type() != HermiteGrid::gridType() || (grid && grid->getName() == "hermite")) continue;
+        grid = openvdb::gridPtrCast<HermiteGrid>(g);
+    }
+    if (!grid) {
+        throw VolumeIOError("'" + path + "' is a .vdb file without a VDBClay Hermite grid" +
+                            (found.empty() ? std::string() : "; it holds: " + found));
+    }
+    const auto version = grid->metaValue<int32_t>(kFormatVersionKey);
+    if (version > kFormatVersion || version < 1) {
+        throw VolumeIOError("'" + path + "' has VDBClay format version " + std::to_string(version) +
+                            "; this build reads versions 1 to " + std::to_string(kFormatVersion));
+    }
+    MaterialTable materials = MaterialTable::fromJson(grid->metaValue<std::string>(kMaterialsKey));
+    if (!grid->hasUniformVoxels() || !grid->transform().isLinear())
+        throw VolumeIOError("'" + path + "': the Hermite grid needs a linear transform with cubic voxels");
+    if (grid->background().id != kEmptyMaterial)
+        throw VolumeIOError("'" + path + "': the Hermite grid's background must be empty");
+    const auto undefinedMaterial = [&](MaterialValue v) { return v.id > materials.size(); };
+    bool corrupt = false;
+    for (auto leaf = grid->constTree().cbeginLeaf(); leaf && !corrupt; ++leaf) {
+        const MaterialValue* values = leaf->buffer().data();
+        corrupt = std::any_of(values, values + kLeafVoxels, undefinedMaterial);
+    }
+    forEachTile(grid->constTree(), [&](const CoordBBox&, MaterialValue v) { corrupt = corrupt || undefinedMaterial(v); });
+    if (corrupt) throw VolumeIOError("'" + path + "' is corrupt: a voxel uses an undefined material id");
+    grid->removeMeta(kFormatVersionKey);
+    grid->removeMeta(kMaterialsKey);
+    Volume volume(grid->voxelSize()[0]);
+    volume.impl().grid = grid;
+    volume.materials() = std::move(materials);
+    volume.impl().formatVersion = version;
+    return volume;
+}
+
+/// Runs `read`, turning every library failure into a VolumeIOError of one printable line.
+template<typename Read>
+Volume guardedRead(const std::string& path, Read&& read)
+{
+    try {
+        return read();
+    } catch (const VolumeIOError&) {
+        throw;
+    } catch (const openvdb::TypeError&) {
+        throw VolumeIOError("'" + path + "' lacks the VDBClay metadata (format version, materials)");
+    } catch (const openvdb::LookupError&) {
+        throw VolumeIOError("'" + path + "' lacks the VDBClay metadata (format version, materials)");
+    } catch (const std::bad_alloc&) {
+        throw VolumeIOError("'" + path + "' is corrupt (implausible sizes)");
+    } catch (const std::exception& e) {
+        std::string what = e.what();
+        if (what.find("not a VDB file") != std::string::npos || what.find("magic number") != std::string::npos)
+            throw VolumeIOError("'" + path + "' is not a .vdb file");
+        throw VolumeIOError("'" + path + "' cannot be read: " + printableText(what)); // libraries quote the file's bytes
+    }
+}
+
+} // namespace
+
+std::string encodeVolume(const Volume& volume)
+{
+    std::stringstream bytes(std::ios::in | std::ios::out | std::ios::binary);
+    writePayload(volume, bytes);
+    const uint64_t written = uint64_t(bytes.tellp());
+    replaceUuidByContentHash(bytes, written, "volume");
+    appendTrailer(bytes, written, "volume");
+    return bytes.str();
+}
+
+Volume decodeVolume(const std::string& bytes, const std::string& name)
+{
+    initializeHermiteGrid();
+    std::istringstream in(bytes, std::ios::binary);
+    return guardedRead(name, [&] { return readVolume(in, bytes.size(), name); });
+}
+
+void saveVolume(const Volume& volume, const std::string& path)
+{
     try {
         // Written through a stream we own: OpenVDB's File does not check its writes, so a full disk
         // would otherwise go unnoticed.
         writeFileAtomically(
-            path,
-            [&](std::ostream& os) {
-                openvdb::io::Stream stream(os);
-                stream.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
-                stream.write(openvdb::GridCPtrVec{out});
-            },
+            path, [&](std::ostream& os) { writePayload(volume, os); },
             [](const std::string& temp, uint64_t written) {
-                replaceUuidByContentHash(temp, written);
-                appendTrailer(temp, written);
+                if (std::filesystem::file_size(temp) != written)
+                    throw VolumeIOError("cannot write '" + temp + "' completely (disk full?)");
+                std::fstream file(temp, std::ios::binary | std::ios::in | std::ios::out);
+                replaceUuidByContentHash(file, written, temp);
+                appendTrailer(file, written, temp);
             });
     } catch (const FileWriteError& e) {
         throw VolumeIOError(e.what());
@@ -171,83 +284,9 @@ Volume loadVolume(const std::string& path)
     std::error_code ec;
     if (!fs::exists(path, ec)) throw VolumeIOError("'" + path + "' does not exist");
     if (!fs::is_regular_file(path, ec)) throw VolumeIOError("'" + path + "' is not a regular file");
-
-    try {
-        if (!hasVdbMagic(path)) throw VolumeIOError("'" + path + "' is not a .vdb file");
-        // Without a trailer the file is foreign or damaged; it never reaches OpenVDB's parser, which
-        // trusts the sizes it reads (junk can make it allocate gigabytes or corrupt memory).
-        if (checkIntegrity(path) != Integrity::Verified) {
-            throw VolumeIOError("'" + path + "' is not a VDBClay volume: it has no VDBClay checksum trailer "
-                                "(a .vdb from another tool, or a truncated or damaged VDBClay file)");
-        }
-        // Every count and size OpenVDB will trust is checked first (PayloadCheck.h), and what it will
-        // allocate is held to a small multiple of the file's size.
-        const uint64_t payloadBytes = fs::file_size(path) - kTrailerBytes;
-        {
-            std::ifstream check(path, std::ios::binary);
-            const PayloadSummary summary = checkPayload(check, payloadBytes, path, HermiteGrid::gridType());
-            if (summary.estimatedMemoryBytes > 64 * payloadBytes + (64u << 20))
-                throw VolumeIOError("'" + path + "' is corrupt: its tree would take " +
-                                    std::to_string(summary.estimatedMemoryBytes >> 20) + " MiB for a " +
-                                    std::to_string(payloadBytes >> 10) + " KiB file");
-        }
-        // Parsed from a stream we own, so a read past the end (a payload that is shorter than its
-        // structure says) shows up as a failed stream or a wrong end position.
-        std::ifstream is(path, std::ios::binary);
-        openvdb::io::Stream stream(is, /*delayLoad=*/false);
-        const auto payloadEnd = std::streamoff(fs::file_size(path) - kTrailerBytes);
-        if (is.fail() || is.tellg() != payloadEnd)
-            throw VolumeIOError("'" + path + "' is damaged: its grids do not end where its checksum says");
-        HermiteGrid::Ptr grid;
-        std::string found;
-        for (const auto& g : *stream.getGrids()) {
-            found += (found.empty() ? "" : ", ") + g->getName() + " (" + g->type() + ")";
-            if (g->type() != HermiteGrid::gridType() || (grid && grid->getName() == "hermite")) continue;
-            grid = openvdb::gridPtrCast<HermiteGrid>(g);
-        }
-        if (!grid) {
-            throw VolumeIOError("'" + path + "' is a .vdb file without a VDBClay Hermite grid" +
-                                (found.empty() ? std::string() : "; it holds: " + found));
-        }
-        const auto version = grid->metaValue<int32_t>(kFormatVersionKey);
-        if (version > kFormatVersion || version < 1) {
-            throw VolumeIOError("'" + path + "' has VDBClay format version " + std::to_string(version) +
-                                "; this build reads versions 1 to " + std::to_string(kFormatVersion));
-        }
-        MaterialTable materials = MaterialTable::fromJson(grid->metaValue<std::string>(kMaterialsKey));
-        if (!grid->hasUniformVoxels() || !grid->transform().isLinear())
-            throw VolumeIOError("'" + path + "': the Hermite grid needs a linear transform with cubic voxels");
-        if (grid->background().id != kEmptyMaterial)
-            throw VolumeIOError("'" + path + "': the Hermite grid's background must be empty");
-        const auto undefinedMaterial = [&](MaterialValue v) { return v.id > materials.size(); };
-        bool corrupt = false;
-        for (auto leaf = grid->constTree().cbeginLeaf(); leaf && !corrupt; ++leaf) {
-            const MaterialValue* values = leaf->buffer().data();
-            corrupt = std::any_of(values, values + kLeafVoxels, undefinedMaterial);
-        }
-        forEachTile(grid->constTree(), [&](const CoordBBox&, MaterialValue v) { corrupt = corrupt || undefinedMaterial(v); });
-        if (corrupt) throw VolumeIOError("'" + path + "' is corrupt: a voxel uses an undefined material id");
-        grid->removeMeta(kFormatVersionKey);
-        grid->removeMeta(kMaterialsKey);
-        Volume volume(grid->voxelSize()[0]);
-        volume.impl().grid = grid;
-        volume.materials() = std::move(materials);
-        volume.impl().formatVersion = version;
-        return volume;
-    } catch (const VolumeIOError&) {
-        throw;
-    } catch (const openvdb::TypeError&) {
-        throw VolumeIOError("'" + path + "' lacks the VDBClay metadata (format version, materials)");
-    } catch (const openvdb::LookupError&) {
-        throw VolumeIOError("'" + path + "' lacks the VDBClay metadata (format version, materials)");
-    } catch (const std::bad_alloc&) {
-        throw VolumeIOError("'" + path + "' is corrupt (implausible sizes)");
-    } catch (const std::exception& e) {
-        std::string what = e.what();
-        if (what.find("not a VDB file") != std::string::npos || what.find("magic number") != std::string::npos)
-            throw VolumeIOError("'" + path + "' is not a .vdb file");
-        throw VolumeIOError("'" + path + "' cannot be read: " + printableText(what)); // libraries quote the file's bytes
-    }
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw VolumeIOError("cannot open '" + path + "': " + std::strerror(errno));
+    return guardedRead(path, [&] { return readVolume(in, fs::file_size(path), path); });
 }
 
 } // namespace vdbclay

@@ -21,4 +21,12 @@ void saveVolume(const Volume& volume, const std::string& path);
 /// Reads the first VDBClay Hermite grid of a .vdb file (the one named "hermite" if there are several).
 Volume loadVolume(const std::string& path);
 
+/// The bytes saveVolume writes for `volume` (OpenVDB's data, Blosc-compressed, and the checksum
+/// trailer), for volumes kept elsewhere than in their own file (the scene store's bricks).
+std::string encodeVolume(const Volume& volume);
+
+/// Reads bytes encodeVolume (or a saved file) holds, with every check loadVolume makes; `name` names
+/// their source in messages.
+Volume decodeVolume(const std::string& bytes, const std::string& name);
+
 } // namespace vdbclay

@@ -1,0 +1,83 @@
+// The scene store's narrow interface: bricks by (level, brick coordinate) and the scene's metadata,
+// written in transactions. SQLite (SqliteBrickStore.cpp) is the working store; a server backend for
+// scenes shared between machines can be added behind the same interface.
+#pragma once
+
+#include "vdb_hermite/VolumeRegions.h"
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+namespace vdbclay {
+
+/// Every failure to open, read or write a store; what() is one line meant for the user.
+class StoreError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+struct BrickKey {
+    int level = 0;
+    IndexCoord brick{0, 0, 0}; // the brick's origin divided by the brick edge
+    friend bool operator<(const BrickKey& a, const BrickKey& b)
+    {
+        return a.level != b.level ? a.level < b.level : a.brick < b.brick;
+    }
+    friend bool operator==(const BrickKey& a, const BrickKey& b) { return a.level == b.level && a.brick == b.brick; }
+};
+
+/// One stored brick: either uniform (one material throughout, no payload) or a payload, the bytes of
+/// a native .vdb holding the brick's part of the volume (encodeVolume: OpenVDB-serialized, Blosc).
+struct BrickRecord {
+    std::optional<MaterialId> uniform;
+    std::string payload;
+    uint32_t leaves = 0;
+};
+
+/// What scan() tells about a brick without reading its payload.
+struct BrickSummary {
+    std::optional<MaterialId> uniform;
+    uint32_t leaves = 0;
+    uint64_t bytes = 0;
+};
+
+enum class StoreAccess {
+    ReadOnly,  // any number of readers, beside at most one writer
+    ReadWrite, // one writer at a time: a second is refused
+    Create,    // a new, empty store (the file must not exist), opened for writing
+};
+
+class BrickStore {
+public:
+    virtual ~BrickStore() = default;
+
+    virtual std::optional<BrickRecord> get(const BrickKey& key) const = 0;
+    virtual void put(const BrickKey& key, const BrickRecord& record) = 0;
+    virtual void erase(const BrickKey& key) = 0;
+    /// Calls fn for every brick of a level, in key order.
+    virtual void scan(int level, const std::function<void(const BrickKey&, const BrickSummary&)>& fn) const = 0;
+
+    virtual std::optional<std::string> meta(const std::string& key) const = 0;
+    virtual void putMeta(const std::string& key, const std::string& value) = 0;
+
+    /// Puts and erases between begin() and commit() land together or not at all; commit() returns
+    /// once they are on disk.
+    virtual void begin() = 0;
+    virtual void commit() = 0;
+    virtual void rollback() = 0;
+
+    virtual const std::string& path() const = 0;
+};
+
+/// Opens an SQLite store (WAL mode). Refuses, with one line, a file that is not an SQLite database,
+/// not a VDBClay store, of a newer format, damaged, or (for writing) open for writing elsewhere.
+std::unique_ptr<BrickStore> openSqliteStore(const std::string& path, StoreAccess access);
+
+/// Whether the file starts like an SQLite database (the form of a .vdbclay store).
+bool looksLikeSqliteFile(const std::string& path);
+
+} // namespace vdbclay

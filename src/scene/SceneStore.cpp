@@ -1,0 +1,279 @@
+#include "scene/SceneStore.h"
+
+#include "vdb_hermite/AtomicFile.h"
+#include "vdb_hermite/VolumeIO.h"
+#include "vdb_hermite/VolumeRegions.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <iterator>
+#include <random>
+#include <set>
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+namespace vdbclay {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kFormatKey = "format";
+constexpr const char* kFormatValue = "vdbclay-scene";
+constexpr const char* kVoxelSizeKey = "voxel_size";
+constexpr const char* kMaterialsKey = "materials";
+constexpr const char* kBrickLeavesKey = "brick_leaves";
+constexpr const char* kLodLevelsKey = "lod_levels";
+constexpr const char* kLodStaleKey = "lod_stale";
+
+std::string exactNumber(double v)
+{
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.17g", v);
+    return text;
+}
+
+LeafAlignedBox brickBox(const IndexCoord& brick)
+{
+    return {{brick[0] * kBrickEdge, brick[1] * kBrickEdge, brick[2] * kBrickEdge}, kBrickEdge};
+}
+
+double levelVoxelSize(double voxelSize, int level) { return voxelSize * double(1 << level); }
+
+} // namespace
+
+bool isStorePath(const std::string& path)
+{
+    std::string ext = fs::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext == kStoreExtension;
+}
+
+SceneStore::SceneStore(std::unique_ptr<BrickStore> store) : store_(std::move(store)) {}
+SceneStore::SceneStore(SceneStore&&) noexcept = default;
+SceneStore& SceneStore::operator=(SceneStore&&) noexcept = default;
+SceneStore::~SceneStore() = default;
+
+SceneStore SceneStore::create(const std::string& path, double voxelSize, const MaterialTable& materials)
+{
+    Volume probe(voxelSize); // checks the voxel size
+    SceneStore scene(openSqliteStore(path, StoreAccess::Create));
+    scene.store_->begin();
+    scene.store_->putMeta(kFormatKey, kFormatValue);
+    scene.store_->putMeta(kVoxelSizeKey, exactNumber(voxelSize));
+    scene.store_->putMeta(kMaterialsKey, materials.toJson());
+    scene.store_->putMeta(kBrickLeavesKey, std::to_string(kBrickLeaves));
+    scene.store_->putMeta(kLodLevelsKey, "0");
+    scene.store_->putMeta(kLodStaleKey, "0");
+    scene.store_->commit();
+    scene.readMeta();
+    return scene;
+}
+
+SceneStore SceneStore::open(const std::string& path, StoreAccess access)
+{
+    SceneStore scene(openSqliteStore(path, access));
+    scene.readMeta();
+    return scene;
+}
+
+void SceneStore::readMeta()
+{
+    const std::string& path = store_->path();
+    const auto require = [&](const char* key) {
+        const std::optional<std::string> value = store_->meta(key);
+        if (!value) throw StoreError("'" + path + "' is damaged: its metadata lacks '" + key + "'");
+        return *value;
+    };
+    if (require(kFormatKey) != kFormatValue) throw StoreError("'" + path + "' is not a VDBClay scene store");
+    try {
+        std::size_t used = 0;
+        const std::string text = require(kVoxelSizeKey);
+        voxelSize_ = std::stod(text, &used);
+        if (used != text.size() || !(voxelSize_ >= kMinVoxelSize && voxelSize_ <= kMaxVoxelSize)) throw std::invalid_argument(text);
+        if (require(kBrickLeavesKey) != std::to_string(kBrickLeaves))
+            throw StoreError("'" + path + "' has bricks of " + require(kBrickLeavesKey) + " leaves; this build reads " +
+                             std::to_string(kBrickLeaves));
+        materials_ = MaterialTable::fromJson(require(kMaterialsKey));
+        const int levels = lodLevels();
+        if (levels < 0 || levels > 16) throw std::invalid_argument("lod_levels");
+    } catch (const StoreError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw StoreError("'" + path + "' is damaged: its metadata is not valid (" + e.what() + ")");
+    }
+}
+
+const std::string& SceneStore::path() const { return store_->path(); }
+
+void SceneStore::setMaterials(const MaterialTable& materials)
+{
+    store_->putMeta(kMaterialsKey, materials.toJson());
+    materials_ = materials;
+}
+
+int SceneStore::lodLevels() const { return std::stoi(store_->meta(kLodLevelsKey).value_or("0")); }
+bool SceneStore::lodStale() const { return store_->meta(kLodStaleKey).value_or("0") != "0"; }
+void SceneStore::setLod(int levels, bool stale)
+{
+    store_->putMeta(kLodLevelsKey, std::to_string(levels));
+    store_->putMeta(kLodStaleKey, stale ? "1" : "0");
+}
+
+std::vector<IndexCoord> SceneStore::brickCoords(int level) const
+{
+    std::vector<IndexCoord> out;
+    store_->scan(level, [&](const BrickKey& key, const BrickSummary&) { out.push_back(key.brick); });
+    return out;
+}
+
+LevelSummary SceneStore::summary(int level) const
+{
+    LevelSummary s;
+    s.level = level;
+    store_->scan(level, [&](const BrickKey&, const BrickSummary& b) {
+        ++s.bricks;
+        s.leaves += b.leaves;
+        s.bytes += b.bytes;
+    });
+    return s;
+}
+
+void SceneStore::loadBricks(int level, const std::vector<IndexCoord>& bricks, Volume& into, const Progress& progress,
+                            std::vector<std::optional<BrickRecord>>* raw) const
+{
+    if (raw) raw->clear();
+    const double voxelSize = levelVoxelSize(voxelSize_, level);
+    if (into.voxelSize() != voxelSize) throw std::invalid_argument("loadBricks: the volume has another voxel size");
+    constexpr std::size_t kBatch = 64; // decoded in parallel, pasted in order
+    for (std::size_t first = 0; first < bricks.size(); first += kBatch) {
+        const std::size_t count = std::min(kBatch, bricks.size() - first);
+        std::vector<std::optional<BrickRecord>> records(count);
+        for (std::size_t i = 0; i < count; ++i) records[i] = store_->get({level, bricks[first + i]});
+        std::vector<std::optional<Volume>> parts(count);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const auto& range) {
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                if (!records[i] || records[i]->uniform) continue;
+                const IndexCoord& b = bricks[first + i];
+                const std::string name = store_->path() + " brick " + std::to_string(level) + "/" + std::to_string(b[0]) +
+                                         "," + std::to_string(b[1]) + "," + std::to_string(b[2]);
+                try {
+                    parts[i] = decodeVolume(records[i]->payload, name);
+                } catch (const VolumeIOError& e) {
+                    throw StoreError(e.what());
+                }
+                if (parts[i]->voxelSize() != voxelSize)
+                    throw StoreError("'" + name + "' is damaged: its voxel size does not match its level");
+            }
+        });
+        for (std::size_t i = 0; i < count; ++i) {
+            if (!records[i]) continue;
+            const LeafAlignedBox box = brickBox(bricks[first + i]);
+            if (records[i]->uniform) {
+                if (*records[i]->uniform > materials_.size())
+                    throw StoreError("'" + store_->path() + "' is damaged: a brick uses an undefined material");
+                fillRegion(into, box, *records[i]->uniform);
+            } else {
+                pasteRegion(into, *parts[i], box);
+            }
+        }
+        if (raw) std::move(records.begin(), records.end(), std::back_inserter(*raw));
+        if (progress) progress(first + count, bricks.size());
+    }
+}
+
+Volume SceneStore::loadLevel(int level, const Progress& progress) const
+{
+    Volume volume(levelVoxelSize(voxelSize_, level));
+    volume.materials() = materials_;
+    loadBricks(level, brickCoords(level), volume, progress);
+    return volume;
+}
+
+void SceneStore::writeBricks(int level, const Volume& volume, const std::vector<IndexCoord>& bricks, const Progress& progress)
+{
+    constexpr std::size_t kBatch = 256;
+    for (std::size_t first = 0; first < bricks.size(); first += kBatch) {
+        const std::size_t count = std::min(kBatch, bricks.size() - first);
+        std::vector<std::optional<BrickRecord>> records(count);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const auto& range) {
+            for (std::size_t i = range.begin(); i != range.end(); ++i) records[i] = encodeBrick(volume, bricks[first + i]);
+        });
+        for (std::size_t i = 0; i < count; ++i) {
+            const BrickKey key{level, bricks[first + i]};
+            if (records[i]) store_->put(key, *records[i]);
+            else store_->erase(key);
+        }
+        if (progress) progress(first + count, bricks.size());
+    }
+}
+
+void SceneStore::writeLevel(int level, const Volume& volume, const Progress& progress)
+{
+    const std::vector<IndexCoord> occupied = occupiedBoxes(volume, kBrickEdge);
+    std::vector<IndexCoord> bricks;
+    for (const IndexCoord& o : occupied) bricks.push_back({o[0] / kBrickEdge, o[1] / kBrickEdge, o[2] / kBrickEdge});
+    const std::set<IndexCoord> keep(bricks.begin(), bricks.end());
+    for (const IndexCoord& old : brickCoords(level))
+        if (!keep.count(old)) store_->erase({level, old});
+    writeBricks(level, volume, bricks, progress);
+}
+
+std::optional<BrickRecord> encodeBrick(const Volume& volume, const IndexCoord& brick)
+{
+    const LeafAlignedBox box = brickBox(brick);
+    if (const std::optional<MaterialId> uniform = uniformMaterial(volume, box)) {
+        if (*uniform == kEmptyMaterial) return std::nullopt;
+        return BrickRecord{uniform, {}, 0};
+    }
+    const Volume part = copyRegion(volume, box);
+    return BrickRecord{std::nullopt, encodeVolume(part), uint32_t(part.stats().leafCount)};
+}
+
+void writeStoreFile(const Volume& volume, const std::string& path, const Progress& progress)
+{
+    std::error_code ec;
+    if (fs::exists(path, ec)) {
+        if (!fs::is_regular_file(path, ec)) throw StoreError("'" + path + "' exists and is not a regular file");
+        // Opening for writing refuses a store another process writes; the lock ends with this scope.
+        if (looksLikeSqliteFile(path)) openSqliteStore(path, StoreAccess::ReadWrite);
+        else throw StoreError("'" + path + "' exists and is not a VDBClay scene store; not replacing it");
+    }
+    const fs::path target(path);
+    std::random_device random;
+    const fs::path temp = target.parent_path() / ("." + target.filename().string() + ".vdbclay-tmp-" +
+                                                   std::to_string(::getpid()) + "-" + std::to_string(random() % 1000000));
+    try {
+        {
+            SceneStore scene = SceneStore::create(temp.string(), volume.voxelSize(), volume.materials());
+            scene.bricks().begin();
+            scene.writeLevel(0, volume, progress);
+            scene.bricks().commit();
+        } // closing checkpoints the WAL into the file
+        syncFileToDisk(temp.string());
+        for (const char* suffix : {"-wal", "-shm"}) fs::remove(path + suffix, ec);
+        fs::rename(temp, target);
+        const int dir = ::open(target.parent_path().empty() ? "." : target.parent_path().c_str(), O_RDONLY | O_DIRECTORY);
+        if (dir >= 0) ::fsync(dir), ::close(dir);
+    } catch (...) {
+        for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(temp.string() + suffix, ec);
+        throw;
+    }
+}
+
+Volume loadScene(const std::string& path, const Progress& progress)
+{
+    if (!isStorePath(path)) return loadVolume(path);
+    return SceneStore::open(path, StoreAccess::ReadOnly).loadLevel(0, progress);
+}
+
+} // namespace vdbclay

@@ -1,0 +1,97 @@
+// A scene kept in a brick store (.vdbclay): the volume cut into bricks of 8^3 leaves (64^3 voxels) per
+// level of detail, read and written brick by brick, so a command touches only the bricks it needs.
+// Level 0 is the sculpted volume; level k >= 1 holds the coarse Hermite data of the LOD pyramid
+// (wavelet/LodPyramid.h) at voxel size 2^k, cut into bricks the same way.
+#pragma once
+
+#include "scene/BrickStore.h"
+#include "vdb_hermite/Materials.h"
+#include "vdb_hermite/Volume.h"
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace vdbclay {
+
+/// Leaves per brick side, and voxels: chosen so that a brick's payload (tens of KB compressed for a
+/// surface brick) amortizes a store read, while a small edit reads and writes few voxels it does not
+/// change (docs/ARCHITECTURE.md, "The scene store").
+constexpr int kBrickLeaves = 8;
+constexpr int32_t kBrickEdge = kBrickLeaves * kLeafDim;
+
+/// File extension of a store; every other extension is a native .vdb.
+constexpr const char* kStoreExtension = ".vdbclay";
+/// Whether a path names a store (by its extension, any case).
+bool isStorePath(const std::string& path);
+
+struct LevelSummary {
+    int level = 0;
+    uint64_t bricks = 0;
+    uint64_t leaves = 0;
+    uint64_t bytes = 0;
+};
+
+/// Progress of long work: done out of total units.
+using Progress = std::function<void(uint64_t done, uint64_t total)>;
+
+class SceneStore {
+public:
+    /// A new store at `path` (which must not exist), empty, with the given voxel size and materials.
+    static SceneStore create(const std::string& path, double voxelSize, const MaterialTable& materials);
+    static SceneStore open(const std::string& path, StoreAccess access);
+
+    SceneStore(SceneStore&&) noexcept;
+    SceneStore& operator=(SceneStore&&) noexcept;
+    ~SceneStore();
+
+    const std::string& path() const;
+    double voxelSize() const { return voxelSize_; }
+    const MaterialTable& materials() const { return materials_; }
+    /// Replaces the materials table (inside a transaction).
+    void setMaterials(const MaterialTable& materials);
+    /// The number of coarse levels stored (0 until `lod build`), and whether edits since made them stale.
+    int lodLevels() const;
+    bool lodStale() const;
+    void setLod(int levels, bool stale);
+
+    BrickStore& bricks() { return *store_; }
+    const BrickStore& bricks() const { return *store_; }
+
+    /// The brick coordinates of a level, sorted.
+    std::vector<IndexCoord> brickCoords(int level) const;
+    LevelSummary summary(int level) const;
+    /// Reads bricks of a level into `into` (a volume of that level's voxel size); missing bricks are empty.
+    /// `records` (optional) receives what was stored for each brick (nullopt: nothing).
+    void loadBricks(int level, const std::vector<IndexCoord>& bricks, Volume& into, const Progress& progress = {},
+                    std::vector<std::optional<BrickRecord>>* records = nullptr) const;
+    /// A whole level as one volume.
+    Volume loadLevel(int level, const Progress& progress = {}) const;
+    /// Stores the given bricks of `volume` (a level): a payload, a uniform record, or nothing for empty
+    /// space. Call between bricks().begin() and commit().
+    void writeBricks(int level, const Volume& volume, const std::vector<IndexCoord>& bricks, const Progress& progress = {});
+    /// Replaces a whole level by `volume`'s content (bricks it does not occupy are erased).
+    void writeLevel(int level, const Volume& volume, const Progress& progress = {});
+
+private:
+    SceneStore(std::unique_ptr<BrickStore> store);
+    void readMeta();
+
+    std::unique_ptr<BrickStore> store_;
+    double voxelSize_ = 1.0;
+    MaterialTable materials_;
+};
+
+/// What a store holds for one brick of `volume`: a payload, a uniform record, or nullopt (empty space).
+/// The same content always gives the same bytes.
+std::optional<BrickRecord> encodeBrick(const Volume& volume, const IndexCoord& brick);
+
+/// Writes `volume` as a new store at `path`, replacing an existing store there only once the new one is
+/// complete (a crash leaves the old one or none). Refuses a store another process has open for writing.
+void writeStoreFile(const Volume& volume, const std::string& path, const Progress& progress = {});
+
+/// Loads a scene in either form: a native .vdb, or level 0 of a store.
+Volume loadScene(const std::string& path, const Progress& progress = {});
+
+} // namespace vdbclay

@@ -1,0 +1,317 @@
+// The SQLite brick store: one table of bricks keyed by (level, x, y, z), one of metadata. WAL mode, so
+// readers see the last committed state while a writer works; synchronous=FULL, so a commit survives a
+// crash of the process or of the machine. One writer at a time, held by an flock on the file (SQLite's
+// own locks are fcntl locks, which flock does not disturb).
+#include "scene/BrickStore.h"
+
+#include <sqlite3.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+namespace vdbclay {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int32_t kApplicationId = 0x56434C59; // "VCLY"
+constexpr int kStoreFormatVersion = 1;
+
+class Statement {
+public:
+    Statement(sqlite3* db, const char* sql, const std::string& path)
+    {
+        if (sqlite3_prepare_v2(db, sql, -1, &stmt_, nullptr) != SQLITE_OK)
+            throw StoreError("'" + path + "' is not a usable VDBClay scene store (" + sqlite3_errmsg(db) + ")");
+    }
+    ~Statement() { sqlite3_finalize(stmt_); }
+    Statement(const Statement&) = delete;
+    Statement& operator=(const Statement&) = delete;
+    sqlite3_stmt* get() const
+    {
+        sqlite3_reset(stmt_);
+        sqlite3_clear_bindings(stmt_);
+        return stmt_;
+    }
+
+private:
+    sqlite3_stmt* stmt_ = nullptr;
+};
+
+class SqliteBrickStore final : public BrickStore {
+public:
+    SqliteBrickStore(const std::string& path, StoreAccess access) : path_(path)
+    {
+        std::error_code ec;
+        const bool exists = fs::exists(path, ec);
+        if (access == StoreAccess::Create && exists) throw StoreError("'" + path + "' already exists");
+        if (access != StoreAccess::Create) {
+            if (!exists) throw StoreError("'" + path + "' does not exist");
+            if (!fs::is_regular_file(path, ec)) throw StoreError("'" + path + "' is not a regular file");
+            if (!looksLikeSqliteFile(path))
+                throw StoreError("'" + path + "' is not a VDBClay scene store (not an SQLite database)");
+        }
+        if (access != StoreAccess::ReadOnly) lockForWriting(access == StoreAccess::Create);
+        const int flags = access == StoreAccess::ReadOnly ? SQLITE_OPEN_READONLY
+                          : access == StoreAccess::Create ? SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE
+                                                          : SQLITE_OPEN_READWRITE;
+        if (sqlite3_open_v2(path.c_str(), &db_, flags | SQLITE_OPEN_NOMUTEX, nullptr) != SQLITE_OK) {
+            const std::string why = db_ ? sqlite3_errmsg(db_) : "out of memory";
+            close();
+            throw StoreError("cannot open '" + path + "': " + why);
+        }
+        try {
+            sqlite3_busy_timeout(db_, 10000);
+            sqlite3_extended_result_codes(db_, 1);
+            if (access == StoreAccess::Create) createSchema();
+            else checkSchema();
+            if (access != StoreAccess::ReadOnly) {
+                exec("PRAGMA journal_mode=WAL");
+                exec("PRAGMA synchronous=FULL");
+            }
+            prepare();
+        } catch (...) {
+            close();
+            throw;
+        }
+    }
+    ~SqliteBrickStore() override
+    {
+        if (inTransaction_) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+        close();
+    }
+
+    std::optional<BrickRecord> get(const BrickKey& key) const override
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        sqlite3_stmt* s = select_->get();
+        bindKey(s, key);
+        const int rc = sqlite3_step(s);
+        if (rc == SQLITE_DONE) return std::nullopt;
+        if (rc != SQLITE_ROW) fail("read a brick");
+        BrickRecord record;
+        if (sqlite3_column_type(s, 0) != SQLITE_NULL) record.uniform = MaterialId(sqlite3_column_int(s, 0));
+        record.leaves = uint32_t(sqlite3_column_int64(s, 1));
+        const auto* bytes = static_cast<const char*>(sqlite3_column_blob(s, 2));
+        record.payload.assign(bytes ? bytes : "", std::size_t(sqlite3_column_bytes(s, 2)));
+        return record;
+    }
+
+    void put(const BrickKey& key, const BrickRecord& record) override
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        sqlite3_stmt* s = insert_->get();
+        bindKey(s, key);
+        if (record.uniform) sqlite3_bind_int(s, 5, int(*record.uniform));
+        else sqlite3_bind_null(s, 5);
+        sqlite3_bind_int64(s, 6, sqlite3_int64(record.leaves));
+        sqlite3_bind_blob64(s, 7, record.payload.data(), sqlite3_uint64(record.payload.size()), SQLITE_STATIC);
+        if (sqlite3_step(s) != SQLITE_DONE) fail("write a brick");
+    }
+
+    void erase(const BrickKey& key) override
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        sqlite3_stmt* s = remove_->get();
+        bindKey(s, key);
+        if (sqlite3_step(s) != SQLITE_DONE) fail("erase a brick");
+    }
+
+    void scan(int level, const std::function<void(const BrickKey&, const BrickSummary&)>& fn) const override
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        Statement stmt(db_, "SELECT x, y, z, uniform, leaves, length(payload) FROM bricks WHERE level = ?1 ORDER BY x, y, z", path_);
+        sqlite3_stmt* s = stmt.get();
+        sqlite3_bind_int(s, 1, level);
+        int rc;
+        while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
+            BrickKey key{level, {sqlite3_column_int(s, 0), sqlite3_column_int(s, 1), sqlite3_column_int(s, 2)}};
+            BrickSummary summary;
+            if (sqlite3_column_type(s, 3) != SQLITE_NULL) summary.uniform = MaterialId(sqlite3_column_int(s, 3));
+            summary.leaves = uint32_t(sqlite3_column_int64(s, 4));
+            summary.bytes = uint64_t(sqlite3_column_int64(s, 5));
+            fn(key, summary);
+        }
+        if (rc != SQLITE_DONE) fail("list the bricks");
+    }
+
+    std::optional<std::string> meta(const std::string& key) const override
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        sqlite3_stmt* s = metaSelect_->get();
+        sqlite3_bind_text(s, 1, key.c_str(), int(key.size()), SQLITE_TRANSIENT);
+        const int rc = sqlite3_step(s);
+        if (rc == SQLITE_DONE) return std::nullopt;
+        if (rc != SQLITE_ROW) fail("read the scene's metadata");
+        const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
+        return std::string(text ? text : "");
+    }
+
+    void putMeta(const std::string& key, const std::string& value) override
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        sqlite3_stmt* s = metaInsert_->get();
+        sqlite3_bind_text(s, 1, key.c_str(), int(key.size()), SQLITE_TRANSIENT);
+        sqlite3_bind_text(s, 2, value.c_str(), int(value.size()), SQLITE_TRANSIENT);
+        if (sqlite3_step(s) != SQLITE_DONE) fail("write the scene's metadata");
+    }
+
+    void begin() override
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        exec("BEGIN IMMEDIATE");
+        inTransaction_ = true;
+    }
+    void commit() override
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        exec("COMMIT");
+        inTransaction_ = false;
+    }
+    void rollback() override
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        exec("ROLLBACK");
+        inTransaction_ = false;
+    }
+
+    const std::string& path() const override { return path_; }
+
+private:
+    void lockForWriting(bool create)
+    {
+        lockFd_ = ::open(path_.c_str(), O_RDWR | O_CLOEXEC | (create ? O_CREAT | O_EXCL : 0), 0644);
+        if (lockFd_ < 0) {
+            if (errno == EEXIST) throw StoreError("'" + path_ + "' already exists");
+            throw StoreError("cannot open '" + path_ + "' for writing: " + std::strerror(errno));
+        }
+        if (::flock(lockFd_, LOCK_EX | LOCK_NB) != 0) {
+            const int err = errno;
+            ::close(lockFd_);
+            lockFd_ = -1;
+            if (err == EWOULDBLOCK)
+                throw StoreError("'" + path_ + "' is open for writing by another process (close it there, or read it only)");
+            throw StoreError("cannot lock '" + path_ + "': " + std::strerror(err));
+        }
+    }
+
+    void close()
+    {
+        if (db_) sqlite3_close_v2(db_);
+        db_ = nullptr;
+        // After SQLite let go of the file: closing another descriptor of it drops the process's fcntl locks.
+        if (lockFd_ >= 0) ::close(lockFd_);
+        lockFd_ = -1;
+    }
+
+    void exec(const char* sql) const
+    {
+        char* message = nullptr;
+        if (sqlite3_exec(db_, sql, nullptr, nullptr, &message) != SQLITE_OK) {
+            const std::string why = message ? message : sqlite3_errmsg(db_);
+            sqlite3_free(message);
+            throw StoreError(describe(why));
+        }
+    }
+
+    std::string describe(const std::string& why) const
+    {
+        const int code = sqlite3_errcode(db_) & 0xff;
+        if (code == SQLITE_NOTADB) return "'" + path_ + "' is not a VDBClay scene store (not an SQLite database)";
+        if (code == SQLITE_CORRUPT) return "'" + path_ + "' is damaged (" + why + ")";
+        if (code == SQLITE_FULL) return "cannot write '" + path_ + "' (disk full)";
+        if (code == SQLITE_BUSY) return "'" + path_ + "' is busy in another process (" + why + ")";
+        return "'" + path_ + "': " + why;
+    }
+
+    [[noreturn]] void fail(const char* what) const
+    {
+        throw StoreError(describe(std::string("cannot ") + what + ": " + sqlite3_errmsg(db_)));
+    }
+
+    int64_t pragmaInt(const char* sql) const
+    {
+        Statement stmt(db_, sql, path_);
+        sqlite3_stmt* s = stmt.get();
+        const int rc = sqlite3_step(s);
+        if (rc != SQLITE_ROW) throw StoreError(describe(sqlite3_errmsg(db_)));
+        return sqlite3_column_int64(s, 0);
+    }
+
+    void createSchema()
+    {
+        exec("PRAGMA journal_mode=WAL");
+        exec("PRAGMA application_id=1447251033"); // kApplicationId
+        exec(("PRAGMA user_version=" + std::to_string(kStoreFormatVersion)).c_str());
+        exec("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL) WITHOUT ROWID");
+        exec("CREATE TABLE bricks (level INTEGER NOT NULL, x INTEGER NOT NULL, y INTEGER NOT NULL, z INTEGER NOT NULL, "
+             "uniform INTEGER, leaves INTEGER NOT NULL, payload BLOB NOT NULL, PRIMARY KEY (level, x, y, z)) WITHOUT ROWID");
+    }
+
+    void checkSchema()
+    {
+        int64_t application = 0;
+        try {
+            application = pragmaInt("PRAGMA application_id");
+        } catch (const StoreError&) {
+            throw;
+        }
+        if (application != kApplicationId)
+            throw StoreError("'" + path_ + "' is an SQLite database but not a VDBClay scene store");
+        const int64_t version = pragmaInt("PRAGMA user_version");
+        if (version > kStoreFormatVersion || version < 1)
+            throw StoreError("'" + path_ + "' is a VDBClay scene store of format version " + std::to_string(version) +
+                             "; this build reads versions 1 to " + std::to_string(kStoreFormatVersion));
+        if (pragmaInt("SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name IN ('meta', 'bricks')") != 2)
+            throw StoreError("'" + path_ + "' is damaged (its tables are missing)");
+    }
+
+    void prepare()
+    {
+        select_ = std::make_unique<Statement>(
+            db_, "SELECT uniform, leaves, payload FROM bricks WHERE level = ?1 AND x = ?2 AND y = ?3 AND z = ?4", path_);
+        insert_ = std::make_unique<Statement>(
+            db_, "INSERT OR REPLACE INTO bricks (level, x, y, z, uniform, leaves, payload) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)", path_);
+        remove_ = std::make_unique<Statement>(db_, "DELETE FROM bricks WHERE level = ?1 AND x = ?2 AND y = ?3 AND z = ?4", path_);
+        metaSelect_ = std::make_unique<Statement>(db_, "SELECT value FROM meta WHERE key = ?1", path_);
+        metaInsert_ = std::make_unique<Statement>(db_, "INSERT OR REPLACE INTO meta (key, value) VALUES (?1, ?2)", path_);
+    }
+
+    static void bindKey(sqlite3_stmt* s, const BrickKey& key)
+    {
+        sqlite3_bind_int(s, 1, key.level);
+        for (int i = 0; i < 3; ++i) sqlite3_bind_int(s, 2 + i, key.brick[std::size_t(i)]);
+    }
+
+    std::string path_;
+    sqlite3* db_ = nullptr;
+    int lockFd_ = -1;
+    bool inTransaction_ = false;
+    mutable std::mutex mutex_; // one connection, used from the loader threads too
+    std::unique_ptr<Statement> select_, insert_, remove_, metaSelect_, metaInsert_;
+};
+
+} // namespace
+
+std::unique_ptr<BrickStore> openSqliteStore(const std::string& path, StoreAccess access)
+{
+    return std::make_unique<SqliteBrickStore>(path, access);
+}
+
+bool looksLikeSqliteFile(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    char header[16] = {};
+    in.read(header, sizeof(header));
+    return in && std::memcmp(header, "SQLite format 3\0", 16) == 0;
+}
+
+} // namespace vdbclay

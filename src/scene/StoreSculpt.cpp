@@ -1,0 +1,99 @@
+#include "scene/StoreSculpt.h"
+
+#include "sculpt/Brush.h"
+
+#include <cmath>
+#include <limits>
+#include <set>
+
+namespace vdbclay {
+
+namespace {
+
+int32_t floorDiv(int64_t v, int64_t d) { return int32_t(v >= 0 ? v / d : -((-v + d - 1) / d)); }
+
+/// The bricks an op can read or change: its brush's bounds in index space, grown by two voxels below
+/// (edges that start below reach into the brush) and by a leaf and two voxels above (the CSG kernel
+/// reads the first layer of the +x, +y, +z neighbours). Nullopt when the op reaches everything.
+std::optional<std::pair<IndexCoord, IndexCoord>> brickRange(const ScriptOp& op, double voxelSize)
+{
+    if (op.mode == CsgMode::Intersect) return std::nullopt;
+    WorldBounds b = op.brush.bounds();
+    if (!b.bounded()) return std::nullopt;
+    if (!op.path.empty()) {
+        Vec3d lo = op.path.front(), hi = op.path.front();
+        for (const Vec3d& p : op.path)
+            for (int i = 0; i < 3; ++i) lo[i] = std::min(lo[i], p[i]), hi[i] = std::max(hi[i], p[i]);
+        for (int i = 0; i < 3; ++i) {
+            b.min[i] += lo[i] - op.path.front()[i];
+            b.max[i] += hi[i] - op.path.front()[i];
+        }
+    }
+    IndexCoord lo, hi;
+    for (int i = 0; i < 3; ++i) {
+        const double min = std::floor(b.min[i] / voxelSize) - 2.0, max = std::ceil(b.max[i] / voxelSize) + kLeafDim + 2.0;
+        lo[std::size_t(i)] = floorDiv(int64_t(std::max(min, -1e9)), kBrickEdge);
+        hi[std::size_t(i)] = floorDiv(int64_t(std::min(max, 1e9)), kBrickEdge);
+    }
+    return std::pair{lo, hi};
+}
+
+} // namespace
+
+StoreSculptReport sculptStore(SceneStore& scene, const StrokeScript& script,
+                              const std::function<void(const ScriptOpReport&)>& onOp)
+{
+    std::set<IndexCoord> bricks;
+    bool everything = false;
+    for (const ScriptOp& op : script.ops) {
+        const auto range = brickRange(op, scene.voxelSize());
+        if (!range) {
+            everything = true;
+            break;
+        }
+        const auto& [lo, hi] = *range;
+        // The limits (checked again by runStrokeScript) keep a brush within +-250,000 voxels; this
+        // guard keeps a brush that fails them from enumerating billions of bricks first.
+        const double count = double(hi[0] - lo[0] + 1) * double(hi[1] - lo[1] + 1) * double(hi[2] - lo[2] + 1);
+        if (count > 5e7) throw ScriptError("an op reaches " + std::to_string(uint64_t(count)) + " bricks of the store");
+        for (int32_t x = lo[0]; x <= hi[0]; ++x)
+            for (int32_t y = lo[1]; y <= hi[1]; ++y)
+                for (int32_t z = lo[2]; z <= hi[2]; ++z) bricks.insert({x, y, z});
+    }
+    if (everything) {
+        const std::vector<IndexCoord> all = scene.brickCoords(0);
+        bricks.insert(all.begin(), all.end());
+    }
+    const std::vector<IndexCoord> order(bricks.begin(), bricks.end());
+    Volume part(scene.voxelSize());
+    part.materials() = scene.materials();
+    std::vector<std::optional<BrickRecord>> before;
+    scene.loadBricks(0, order, part, {}, &before);
+
+    StoreSculptReport report;
+    report.bricksRead = order.size();
+    report.ops = runStrokeScript(part, script, onOp);
+
+    // Intersect clears what lies outside the loaded bricks too: every stored brick was loaded then.
+    scene.bricks().begin();
+    try {
+        for (std::size_t i = 0; i < order.size(); ++i) {
+            std::optional<BrickRecord> after = encodeBrick(part, order[i]);
+            const bool same = after.has_value() == before[i].has_value() &&
+                              (!after || (after->uniform == before[i]->uniform && after->payload == before[i]->payload));
+            if (same) continue;
+            if (after) scene.bricks().put({0, order[i]}, *after);
+            else scene.bricks().erase({0, order[i]});
+            ++report.bricksWritten;
+        }
+        scene.setMaterials(part.materials());
+        if (report.bricksWritten > 0 && scene.lodLevels() > 0) scene.setLod(scene.lodLevels(), true);
+        scene.bricks().commit();
+    } catch (...) {
+        scene.bricks().rollback();
+        throw;
+    }
+    return report;
+}
+
+} // namespace vdbclay

@@ -1,0 +1,115 @@
+#include "vdb_hermite/VolumeRegions.h"
+
+#include "vdb_hermite/HermiteGrid.h"
+
+#include <algorithm>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+namespace vdbclay {
+
+namespace {
+
+void checkBox(const LeafAlignedBox& box)
+{
+    const auto aligned = [](int32_t v) { return (v & (kLeafDim - 1)) == 0; };
+    if (box.edge <= 0 || !aligned(box.edge) || !aligned(box.min[0]) || !aligned(box.min[1]) || !aligned(box.min[2]))
+        throw std::invalid_argument("a region must lie on leaf bounds (multiples of " + std::to_string(kLeafDim) + ")");
+}
+
+template<typename Fn>
+void forEachBlock(const LeafAlignedBox& box, Fn&& fn)
+{
+    for (int32_t x = 0; x < box.edge; x += kLeafDim)
+        for (int32_t y = 0; y < box.edge; y += kLeafDim)
+            for (int32_t z = 0; z < box.edge; z += kLeafDim) fn(Coord(box.min[0] + x, box.min[1] + y, box.min[2] + z));
+}
+
+int32_t floorTo(int32_t v, int32_t edge) { return v >= 0 ? v / edge * edge : -((-v + edge - 1) / edge) * edge; }
+
+} // namespace
+
+Volume copyRegion(const Volume& volume, const LeafAlignedBox& box)
+{
+    checkBox(box);
+    Volume part(volume.voxelSize());
+    part.materials() = volume.materials();
+    const HermiteTree& src = volume.impl().grid->constTree();
+    HermiteTree& dst = part.impl().grid->tree();
+    forEachBlock(box, [&](const Coord& o) {
+        if (const HermiteLeaf* leaf = src.probeConstLeaf(o)) {
+            dst.addLeaf(new HermiteLeaf(*leaf));
+        } else {
+            const MaterialValue value = src.getValue(o);
+            if (value.solid()) dst.addTile(1, o, value, false);
+        }
+    });
+    return part;
+}
+
+void pasteRegion(Volume& volume, const Volume& part, const LeafAlignedBox& box)
+{
+    checkBox(box);
+    if (part.voxelSize() != volume.voxelSize()) throw std::invalid_argument("a pasted region needs the same voxel size");
+    const HermiteTree& src = part.impl().grid->constTree();
+    HermiteTree& dst = volume.impl().grid->tree();
+    std::set<Coord> lowers;
+    forEachBlock(box, [&](const Coord& o) {
+        if (const HermiteLeaf* leaf = src.probeConstLeaf(o)) dst.addLeaf(new HermiteLeaf(*leaf));
+        else dst.addTile(1, o, src.getValue(o), false);
+        lowers.insert(alignDown(o, kLowerDim));
+    });
+    pruneNodes(dst, lowers);
+}
+
+void fillRegion(Volume& volume, const LeafAlignedBox& box, MaterialId material)
+{
+    checkBox(box);
+    HermiteTree& dst = volume.impl().grid->tree();
+    std::set<Coord> lowers;
+    forEachBlock(box, [&](const Coord& o) {
+        dst.addTile(1, o, MaterialValue{material}, false);
+        lowers.insert(alignDown(o, kLowerDim));
+    });
+    pruneNodes(dst, lowers);
+}
+
+std::optional<MaterialId> uniformMaterial(const Volume& volume, const LeafAlignedBox& box)
+{
+    checkBox(box);
+    const HermiteTree& tree = volume.impl().grid->constTree();
+    std::optional<MaterialId> value;
+    bool uniform = true;
+    forEachBlock(box, [&](const Coord& o) {
+        if (!uniform) return;
+        if (tree.probeConstLeaf(o)) {
+            uniform = false;
+            return;
+        }
+        const MaterialId id = tree.getValue(o).id;
+        if (value && *value != id) uniform = false;
+        value = id;
+    });
+    return uniform ? value : std::nullopt;
+}
+
+std::vector<IndexCoord> occupiedBoxes(const Volume& volume, int32_t edge)
+{
+    if (edge <= 0 || edge % kLeafDim != 0) throw std::invalid_argument("a box edge must be a multiple of the leaf size");
+    const HermiteTree& tree = volume.impl().grid->constTree();
+    std::set<IndexCoord> boxes;
+    for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
+        const Coord o = leaf->origin();
+        boxes.insert({floorTo(o.x(), edge), floorTo(o.y(), edge), floorTo(o.z(), edge)});
+    }
+    forEachTile(tree, [&](const CoordBBox& tile, MaterialValue value) {
+        if (!value.solid()) return;
+        for (int32_t x = floorTo(tile.min().x(), edge); x <= tile.max().x(); x += edge)
+            for (int32_t y = floorTo(tile.min().y(), edge); y <= tile.max().y(); y += edge)
+                for (int32_t z = floorTo(tile.min().z(), edge); z <= tile.max().z(); z += edge) boxes.insert({x, y, z});
+    });
+    return {boxes.begin(), boxes.end()};
+}
+
+} // namespace vdbclay

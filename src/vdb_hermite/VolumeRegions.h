@@ -1,0 +1,40 @@
+// Boxes of whole leaves cut out of a volume and put back: what the scene store's bricks are made of.
+// Light header: no OpenVDB templates.
+#pragma once
+
+#include "vdb_hermite/Volume.h"
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+namespace vdbclay {
+
+using IndexCoord = std::array<int32_t, 3>;
+
+/// A cube of `edge` voxels per side starting at `min` (index space); both multiples of the leaf size.
+struct LeafAlignedBox {
+    IndexCoord min{0, 0, 0};
+    int32_t edge = kLeafDim;
+};
+
+/// The part of `volume` inside the box, with the same voxel size and materials: its leaves copied,
+/// its tiles cut to the box's 8^3 blocks. Throws std::invalid_argument for a box not on leaf bounds.
+Volume copyRegion(const Volume& volume, const LeafAlignedBox& box);
+
+/// Replaces what `volume` holds inside the box by what `part` holds there (leaves and tiles), and folds
+/// nodes that became uniform. `part` must have the same voxel size; its materials are not copied.
+void pasteRegion(Volume& volume, const Volume& part, const LeafAlignedBox& box);
+
+/// Fills the box with one material (0 = empty), dropping its leaves.
+void fillRegion(Volume& volume, const LeafAlignedBox& box, MaterialId material);
+
+/// The material filling the whole box when it holds no leaf (0 = empty), or nullopt.
+std::optional<MaterialId> uniformMaterial(const Volume& volume, const LeafAlignedBox& box);
+
+/// The boxes of `edge` voxels (a multiple of the leaf size) on a lattice of that spacing that hold a
+/// leaf or a solid tile, sorted.
+std::vector<IndexCoord> occupiedBoxes(const Volume& volume, int32_t edge);
+
+} // namespace vdbclay
