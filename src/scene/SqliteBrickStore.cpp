@@ -60,7 +60,10 @@ public:
                 throw StoreError("'" + path + "' is not a VDBClay scene store (not an SQLite database)");
         }
         if (access != StoreAccess::ReadOnly) lockForWriting(access == StoreAccess::Create);
-        const int flags = access == StoreAccess::ReadOnly ? SQLITE_OPEN_READONLY
+        // A reader opens a writable file read-write (and then only queries), so that SQLite removes the
+        // -wal and -shm files when the last connection closes instead of leaving them beside the store.
+        const bool readOnlyFile = ::access(path.c_str(), W_OK) != 0;
+        const int flags = access == StoreAccess::ReadOnly ? (readOnlyFile ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE)
                           : access == StoreAccess::Create ? SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE
                                                           : SQLITE_OPEN_READWRITE;
         if (sqlite3_open_v2(path.c_str(), &db_, flags | SQLITE_OPEN_NOMUTEX, nullptr) != SQLITE_OK) {
@@ -76,6 +79,8 @@ public:
             if (access != StoreAccess::ReadOnly) {
                 exec("PRAGMA journal_mode=WAL");
                 exec("PRAGMA synchronous=FULL");
+            } else {
+                exec("PRAGMA query_only=1");
             }
             prepare();
         } catch (...) {

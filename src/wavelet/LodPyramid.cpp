@@ -363,6 +363,25 @@ Volume LodPyramid::coarseVolume(const Volume& fine, int level) const
 {
     Volume coarse(fine.voxelSize() * double(1 << level));
     coarse.materials() = fine.materials();
+    // Solid interiors first: each solid tile of the fine volume shrinks to its image at this level (a
+    // block that holds part of an image and no leaf's footprint is uniform: one tile fills it all).
+    // The blocks near the surface then replace what they cover.
+    HermiteTree& out = coarse.impl().grid->tree();
+    std::set<Coord> lowers;
+    forEachTile(fine.impl().grid->constTree(), [&](const CoordBBox& tile, MaterialValue value) {
+        if (!value.solid()) return;
+        const int size = tile.dim().x() >> level;
+        const Coord o(tile.min().x() >> level, tile.min().y() >> level, tile.min().z() >> level);
+        if (size >= kUpperDim) out.addTile(3, o, value, false);
+        else if (size >= kLowerDim) out.addTile(2, o, value, false);
+        else if (size < kDim) out.addTile(1, alignDown(o, kDim), value, false), lowers.insert(alignDown(o, kLowerDim));
+        else
+            for (int x = 0; x < size; x += kDim)
+                for (int y = 0; y < size; y += kDim)
+                    for (int z = 0; z < size; z += kDim) out.addTile(1, o.offsetBy(x, y, z), value, false);
+        lowers.insert(alignDown(o, kLowerDim));
+    });
+    pruneNodes(out, lowers);
     std::vector<BlockOrigin> origins;
     for (const auto& [origin, block] : blocks(level)) origins.push_back(origin);
     updateCoarseVolume(fine, level, origins, coarse);

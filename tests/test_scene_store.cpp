@@ -1,0 +1,250 @@
+// The scene store: round trips against the native .vdb, sculpting in place against sculpting the
+// .vdb, and stores that are damaged, truncated, foreign, newer or open for writing elsewhere.
+#include "scene/SceneStore.h"
+#include "scene/StoreLod.h"
+#include "scene/StoreSculpt.h"
+#include "sculpt/StrokeScript.h"
+#include "support/HermiteProbe.h"
+#include "support/Sculpt.h"
+#include "support/TestUtil.h"
+#include "vdb_hermite/VolumeIO.h"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+#include <sqlite3.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+using namespace vdbclay;
+using namespace vdbclay::test;
+
+namespace {
+
+/// Spans several bricks on both sides of the origin, with two materials and a solid interior big
+/// enough for uniform bricks.
+Volume multiBrickScene()
+{
+    Volume v(0.5);
+    const MaterialId red = defineMaterial(v, "red", 0.5f);
+    apply(v, CsgMode::Add, sphere(70.0), at(Vec3d(3.1, -2.0, 1.0)));
+    apply(v, CsgMode::Add, box(Vec3d(20.0, 10.0, 12.0)), at(Vec3d(45.0, 20.0, -10.0), Vec3d(0.0, 30.0, 0.0)), red);
+    apply(v, CsgMode::Remove, sphere(12.0), at(Vec3d(-40.0, 0.0, 20.0)));
+    return v;
+}
+
+std::string randomScript(std::mt19937& rng)
+{
+    std::uniform_real_distribution<double> pos(-60.0, 60.0), radius(2.0, 14.0);
+    const char* modes[] = {"add", "remove", "paint", "erode", "add", "remove"};
+    nlohmann::json ops = nlohmann::json::array();
+    for (int i = 0; i < 6; ++i) {
+        nlohmann::json op{{"mode", modes[rng() % 6]}, {"brush", {{"shape", rng() % 2 ? "sphere" : "box"}, {"radius", radius(rng)},
+                                                               {"size", {radius(rng), radius(rng), radius(rng)}}}}};
+        if (rng() % 3 == 0) op["path"] = {{pos(rng), pos(rng), pos(rng)}, {pos(rng), pos(rng), pos(rng)}};
+        else op["at"] = {std::round(pos(rng)), std::round(pos(rng)), pos(rng)};
+        if (op["mode"] == "paint" || op["mode"] == "add") op["material"] = rng() % 2 ? "red" : "default";
+        ops.push_back(op);
+    }
+    return nlohmann::json{{"materials", {{{"name", "red"}, {"color", {1, 0, 0, 1}}, {"toughness", 0.5}}}}, {"ops", ops}}.dump();
+}
+
+void execSql(const std::string& path, const std::string& sql)
+{
+    sqlite3* db = nullptr;
+    REQUIRE(sqlite3_open(path.c_str(), &db) == SQLITE_OK);
+    char* message = nullptr;
+    const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message);
+    sqlite3_free(message);
+    sqlite3_close(db);
+    REQUIRE(rc == SQLITE_OK);
+}
+
+} // namespace
+
+TEST_CASE("a store round trip equals the native .vdb round trip bit-exactly", "[store]")
+{
+    TempDir dir;
+    const Volume v = multiBrickScene();
+    writeStoreFile(v, dir.file("s.vdbclay"));
+    saveVolume(v, dir.file("s.vdb"));
+    const Volume fromStore = loadScene(dir.file("s.vdbclay"));
+    const Volume fromVdb = loadScene(dir.file("s.vdb"));
+    CHECK(checkInvariants(fromStore).empty());
+    CHECK(identical(fromStore, v));
+    CHECK(identical(fromStore, fromVdb));
+    // Exported again, the store gives the very bytes of the .vdb.
+    saveVolume(fromStore, dir.file("back.vdb"));
+    CHECK(readBytes(dir.file("back.vdb")) == readBytes(dir.file("s.vdb")));
+
+    {
+        const SceneStore scene = SceneStore::open(dir.file("s.vdbclay"), StoreAccess::ReadOnly);
+        const LevelSummary level0 = scene.summary(0);
+        CHECK(level0.leaves == v.stats().leafCount);
+        CHECK(level0.bricks > 8);
+        bool uniformBrick = false;
+        scene.bricks().scan(0, [&](const BrickKey&, const BrickSummary& b) { uniformBrick = uniformBrick || b.uniform.has_value(); });
+        CHECK(uniformBrick);
+    }
+    // Replacing a store keeps no trace of the old one.
+    writeStoreFile(Volume(0.5), dir.file("s.vdbclay"));
+    CHECK(loadScene(dir.file("s.vdbclay")).stats().empty);
+    CHECK(dir.entries() == std::vector<std::string>{"back.vdb", "s.vdb", "s.vdbclay"});
+}
+
+TEST_CASE("sculpting a store in place equals sculpting the .vdb", "[store]")
+{
+    TempDir dir;
+    std::mt19937 rng(5);
+    Volume reference = multiBrickScene();
+    writeStoreFile(reference, dir.file("s.vdbclay"));
+    for (int round = 0; round < 6; ++round) {
+        const StrokeScript script = parseStrokeScript(randomScript(rng));
+        runStrokeScript(reference, script);
+        StoreSculptReport report;
+        {
+            SceneStore scene = SceneStore::open(dir.file("s.vdbclay"), StoreAccess::ReadWrite);
+            report = sculptStore(scene, script);
+        }
+        INFO("round " << round);
+        const Volume stored = loadScene(dir.file("s.vdbclay"));
+        REQUIRE(identical(stored, reference));
+        CHECK(report.bricksWritten <= report.bricksRead);
+    }
+    // Intersect reaches the whole scene.
+    const StrokeScript intersect =
+        parseStrokeScript(R"({"ops": [{"mode": "intersect", "brush": {"shape": "sphere", "radius": 30}, "at": [0, 0, 0]}]})");
+    runStrokeScript(reference, intersect);
+    {
+        SceneStore scene = SceneStore::open(dir.file("s.vdbclay"), StoreAccess::ReadWrite);
+        sculptStore(scene, intersect);
+    }
+    CHECK(identical(loadScene(dir.file("s.vdbclay")), reference));
+}
+
+TEST_CASE("a small edit reads and writes only the bricks it reaches", "[store]")
+{
+    TempDir dir;
+    writeStoreFile(multiBrickScene(), dir.file("s.vdbclay"));
+    SceneStore scene = SceneStore::open(dir.file("s.vdbclay"), StoreAccess::ReadWrite);
+    const uint64_t total = scene.summary(0).bricks;
+    const StrokeScript stamp =
+        parseStrokeScript(R"({"ops": [{"mode": "remove", "brush": {"shape": "sphere", "radius": 3}, "at": [25.3, 0.2, 0.1]}]})");
+    const StoreSculptReport report = sculptStore(scene, stamp);
+    CHECK(report.bricksRead <= 8);
+    CHECK(report.bricksWritten >= 1);
+    CHECK(report.bricksRead < total);
+}
+
+TEST_CASE("stores that are damaged, truncated, foreign or newer are refused with one line", "[store]")
+{
+    TempDir dir;
+    const std::string good = dir.file("good.vdbclay");
+    writeStoreFile(multiBrickScene(), good);
+    const auto refused = [](const std::string& path, const std::string& needle) {
+        try {
+            const Volume v = loadScene(path);
+            FAIL("loaded " << path);
+        } catch (const StoreError& e) {
+            const std::string what = e.what();
+            INFO(what);
+            CHECK(what.find('\n') == std::string::npos);
+            CHECK(what.find(needle) != std::string::npos);
+        }
+    };
+    SECTION("not a database")
+    {
+        writeText(dir.file("text.vdbclay"), "hello, this is text");
+        refused(dir.file("text.vdbclay"), "not an SQLite database");
+        CHECK_THROWS_AS(SceneStore::open(dir.file("missing.vdbclay"), StoreAccess::ReadOnly), StoreError);
+    }
+    SECTION("another application's database")
+    {
+        execSql(dir.file("other.vdbclay"), "CREATE TABLE t (a INTEGER); INSERT INTO t VALUES (1);");
+        refused(dir.file("other.vdbclay"), "not a VDBClay scene store");
+    }
+    SECTION("a newer format")
+    {
+        execSql(good, "PRAGMA user_version = 7;");
+        refused(good, "format version 7");
+    }
+    SECTION("metadata gone")
+    {
+        execSql(good, "DELETE FROM meta WHERE key = 'voxel_size';");
+        refused(good, "lacks 'voxel_size'");
+    }
+    SECTION("a payload damaged inside the database")
+    {
+        execSql(good, "UPDATE bricks SET payload = substr(payload, 1, length(payload) / 2) || zeroblob(64) "
+                      "WHERE uniform IS NULL;");
+        refused(good, "damaged");
+    }
+    SECTION("truncated and overwritten files")
+    {
+        const std::vector<char> bytes = readBytes(good);
+        std::mt19937 rng(9);
+        for (int trial = 0; trial < 40; ++trial) {
+            std::vector<char> damaged = bytes;
+            if (trial % 2 == 0) {
+                damaged.resize(std::size_t(rng() % bytes.size()));
+            } else {
+                for (int i = 0; i < 16; ++i) damaged[std::size_t(rng() % damaged.size())] ^= char(1 + rng() % 255);
+            }
+            const std::string path = dir.file("damaged" + std::to_string(trial) + ".vdbclay");
+            writeBytes(path, damaged.data(), damaged.size());
+            // Either refused with one line, or (damage in free pages) read as the scene it was.
+            try {
+                const Volume v = loadScene(path);
+                CHECK(checkInvariants(v).empty());
+            } catch (const std::exception& e) {
+                const std::string what = e.what();
+                CHECK(what.find('\n') == std::string::npos);
+            }
+        }
+    }
+}
+
+TEST_CASE("a store open for writing refuses a second writer and lets readers read", "[store]")
+{
+    TempDir dir;
+    const std::string path = dir.file("s.vdbclay");
+    writeStoreFile(multiBrickScene(), path);
+    SceneStore writer = SceneStore::open(path, StoreAccess::ReadWrite);
+    try {
+        SceneStore second = SceneStore::open(path, StoreAccess::ReadWrite);
+        FAIL("a second writer opened the store");
+    } catch (const StoreError& e) {
+        CHECK(std::string(e.what()).find("open for writing by another process") != std::string::npos);
+    }
+    CHECK_THROWS_AS(writeStoreFile(Volume(0.5), path), StoreError);
+    const SceneStore reader = SceneStore::open(path, StoreAccess::ReadOnly);
+    CHECK(reader.summary(0).bricks == writer.summary(0).bricks);
+}
+
+TEST_CASE("lod build stores every level, and an edit marks them stale", "[store][lod]")
+{
+    TempDir dir;
+    const std::string path = dir.file("s.vdbclay");
+    const Volume v = multiBrickScene();
+    writeStoreFile(v, path);
+    SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
+    CHECK(buildStoreLod(scene, 3) == 3);
+    CHECK(scene.lodLevels() == 3);
+    CHECK_FALSE(scene.lodStale());
+    uint64_t previous = scene.summary(0).leaves;
+    for (int k = 1; k <= 3; ++k) {
+        const Volume level = scene.loadLevel(k);
+        CHECK(level.voxelSize() == v.voxelSize() * double(1 << k));
+        CHECK(checkInvariants(level).empty());
+        const uint64_t leaves = scene.summary(k).leaves;
+        CHECK(leaves > 0);
+        CHECK(leaves < previous);
+        previous = leaves;
+    }
+    sculptStore(scene, parseStrokeScript(R"({"ops": [{"mode": "add", "brush": {"shape": "sphere", "radius": 4}, "at": [0, 75, 0]}]})"));
+    CHECK(scene.lodStale());
+    buildStoreLod(scene, 2);
+    CHECK(scene.lodLevels() == 2);
+    CHECK(scene.summary(3).bricks == 0);
+}
