@@ -8,7 +8,7 @@
 
 namespace vdbclay::bench {
 
-std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh"}; }
+std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet"}; }
 
 int runBench(const std::string& which, bool json, bool quick)
 {
@@ -17,7 +17,8 @@ int runBench(const std::string& which, bool json, bool quick)
     if (which == "memory") return benchMemory(json, quick);
     if (which == "io") return benchIo(json, quick);
     if (which == "mesh") return benchMesh(json, quick);
-    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io or mesh)");
+    if (which == "wavelet") return benchWavelet(json, quick);
+    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh or wavelet)");
 }
 
 } // namespace vdbclay::bench

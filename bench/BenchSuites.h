@@ -7,5 +7,6 @@ int benchCsg(bool json, bool quick);
 int benchMemory(bool json, bool quick);
 int benchIo(bool json, bool quick);
 int benchMesh(bool json, bool quick);
+int benchWavelet(bool json, bool quick);
 
 } // namespace vdbclay::bench

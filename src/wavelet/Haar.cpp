@@ -167,13 +167,13 @@ DenseHaar<typename Ops::Value> decompose3D(const std::vector<typename Ops::Value
     DenseHaar<typename Ops::Value> haar;
     haar.edge = edge;
     haar.levels = levels;
-    std::vector<typename Ops::Value> current = values, next;
+    std::vector<typename Ops::Value> current, next;
     for (int k = 1; k <= levels; ++k) {
         const int e = edge >> k;
         const std::size_t block = std::size_t(e) * e * e;
         next.resize(block);
         haar.details.emplace_back(7 * block);
-        forwardLevel<Ops>(current.data(), e, next.data(), haar.details.back().data());
+        forwardLevel<Ops>(k == 1 ? values.data() : current.data(), e, next.data(), haar.details.back().data());
         std::swap(current, next);
     }
     haar.low = std::move(current);
