@@ -147,6 +147,25 @@ LodCommands addLodCommand(CLI::App& parent, LodOptions& options);
 int runLodBuild(const LodOptions& options);
 int runLodInfo(const LodOptions& options);
 
+struct SynthCommandOptions {
+    std::string kind;
+    int extent = 512;
+    uint64_t seed = 1;
+    double voxelSize = 1.0;
+    std::string output;
+    bool json = false;
+};
+CLI::App* addSynthCommand(CLI::App& parent, SynthCommandOptions& options);
+int runSynth(const SynthCommandOptions& options);
+
+struct DiffOptions {
+    std::string a, b;
+    std::optional<double> tolerance;
+    bool json = false;
+};
+CLI::App* addDiffCommand(CLI::App& parent, DiffOptions& options);
+int runDiff(const DiffOptions& options);
+
 struct BenchCommandOptions {
     std::string which;
     bool json = false;

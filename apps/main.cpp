@@ -36,6 +36,8 @@ int run(int argc, char** argv)
     ImportOptions importOptions;
     ExportOptions exportOptions;
     LodOptions lodOptions;
+    SynthCommandOptions synthOptions;
+    DiffOptions diffOptions;
 
     CLI::App* newCmd = addNewCommand(app, newOptions);
     CLI::App* sculptCmd = addSculptCommand(app, sculptOptions);
@@ -47,7 +49,9 @@ int run(int argc, char** argv)
     CLI::App* importCmd = addImportCommand(app, importOptions);
     CLI::App* exportCmd = addExportCommand(app, exportOptions);
     const LodCommands lodCmds = addLodCommand(app, lodOptions);
-    for (CLI::App* cmd : {newCmd, sculptCmd, meshCmd, demoCmd, benchCmd, importCmd, exportCmd, lodCmds.build}) addThreadsOption(*cmd, threads);
+    CLI::App* synthCmd = addSynthCommand(app, synthOptions);
+    CLI::App* diffCmd = addDiffCommand(app, diffOptions);
+    for (CLI::App* cmd : {newCmd, sculptCmd, meshCmd, demoCmd, benchCmd, importCmd, exportCmd, lodCmds.build, synthCmd}) addThreadsOption(*cmd, threads);
     // Set after the subcommands exist: CLI11 copies the parent's footer into subcommands created later.
     app.footer("Run 'vdbclay COMMAND --help' for the options of one command.\n"
                "Exit codes: 0 success, 1 the command failed, 2 wrong command line.");
@@ -63,7 +67,7 @@ int run(int argc, char** argv)
     } catch (const CLI::ParseError& e) {
         if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-') {
             printError(std::string("unknown command '") + argv[1] +
-                       "' (expected new, sculpt, mesh, info, import, export, lod, demo, bench or selftest; see 'vdbclay --help')");
+                       "' (expected new, sculpt, mesh, info, import, export, lod, synth, diff, demo, bench or selftest; see 'vdbclay --help')");
             return kExitUsage;
         }
         std::string hint = "vdbclay --help";
@@ -93,6 +97,8 @@ int run(int argc, char** argv)
     if (*exportCmd) return runExport(exportOptions);
     if (*lodCmds.build) return runLodBuild(lodOptions);
     if (*lodCmds.info) return runLodInfo(lodOptions);
+    if (*synthCmd) return runSynth(synthOptions);
+    if (*diffCmd) return runDiff(diffOptions);
     printError("no command given (see 'vdbclay --help')");
     return kExitUsage;
 }

@@ -239,7 +239,8 @@ std::optional<BrickRecord> encodeBrick(const Volume& volume, const IndexCoord& b
     return BrickRecord{std::nullopt, encodeVolume(part), uint32_t(part.stats().leafCount)};
 }
 
-void writeStoreFile(const Volume& volume, const std::string& path, const Progress& progress)
+void createStoreFile(const std::string& path, double voxelSize, const MaterialTable& materials,
+                     const std::function<void(SceneStore&)>& fill)
 {
     std::error_code ec;
     if (fs::exists(path, ec)) {
@@ -254,9 +255,9 @@ void writeStoreFile(const Volume& volume, const std::string& path, const Progres
                                                    std::to_string(::getpid()) + "-" + std::to_string(random() % 1000000));
     try {
         {
-            SceneStore scene = SceneStore::create(temp.string(), volume.voxelSize(), volume.materials());
+            SceneStore scene = SceneStore::create(temp.string(), voxelSize, materials);
             scene.bricks().begin();
-            scene.writeLevel(0, volume, progress);
+            fill(scene);
             scene.bricks().commit();
         } // closing checkpoints the WAL into the file
         syncFileToDisk(temp.string());
@@ -268,6 +269,12 @@ void writeStoreFile(const Volume& volume, const std::string& path, const Progres
         for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(temp.string() + suffix, ec);
         throw;
     }
+}
+
+void writeStoreFile(const Volume& volume, const std::string& path, const Progress& progress)
+{
+    createStoreFile(path, volume.voxelSize(), volume.materials(),
+                    [&](SceneStore& scene) { scene.writeLevel(0, volume, progress); });
 }
 
 Volume loadScene(const std::string& path, const Progress& progress)

@@ -87,6 +87,12 @@ private:
 /// The same content always gives the same bytes.
 std::optional<BrickRecord> encodeBrick(const Volume& volume, const IndexCoord& brick);
 
+/// Makes a new store at `path`: `fill` writes it inside one transaction (begun and committed here), and
+/// the file replaces an existing store only once complete (a crash leaves the old one or none).
+/// Refuses to replace a store another process has open for writing, or a file that is not a store.
+void createStoreFile(const std::string& path, double voxelSize, const MaterialTable& materials,
+                     const std::function<void(SceneStore&)>& fill);
+
 /// Writes `volume` as a new store at `path`, replacing an existing store there only once the new one is
 /// complete (a crash leaves the old one or none). Refuses a store another process has open for writing.
 void writeStoreFile(const Volume& volume, const std::string& path, const Progress& progress = {});

@@ -94,6 +94,39 @@ std::optional<MaterialId> uniformMaterial(const Volume& volume, const LeafAligne
     return uniform ? value : std::nullopt;
 }
 
+RegionDifference compareRegion(const Volume& a, const Volume& b, const LeafAlignedBox& box)
+{
+    checkBox(box);
+    const HermiteTree& ta = a.impl().grid->constTree();
+    const HermiteTree& tb = b.impl().grid->constTree();
+    RegionDifference d;
+    forEachBlock(box, [&](const Coord& o) {
+        const HermiteLeaf* la = ta.probeConstLeaf(o);
+        const HermiteLeaf* lb = tb.probeConstLeaf(o);
+        if (!la && !lb) {
+            const MaterialValue va = ta.getValue(o), vb = tb.getValue(o);
+            if (va == vb) return;
+            (va.solid() && vb.solid() ? d.materials : d.occupancy) += uint64_t(kLeafVoxels);
+            return;
+        }
+        if (la && lb && *la == *lb) return;
+        const MaterialValue tileA = la ? MaterialValue{} : ta.getValue(o), tileB = lb ? MaterialValue{} : tb.getValue(o);
+        for (Index i = 0; i < Index(kLeafVoxels); ++i) {
+            const MaterialValue va = la ? la->getValue(i) : tileA, vb = lb ? lb->getValue(i) : tileB;
+            if (va != vb) {
+                (va.solid() && vb.solid() ? d.materials : d.occupancy)++;
+                continue;
+            }
+            for (int axis = 0; axis < 3; ++axis) {
+                const PackedSample* sa = la ? la->sample(i, axis) : nullptr;
+                const PackedSample* sb = lb ? lb->sample(i, axis) : nullptr;
+                if ((sa == nullptr) != (sb == nullptr) || (sa && !(*sa == *sb))) ++d.samples;
+            }
+        }
+    });
+    return d;
+}
+
 std::vector<IndexCoord> occupiedBoxes(const Volume& volume, int32_t edge)
 {
     if (edge <= 0 || edge % kLeafDim != 0) throw std::invalid_argument("a box edge must be a multiple of the leaf size");

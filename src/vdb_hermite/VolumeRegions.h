@@ -33,6 +33,15 @@ void fillRegion(Volume& volume, const LeafAlignedBox& box, MaterialId material);
 /// The material filling the whole box when it holds no leaf (0 = empty), or nullopt.
 std::optional<MaterialId> uniformMaterial(const Volume& volume, const LeafAlignedBox& box);
 
+/// How two volumes differ inside a box, voxel by voxel.
+struct RegionDifference {
+    uint64_t occupancy = 0; // voxels solid in one and empty in the other
+    uint64_t materials = 0; // voxels solid in both, of different materials
+    uint64_t samples = 0;   // voxel edges whose Hermite samples differ where the materials agree
+    bool any() const { return occupancy || materials || samples; }
+};
+RegionDifference compareRegion(const Volume& a, const Volume& b, const LeafAlignedBox& box);
+
 /// The boxes of `edge` voxels (a multiple of the leaf size) on a lattice of that spacing that hold a
 /// leaf or a solid tile, sorted.
 std::vector<IndexCoord> occupiedBoxes(const Volume& volume, int32_t edge);

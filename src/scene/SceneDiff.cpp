@@ -1,0 +1,123 @@
+#include "scene/SceneDiff.h"
+
+#include "mesher/MeshQuality.h"
+#include "mesher/Mesher.h"
+#include "scene/SceneStore.h"
+#include "vdb_hermite/VolumeIO.h"
+
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <set>
+
+namespace vdbclay {
+
+namespace {
+
+/// A scene read brick by brick: a store, or a .vdb loaded whole.
+class SceneSource {
+public:
+    explicit SceneSource(const std::string& path)
+    {
+        if (isStorePath(path)) store_.emplace(SceneStore::open(path, StoreAccess::ReadOnly));
+        else volume_.emplace(loadVolume(path));
+    }
+    double voxelSize() const { return store_ ? store_->voxelSize() : volume_->voxelSize(); }
+    const MaterialTable& materials() const { return store_ ? store_->materials() : volume_->materials(); }
+    std::vector<IndexCoord> bricks() const
+    {
+        if (store_) return store_->brickCoords(0);
+        std::vector<IndexCoord> out;
+        for (const IndexCoord& o : occupiedBoxes(*volume_, kBrickEdge))
+            out.push_back({o[0] / kBrickEdge, o[1] / kBrickEdge, o[2] / kBrickEdge});
+        return out;
+    }
+    std::optional<BrickRecord> record(const IndexCoord& brick) const
+    {
+        return store_ ? store_->bricks().get({0, brick}) : encodeBrick(*volume_, brick);
+    }
+    Volume region(const std::vector<IndexCoord>& bricks) const
+    {
+        Volume out(voxelSize());
+        out.materials() = materials();
+        if (store_) {
+            store_->loadBricks(0, bricks, out);
+        } else {
+            for (const IndexCoord& b : bricks) {
+                const LeafAlignedBox box{{b[0] * kBrickEdge, b[1] * kBrickEdge, b[2] * kBrickEdge}, kBrickEdge};
+                pasteRegion(out, copyRegion(*volume_, box), box);
+            }
+        }
+        return out;
+    }
+
+private:
+    std::optional<SceneStore> store_;
+    std::optional<Volume> volume_;
+};
+
+bool sameRecord(const std::optional<BrickRecord>& a, const std::optional<BrickRecord>& b)
+{
+    if (!a || !b) return !a && !b;
+    return a->uniform == b->uniform && a->payload == b->payload;
+}
+
+} // namespace
+
+bool SceneDiff::withinTolerance(double toleranceVoxels) const
+{
+    if (identical()) return true;
+    if (voxelSizesDiffer || materialTablesDiffer || materialDifferences > 0) return false;
+    return surfaceDistance <= toleranceVoxels * voxelSize;
+}
+
+SceneDiff diffScenes(const std::string& pathA, const std::string& pathB)
+{
+    const SceneSource a(pathA), b(pathB);
+    SceneDiff diff;
+    diff.voxelSize = a.voxelSize();
+    if (a.voxelSize() != b.voxelSize()) {
+        diff.voxelSizesDiffer = true;
+        return diff;
+    }
+    diff.materialTablesDiffer = !(a.materials() == b.materials());
+    std::set<IndexCoord> all;
+    for (const IndexCoord& c : a.bricks()) all.insert(c);
+    for (const IndexCoord& c : b.bricks()) all.insert(c);
+    for (const IndexCoord& brick : all) {
+        if (sameRecord(a.record(brick), b.record(brick))) continue;
+        // Different bytes may still hold the same voxels (a tree laid out otherwise): compare those.
+        const LeafAlignedBox box{{brick[0] * kBrickEdge, brick[1] * kBrickEdge, brick[2] * kBrickEdge}, kBrickEdge};
+        const RegionDifference d = compareRegion(a.region({brick}), b.region({brick}), box);
+        if (!d.any()) continue;
+        diff.differingBricks.push_back(brick);
+        diff.occupancyDifferences += d.occupancy;
+        diff.materialDifferences += d.materials;
+        diff.sampleDifferences += d.samples;
+    }
+    const double vs = diff.voxelSize;
+    diff.differenceVolume = double(diff.occupancyDifferences) * vs * vs * vs;
+    if (diff.differingBricks.empty()) return diff;
+
+    // The surfaces around the differing bricks: those bricks and a ring of bricks around them, so the
+    // region's cut walls lie in bricks both scenes share and coincide.
+    std::set<IndexCoord> region;
+    for (const IndexCoord& c : diff.differingBricks)
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz) region.insert({c[0] + dx, c[1] + dy, c[2] + dz});
+    const std::vector<IndexCoord> bricks(region.begin(), region.end());
+    MeshOptions options;
+    options.kind = MesherKind::CubicalMarchingSquares;
+    const Mesh meshA = meshVolume(a.region(bricks), options), meshB = meshVolume(b.region(bricks), options);
+    if (meshA.triangleCount() == 0 || meshB.triangleCount() == 0) {
+        diff.surfaceDistance = meshA.triangleCount() == meshB.triangleCount() ? 0.0 : std::numeric_limits<double>::infinity();
+    } else {
+        SurfaceSampling sampling;
+        sampling.spacing = 0.5 * vs;
+        diff.surfaceDistance = measureAgainstMesh(meshA, meshB, sampling).maxDistance;
+    }
+    return diff;
+}
+
+} // namespace vdbclay
