@@ -29,7 +29,7 @@ int runDiff(const DiffOptions& o)
 {
     SceneDiff diff;
     try {
-        diff = diffScenes(o.a, o.b);
+        diff = diffScenes(o.a, o.b, o.json || o.tolerance.has_value());
     } catch (const std::exception& e) {
         printError(e.what());
         return kExitUsage;
@@ -64,7 +64,7 @@ int runDiff(const DiffOptions& o)
         rows.push_back({"voxels", std::to_string(diff.occupancyDifferences) + " solid/empty, " +
                                       std::to_string(diff.materialDifferences) + " of another material, " +
                                       std::to_string(diff.sampleDifferences) + " edges with other samples"});
-        rows.push_back({"surface distance", formatNumber(distanceVoxels) + " voxels"});
+        if (o.tolerance) rows.push_back({"surface distance", formatNumber(distanceVoxels) + " voxels"});
         printFields(rows, 0);
     }
     return accepted ? kExitOk : kExitFailure;

@@ -446,6 +446,14 @@ MeshQuality measureAgainstSdf(const Mesh& mesh, const SignedDistanceFn& sdf, con
     return q;
 }
 
+double maxDistanceToMesh(const Mesh& from, const Mesh& to, double spacing)
+{
+    if (from.triangles.empty()) return 0.0;
+    const TriangleLocator locator(to);
+    if (locator.empty()) return kInf;
+    return sampleAgainst(from, locator, spacing, 64).maximum();
+}
+
 MeshQuality measureAgainstMesh(const Mesh& mesh, const Mesh& reference, const SurfaceSampling& sampling)
 {
     MeshQuality q;

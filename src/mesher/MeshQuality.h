@@ -75,6 +75,10 @@ MeshQuality measureAgainstSdf(const Mesh& mesh, const SignedDistanceFn& sdf, con
 /// the normal of the reference triangle nearest its centroid.
 MeshQuality measureAgainstMesh(const Mesh& mesh, const Mesh& reference, const SurfaceSampling& sampling = {});
 
+/// The largest distance from samples of `from` (vertices and barycentric points at most `spacing` apart)
+/// to `to`: one side of the Hausdorff distance. 0 when `from` is empty, infinite when only `to` is.
+double maxDistanceToMesh(const Mesh& from, const Mesh& to, double spacing);
+
 /// Closest point to p on the triangle abc (region-based: vertex, edge or face region).
 Point3d closestPointOnTriangle(const Point3d& p, const Point3d& a, const Point3d& b, const Point3d& c);
 

@@ -1,10 +1,12 @@
 #include "scene/SceneDiff.h"
 
 #include "mesher/MeshQuality.h"
+#include "mesher/Mesh.h"
 #include "mesher/Mesher.h"
 #include "scene/SceneStore.h"
 #include "vdb_hermite/VolumeIO.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -71,7 +73,7 @@ bool SceneDiff::withinTolerance(double toleranceVoxels) const
     return surfaceDistance <= toleranceVoxels * voxelSize;
 }
 
-SceneDiff diffScenes(const std::string& pathA, const std::string& pathB)
+SceneDiff diffScenes(const std::string& pathA, const std::string& pathB, bool measureSurface)
 {
     const SceneSource a(pathA), b(pathB);
     SceneDiff diff;
@@ -99,8 +101,12 @@ SceneDiff diffScenes(const std::string& pathA, const std::string& pathB)
     diff.differenceVolume = double(diff.occupancyDifferences) * vs * vs * vs;
     if (diff.differingBricks.empty()) return diff;
 
-    // The surfaces around the differing bricks: those bricks and a ring of bricks around them, so the
-    // region's cut walls lie in bricks both scenes share and coincide.
+    if (!measureSurface || (diff.occupancyDifferences == 0 && diff.sampleDifferences == 0)) return diff; // the same surface
+
+    // The surfaces around the differing bricks, meshed with a ring of bricks around them so the region's
+    // cut walls lie in bricks both scenes share. Only the triangles in the differing bricks (grown by a
+    // leaf, as cells read their neighbours) are measured, each side against the other side's whole mesh:
+    // elsewhere the surfaces are the same.
     std::set<IndexCoord> region;
     for (const IndexCoord& c : diff.differingBricks)
         for (int dx = -1; dx <= 1; ++dx)
@@ -110,13 +116,34 @@ SceneDiff diffScenes(const std::string& pathA, const std::string& pathB)
     MeshOptions options;
     options.kind = MesherKind::CubicalMarchingSquares;
     const Mesh meshA = meshVolume(a.region(bricks), options), meshB = meshVolume(b.region(bricks), options);
-    if (meshA.triangleCount() == 0 || meshB.triangleCount() == 0) {
-        diff.surfaceDistance = meshA.triangleCount() == meshB.triangleCount() ? 0.0 : std::numeric_limits<double>::infinity();
-    } else {
-        SurfaceSampling sampling;
-        sampling.spacing = 0.5 * vs;
-        diff.surfaceDistance = measureAgainstMesh(meshA, meshB, sampling).maxDistance;
-    }
+    const std::set<IndexCoord> differing(diff.differingBricks.begin(), diff.differingBricks.end());
+    const auto crop = [&](const Mesh& mesh) {
+        Mesh out = mesh;
+        out.triangles.clear();
+        out.triangleMaterials.clear();
+        for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+            bool near = false;
+            for (uint32_t v : mesh.triangles[t]) {
+                for (int dx = -1; dx <= 1 && !near; dx += 2)
+                    for (int dy = -1; dy <= 1 && !near; dy += 2)
+                        for (int dz = -1; dz <= 1 && !near; dz += 2) {
+                            const double margin = kLeafDim * vs;
+                            const auto& p = mesh.positions[v];
+                            const IndexCoord c{int32_t(std::floor((p[0] + dx * margin) / (kBrickEdge * vs))),
+                                               int32_t(std::floor((p[1] + dy * margin) / (kBrickEdge * vs))),
+                                               int32_t(std::floor((p[2] + dz * margin) / (kBrickEdge * vs)))};
+                            near = differing.count(c) > 0;
+                        }
+            }
+            if (!near) continue;
+            out.triangles.push_back(mesh.triangles[t]);
+            if (t < mesh.triangleMaterials.size()) out.triangleMaterials.push_back(mesh.triangleMaterials[t]);
+        }
+        return out;
+    };
+    // Samples a quarter voxel apart for a local change; a voxel apart where much of the scene changed.
+    const double spacing = (diff.differingBricks.size() <= 8 ? 0.25 : 1.0) * vs;
+    diff.surfaceDistance = std::max(maxDistanceToMesh(crop(meshA), meshB, spacing), maxDistanceToMesh(crop(meshB), meshA, spacing));
     return diff;
 }
 

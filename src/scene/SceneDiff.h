@@ -27,8 +27,9 @@ struct SceneDiff {
     bool withinTolerance(double toleranceVoxels) const;
 };
 
-/// Compares level 0 of two scenes, each a native .vdb or a store. Throws VolumeIOError / StoreError for
+/// Compares level 0 of two scenes, each a native .vdb or a store; with `measureSurface`, also the
+/// surface distance (which meshes the differing bricks). Throws VolumeIOError / StoreError for
 /// unreadable scenes.
-SceneDiff diffScenes(const std::string& a, const std::string& b);
+SceneDiff diffScenes(const std::string& a, const std::string& b, bool measureSurface = true);
 
 } // namespace vdbclay
