@@ -86,6 +86,8 @@ struct SculptOptions {
     std::string input;
     std::string script;
     std::string output;
+    std::optional<double> memoryBudgetMB; // stores: stream under this budget, autosaving
+    uint64_t autosaveEvery = 0;           // stores: commit every N ops (0: once at the end)
     bool json = false;
 };
 CLI::App* addSculptCommand(CLI::App& parent, SculptOptions& options);
@@ -138,14 +140,22 @@ struct LodOptions {
     std::string scene;
     int levels = 0;
     bool json = false;
+    // inspect
+    std::string cameraPath;
+    double memoryBudgetMB = 0.0;
+    double pixelError = 1.0;
+    std::string csv;
+    std::string plot;
 };
 struct LodCommands {
     CLI::App* build = nullptr;
     CLI::App* info = nullptr;
+    CLI::App* inspect = nullptr;
 };
 LodCommands addLodCommand(CLI::App& parent, LodOptions& options);
 int runLodBuild(const LodOptions& options);
 int runLodInfo(const LodOptions& options);
+int runLodInspect(const LodOptions& options);
 
 struct SynthCommandOptions {
     std::string kind;

@@ -51,7 +51,7 @@ int run(int argc, char** argv)
     const LodCommands lodCmds = addLodCommand(app, lodOptions);
     CLI::App* synthCmd = addSynthCommand(app, synthOptions);
     CLI::App* diffCmd = addDiffCommand(app, diffOptions);
-    for (CLI::App* cmd : {newCmd, sculptCmd, meshCmd, demoCmd, benchCmd, importCmd, exportCmd, lodCmds.build, synthCmd}) addThreadsOption(*cmd, threads);
+    for (CLI::App* cmd : {newCmd, sculptCmd, meshCmd, demoCmd, benchCmd, importCmd, exportCmd, lodCmds.build, lodCmds.inspect, synthCmd}) addThreadsOption(*cmd, threads);
     // Set after the subcommands exist: CLI11 copies the parent's footer into subcommands created later.
     app.footer("Run 'vdbclay COMMAND --help' for the options of one command.\n"
                "Exit codes: 0 success, 1 the command failed, 2 wrong command line.");
@@ -97,6 +97,7 @@ int run(int argc, char** argv)
     if (*exportCmd) return runExport(exportOptions);
     if (*lodCmds.build) return runLodBuild(lodOptions);
     if (*lodCmds.info) return runLodInfo(lodOptions);
+    if (*lodCmds.inspect) return runLodInspect(lodOptions);
     if (*synthCmd) return runSynth(synthOptions);
     if (*diffCmd) return runDiff(diffOptions);
     printError("no command given (see 'vdbclay --help')");

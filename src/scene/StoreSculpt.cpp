@@ -40,16 +40,16 @@ std::optional<std::pair<IndexCoord, IndexCoord>> brickRange(const ScriptOp& op, 
 
 } // namespace
 
-StoreSculptReport sculptStore(SceneStore& scene, const StrokeScript& script,
-                              const std::function<void(const ScriptOpReport&)>& onOp)
+std::vector<IndexCoord> bricksReachedBy(const StrokeScript& script, double voxelSize,
+                                        const std::function<std::vector<IndexCoord>()>& allBricks)
 {
     std::set<IndexCoord> bricks;
-    bool everything = false;
     for (const ScriptOp& op : script.ops) {
-        const auto range = brickRange(op, scene.voxelSize());
+        const auto range = brickRange(op, voxelSize);
         if (!range) {
-            everything = true;
-            break;
+            const std::vector<IndexCoord> all = allBricks();
+            bricks.insert(all.begin(), all.end());
+            continue;
         }
         const auto& [lo, hi] = *range;
         // The limits (checked again by runStrokeScript) keep a brush within +-250,000 voxels; this
@@ -60,11 +60,13 @@ StoreSculptReport sculptStore(SceneStore& scene, const StrokeScript& script,
             for (int32_t y = lo[1]; y <= hi[1]; ++y)
                 for (int32_t z = lo[2]; z <= hi[2]; ++z) bricks.insert({x, y, z});
     }
-    if (everything) {
-        const std::vector<IndexCoord> all = scene.brickCoords(0);
-        bricks.insert(all.begin(), all.end());
-    }
-    const std::vector<IndexCoord> order(bricks.begin(), bricks.end());
+    return {bricks.begin(), bricks.end()};
+}
+
+StoreSculptReport sculptStore(SceneStore& scene, const StrokeScript& script,
+                              const std::function<void(const ScriptOpReport&)>& onOp)
+{
+    const std::vector<IndexCoord> order = bricksReachedBy(script, scene.voxelSize(), [&] { return scene.brickCoords(0); });
     Volume part(scene.voxelSize());
     part.materials() = scene.materials();
     std::vector<std::optional<BrickRecord>> before;

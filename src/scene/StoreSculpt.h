@@ -16,6 +16,12 @@ struct StoreSculptReport {
     uint64_t bricksWritten = 0;
 };
 
+/// The level-0 bricks a script's ops can read or change (sorted): every brush's bounds, grown as the
+/// CSG kernel reads; `allBricks` is asked for the stored bricks when an op reaches everything
+/// (intersect, unbounded brushes). Throws ScriptError when an op would reach more than 5e7 bricks.
+std::vector<IndexCoord> bricksReachedBy(const StrokeScript& script, double voxelSize,
+                                        const std::function<std::vector<IndexCoord>()>& allBricks);
+
 /// Runs the script on the bricks its ops reach (all bricks for intersect and unbounded brushes) and
 /// commits the changed ones. The store must be open for writing. Marks a built LOD pyramid stale.
 StoreSculptReport sculptStore(SceneStore& scene, const StrokeScript& script,

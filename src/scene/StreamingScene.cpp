@@ -1,0 +1,385 @@
+#include "scene/StreamingScene.h"
+
+#include "scene/StoreSculpt.h"
+#include "vdb_hermite/VolumeRegions.h"
+
+#include <algorithm>
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+#include <utility>
+
+namespace vdbclay {
+
+namespace {
+
+constexpr const char* kEditCountKey = "edit_count";
+/// A resident leaf costs about this much (materials, masks, prefix counts, samples, node overhead);
+/// used to estimate a brick before it is loaded, from the leaf count the store keeps per brick.
+constexpr uint64_t kEstimatedBytesPerLeaf = 2600;
+constexpr uint64_t kEstimatedBytesPerBrick = 24 << 10; // an empty tree with one brick's nodes
+
+LeafAlignedBox brickBox(const IndexCoord& b) { return {{b[0] * kBrickEdge, b[1] * kBrickEdge, b[2] * kBrickEdge}, kBrickEdge}; }
+
+} // namespace
+
+struct StreamingScene::Impl {
+    struct Resident {
+        std::shared_ptr<Volume> volume;
+        uint64_t bytes = 0;
+        uint64_t lastUsed = 0;
+        bool dirty = false;
+    };
+
+    StreamingOptions options;
+    SceneStore scene;
+    int levels = 0;
+    std::vector<std::set<IndexCoord>> present; // per level: stored bricks and the parents of present ones
+    std::map<BrickKey, uint64_t> estimates;
+
+    mutable std::mutex mutex;
+    std::condition_variable wake, idle;
+    std::map<BrickKey, Resident> resident;
+    std::deque<BrickKey> queue;
+    std::set<BrickKey> inFlight;
+    std::set<BrickKey> wanted; // the current frame's accepted selection and fallbacks
+    uint64_t residentBytes = 0, inFlightBytes = 0;
+    uint64_t frameNumber = 0;
+    uint64_t bytesRead = 0, loads = 0, evictions = 0;
+    uint64_t edits = 0;
+    MaterialTable materials; // the scene's, with what edits defined since the last autosave
+    bool stopping = false;
+    std::vector<std::thread> workers;
+
+    Impl(const std::string& path, const StreamingOptions& o) : options(o), scene(SceneStore::open(path, o.access))
+    {
+        levels = scene.lodLevels();
+        present.resize(std::size_t(levels) + 1);
+        uint64_t largest = 0;
+        for (int k = 0; k <= levels; ++k) {
+            scene.bricks().scan(k, [&](const BrickKey& key, const BrickSummary& s) {
+                present[std::size_t(k)].insert(key.brick);
+                const uint64_t estimate = kEstimatedBytesPerBrick + kEstimatedBytesPerLeaf * s.leaves;
+                estimates[key] = estimate;
+                largest = std::max(largest, estimate);
+            });
+            if (k > 0)
+                for (const IndexCoord& b : present[std::size_t(k - 1)]) present[std::size_t(k)].insert(parentBrick(b));
+        }
+        if (options.memoryBudgetBytes < largest)
+            throw std::invalid_argument("a memory budget of " + std::to_string(options.memoryBudgetBytes >> 20) +
+                                        " MB cannot hold one brick of this scene (the largest needs about " +
+                                        std::to_string((largest + (1 << 20) - 1) >> 20) + " MB)");
+        edits = committedEdits(scene);
+        materials = scene.materials();
+        for (int i = 0; i < std::max(1, options.loaderThreads); ++i) workers.emplace_back([this] { work(); });
+    }
+
+    ~Impl()
+    {
+        {
+            std::lock_guard<std::mutex> lock(mutex);
+            stopping = true;
+        }
+        wake.notify_all();
+        for (std::thread& t : workers) t.join();
+    }
+
+    uint64_t estimateOf(const BrickKey& key) const
+    {
+        const auto it = estimates.find(key);
+        return it == estimates.end() ? kEstimatedBytesPerBrick : it->second;
+    }
+
+    /// Reads one brick from the store (no lock held).
+    std::pair<std::shared_ptr<Volume>, uint64_t> read(const BrickKey& key) const
+    {
+        auto volume = std::make_shared<Volume>(scene.voxelSize() * double(1 << key.level));
+        std::vector<std::optional<BrickRecord>> records;
+        scene.loadBricks(key.level, {key.brick}, *volume, {}, &records);
+        const uint64_t bytes = records.empty() || !records[0] ? 0 : records[0]->payload.size();
+        return {volume, bytes};
+    }
+
+    /// Evicts least recently used bricks outside `keep` until `needed` more bytes fit. Dirty bricks are
+    /// committed first (all of them, so the store never holds half an edit). Lock held.
+    bool makeRoom(uint64_t needed, std::unique_lock<std::mutex>& lock)
+    {
+        while (residentBytes + inFlightBytes + needed > options.memoryBudgetBytes) {
+            auto victim = resident.end();
+            for (auto it = resident.begin(); it != resident.end(); ++it) {
+                if (wanted.count(it->first)) continue;
+                if (victim == resident.end() || it->second.lastUsed < victim->second.lastUsed) victim = it;
+            }
+            if (victim == resident.end()) return false;
+            if (victim->second.dirty) {
+                autosaveLocked();
+                continue;
+            }
+            residentBytes -= victim->second.bytes;
+            resident.erase(victim);
+            ++evictions;
+        }
+        (void)lock;
+        return true;
+    }
+
+    void work()
+    {
+        std::unique_lock<std::mutex> lock(mutex);
+        while (true) {
+            wake.wait(lock, [&] { return stopping || !queue.empty(); });
+            if (stopping) return;
+            const BrickKey key = queue.front();
+            queue.pop_front();
+            const uint64_t estimate = estimateOf(key);
+            inFlight.insert(key);
+            inFlightBytes += estimate;
+            lock.unlock();
+            std::pair<std::shared_ptr<Volume>, uint64_t> loaded;
+            try {
+                loaded = read(key);
+            } catch (...) {
+                loaded.first.reset(); // a damaged brick shows as missing; sculpting it reports the error
+            }
+            lock.lock();
+            inFlight.erase(key);
+            inFlightBytes -= estimate;
+            if (loaded.first && !resident.count(key)) {
+                const uint64_t bytes = loaded.first->stats().memoryBytes;
+                if (wanted.count(key) && makeRoom(bytes, lock)) {
+                    resident[key] = Resident{loaded.first, bytes, frameNumber, false};
+                    residentBytes += bytes;
+                    bytesRead += loaded.second;
+                    ++loads;
+                }
+            }
+            if (queue.empty() && inFlight.empty()) idle.notify_all();
+        }
+    }
+
+    uint64_t autosaveLocked()
+    {
+        std::vector<std::pair<BrickKey, Resident*>> dirty;
+        for (auto& [key, r] : resident)
+            if (r.dirty) dirty.push_back({key, &r});
+        if (dirty.empty() && committedEdits(scene) == edits) return 0;
+        scene.bricks().begin();
+        try {
+            for (auto& [key, r] : dirty) {
+                r->volume->materials() = materials;
+                if (const std::optional<BrickRecord> record = encodeBrick(*r->volume, key.brick)) {
+                    scene.bricks().put(key, *record);
+                    present[0].insert(key.brick);
+                } else {
+                    scene.bricks().erase(key);
+                }
+            }
+            if (!dirty.empty()) {
+                scene.setMaterials(materials);
+                if (levels > 0) scene.setLod(levels, true);
+            }
+            scene.bricks().putMeta(kEditCountKey, std::to_string(edits));
+            scene.bricks().commit();
+        } catch (...) {
+            scene.bricks().rollback();
+            throw;
+        }
+        for (auto& [key, r] : dirty) r->dirty = false;
+        return dirty.size();
+    }
+};
+
+StreamingScene::StreamingScene(const std::string& path, const StreamingOptions& options)
+    : impl_(std::make_unique<Impl>(path, options))
+{
+}
+
+StreamingScene::~StreamingScene() = default;
+
+FrameReport StreamingScene::frame(const Viewer& viewer)
+{
+    Impl& s = *impl_;
+    SelectionOptions selection;
+    selection.pixelTolerance = s.options.pixelTolerance;
+    selection.voxelSize = s.scene.voxelSize();
+    selection.levels = s.levels;
+    const std::vector<SelectedBrick> selected = selectBricks(viewer, selection, s.present);
+
+    std::unique_lock<std::mutex> lock(s.mutex);
+    ++s.frameNumber;
+    FrameReport report;
+    report.requested = selected.size();
+    // What the view needs, coarse first: each selected brick's ancestors (shown while it loads), then
+    // the selection itself, as far as the budget goes.
+    std::vector<BrickKey> order;
+    std::set<BrickKey> seen;
+    for (int level = s.levels; level >= 0; --level)
+        for (const SelectedBrick& b : selected) {
+            if (b.key.level > level) continue;
+            IndexCoord c = b.key.brick;
+            for (int k = b.key.level; k < level; ++k) c = parentBrick(c);
+            const BrickKey key{level, c};
+            if (seen.insert(key).second) order.push_back(key);
+        }
+    std::set<BrickKey> accepted;
+    uint64_t cost = 0;
+    for (const BrickKey& key : order) {
+        const auto it = s.resident.find(key);
+        const uint64_t bytes = it != s.resident.end() ? it->second.bytes : s.estimateOf(key);
+        if (cost + bytes > s.options.memoryBudgetBytes) {
+            report.budgetLimited = true;
+            break;
+        }
+        cost += bytes;
+        accepted.insert(key);
+    }
+    // Dirty bricks stay wanted until saved: they hold edits.
+    for (const auto& [key, r] : s.resident)
+        if (r.dirty) accepted.insert(key);
+    s.wanted = accepted;
+    for (const SelectedBrick& b : selected) report.hits += s.resident.count(b.key);
+    for (const BrickKey& key : accepted) {
+        const auto it = s.resident.find(key);
+        if (it != s.resident.end()) it->second.lastUsed = s.frameNumber;
+    }
+    s.makeRoom(0, lock);
+    s.queue.clear();
+    for (const BrickKey& key : order)
+        if (accepted.count(key) && !s.resident.count(key) && !s.inFlight.count(key)) s.queue.push_back(key);
+    s.wake.notify_all();
+
+    // What the view shows now: each selected brick at its own level if resident, else its finest
+    // resident ancestor.
+    report.coarseComplete = true;
+    report.complete = true;
+    for (const SelectedBrick& b : selected) {
+        report.targetError = std::max(report.targetError, b.screenError);
+        IndexCoord c = b.key.brick;
+        int shown = -1;
+        for (int k = b.key.level; k <= s.levels; ++k) {
+            if (s.resident.count({k, c})) {
+                shown = k;
+                break;
+            }
+            c = parentBrick(c);
+        }
+        if (shown < 0) {
+            report.coarseComplete = false;
+            report.complete = false;
+            continue;
+        }
+        if (shown != b.key.level) report.complete = false;
+        report.screenError = std::max(report.screenError, b.screenError * double(1 << (shown - b.key.level)));
+    }
+    report.residentPerLevel.assign(std::size_t(s.levels) + 1, 0);
+    for (const auto& [key, r] : s.resident) ++report.residentPerLevel[std::size_t(key.level)];
+    report.residentBytes = s.residentBytes;
+    report.bytesRead = std::exchange(s.bytesRead, 0);
+    report.loads = std::exchange(s.loads, 0);
+    report.evictions = std::exchange(s.evictions, 0);
+    report.pending = s.queue.size() + s.inFlight.size();
+    return report;
+}
+
+void StreamingScene::waitForLoads()
+{
+    Impl& s = *impl_;
+    std::unique_lock<std::mutex> lock(s.mutex);
+    s.idle.wait(lock, [&] { return s.queue.empty() && s.inFlight.empty(); });
+}
+
+StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script)
+{
+    Impl& s = *impl_;
+    if (s.options.access == StoreAccess::ReadOnly) throw std::logic_error("sculpting a scene opened read-only");
+    const auto start = std::chrono::steady_clock::now();
+    const std::vector<IndexCoord> bricks = bricksReachedBy(script, s.scene.voxelSize(), [&] {
+        std::lock_guard<std::mutex> lock(s.mutex);
+        return std::vector<IndexCoord>(s.present[0].begin(), s.present[0].end());
+    });
+    EditReport report;
+    std::unique_lock<std::mutex> lock(s.mutex);
+    // Page in what the edit touches; those bricks stay wanted while it runs.
+    for (const IndexCoord& b : bricks) s.wanted.insert({0, b});
+    for (const IndexCoord& b : bricks) {
+        const BrickKey key{0, b};
+        if (s.resident.count(key)) continue;
+        lock.unlock();
+        auto [volume, bytesRead] = s.read(key);
+        lock.lock();
+        if (s.resident.count(key)) continue; // a loader got there first
+        const uint64_t bytes = volume->stats().memoryBytes;
+        if (!s.makeRoom(bytes, lock))
+            throw std::runtime_error("the edit reaches more bricks than the memory budget holds");
+        s.resident[key] = Impl::Resident{volume, bytes, s.frameNumber, false};
+        s.residentBytes += bytes;
+        s.bytesRead += bytesRead;
+        ++s.loads;
+        ++report.bricksPagedIn;
+    }
+    report.pageInSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    Volume work(s.scene.voxelSize());
+    work.materials() = s.materials;
+    for (const IndexCoord& b : bricks) pasteRegion(work, *s.resident.at({0, b}).volume, brickBox(b));
+    report.ops = runStrokeScript(work, script);
+    for (const IndexCoord& b : bricks) {
+        Impl::Resident& r = s.resident.at({0, b});
+        const LeafAlignedBox box = brickBox(b);
+        if (!compareRegion(*r.volume, work, box).any()) continue;
+        auto part = std::make_shared<Volume>(copyRegion(work, box));
+        const uint64_t bytes = part->stats().memoryBytes;
+        s.residentBytes = s.residentBytes - r.bytes + bytes;
+        r.volume = part;
+        r.bytes = bytes;
+        r.dirty = true;
+        ++report.bricksChanged;
+    }
+    s.materials = work.materials();
+    s.edits += script.ops.size();
+    return report;
+}
+
+uint64_t StreamingScene::autosave()
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    return impl_->autosaveLocked();
+}
+
+uint64_t StreamingScene::dirtyBricks() const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    uint64_t n = 0;
+    for (const auto& [key, r] : impl_->resident) n += r.dirty;
+    return n;
+}
+
+uint64_t StreamingScene::committedEdits(const SceneStore& scene)
+{
+    const std::optional<std::string> text = scene.bricks().meta(kEditCountKey);
+    return text ? std::stoull(*text) : 0;
+}
+
+uint64_t StreamingScene::residentBytes() const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    return impl_->residentBytes;
+}
+
+const SceneStore& StreamingScene::store() const { return impl_->scene; }
+
+Volume StreamingScene::residentLevel0() const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    Volume out(impl_->scene.voxelSize());
+    out.materials() = impl_->scene.materials();
+    for (const auto& [key, r] : impl_->resident)
+        if (key.level == 0) pasteRegion(out, *r.volume, brickBox(key.brick));
+    return out;
+}
+
+} // namespace vdbclay

@@ -1,0 +1,83 @@
+// The editing session on a store: bricks stream in by view under a memory budget (coarse first, then
+// refined, on worker threads), the least recently used ones are evicted, edits page in what they touch,
+// and autosave commits the dirty bricks in one transaction. The figures per frame (FrameReport) are the
+// API the editor and `vdbclay lod inspect` show.
+#pragma once
+
+#include "scene/SceneStore.h"
+#include "scene/ViewSelection.h"
+#include "sculpt/StrokeScript.h"
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vdbclay {
+
+struct StreamingOptions {
+    uint64_t memoryBudgetBytes = 512ull << 20; // resident bricks (volume data)
+    double pixelTolerance = 1.0;
+    int loaderThreads = 2;
+    StoreAccess access = StoreAccess::ReadOnly; // ReadWrite to edit and autosave
+};
+
+struct FrameReport {
+    std::vector<uint64_t> residentPerLevel; // bricks resident, per level
+    uint64_t residentBytes = 0;
+    uint64_t bytesRead = 0;    // payload bytes read from the store since the last frame
+    uint64_t loads = 0;        // bricks loaded since the last frame
+    uint64_t evictions = 0;    // since the last frame
+    uint64_t requested = 0;    // bricks the view asked for this frame
+    uint64_t hits = 0;         // of those, resident already
+    double hitRate() const { return requested ? double(hits) / double(requested) : 1.0; }
+    double screenError = 0.0;  // pixels: the largest error among the bricks shown (resident or fallback)
+    double targetError = 0.0;  // pixels: the largest error of the selection the view asked for
+    bool coarseComplete = false; // every region in view shows some level
+    bool complete = false;       // every region in view shows the level it asked for
+    bool budgetLimited = false;  // the selection was cut to fit the budget: the view refines less
+    uint64_t pending = 0;        // loads still queued or running
+};
+
+class StreamingScene {
+public:
+    /// Opens the store. Throws std::invalid_argument when the budget cannot hold the largest stored
+    /// brick, StoreError when the store cannot be opened.
+    StreamingScene(const std::string& path, const StreamingOptions& options);
+    ~StreamingScene();
+    StreamingScene(const StreamingScene&) = delete;
+    StreamingScene& operator=(const StreamingScene&) = delete;
+
+    /// One frame: selects the bricks the view needs, queues the missing ones (coarse first), evicts
+    /// the least recently used bricks the view does not need when over budget, and reports.
+    FrameReport frame(const Viewer& viewer);
+    /// Waits until every queued load has finished (tests, and callers that want a complete view).
+    void waitForLoads();
+
+    struct EditReport {
+        std::vector<ScriptOpReport> ops;
+        uint64_t bricksPagedIn = 0;
+        uint64_t bricksChanged = 0;
+        double pageInSeconds = 0.0;
+    };
+    /// Applies a script at level 0: the bricks its brushes reach are paged in first (loaded now if not
+    /// resident), the changed ones stay resident and dirty until autosave. Marks the LOD stale.
+    EditReport sculpt(const StrokeScript& script);
+    /// Writes every dirty brick, and the count of edits applied, in one transaction. Returns the bricks written.
+    uint64_t autosave();
+    uint64_t dirtyBricks() const;
+    /// Edits (script ops) applied since the store was made, as of the last autosave.
+    static uint64_t committedEdits(const SceneStore& scene);
+
+    uint64_t residentBytes() const;
+    const SceneStore& store() const;
+    /// The resident level-0 bricks, for checks: a volume holding them (dirty content included).
+    Volume residentLevel0() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+} // namespace vdbclay

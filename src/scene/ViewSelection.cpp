@@ -1,0 +1,125 @@
+#include "scene/ViewSelection.h"
+
+#include "scene/SceneStore.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace vdbclay {
+
+namespace {
+
+using V3 = std::array<double, 3>;
+
+V3 sub(const V3& a, const V3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+V3 cross(const V3& a, const V3& b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; }
+V3 normalized(const V3& a)
+{
+    const double l = std::sqrt(dot(a, a));
+    return {a[0] / l, a[1] / l, a[2] / l};
+}
+
+/// The view frustum as planes n . p + d >= 0 (inside), without a far plane.
+struct Frustum {
+    std::array<V3, 5> normals;
+    std::array<double, 5> offsets;
+
+    Frustum(const Viewer& v)
+    {
+        const V3 forward = normalized(sub(v.target, v.position));
+        V3 up{0.0, 1.0, 0.0};
+        if (std::fabs(dot(forward, up)) > 0.999) up = {0.0, 0.0, 1.0};
+        const V3 right = normalized(cross(forward, up));
+        const V3 trueUp = cross(right, forward);
+        const double tanY = std::tan(v.fovDegrees * M_PI / 360.0);
+        const double tanX = tanY * double(v.viewport[0]) / double(v.viewport[1]);
+        // Side planes through the eye: normals point inwards.
+        const auto plane = [&](const V3& edgeDir, const V3& along) { return normalized(cross(edgeDir, along)); };
+        const V3 dirRight{forward[0] + right[0] * tanX, forward[1] + right[1] * tanX, forward[2] + right[2] * tanX};
+        const V3 dirLeft{forward[0] - right[0] * tanX, forward[1] - right[1] * tanX, forward[2] - right[2] * tanX};
+        const V3 dirTop{forward[0] + trueUp[0] * tanY, forward[1] + trueUp[1] * tanY, forward[2] + trueUp[2] * tanY};
+        const V3 dirBottom{forward[0] - trueUp[0] * tanY, forward[1] - trueUp[1] * tanY, forward[2] - trueUp[2] * tanY};
+        normals = {forward, plane(trueUp, dirRight), plane(dirLeft, trueUp), plane(dirTop, right), plane(right, dirBottom)};
+        for (int i = 0; i < 5; ++i) offsets[std::size_t(i)] = -dot(normals[std::size_t(i)], v.position);
+        offsets[0] += 0.0; // the near plane passes through the eye
+    }
+
+    /// Whether the box may intersect the frustum (conservative).
+    bool overlaps(const V3& lo, const V3& hi) const
+    {
+        for (int i = 0; i < 5; ++i) {
+            const V3& n = normals[std::size_t(i)];
+            const V3 far{n[0] >= 0 ? hi[0] : lo[0], n[1] >= 0 ? hi[1] : lo[1], n[2] >= 0 ? hi[2] : lo[2]};
+            if (dot(n, far) + offsets[std::size_t(i)] < 0.0) return false;
+        }
+        return true;
+    }
+};
+
+double distanceToBox(const V3& p, const V3& lo, const V3& hi)
+{
+    double s = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        const double d = std::max({lo[std::size_t(i)] - p[std::size_t(i)], 0.0, p[std::size_t(i)] - hi[std::size_t(i)]});
+        s += d * d;
+    }
+    return std::sqrt(s);
+}
+
+} // namespace
+
+void validateViewer(const Viewer& v)
+{
+    const V3 d = sub(v.target, v.position);
+    if (!(dot(d, d) > 0.0)) throw std::invalid_argument("a camera's target must differ from its position");
+    if (!(v.fovDegrees > 0.0 && v.fovDegrees < 180.0)) throw std::invalid_argument("the field of view must lie in (0, 180) degrees");
+    if (v.viewport[0] <= 0 || v.viewport[1] <= 0) throw std::invalid_argument("the viewport must have a positive size");
+}
+
+std::vector<SelectedBrick> selectBricks(const Viewer& viewer, const SelectionOptions& options,
+                                        const std::vector<std::set<IndexCoord>>& stored)
+{
+    validateViewer(viewer);
+    const Frustum frustum(viewer);
+    const double pixelsPerRadian = double(viewer.viewport[1]) / (2.0 * std::tan(viewer.fovDegrees * M_PI / 360.0));
+    const int top = std::min<int>(options.levels, int(stored.size()) - 1);
+    std::vector<SelectedBrick> out;
+    if (top < 0) return out;
+    // Depth-first from each top brick; a brick whose children are not stored (a level not built there)
+    // is shown as it is.
+    std::vector<BrickKey> stack;
+    for (auto it = stored[std::size_t(top)].rbegin(); it != stored[std::size_t(top)].rend(); ++it) stack.push_back({top, *it});
+    while (!stack.empty()) {
+        const BrickKey key = stack.back();
+        stack.pop_back();
+        const double edge = double(kBrickEdge) * double(1 << key.level) * options.voxelSize;
+        const V3 lo{key.brick[0] * edge, key.brick[1] * edge, key.brick[2] * edge};
+        const V3 hi{lo[0] + edge, lo[1] + edge, lo[2] + edge};
+        if (!frustum.overlaps(lo, hi)) continue;
+        const double distance = distanceToBox(viewer.position, lo, hi);
+        const double voxel = options.voxelSize * double(1 << key.level);
+        const double error = distance > 0.0 ? voxel * pixelsPerRadian / distance : 1e30;
+        if (key.level > 0 && error > options.pixelTolerance) {
+            std::vector<BrickKey> children;
+            const std::set<IndexCoord>& below = stored[std::size_t(key.level - 1)];
+            for (int c = 0; c < 8; ++c) {
+                const IndexCoord child{2 * key.brick[0] + (c & 1), 2 * key.brick[1] + ((c >> 1) & 1), 2 * key.brick[2] + ((c >> 2) & 1)};
+                if (below.count(child)) children.push_back({key.level - 1, child});
+            }
+            if (!children.empty()) {
+                for (auto it = children.rbegin(); it != children.rend(); ++it) stack.push_back(*it);
+                continue;
+            }
+        }
+        out.push_back({key, error, distance});
+    }
+    std::stable_sort(out.begin(), out.end(), [](const SelectedBrick& a, const SelectedBrick& b) {
+        if (a.key.level != b.key.level) return a.key.level > b.key.level;
+        return a.distance < b.distance;
+    });
+    return out;
+}
+
+} // namespace vdbclay

@@ -1,0 +1,51 @@
+// Which bricks a view needs, at which level: from the coarsest level down, a brick in the view frustum
+// is refined into its (up to) eight children while its screen-space error (its level's voxel size
+// projected at its distance) exceeds the tolerance. Pure geometry: no store access, no threads.
+#pragma once
+
+#include "scene/BrickStore.h"
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <set>
+#include <vector>
+
+namespace vdbclay {
+
+struct Viewer {
+    std::array<double, 3> position{0.0, 0.0, 0.0}; // world units
+    std::array<double, 3> target{0.0, 0.0, -1.0};
+    double fovDegrees = 60.0;                      // vertical
+    std::array<int, 2> viewport{1920, 1080};       // pixels
+};
+
+struct SelectionOptions {
+    double pixelTolerance = 1.0; // screen-space error a brick may show, in pixels
+    double voxelSize = 1.0;      // level 0
+    int levels = 0;              // coarse levels available (bricks of level k: 64 voxels of 2^k * voxelSize)
+};
+
+struct SelectedBrick {
+    BrickKey key;
+    double screenError = 0.0; // pixels, at its level
+    double distance = 0.0;    // world units, eye to the brick's nearest point
+};
+
+/// The bricks to show: every brick of `stored` (per level, the bricks that exist) in the frustum, at
+/// the coarsest level whose screen-space error is within the tolerance (or level 0), coarse regions
+/// first. `stored[k]` holds level k's brick coordinates.
+std::vector<SelectedBrick> selectBricks(const Viewer& viewer, const SelectionOptions& options,
+                                        const std::vector<std::set<IndexCoord>>& stored);
+
+/// The parent brick (level k + 1) of a brick of level k.
+inline IndexCoord parentBrick(const IndexCoord& b)
+{
+    return {b[0] >> 1, b[1] >> 1, b[2] >> 1};
+}
+
+/// Throws std::invalid_argument for a viewer with a zero view direction, a field of view outside
+/// (0, 180) or an empty viewport.
+void validateViewer(const Viewer& viewer);
+
+} // namespace vdbclay
