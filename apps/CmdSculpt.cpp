@@ -3,6 +3,7 @@
 
 #include "scene/SceneStore.h"
 #include "scene/StoreSculpt.h"
+#include "scene/StreamingScene.h"
 #include "sculpt/StrokeScript.h"
 #include "vdb_hermite/VolumeIO.h"
 
@@ -24,6 +25,14 @@ CLI::App* addSculptCommand(CLI::App& parent, SculptOptions& o)
                     "Scene to write (.vdb or .vdbclay); may be IN itself (saving is atomic). Required for a .vdb input; "
                     "a store is edited in place")
         ->type_name("OUT.vdb|OUT.vdbclay");
+    cmd->add_option("--memory-budget", o.memoryBudgetMB,
+                    "Stores: keep at most this many MB of bricks resident, paging bricks in and out as the ops reach them")
+        ->type_name("MB")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--autosave-every", o.autosaveEvery,
+                    "Stores: commit the changed bricks every N ops (a crash loses at most the ops since the last commit)")
+        ->type_name("N")
+        ->check(CLI::PositiveNumber);
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text (no progress lines)");
     cmd->footer("Without --json, one progress line per op goes to stderr, e.g. \"op 3/7 remove: 120 blocks, 0.8 ms\".\n"
                 "The script is checked completely before the volume is touched. On a store only the bricks the\n"
@@ -33,12 +42,50 @@ CLI::App* addSculptCommand(CLI::App& parent, SculptOptions& o)
 
 namespace {
 
+/// Streams the script's ops through the store under a budget, committing every `autosaveEvery` ops.
+StoreSculptReport sculptStreaming(const SculptOptions& o, const StrokeScript& script,
+                                  const std::function<void(const ScriptOpReport&)>& progress)
+{
+    StreamingOptions options;
+    options.access = StoreAccess::ReadWrite;
+    options.memoryBudgetBytes = uint64_t(o.memoryBudgetMB.value_or(1024.0) * 1048576.0);
+    std::unique_ptr<StreamingScene> scene;
+    try {
+        scene = std::make_unique<StreamingScene>(o.input, options);
+    } catch (const std::invalid_argument& e) {
+        throw UsageError(e.what());
+    }
+    StoreSculptReport report;
+    const uint64_t every = o.autosaveEvery ? o.autosaveEvery : script.ops.size();
+    StrokeScript batch;
+    batch.materials = script.materials;
+    for (std::size_t i = 0; i < script.ops.size(); ++i) {
+        batch.ops.push_back(script.ops[i]);
+        if (batch.ops.size() < every && i + 1 < script.ops.size()) continue;
+        const StreamingScene::EditReport edit = scene->sculpt(batch);
+        for (ScriptOpReport r : edit.ops) {
+            r.index = report.ops.size();
+            progress(r);
+            report.ops.push_back(r);
+        }
+        report.bricksRead += edit.bricksPagedIn;
+        report.bricksWritten += scene->autosave();
+        batch.ops.clear();
+    }
+    return report;
+}
+
 int sculptStoreInPlace(const SculptOptions& o, const StrokeScript& script,
                        const std::function<void(const ScriptOpReport&)>& progress)
 {
     const auto start = std::chrono::steady_clock::now();
-    SceneStore scene = SceneStore::open(o.input, StoreAccess::ReadWrite);
-    const StoreSculptReport report = sculptStore(scene, script, progress);
+    StoreSculptReport report;
+    if (o.memoryBudgetMB || o.autosaveEvery) {
+        report = sculptStreaming(o, script, progress);
+    } else {
+        SceneStore scene = SceneStore::open(o.input, StoreAccess::ReadWrite);
+        report = sculptStore(scene, script, progress);
+    }
     const double seconds = secondsSince(start);
     if (o.json) {
         nlohmann::json ops = nlohmann::json::array();
@@ -67,6 +114,8 @@ int runSculpt(const SculptOptions& o)
     const auto start = std::chrono::steady_clock::now();
     const bool store = isStorePath(o.input);
     if (!store && o.output.empty()) throw UsageError("--output is required for a .vdb input");
+    if (!store && (o.memoryBudgetMB || o.autosaveEvery))
+        throw UsageError("--memory-budget and --autosave-every apply to stores (.vdbclay)");
     if (store && !o.output.empty() && o.output != o.input)
         throw UsageError("a store is sculpted in place: leave out --output (or make a copy with 'vdbclay import' first)");
     // Parse the script first: a typo in it should not cost a large volume load.

@@ -238,9 +238,6 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
         cost += bytes;
         accepted.insert(key);
     }
-    // Dirty bricks stay wanted until saved: they hold edits.
-    for (const auto& [key, r] : s.resident)
-        if (r.dirty) accepted.insert(key);
     s.wanted = accepted;
     for (const SelectedBrick& b : selected) report.hits += s.resident.count(b.key);
     for (const BrickKey& key : accepted) {

@@ -1,0 +1,249 @@
+// Streaming a store by view under a memory budget: which bricks a view selects, the budget held over a
+// flight, dirty bricks that survive eviction, a budget too small for one brick, and autosave against
+// SIGKILL at random moments.
+#include "scene/SceneStore.h"
+#include "scene/StoreLod.h"
+#include "scene/StreamingScene.h"
+#include "scene/Synthesize.h"
+#include "scene/ViewSelection.h"
+#include "sculpt/StrokeScript.h"
+#include "support/HermiteProbe.h"
+#include "support/TestUtil.h"
+#include "vdb_hermite/VolumeRegions.h"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <filesystem>
+#include <random>
+#include <thread>
+
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+using namespace vdbclay;
+using namespace vdbclay::test;
+
+namespace {
+
+#ifdef VDBCLAY_CLI
+constexpr const char* kCli = VDBCLAY_CLI;
+#else
+constexpr const char* kCli = "";
+#endif
+
+/// A terrain store of 256 voxels with its levels of detail.
+std::string makeTerrain(const TempDir& dir, const std::string& name = "t.vdbclay")
+{
+    SynthOptions o;
+    o.kind = SynthKind::Terrain;
+    o.extent = 256;
+    o.seed = 6;
+    const std::string path = dir.file(name);
+    synthesizeStore(o, path);
+    SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
+    buildStoreLod(scene, 3);
+    return path;
+}
+
+Viewer lookingAt(const std::array<double, 3>& from, const std::array<double, 3>& to)
+{
+    Viewer v;
+    v.position = from;
+    v.target = to;
+    return v;
+}
+
+std::string stampScript(int count, uint64_t seed, double from = 8.0, double to = 248.0)
+{
+    std::mt19937 rng{unsigned(seed)};
+    std::uniform_real_distribution<double> xz(from, to), y(20.0, 50.0), r(2.0, 6.0);
+    nlohmann::json ops = nlohmann::json::array();
+    for (int i = 0; i < count; ++i)
+        ops.push_back({{"mode", i % 3 == 2 ? "remove" : "add"}, {"brush", {{"shape", "sphere"}, {"radius", r(rng)}}},
+                       {"at", {xz(rng), y(rng), xz(rng)}}});
+    return nlohmann::json{{"ops", ops}}.dump();
+}
+
+} // namespace
+
+TEST_CASE("a view selects coarse bricks far away and fine ones close by, only in its frustum", "[streaming]")
+{
+    std::vector<std::set<IndexCoord>> stored(3);
+    for (int x = 0; x < 8; ++x)
+        for (int z = 0; z < 8; ++z) stored[0].insert({x, 0, z});
+    for (const IndexCoord& b : stored[0]) stored[1].insert(parentBrick(b));
+    for (const IndexCoord& b : stored[1]) stored[2].insert(parentBrick(b));
+    SelectionOptions options;
+    options.levels = 2;
+    options.pixelTolerance = 1.0;
+    // Far away: the coarsest level everywhere.
+    const auto far = selectBricks(lookingAt({256, 30, 200000}, {256, 30, 256}), options, stored);
+    REQUIRE(!far.empty());
+    for (const SelectedBrick& b : far) CHECK(b.key.level == 2);
+    // Close by: level 0 next to the eye, every selected brick within the tolerance or at level 0.
+    const auto near = selectBricks(lookingAt({40, 30, 40}, {400, 30, 400}), options, stored);
+    bool fine = false;
+    for (const SelectedBrick& b : near) {
+        fine = fine || b.key.level == 0;
+        CHECK((b.key.level == 0 || b.screenError <= options.pixelTolerance));
+    }
+    CHECK(fine);
+    // Bricks behind the eye are not selected; each region is selected at one level only.
+    for (const SelectedBrick& b : near) {
+        const double edge = 64.0 * double(1 << b.key.level);
+        CHECK((b.key.brick[0] + 1) * edge >= 40.0 - 1e-9);
+    }
+    std::set<IndexCoord> covered;
+    for (const SelectedBrick& b : near) {
+        const int scale = 1 << b.key.level;
+        for (int x = 0; x < scale; ++x)
+            for (int z = 0; z < scale; ++z) {
+                const IndexCoord fine0{b.key.brick[0] * scale + x, 0, b.key.brick[2] * scale + z};
+                if (stored[0].count(fine0)) CHECK(covered.insert(fine0).second);
+            }
+    }
+    CHECK_THROWS_AS(selectBricks(lookingAt({1, 2, 3}, {1, 2, 3}), options, stored), std::invalid_argument);
+}
+
+TEST_CASE("streaming holds the memory budget over a flight, and a large budget refines the view", "[streaming]")
+{
+    TempDir dir;
+    const std::string path = makeTerrain(dir);
+    for (const uint64_t budgetMB : {2ull, 64ull}) {
+        StreamingOptions options;
+        options.memoryBudgetBytes = budgetMB << 20;
+        StreamingScene scene(path, options);
+        bool complete = false, limited = false, coarse = false;
+        for (int i = 0; i < 24; ++i) {
+            const double a = i / 24.0 * 3.14159;
+            const FrameReport r = scene.frame(lookingAt({128 + 150 * std::cos(a), 90, 128 + 150 * std::sin(a)}, {128, 30, 128}));
+            scene.waitForLoads();
+            const FrameReport settled = scene.frame(lookingAt({128 + 150 * std::cos(a), 90, 128 + 150 * std::sin(a)}, {128, 30, 128}));
+            INFO("budget " << budgetMB << " MB, frame " << i);
+            CHECK(r.residentBytes <= options.memoryBudgetBytes);
+            CHECK(settled.residentBytes <= options.memoryBudgetBytes);
+            CHECK(scene.residentBytes() <= options.memoryBudgetBytes);
+            complete = complete || settled.complete;
+            limited = limited || settled.budgetLimited;
+            coarse = coarse || settled.coarseComplete;
+        }
+        CHECK(coarse);
+        if (budgetMB == 2) CHECK(limited);
+        if (budgetMB == 64) CHECK(complete);
+    }
+    // What streams in is what the store holds.
+    StreamingOptions big;
+    big.memoryBudgetBytes = 256ull << 20;
+    StreamingScene scene(path, big);
+    scene.frame(lookingAt({128, 40, 128}, {129, 30, 128}));
+    scene.waitForLoads();
+    const Volume resident = scene.residentLevel0();
+    const Volume stored = loadScene(path);
+    for (const IndexCoord& b : occupiedBoxes(resident, kBrickEdge))
+        CHECK_FALSE(compareRegion(resident, stored, {b, kBrickEdge}).any());
+}
+
+TEST_CASE("a budget smaller than one brick is a clear error", "[streaming]")
+{
+    TempDir dir;
+    const std::string path = makeTerrain(dir);
+    StreamingOptions options;
+    options.memoryBudgetBytes = 64 << 10;
+    try {
+        StreamingScene scene(path, options);
+        FAIL("opened with a 64 KB budget");
+    } catch (const std::invalid_argument& e) {
+        CHECK(std::string(e.what()).find("cannot hold one brick") != std::string::npos);
+    }
+}
+
+TEST_CASE("edits page bricks in, and dirty bricks evicted for the view lose nothing", "[streaming]")
+{
+    TempDir dir;
+    const std::string path = makeTerrain(dir);
+    Volume reference = loadScene(path);
+    const StrokeScript script = parseStrokeScript(stampScript(30, 3, 8.0, 50.0)); // one corner of bricks
+    {
+        StreamingOptions options;
+        options.access = StoreAccess::ReadWrite;
+        options.memoryBudgetBytes = 6 << 20; // a few bricks: the flight below evicts the edited ones
+        StreamingScene scene(path, options);
+        const StreamingScene::EditReport edit = scene.sculpt(script);
+        CHECK(edit.bricksPagedIn > 0);
+        CHECK(edit.bricksChanged > 0);
+        CHECK(scene.dirtyBricks() > 0);
+        uint64_t evictions = 0;
+        for (int i = 0; i < 12; ++i) {
+            evictions += scene.frame(lookingAt({400.0, 60, 100.0 + 10 * i}, {200, 30, 200})).evictions;
+            scene.waitForLoads();
+        }
+        evictions += scene.frame(lookingAt({400.0, 60, 220.0}, {200, 30, 200})).evictions;
+        CHECK(evictions > 0);
+        // Evicting an edited brick committed every edit first (the store never holds half an edit).
+        CHECK(StreamingScene::committedEdits(scene.store()) == script.ops.size());
+        scene.autosave();
+        CHECK(scene.dirtyBricks() == 0);
+        CHECK(StreamingScene::committedEdits(scene.store()) == script.ops.size());
+    }
+    runStrokeScript(reference, script);
+    CHECK(identical(loadScene(path), reference));
+    SceneStore scene = SceneStore::open(path, StoreAccess::ReadOnly);
+    CHECK(scene.lodStale());
+}
+
+TEST_CASE("SIGKILL at any moment loses at most the edits since the last autosave", "[streaming][kill]")
+{
+    if (std::string(kCli).empty()) return; // no CLI in this build
+    TempDir dir;
+    const std::string original = makeTerrain(dir, "original.vdbclay");
+    constexpr int kOps = 24, kEvery = 3;
+    writeText(dir.file("ops.json"), stampScript(kOps, 8));
+    const StrokeScript script = parseStrokeScript(stampScript(kOps, 8));
+    // The scene after each number of ops.
+    std::vector<Volume> after;
+    after.push_back(loadScene(original));
+    for (int i = 0; i < kOps; ++i) {
+        Volume next = after.back().clone();
+        StrokeScript one;
+        one.ops = {script.ops[std::size_t(i)]};
+        runStrokeScript(next, one);
+        after.push_back(std::move(next));
+    }
+    std::mt19937 rng(12);
+    int killed = 0, finished = 0;
+    std::set<uint64_t> seenCommitted;
+    for (int trial = 0; trial < 50; ++trial) {
+        const std::string path = dir.file("victim.vdbclay");
+        std::filesystem::copy_file(original, path, std::filesystem::copy_options::overwrite_existing);
+        const pid_t child = ::fork();
+        if (child == 0) {
+            const int devnull = ::open("/dev/null", O_WRONLY);
+            ::dup2(devnull, 1), ::dup2(devnull, 2);
+            ::execl(kCli, kCli, "sculpt", path.c_str(), dir.file("ops.json").c_str(), "--autosave-every",
+                    std::to_string(kEvery).c_str(), "--memory-budget", "16", static_cast<char*>(nullptr));
+            ::_exit(127);
+        }
+        std::this_thread::sleep_for(std::chrono::microseconds(rng() % 400000));
+        ::kill(child, SIGKILL);
+        int status = 0;
+        ::waitpid(child, &status, 0);
+        (WIFSIGNALED(status) ? killed : finished)++;
+        if (WIFEXITED(status)) REQUIRE(WEXITSTATUS(status) == 0);
+        // The store reopens, for writing too, and holds the scene after the edits it committed.
+        { SceneStore writable = SceneStore::open(path, StoreAccess::ReadWrite); }
+        const SceneStore scene = SceneStore::open(path, StoreAccess::ReadOnly);
+        const uint64_t committed = StreamingScene::committedEdits(scene);
+        INFO("trial " << trial << ": " << committed << " edits committed");
+        REQUIRE(committed <= uint64_t(kOps));
+        CHECK((committed % kEvery == 0 || committed == uint64_t(kOps)));
+        seenCommitted.insert(committed);
+        REQUIRE(identical(scene.loadLevel(0), after[committed]));
+    }
+    CHECK(killed >= 25);
+    CHECK(seenCommitted.size() >= 3); // the kills landed at different moments
+}
