@@ -9,6 +9,8 @@
 #include "support/TestUtil.h"
 #include "wavelet/Haar.h"
 #include "wavelet/LodPyramid.h"
+#include "wavelet/MixedLevels.h"
+#include "support/HermiteProbe.h"
 
 #include <catch2/catch.hpp>
 #include <tbb/global_control.h>
@@ -272,4 +274,59 @@ TEST_CASE("coarse meshes follow an edit through the pyramid's update", "[wavelet
     MeshChunkSet rebuilt(options);
     rebuilt.rebuild(pyramid.coarseVolume(v, level));
     CHECK(identical(chunks, rebuilt));
+}
+
+namespace {
+
+/// Meshes a mixed-level volume with every mesher and checks it is closed.
+void requireClosedAtMixedLevels(const Volume& v, const LodPyramid& pyramid, const LevelOfBlock& levelOf, const char* what)
+{
+    const Volume mixed = mixedLevelVolume(v, pyramid, levelOf);
+    REQUIRE(checkInvariants(mixed).empty());
+    CHECK(!changedBlocks(mixed, v).empty()); // the coarse regions show another surface than level 0
+    for (const auto& [kind, width] : {std::pair{MesherKind::CubicalMarchingSquares, 8}, std::pair{MesherKind::CubicalMarchingSquares, 1},
+                                      std::pair{MesherKind::MarchingCubes, 1}}) {
+        MeshOptions options;
+        options.kind = kind;
+        options.maxCellWidth = width;
+        const Mesh mesh = meshVolume(mixed, options);
+        const MeshTopology t = analyzeTopology(mesh, kMergeDistanceVoxels * v.voxelSize());
+        INFO(what << ", " << mesherName(kind) << " cells " << width << ": " << t.boundaryEdges << " boundary, "
+                  << t.nonManifoldEdges << " non-manifold, " << t.pinchedVertices << " pinched");
+        CHECK(mesh.triangleCount() > 0);
+        CHECK(t.watertight());
+    }
+}
+
+} // namespace
+
+TEST_CASE("a scene shown at mixed levels meshes watertight", "[wavelet][lod][mixed]")
+{
+    Volume v(1.0);
+    const MaterialId red = defineMaterial(v, "red", 0.5f);
+    apply(v, CsgMode::Add, sphere(22.0), at(Vec3d(0.3, -0.4, 0.2)));
+    // A box whose sharp edges and corners cross level boundaries, and a second material against it.
+    apply(v, CsgMode::Add, box(Vec3d(12.0, 9.0, 14.0)), at(Vec3d(24.0, 3.0, 1.0), Vec3d(0.0, 30.0, 0.0)));
+    apply(v, CsgMode::Add, box(Vec3d(10.0, 10.0, 10.0)), at(Vec3d(24.0, -16.0, 1.0)), red);
+    LodPyramid pyramid(3);
+    pyramid.build(v);
+
+    SECTION("a checkerboard of levels 0 and 1, and of all four levels")
+    {
+        requireClosedAtMixedLevels(v, pyramid, [](const BlockOrigin& o) { return ((o[0] + o[1] + o[2]) / 8 & 1) ? 1 : 0; },
+                                   "checkerboard 0/1");
+        requireClosedAtMixedLevels(v, pyramid, [](const BlockOrigin& o) { return std::abs((o[0] / 8) + 2 * (o[1] / 8) + (o[2] / 8)) % 4; },
+                                   "levels 0 to 3");
+    }
+    SECTION("a level boundary across the sharp edges and the material boundary")
+    {
+        // x >= 24 at level 2: the plane cuts the box's edges and the red box's interface with it.
+        requireClosedAtMixedLevels(v, pyramid, [](const BlockOrigin& o) { return o[0] >= 24 ? 2 : 0; }, "plane x = 24");
+        requireClosedAtMixedLevels(v, pyramid, [](const BlockOrigin& o) { return o[1] >= -8 ? 0 : 3; }, "plane y = -8");
+    }
+    SECTION("one level everywhere is that level's surface")
+    {
+        const Volume allFine = mixedLevelVolume(v, pyramid, [](const BlockOrigin&) { return 0; });
+        CHECK(changedBlocks(allFine, v).empty());
+    }
 }
