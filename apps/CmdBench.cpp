@@ -23,6 +23,8 @@ CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& o)
                 "        sharp and thin shapes vs tools::volumeToMesh (adaptivity 0 and 0.5) on level sets\n"
                 "wavelet integer Haar build and level-0 extraction of 128^3, 256^3, 512^3 cubes vs seed 001\n"
                 "        Table 1 and this machine's copy bandwidth; the sparse pyramid vs tools::MultiResGrid\n"
+                "stream  a terrain store 4x the memory budget, flown over at 90 Hz with strokes: peak RSS, time to\n"
+                "        coarse and refined views, stroke latency, read rate vs the disk, bytes per voxel^2 of surface\n"
                 "Build in Release for meaningful figures; docs/BENCHMARKS.md has measured tables.");
     return cmd;
 }
@@ -31,7 +33,7 @@ int runBenchCommand(const BenchCommandOptions& o)
 {
     bool known = false;
     for (const auto& n : bench::benchNames()) known = known || n == o.which;
-    if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory, io, mesh or wavelet)");
+    if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory, io, mesh, wavelet or stream)");
     return bench::runBench(o.which, o.json, o.quick);
 }
 

@@ -8,7 +8,7 @@
 
 namespace vdbclay::bench {
 
-std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet"}; }
+std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream"}; }
 
 int runBench(const std::string& which, bool json, bool quick)
 {
@@ -18,7 +18,8 @@ int runBench(const std::string& which, bool json, bool quick)
     if (which == "io") return benchIo(json, quick);
     if (which == "mesh") return benchMesh(json, quick);
     if (which == "wavelet") return benchWavelet(json, quick);
-    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh or wavelet)");
+    if (which == "stream") return benchStream(json, quick);
+    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet or stream)");
 }
 
 } // namespace vdbclay::bench

@@ -7,7 +7,7 @@
 
 namespace vdbclay::bench {
 
-/// "csg", "memory", "io", "mesh", "wavelet".
+/// "csg", "memory", "io", "mesh", "wavelet", "stream".
 std::vector<std::string> benchNames();
 
 /// Runs one benchmark; `quick` picks the small sizes used in CI. Prints to stdout and returns the exit

@@ -8,5 +8,6 @@ int benchMemory(bool json, bool quick);
 int benchIo(bool json, bool quick);
 int benchMesh(bool json, bool quick);
 int benchWavelet(bool json, bool quick);
+int benchStream(bool json, bool quick);
 
 } // namespace vdbclay::bench

@@ -21,7 +21,7 @@ constexpr const char* kEditCountKey = "edit_count";
 /// A resident leaf costs about this much (materials, masks, prefix counts, samples, node overhead);
 /// used to estimate a brick before it is loaded, from the leaf count the store keeps per brick.
 constexpr uint64_t kEstimatedBytesPerLeaf = 2600;
-constexpr uint64_t kEstimatedBytesPerBrick = 24 << 10; // an empty tree with one brick's nodes
+constexpr uint64_t kEstimatedBytesPerBrick = 4 << 10; // its share of the 128^3 nodes above its leaves
 
 LeafAlignedBox brickBox(const IndexCoord& b) { return {{b[0] * kBrickEdge, b[1] * kBrickEdge, b[2] * kBrickEdge}, kBrickEdge}; }
 
@@ -29,7 +29,6 @@ LeafAlignedBox brickBox(const IndexCoord& b) { return {{b[0] * kBrickEdge, b[1] 
 
 struct StreamingScene::Impl {
     struct Resident {
-        std::shared_ptr<Volume> volume;
         uint64_t bytes = 0;
         uint64_t lastUsed = 0;
         bool dirty = false;
@@ -40,6 +39,8 @@ struct StreamingScene::Impl {
     int levels = 0;
     std::vector<std::set<IndexCoord>> present; // per level: stored bricks and the parents of present ones
     std::map<BrickKey, uint64_t> estimates;
+    // The resident bricks of each level share one tree, so the nodes above the leaves cost little per brick.
+    std::vector<Volume> levelVolumes;
 
     mutable std::mutex mutex;
     std::condition_variable wake, idle;
@@ -76,6 +77,10 @@ struct StreamingScene::Impl {
                                         std::to_string((largest + (1 << 20) - 1) >> 20) + " MB)");
         edits = committedEdits(scene);
         materials = scene.materials();
+        for (int k = 0; k <= levels; ++k) {
+            levelVolumes.emplace_back(scene.voxelSize() * double(1 << k));
+            levelVolumes.back().materials() = materials;
+        }
         for (int i = 0; i < std::max(1, options.loaderThreads); ++i) workers.emplace_back([this] { work(); });
     }
 
@@ -105,6 +110,18 @@ struct StreamingScene::Impl {
         return {volume, bytes};
     }
 
+    /// Puts a loaded brick into its level's tree and accounts for it. Lock held.
+    void install(const BrickKey& key, const Volume& part, uint64_t bytesReadFromStore)
+    {
+        Volume& level = levelVolumes[std::size_t(key.level)];
+        pasteRegion(level, part, brickBox(key.brick));
+        const uint64_t bytes = regionMemoryBytes(level, brickBox(key.brick));
+        resident[key] = Resident{bytes, frameNumber, false};
+        residentBytes += bytes;
+        bytesRead += bytesReadFromStore;
+        ++loads;
+    }
+
     /// Evicts least recently used bricks outside `keep` until `needed` more bytes fit. Dirty bricks are
     /// committed first (all of them, so the store never holds half an edit). Lock held.
     bool makeRoom(uint64_t needed, std::unique_lock<std::mutex>& lock)
@@ -121,6 +138,7 @@ struct StreamingScene::Impl {
                 continue;
             }
             residentBytes -= victim->second.bytes;
+            fillRegion(levelVolumes[std::size_t(victim->first.level)], brickBox(victim->first.brick), kEmptyMaterial);
             resident.erase(victim);
             ++evictions;
         }
@@ -150,13 +168,8 @@ struct StreamingScene::Impl {
             inFlight.erase(key);
             inFlightBytes -= estimate;
             if (loaded.first && !resident.count(key)) {
-                const uint64_t bytes = loaded.first->stats().memoryBytes;
-                if (wanted.count(key) && makeRoom(bytes, lock)) {
-                    resident[key] = Resident{loaded.first, bytes, frameNumber, false};
-                    residentBytes += bytes;
-                    bytesRead += loaded.second;
-                    ++loads;
-                }
+                const uint64_t bytes = regionMemoryBytes(*loaded.first, brickBox(key.brick));
+                if (wanted.count(key) && makeRoom(bytes, lock)) install(key, *loaded.first, loaded.second);
             }
             if (queue.empty() && inFlight.empty()) idle.notify_all();
         }
@@ -167,12 +180,13 @@ struct StreamingScene::Impl {
         std::vector<std::pair<BrickKey, Resident*>> dirty;
         for (auto& [key, r] : resident)
             if (r.dirty) dirty.push_back({key, &r});
+        Volume& fine = levelVolumes[0];
+        fine.materials() = materials;
         if (dirty.empty() && committedEdits(scene) == edits) return 0;
         scene.bricks().begin();
         try {
             for (auto& [key, r] : dirty) {
-                r->volume->materials() = materials;
-                if (const std::optional<BrickRecord> record = encodeBrick(*r->volume, key.brick)) {
+                if (const std::optional<BrickRecord> record = encodeBrick(fine, key.brick)) {
                     scene.bricks().put(key, *record);
                     present[0].insert(key.brick);
                 } else {
@@ -301,7 +315,9 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script)
     });
     EditReport report;
     std::unique_lock<std::mutex> lock(s.mutex);
-    // Page in what the edit touches; those bricks stay wanted while it runs.
+    // Page in what the edit touches: while it runs only its bricks are wanted, so the view's may make
+    // room (the next frame asks for them again).
+    s.wanted.clear();
     for (const IndexCoord& b : bricks) s.wanted.insert({0, b});
     for (const IndexCoord& b : bricks) {
         const BrickKey key{0, b};
@@ -310,28 +326,24 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script)
         auto [volume, bytesRead] = s.read(key);
         lock.lock();
         if (s.resident.count(key)) continue; // a loader got there first
-        const uint64_t bytes = volume->stats().memoryBytes;
-        if (!s.makeRoom(bytes, lock))
+        if (!s.makeRoom(regionMemoryBytes(*volume, brickBox(b)), lock))
             throw std::runtime_error("the edit reaches more bricks than the memory budget holds");
-        s.resident[key] = Impl::Resident{volume, bytes, s.frameNumber, false};
-        s.residentBytes += bytes;
-        s.bytesRead += bytesRead;
-        ++s.loads;
+        s.install(key, *volume, bytesRead);
         ++report.bricksPagedIn;
     }
     report.pageInSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     Volume work(s.scene.voxelSize());
     work.materials() = s.materials;
-    for (const IndexCoord& b : bricks) pasteRegion(work, *s.resident.at({0, b}).volume, brickBox(b));
+    Volume& fine = s.levelVolumes[0];
+    for (const IndexCoord& b : bricks) pasteRegion(work, fine, brickBox(b));
     report.ops = runStrokeScript(work, script);
     for (const IndexCoord& b : bricks) {
         Impl::Resident& r = s.resident.at({0, b});
         const LeafAlignedBox box = brickBox(b);
-        if (!compareRegion(*r.volume, work, box).any()) continue;
-        auto part = std::make_shared<Volume>(copyRegion(work, box));
-        const uint64_t bytes = part->stats().memoryBytes;
+        if (!compareRegion(fine, work, box).any()) continue;
+        pasteRegion(fine, work, box);
+        const uint64_t bytes = regionMemoryBytes(fine, box);
         s.residentBytes = s.residentBytes - r.bytes + bytes;
-        r.volume = part;
         r.bytes = bytes;
         r.dirty = true;
         ++report.bricksChanged;
@@ -372,10 +384,8 @@ const SceneStore& StreamingScene::store() const { return impl_->scene; }
 Volume StreamingScene::residentLevel0() const
 {
     std::lock_guard<std::mutex> lock(impl_->mutex);
-    Volume out(impl_->scene.voxelSize());
-    out.materials() = impl_->scene.materials();
-    for (const auto& [key, r] : impl_->resident)
-        if (key.level == 0) pasteRegion(out, *r.volume, brickBox(key.brick));
+    Volume out = impl_->levelVolumes[0].clone();
+    out.materials() = impl_->materials;
     return out;
 }
 

@@ -80,6 +80,7 @@ Recipe terrain(const SynthOptions& o)
     tp.wavelength = n * 0.25 * vs;
     tp.octaves = 5;
     tp.seed = o.seed;
+    tp.spacing = vs;
     auto ground = std::make_shared<TerrainField>(tp);
     r.parts.push_back(ground);
     // The ground is cut to the scene's square and given a flat bottom inside its lowest bricks, so the

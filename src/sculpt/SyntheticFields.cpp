@@ -1,6 +1,8 @@
 #include "sculpt/SyntheticFields.h"
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <cmath>
 
 namespace vdbclay {
@@ -17,11 +19,11 @@ uint64_t mix(uint64_t h)
     return h;
 }
 
-/// A lattice value in [-1, 1].
+/// A lattice value in [-1, 1]: one multiply-xorshift hash of the coordinates and the seed.
 double lattice(int64_t x, int64_t y, int64_t z, uint64_t seed)
 {
-    const uint64_t h = mix(seed ^ mix(uint64_t(x) * 0x9E3779B97F4A7C15ull ^ mix(uint64_t(y) * 0xC2B2AE3D27D4EB4Full ^
-                                                                              mix(uint64_t(z) * 0x165667B19E3779F9ull))));
+    const uint64_t h = mix(uint64_t(x) * 0x9E3779B97F4A7C15ull + uint64_t(y) * 0xC2B2AE3D27D4EB4Full +
+                           uint64_t(z) * 0x165667B19E3779F9ull + seed * 0xD6E8FEB86659FD93ull);
     return double(h >> 11) * (2.0 / 9007199254740992.0) - 1.0;
 }
 
@@ -54,6 +56,8 @@ double valueNoise3(double x, double y, double z, uint64_t seed)
 
 TerrainField::TerrainField(const TerrainParams& params) : params_(params)
 {
+    static std::atomic<uint64_t> fields{0};
+    id_ = ++fields;
     double slope = 0.0, amplitude = params.amplitude, wavelength = params.wavelength;
     for (int i = 0; i < params.octaves; ++i) {
         amplitudeSum_ += amplitude;
@@ -61,18 +65,43 @@ TerrainField::TerrainField(const TerrainParams& params) : params_(params)
         amplitude *= 0.5;
         wavelength *= 0.5;
     }
+    // Interpolating the heights between lattice columns keeps each axis's slope within the noise's: the
+    // gradient grows by at most sqrt(2).
+    slope *= std::sqrt(2.0);
     slopeNorm_ = std::sqrt(1.0 + slope * slope);
+}
+
+double TerrainField::latticeHeight(int64_t i, int64_t j) const
+{
+    // The CSG kernel evaluates whole columns of voxels: a small per-thread cache of column heights
+    // spares the octaves of noise for all but the first voxel of a column.
+    struct Entry {
+        uint64_t field = 0;
+        int64_t i = 0, j = 0;
+        double height = 0.0;
+    };
+    thread_local std::array<Entry, 8192> cache{};
+    Entry& e = cache[std::size_t((uint64_t(i) * 0x9E3779B1u + uint64_t(j) * 0x85EBCA77u) & 8191u)];
+    if (e.field == id_ && e.i == i && e.j == j) return e.height;
+    const double x = double(i) * params_.spacing, z = double(j) * params_.spacing;
+    double h = params_.baseHeight, amplitude = params_.amplitude, wavelength = params_.wavelength;
+    for (int octave = 0; octave < params_.octaves; ++octave) {
+        h += amplitude * valueNoise2(x / wavelength, z / wavelength, params_.seed + uint64_t(octave));
+        amplitude *= 0.5;
+        wavelength *= 0.5;
+    }
+    e = Entry{id_, i, j, h};
+    return h;
 }
 
 double TerrainField::height(double x, double z) const
 {
-    double h = params_.baseHeight, amplitude = params_.amplitude, wavelength = params_.wavelength;
-    for (int i = 0; i < params_.octaves; ++i) {
-        h += amplitude * valueNoise2(x / wavelength, z / wavelength, params_.seed + uint64_t(i));
-        amplitude *= 0.5;
-        wavelength *= 0.5;
-    }
-    return h;
+    const double u = x / params_.spacing, v = z / params_.spacing;
+    const double fu = std::floor(u), fv = std::floor(v);
+    const auto i = int64_t(fu), j = int64_t(fv);
+    const double a = u - fu, b = v - fv;
+    return (1.0 - a) * ((1.0 - b) * latticeHeight(i, j) + b * latticeHeight(i, j + 1)) +
+           a * ((1.0 - b) * latticeHeight(i + 1, j) + b * latticeHeight(i + 1, j + 1));
 }
 
 double TerrainField::distance(const Vec3d& p) const

@@ -24,9 +24,11 @@ struct TerrainParams {
     double wavelength = 16.0;     // of the first octave
     int octaves = 4;              // each of half the amplitude and wavelength
     uint64_t seed = 1;
+    double spacing = 1.0;         // heights are sampled on columns this far apart and interpolated
 };
 
-/// The solid below a height field of fBm value noise: (y - h(x, z)) / sqrt(1 + L^2), L bounding |grad h|.
+/// The solid below a height field of fBm value noise, sampled on a lattice of columns and interpolated
+/// bilinearly between them: (y - h(x, z)) / sqrt(1 + L^2), L bounding |grad h|.
 class TerrainField : public SdfField {
 public:
     explicit TerrainField(const TerrainParams& params);
@@ -38,7 +40,10 @@ public:
     double minHeight() const { return params_.baseHeight - amplitudeSum_; }
 
 private:
+    double latticeHeight(int64_t i, int64_t j) const;
+
     TerrainParams params_;
+    uint64_t id_; // tells this field's entries in the per-thread height cache from another's
     double amplitudeSum_ = 0.0;
     double slopeNorm_ = 1.0;
 };

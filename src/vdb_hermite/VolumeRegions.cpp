@@ -75,6 +75,18 @@ void fillRegion(Volume& volume, const LeafAlignedBox& box, MaterialId material)
     pruneNodes(dst, lowers);
 }
 
+uint64_t regionMemoryBytes(const Volume& volume, const LeafAlignedBox& box)
+{
+    checkBox(box);
+    const HermiteTree& tree = volume.impl().grid->constTree();
+    uint64_t bytes = 0;
+    forEachBlock(box, [&](const Coord& o) {
+        if (const HermiteLeaf* leaf = tree.probeConstLeaf(o)) bytes += leaf->memUsage();
+    });
+    const double lowerShare = double(box.edge) * box.edge * box.edge / (double(kLowerDim) * kLowerDim * kLowerDim);
+    return bytes + uint64_t(lowerShare * double(sizeof(HermiteLower)));
+}
+
 std::optional<MaterialId> uniformMaterial(const Volume& volume, const LeafAlignedBox& box)
 {
     checkBox(box);

@@ -30,6 +30,10 @@ void pasteRegion(Volume& volume, const Volume& part, const LeafAlignedBox& box);
 /// Fills the box with one material (0 = empty), dropping its leaves.
 void fillRegion(Volume& volume, const LeafAlignedBox& box, MaterialId material);
 
+/// Memory the box takes in its volume: its leaves (with their samples), and a share of the 128^3 nodes
+/// above them; the volume's upper nodes, shared by thousands of boxes, are not counted.
+uint64_t regionMemoryBytes(const Volume& volume, const LeafAlignedBox& box);
+
 /// The material filling the whole box when it holds no leaf (0 = empty), or nullopt.
 std::optional<MaterialId> uniformMaterial(const Volume& volume, const LeafAlignedBox& box);
 
