@@ -323,6 +323,92 @@ TEST_CASE("cli: bad input fails cleanly with a message", "[cli]")
     }
 }
 
+TEST_CASE("cli: import, lod, mesh --lod, sculpt, export and diff on a store", "[cli][store]")
+{
+    TempDir dir;
+    REQUIRE(runCli(dir, "new s.vdb --shape sphere --size 40").exitCode == 0);
+    const json imported = parseJsonOutput(runCli(dir, "import s.vdb -o s.vdbclay --json"));
+    CHECK(imported["form"] == "store");
+    const json info = parseJsonOutput(runCli(dir, "info s.vdbclay --json"));
+    CHECK(info["form"] == "store");
+    CHECK(info["leaf_count"].get<uint64_t>() == loadVolume(dir.file("s.vdb")).stats().leafCount);
+
+    const json built = parseJsonOutput(runCli(dir, "lod build s.vdbclay --levels 2 --json"));
+    REQUIRE(built["levels"].size() == 3);
+    const json levels = parseJsonOutput(runCli(dir, "lod info s.vdbclay --json"));
+    REQUIRE(levels["levels"].size() == 3);
+    for (int k = 0; k < 3; ++k) {
+        CHECK(levels["levels"][k]["level"] == k);
+        for (const char* key : {"bricks", "leaves", "bytes"}) CHECK(levels["levels"][k][key].get<uint64_t>() > 0);
+    }
+    CHECK(levels["levels"][2]["leaves"].get<uint64_t>() < levels["levels"][0]["leaves"].get<uint64_t>());
+    for (const char* input : {"s.vdbclay", "s.vdb"}) {
+        const json mesh = parseJsonOutput(runCli(dir, std::string("mesh ") + input + " --lod 2 -o l2.obj --json"));
+        CHECK(mesh["lod"] == 2);
+        CHECK(mesh["watertight"] == true);
+    }
+    checkCleanFailure(runCli(dir, "mesh s.vdbclay --lod 5 -o l5.obj"));
+
+    writeText(dir.file("stamp.json"), R"({"ops": [{"mode": "remove", "brush": {"shape": "sphere", "radius": 9}, "at": [40, 0, 0]}]})");
+    const json sculpted = parseJsonOutput(runCli(dir, "sculpt s.vdbclay stamp.json --json"));
+    CHECK(sculpted["bricks_written"].get<uint64_t>() > 0);
+    CHECK(sculpted["bricks_read"].get<uint64_t>() < info["bricks"].get<uint64_t>());
+    REQUIRE(runCli(dir, "sculpt s.vdb stamp.json -o s2.vdb").exitCode == 0);
+    REQUIRE(runCli(dir, "export s.vdbclay -o back.vdb").exitCode == 0);
+    CHECK(readBytes(dir.file("back.vdb")) == readBytes(dir.file("s2.vdb")));
+    CHECK(runCli(dir, "diff s.vdbclay s2.vdb").exitCode == 0);
+    const CommandResult differ = runCli(dir, "diff s.vdbclay s.vdb --json");
+    CHECK(differ.exitCode == 1);
+    CHECK(json::parse(differ.out)["differing_bricks"].size() > 0);
+    CHECK(runCli(dir, "diff s.vdbclay missing.vdb").exitCode == 2);
+    const json lodAfter = parseJsonOutput(runCli(dir, "lod info s.vdbclay --json"));
+    CHECK(lodAfter["stale"] == true);
+
+    // Bad use of the new commands: clean failures.
+    checkCleanFailure(runCli(dir, "sculpt s.vdbclay stamp.json -o other.vdbclay"));
+    checkCleanFailure(runCli(dir, "sculpt s.vdb stamp.json --autosave-every 2 -o x.vdb"));
+    checkCleanFailure(runCli(dir, "lod build s.vdb"));
+    checkCleanFailure(runCli(dir, "export s.vdbclay -o x.vdbclay"));
+    checkCleanFailure(runCli(dir, "import stamp.json -o x.vdbclay"));
+    writeText(dir.file("not-a-store.vdbclay"), "plain text");
+    checkCleanFailure(runCli(dir, "info not-a-store.vdbclay"));
+    checkCleanFailure(runCli(dir, "import s.vdb -o not-a-store.vdbclay"));
+    CHECK(readBytes(dir.file("not-a-store.vdbclay")).size() == 10); // not replaced
+    for (const char* help : {"import --help", "export --help", "lod build --help", "lod info --help", "lod inspect --help",
+                             "synth --help", "diff --help"})
+        CHECK(runCli(dir, help).exitCode == 0);
+}
+
+TEST_CASE("cli: synth and lod inspect with a camera path, CSV and plot", "[cli][store]")
+{
+    TempDir dir;
+    const json made = parseJsonOutput(runCli(dir, "synth csg-stack --extent 96 --seed 3 -o c.vdbclay --json"));
+    CHECK(made["bricks"].get<uint64_t>() > 0);
+    REQUIRE(runCli(dir, "lod build c.vdbclay").exitCode == 0);
+    json frames = json::array();
+    for (int i = 0; i < 20; ++i) frames.push_back({{"position", {-60.0 + 4.0 * i, 40.0, -60.0}}, {"target", {48.0, 8.0, 48.0}}});
+    writeText(dir.file("path.json"), json{{"fov_degrees", 60}, {"viewport", {1280, 720}}, {"frames", frames}}.dump());
+    const json report = parseJsonOutput(
+        runCli(dir, "lod inspect c.vdbclay --camera-path path.json --memory-budget 64 --csv f.csv --plot f.png --json"));
+    REQUIRE(report["frames"].size() == 20);
+    for (const char* key : {"resident_bricks_per_level", "resident_bytes", "bytes_read", "loads", "evictions", "hit_rate",
+                            "screen_error_px", "complete"})
+        CHECK(report["frames"][0].contains(key));
+    CHECK(report["summary"]["peak_resident_bytes"].get<uint64_t>() <= 64ull << 20);
+    CHECK(report["summary"]["first_coarse_complete_s"].is_number());
+    CHECK(readBytes(dir.file("f.csv")).size() > 100);
+    const std::vector<char> png = readBytes(dir.file("f.png"));
+    REQUIRE(png.size() > 1000);
+    CHECK(std::string(png.begin() + 1, png.begin() + 4) == "PNG");
+    // Bad camera paths and budgets.
+    writeText(dir.file("bad.json"), R"({"frames": [{"position": [0, 0, 0], "target": [0, 0, 0]}]})");
+    checkCleanFailure(runCli(dir, "lod inspect c.vdbclay --camera-path bad.json --memory-budget 64"));
+    checkCleanFailure(runCli(dir, "lod inspect c.vdbclay --camera-path path.json --memory-budget 0.01"));
+    checkCleanFailure(runCli(dir, "synth volcano --extent 64 -o v.vdbclay"));
+    checkCleanFailure(runCli(dir, "synth terrain --extent 3 -o v.vdbclay"));
+    checkCleanFailure(runCli(dir, "synth terrain --extent 64 -o v.vdb"));
+}
+
 TEST_CASE("cli: an in-place sculpt killed at random moments leaves the old or the new file, and no temporary file after the next save", "[cli][saves]")
 {
     TempDir dir;
