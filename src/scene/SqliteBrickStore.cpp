@@ -25,6 +25,13 @@ namespace fs = std::filesystem;
 constexpr int32_t kApplicationId = 0x56434C59; // "VCLY"
 constexpr int kStoreFormatVersion = 1;
 
+/// Resets a statement when it goes out of scope: a statement left on a row holds a read transaction
+/// open, which pins the reader's snapshot and stops checkpoints from emptying the WAL.
+struct ResetOnExit {
+    sqlite3_stmt* stmt;
+    ~ResetOnExit() { sqlite3_reset(stmt); }
+};
+
 class Statement {
 public:
     Statement(sqlite3* db, const char* sql, const std::string& path)
@@ -98,6 +105,7 @@ public:
     {
         std::lock_guard<std::mutex> lock(mutex_);
         sqlite3_stmt* s = select_->get();
+        const ResetOnExit reset{s};
         bindKey(s, key);
         const int rc = sqlite3_step(s);
         if (rc == SQLITE_DONE) return std::nullopt;
@@ -114,6 +122,7 @@ public:
     {
         std::lock_guard<std::mutex> lock(mutex_);
         sqlite3_stmt* s = insert_->get();
+        const ResetOnExit reset{s};
         bindKey(s, key);
         if (record.uniform) sqlite3_bind_int(s, 5, int(*record.uniform));
         else sqlite3_bind_null(s, 5);
@@ -126,6 +135,7 @@ public:
     {
         std::lock_guard<std::mutex> lock(mutex_);
         sqlite3_stmt* s = remove_->get();
+        const ResetOnExit reset{s};
         bindKey(s, key);
         if (sqlite3_step(s) != SQLITE_DONE) fail("erase a brick");
     }
@@ -152,6 +162,7 @@ public:
     {
         std::lock_guard<std::mutex> lock(mutex_);
         sqlite3_stmt* s = metaSelect_->get();
+        const ResetOnExit reset{s};
         sqlite3_bind_text(s, 1, key.c_str(), int(key.size()), SQLITE_TRANSIENT);
         const int rc = sqlite3_step(s);
         if (rc == SQLITE_DONE) return std::nullopt;
@@ -164,6 +175,7 @@ public:
     {
         std::lock_guard<std::mutex> lock(mutex_);
         sqlite3_stmt* s = metaInsert_->get();
+        const ResetOnExit reset{s};
         sqlite3_bind_text(s, 1, key.c_str(), int(key.size()), SQLITE_TRANSIENT);
         sqlite3_bind_text(s, 2, value.c_str(), int(value.size()), SQLITE_TRANSIENT);
         if (sqlite3_step(s) != SQLITE_DONE) fail("write the scene's metadata");
