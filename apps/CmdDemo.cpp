@@ -4,7 +4,11 @@
 
 #include "mesher/MeshIO.h"
 #include "mesher/MeshMetrics.h"
+#include "mesher/LodMesh.h"
 #include "mesher/Mesher.h"
+#include "scene/SceneStore.h"
+#include "scene/StoreLod.h"
+#include "wavelet/LodPyramid.h"
 #include "sculpt/StrokeScript.h"
 #include "vdb_hermite/AtomicFile.h"
 #include "vdb_hermite/VolumeIO.h"
@@ -68,7 +72,8 @@ CLI::App* addDemoCommand(CLI::App& parent, DemoOptions& o)
         ->type_name("DIR");
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text");
     cmd->footer("Writes DIR/scene.vdb, DIR/scene.obj, DIR/scene.ply and DIR/script.json (the stroke script it ran;\n"
-                "replay it with 'vdbclay sculpt'). No picture yet: the renderer is not built.");
+                "replay it with 'vdbclay sculpt'), then the same scene as a store with two levels of detail\n"
+                "(DIR/scene.vdbclay) and the mesh of level 2 (DIR/scene-lod2.obj). No picture yet: the renderer is not built.");
     return cmd;
 }
 
@@ -103,6 +108,18 @@ int runDemo(const DemoOptions& o)
     const MeshTopology topology = analyzeTopology(mesh, kMergeDistanceVoxels * volume.voxelSize());
     writeMesh(mesh, volume.materials(), objPath);
     writeMesh(mesh, volume.materials(), plyPath);
+    // The same scene out of core: a store with its levels of detail, and the coarsest level's mesh.
+    const std::string storePath = (dir / "scene.vdbclay").string();
+    const std::string lodPath = (dir / "scene-lod2.obj").string();
+    writeStoreFile(volume, storePath);
+    {
+        SceneStore store = SceneStore::open(storePath, StoreAccess::ReadWrite);
+        buildStoreLod(store, 2);
+        Mesh coarse = meshVolume(store.loadLevel(2), meshOptions);
+        const double shift = wavelet::LodPyramid::levelOffset(2) * volume.voxelSize();
+        translateMesh(coarse, {shift, shift, shift});
+        writeMesh(coarse, volume.materials(), lodPath);
+    }
     const double seconds = secondsSince(start);
     const VolumeStats stats = volume.stats();
 
@@ -126,7 +143,8 @@ int runDemo(const DemoOptions& o)
                    {"vertices", mesh.vertexCount()},
                    {"triangles", mesh.triangleCount()},
                    {"watertight", topology.watertight()},
-                   {"files", {{"volume", vdbPath}, {"obj", objPath}, {"ply", plyPath}, {"script", scriptPath}}},
+                   {"files", {{"volume", vdbPath}, {"obj", objPath}, {"ply", plyPath}, {"script", scriptPath},
+                              {"store", storePath}, {"lod2_obj", lodPath}}},
                    {"picture", nullptr},
                    {"seconds", seconds}});
         return kExitOk;
@@ -151,6 +169,7 @@ int runDemo(const DemoOptions& o)
                  {"volume", vdbPath},
                  {"meshes", objPath + ", " + plyPath},
                  {"script", scriptPath},
+                 {"store", storePath + " (2 levels of detail; level 2 meshed to " + lodPath + ")"},
                  {"total time", formatSeconds(seconds)}},
                 0);
     std::cout << "picture: skipped (renderer not built yet)" << std::endl;
