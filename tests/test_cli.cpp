@@ -26,12 +26,6 @@ using nlohmann::json;
 
 namespace {
 
-#ifdef VDBCLAY_CLI
-constexpr const char* kCli = VDBCLAY_CLI;
-#else
-constexpr const char* kCli = "";
-#endif
-
 struct CommandResult {
     int exitCode = -1;   // exit status; 128 + signal when the command was killed by a signal
     std::string out;

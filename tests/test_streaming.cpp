@@ -30,12 +30,6 @@ using namespace vdbclay::test;
 
 namespace {
 
-#ifdef VDBCLAY_CLI
-constexpr const char* kCli = VDBCLAY_CLI;
-#else
-constexpr const char* kCli = "";
-#endif
-
 /// A terrain store of 256 voxels with its levels of detail.
 std::string makeTerrain(const TempDir& dir, const std::string& name = "t.vdbclay")
 {

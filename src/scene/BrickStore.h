@@ -73,6 +73,32 @@ public:
     virtual const std::string& path() const = 0;
 };
 
+/// One transaction: begun on construction, rolled back on destruction unless committed.
+class StoreTransaction {
+public:
+    explicit StoreTransaction(BrickStore& store) : store_(store) { store_.begin(); }
+    ~StoreTransaction()
+    {
+        if (!done_) {
+            try {
+                store_.rollback();
+            } catch (...) {
+            }
+        }
+    }
+    StoreTransaction(const StoreTransaction&) = delete;
+    StoreTransaction& operator=(const StoreTransaction&) = delete;
+    void commit()
+    {
+        store_.commit();
+        done_ = true;
+    }
+
+private:
+    BrickStore& store_;
+    bool done_ = false;
+};
+
 /// Opens an SQLite store (WAL mode). Refuses, with one line, a file that is not an SQLite database,
 /// not a VDBClay store, of a newer format, damaged, or (for writing) open for writing elsewhere.
 std::unique_ptr<BrickStore> openSqliteStore(const std::string& path, StoreAccess access);

@@ -46,8 +46,7 @@ public:
             store_->loadBricks(0, bricks, out);
         } else {
             for (const IndexCoord& b : bricks) {
-                const LeafAlignedBox box{{b[0] * kBrickEdge, b[1] * kBrickEdge, b[2] * kBrickEdge}, kBrickEdge};
-                pasteRegion(out, copyRegion(*volume_, box), box);
+                pasteRegion(out, copyRegion(*volume_, brickBox(b)), brickBox(b));
             }
         }
         return out;
@@ -89,8 +88,7 @@ SceneDiff diffScenes(const std::string& pathA, const std::string& pathB, bool me
     for (const IndexCoord& brick : all) {
         if (sameRecord(a.record(brick), b.record(brick))) continue;
         // Different bytes may still hold the same voxels (a tree laid out otherwise): compare those.
-        const LeafAlignedBox box{{brick[0] * kBrickEdge, brick[1] * kBrickEdge, brick[2] * kBrickEdge}, kBrickEdge};
-        const RegionDifference d = compareRegion(a.region({brick}), b.region({brick}), box);
+        const RegionDifference d = compareRegion(a.region({brick}), b.region({brick}), brickBox(brick));
         if (!d.any()) continue;
         diff.differingBricks.push_back(brick);
         diff.occupancyDifferences += d.occupancy;

@@ -42,11 +42,6 @@ std::string exactNumber(double v)
     return text;
 }
 
-LeafAlignedBox brickBox(const IndexCoord& brick)
-{
-    return {{brick[0] * kBrickEdge, brick[1] * kBrickEdge, brick[2] * kBrickEdge}, kBrickEdge};
-}
-
 double levelVoxelSize(double voxelSize, int level) { return voxelSize * double(1 << level); }
 
 } // namespace

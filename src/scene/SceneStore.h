@@ -7,6 +7,7 @@
 #include "scene/BrickStore.h"
 #include "vdb_hermite/Materials.h"
 #include "vdb_hermite/Volume.h"
+#include "vdb_hermite/VolumeRegions.h"
 
 #include <functional>
 #include <memory>
@@ -20,6 +21,12 @@ namespace vdbclay {
 /// change (docs/ARCHITECTURE.md, "The scene store").
 constexpr int kBrickLeaves = 8;
 constexpr int32_t kBrickEdge = kBrickLeaves * kLeafDim;
+
+/// The index-space box of a brick (its coordinates times the brick edge).
+inline LeafAlignedBox brickBox(const IndexCoord& brick)
+{
+    return {{brick[0] * kBrickEdge, brick[1] * kBrickEdge, brick[2] * kBrickEdge}, kBrickEdge};
+}
 
 /// File extension of a store; every other extension is a native .vdb.
 constexpr const char* kStoreExtension = ".vdbclay";

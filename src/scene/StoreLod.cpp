@@ -16,20 +16,15 @@ int buildStoreLod(SceneStore& scene, int levels, const Progress& progress)
                                     std::to_string(levels) + " levels");
     wavelet::LodPyramid pyramid(levels);
     pyramid.build(fine);
-    scene.bricks().begin();
-    try {
-        for (int k = 1; k <= levels; ++k) {
-            scene.writeLevel(k, pyramid.coarseVolume(fine, k));
-            if (progress) progress(uint64_t(k), uint64_t(levels));
-        }
-        for (int k = levels + 1; k <= scene.lodLevels(); ++k)
-            for (const IndexCoord& b : scene.brickCoords(k)) scene.bricks().erase({k, b});
-        scene.setLod(levels, false);
-        scene.bricks().commit();
-    } catch (...) {
-        scene.bricks().rollback();
-        throw;
+    StoreTransaction transaction(scene.bricks());
+    for (int k = 1; k <= levels; ++k) {
+        scene.writeLevel(k, pyramid.coarseVolume(fine, k));
+        if (progress) progress(uint64_t(k), uint64_t(levels));
     }
+    for (int k = levels + 1; k <= scene.lodLevels(); ++k)
+        for (const IndexCoord& b : scene.brickCoords(k)) scene.bricks().erase({k, b});
+    scene.setLod(levels, false);
+    transaction.commit();
     return levels;
 }
 

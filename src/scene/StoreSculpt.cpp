@@ -77,24 +77,19 @@ StoreSculptReport sculptStore(SceneStore& scene, const StrokeScript& script,
     report.ops = runStrokeScript(part, script, onOp);
 
     // Intersect clears what lies outside the loaded bricks too: every stored brick was loaded then.
-    scene.bricks().begin();
-    try {
-        for (std::size_t i = 0; i < order.size(); ++i) {
-            std::optional<BrickRecord> after = encodeBrick(part, order[i]);
-            const bool same = after.has_value() == before[i].has_value() &&
-                              (!after || (after->uniform == before[i]->uniform && after->payload == before[i]->payload));
-            if (same) continue;
-            if (after) scene.bricks().put({0, order[i]}, *after);
-            else scene.bricks().erase({0, order[i]});
-            ++report.bricksWritten;
-        }
-        scene.setMaterials(part.materials());
-        if (report.bricksWritten > 0 && scene.lodLevels() > 0) scene.setLod(scene.lodLevels(), true);
-        scene.bricks().commit();
-    } catch (...) {
-        scene.bricks().rollback();
-        throw;
+    StoreTransaction transaction(scene.bricks());
+    for (std::size_t i = 0; i < order.size(); ++i) {
+        std::optional<BrickRecord> after = encodeBrick(part, order[i]);
+        const bool same = after.has_value() == before[i].has_value() &&
+                          (!after || (after->uniform == before[i]->uniform && after->payload == before[i]->payload));
+        if (same) continue;
+        if (after) scene.bricks().put({0, order[i]}, *after);
+        else scene.bricks().erase({0, order[i]});
+        ++report.bricksWritten;
     }
+    scene.setMaterials(part.materials());
+    if (report.bricksWritten > 0 && scene.lodLevels() > 0) scene.setLod(scene.lodLevels(), true);
+    transaction.commit();
     return report;
 }
 

@@ -23,8 +23,6 @@ constexpr const char* kEditCountKey = "edit_count";
 constexpr uint64_t kEstimatedBytesPerLeaf = 2600;
 constexpr uint64_t kEstimatedBytesPerBrick = 4 << 10; // its share of the 128^3 nodes above its leaves
 
-LeafAlignedBox brickBox(const IndexCoord& b) { return {{b[0] * kBrickEdge, b[1] * kBrickEdge, b[2] * kBrickEdge}, kBrickEdge}; }
-
 } // namespace
 
 struct StreamingScene::Impl {
@@ -183,26 +181,21 @@ struct StreamingScene::Impl {
         Volume& fine = levelVolumes[0];
         fine.materials() = materials;
         if (dirty.empty() && committedEdits(scene) == edits) return 0;
-        scene.bricks().begin();
-        try {
-            for (auto& [key, r] : dirty) {
-                if (const std::optional<BrickRecord> record = encodeBrick(fine, key.brick)) {
-                    scene.bricks().put(key, *record);
-                    present[0].insert(key.brick);
-                } else {
-                    scene.bricks().erase(key);
-                }
+        StoreTransaction transaction(scene.bricks());
+        for (auto& [key, r] : dirty) {
+            if (const std::optional<BrickRecord> record = encodeBrick(fine, key.brick)) {
+                scene.bricks().put(key, *record);
+                present[0].insert(key.brick);
+            } else {
+                scene.bricks().erase(key);
             }
-            if (!dirty.empty()) {
-                scene.setMaterials(materials);
-                if (levels > 0) scene.setLod(levels, true);
-            }
-            scene.bricks().putMeta(kEditCountKey, std::to_string(edits));
-            scene.bricks().commit();
-        } catch (...) {
-            scene.bricks().rollback();
-            throw;
         }
+        if (!dirty.empty()) {
+            scene.setMaterials(materials);
+            if (levels > 0) scene.setLod(levels, true);
+        }
+        scene.bricks().putMeta(kEditCountKey, std::to_string(edits));
+        transaction.commit();
         for (auto& [key, r] : dirty) r->dirty = false;
         return dirty.size();
     }

@@ -14,6 +14,13 @@
 
 namespace vdbclay::test {
 
+/// The `vdbclay` binary of this build, or "" when the build has none (tests/CMakeLists.txt).
+#ifdef VDBCLAY_CLI
+constexpr const char* kCli = VDBCLAY_CLI;
+#else
+constexpr const char* kCli = "";
+#endif
+
 constexpr double kPi = 3.14159265358979323846;
 
 /// A fresh directory under $TMPDIR, removed with everything in it when the object goes away.
