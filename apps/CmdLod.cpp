@@ -85,7 +85,8 @@ LodCommands addLodCommand(CLI::App& parent, LodOptions& o)
     cmds.inspect->footer(
         "The camera path: {\"fov_degrees\": 60, \"viewport\": [1920, 1080], \"frames\": [{\"position\": [x, y, z],\n"
         "\"target\": [x, y, z]}, ...]} in world units; frames at 90 Hz unless a frame gives \"t\" in seconds. The\n"
-        "flight is replayed in real time; after its last frame the view is asked for until refined (2 s at most).");
+        "flight is replayed in real time; after its last frame the view is asked for until refined as far as the\n"
+        "budget allows (2 s at most).");
     return cmds;
 }
 
@@ -140,6 +141,7 @@ nlohmann::json frameJson(const InspectedFrame& f)
             {"coarse_complete", r.coarseComplete},
             {"complete", r.complete},
             {"budget_limited", r.budgetLimited},
+            {"settled", r.settled},
             {"pending", r.pending}};
 }
 
@@ -188,6 +190,7 @@ int runLodInspect(const LodOptions& o)
                      {"max_screen_error_px", s.maxScreenError},
                      {"first_coarse_complete_s", optionalSeconds(s.firstCoarseComplete)},
                      {"first_complete_s", optionalSeconds(s.firstComplete)},
+                     {"first_settled_s", optionalSeconds(s.firstSettled)},
                      {"budget_limited", s.budgetLimited}}}});
         return kExitOk;
     }
@@ -198,7 +201,8 @@ int runLodInspect(const LodOptions& o)
                               std::to_string(s.evictions) + " evictions"},
                  {"hit rate", formatNumber(100.0 * s.meanHitRate) + " %"},
                  {"coarse view", "first complete at " + when(s.firstCoarseComplete)},
-                 {"refined view", "first complete at " + when(s.firstComplete)},
+                 {"refined view", "first complete at " + when(s.firstComplete) + "; refined as far as the budget allows at " +
+                                      when(s.firstSettled)},
                  {"budget", s.budgetLimited ? "too small for the view at some frames: it refined less there" : "enough"}},
                 0);
     return kExitOk;

@@ -160,7 +160,7 @@ int benchStream(bool json, bool quick)
 
     // A new region: teleport there and count the time to a complete coarse view and to full refinement.
     struct Arrival {
-        double coarseMs = -1.0, refinedMs = -1.0;
+        double coarseMs = -1.0, refinedMs = -1.0, settledMs = -1.0;
     };
     const auto arrive = [&](double x, double z) {
         Arrival a;
@@ -168,10 +168,12 @@ int benchStream(bool json, bool quick)
         for (int frame = 0; frame < 90 * 5; ++frame) {
             const FrameReport r = scene.frame(viewer(x, z, height, lookAhead));
             if (r.coarseComplete && a.coarseMs < 0.0) a.coarseMs = millisecondsSince(start);
+            if (r.settled && a.settledMs < 0.0) a.settledMs = millisecondsSince(start);
             if (r.complete) {
                 a.refinedMs = millisecondsSince(start);
                 break;
             }
+            if (r.budgetLimited && a.settledMs >= 0.0) break; // as refined as the budget allows
             std::this_thread::sleep_for(std::chrono::microseconds(11111));
         }
         return a;
@@ -205,12 +207,14 @@ int benchStream(bool json, bool quick)
     const double residentPerSurfaceVoxel = double(scene.residentBytes()) / double(std::max<uint64_t>(1, resident.stats().activeVoxels));
     const auto [ourSphere, vdbSphere] = sphereBytesPerSurfaceVoxel();
 
-    double worstCoarse = 0.0, worstRefined = 0.0;
-    bool allRefined = true;
+    double worstCoarse = 0.0, worstRefined = 0.0, worstSettled = 0.0;
+    bool allRefined = true, allSettled = true;
     for (const Arrival& a : arrivals) {
         worstCoarse = std::max(worstCoarse, a.coarseMs);
         worstRefined = std::max(worstRefined, a.refinedMs);
+        worstSettled = std::max(worstSettled, a.settledMs);
         allRefined = allRefined && a.refinedMs >= 0.0;
+        allSettled = allSettled && a.settledMs >= 0.0;
     }
     const double generatedVoxels = double(generated.bricksVisited) * double(kBrickEdge) * kBrickEdge * kBrickEdge;
 
@@ -228,7 +232,8 @@ int benchStream(bool json, bool quick)
         out["peak_rss_bytes"] = peakRss;
         out["overhead_bytes"] = peakRss > baselineRss + budget ? peakRss - baselineRss - budget : 0;
         nlohmann::json a = nlohmann::json::array();
-        for (const Arrival& x : arrivals) a.push_back({{"coarse_ms", x.coarseMs}, {"refined_ms", x.refinedMs}});
+        for (const Arrival& x : arrivals)
+            a.push_back({{"coarse_ms", x.coarseMs}, {"refined_ms", x.refinedMs}, {"refined_within_budget_ms", x.settledMs}});
         out["arrivals"] = a;
         out["stroke_ms"] = strokeMs;
         out["stroke_max_ms"] = maximum(strokeMs);
@@ -255,6 +260,7 @@ int benchStream(bool json, bool quick)
          "budget + documented overhead"},
         {"first coarse view of a new region (worst of 3)", ms(worstCoarse), "<= 100 ms"},
         {"full refinement of the view (worst of 3)", allRefined ? ms(worstRefined) : ms(-1.0), "<= 1 s"},
+        {"refined as far as the budget allows (worst of 3)", allSettled ? ms(worstSettled) : ms(-1.0), ""},
         {"stroke on bricks not resident (worst)", fixed(maximum(strokeMs), 1) + " ms over " + std::to_string(strokeMs.size()) + " strokes", "<= 50 ms"},
         {"read per frame (mean)", megabytes(double(flightRead) / double(flightFrames)), ""},
         {"sustained read rate / disk speed", megabytes(double(flightRead) / flightSeconds) + "/s / " + megabytes(diskSpeed) + "/s", "disk speed"},

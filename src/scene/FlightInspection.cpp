@@ -43,6 +43,7 @@ FlightInspection inspectFlight(StreamingScene& scene, const std::vector<CameraFr
         s.budgetLimited = s.budgetLimited || f.report.budgetLimited;
         if (f.report.coarseComplete && !s.firstCoarseComplete) s.firstCoarseComplete = f.time;
         if (f.report.complete && !s.firstComplete) s.firstComplete = f.time;
+        if (f.report.settled && !s.firstSettled) s.firstSettled = f.time;
         out.frames.push_back(f);
         return f.report.complete;
     };
@@ -52,7 +53,7 @@ FlightInspection inspectFlight(StreamingScene& scene, const std::vector<CameraFr
         record(frame.viewer, false);
     }
     const double end = since(start) + settleSeconds;
-    for (std::size_t extra = 1; !out.frames.back().report.complete && since(start) < end; ++extra) {
+    for (std::size_t extra = 1; !out.frames.back().report.settled && since(start) < end; ++extra) {
         std::this_thread::sleep_for(std::chrono::duration<double>(1.0 / kDefaultFrameRate));
         record(flight.back().viewer, true);
     }
@@ -70,18 +71,18 @@ void writeFlightCsv(const FlightInspection& inspection, const std::string& path)
     writeFileAtomically(path, [&](std::ostream& os) {
         const std::size_t levels = inspection.frames.empty() ? 0 : inspection.frames.front().report.residentPerLevel.size();
         os << "frame,time_s,resident_bytes,bytes_read,loads,evictions,requested,hits,hit_rate,screen_error_px,"
-              "target_error_px,coarse_complete,complete,budget_limited,pending,settling";
+              "target_error_px,coarse_complete,complete,budget_limited,settled,pending,settling";
         for (std::size_t k = 0; k < levels; ++k) os << ",resident_level_" << k;
         os << '\n';
         for (std::size_t i = 0; i < inspection.frames.size(); ++i) {
             const InspectedFrame& f = inspection.frames[i];
             const FrameReport& r = f.report;
             char line[512];
-            std::snprintf(line, sizeof(line), "%zu,%.6f,%llu,%llu,%llu,%llu,%llu,%llu,%.4f,%.4f,%.4f,%d,%d,%d,%llu", i, f.time,
+            std::snprintf(line, sizeof(line), "%zu,%.6f,%llu,%llu,%llu,%llu,%llu,%llu,%.4f,%.4f,%.4f,%d,%d,%d,%d,%llu", i, f.time,
                           (unsigned long long)r.residentBytes, (unsigned long long)r.bytesRead, (unsigned long long)r.loads,
                           (unsigned long long)r.evictions, (unsigned long long)r.requested, (unsigned long long)r.hits,
                           r.hitRate(), r.screenError, r.targetError, int(r.coarseComplete), int(r.complete),
-                          int(r.budgetLimited), (unsigned long long)r.pending);
+                          int(r.budgetLimited), int(r.settled), (unsigned long long)r.pending);
             os << line << ',' << int(f.settling);
             for (std::size_t k = 0; k < levels; ++k) os << ',' << (k < r.residentPerLevel.size() ? r.residentPerLevel[k] : 0);
             os << '\n';

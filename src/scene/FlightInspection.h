@@ -26,6 +26,7 @@ struct FlightSummary {
     double maxScreenError = 0.0;
     std::optional<double> firstCoarseComplete; // seconds: first frame whose view showed some level everywhere
     std::optional<double> firstComplete;       // seconds: first frame fully refined
+    std::optional<double> firstSettled;        // seconds: first frame refined as far as the budget allows
     bool budgetLimited = false;
 };
 

@@ -167,6 +167,7 @@ struct StreamingScene::Impl {
             inFlightBytes -= estimate;
             if (loaded.first && !resident.count(key)) {
                 const uint64_t bytes = regionMemoryBytes(*loaded.first, brickBox(key.brick));
+                estimates[key] = bytes; // the next frames budget with what it really takes
                 if (wanted.count(key) && makeRoom(bytes, lock)) install(key, *loaded.first, loaded.second);
             }
             if (queue.empty() && inFlight.empty()) idle.notify_all();
@@ -206,7 +207,15 @@ StreamingScene::StreamingScene(const std::string& path, const StreamingOptions& 
 {
 }
 
-StreamingScene::~StreamingScene() = default;
+StreamingScene::~StreamingScene()
+{
+    // Closing keeps what was sculpted: the dirty bricks are committed like an autosave.
+    if (impl_->options.access == StoreAccess::ReadOnly) return;
+    try {
+        autosave();
+    } catch (...) {
+    }
+}
 
 FrameReport StreamingScene::frame(const Viewer& viewer)
 {
@@ -280,6 +289,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
         if (shown != b.key.level) report.complete = false;
         report.screenError = std::max(report.screenError, b.screenError * double(1 << (shown - b.key.level)));
     }
+    report.settled = std::all_of(accepted.begin(), accepted.end(), [&](const BrickKey& key) { return s.resident.count(key) > 0; });
     report.residentPerLevel.assign(std::size_t(s.levels) + 1, 0);
     for (const auto& [key, r] : s.resident) ++report.residentPerLevel[std::size_t(key.level)];
     report.residentBytes = s.residentBytes;

@@ -37,6 +37,7 @@ struct FrameReport {
     bool coarseComplete = false; // every region in view shows some level
     bool complete = false;       // every region in view shows the level it asked for
     bool budgetLimited = false;  // the selection was cut to fit the budget: the view refines less
+    bool settled = false;        // every brick the budget admitted is resident: refined as far as it goes
     uint64_t pending = 0;        // loads still queued or running
 };
 
@@ -45,6 +46,7 @@ public:
     /// Opens the store. Throws std::invalid_argument when the budget cannot hold the largest stored
     /// brick, StoreError when the store cannot be opened.
     StreamingScene(const std::string& path, const StreamingOptions& options);
+    /// Commits the dirty bricks (a scene opened for writing), as autosave() does.
     ~StreamingScene();
     StreamingScene(const StreamingScene&) = delete;
     StreamingScene& operator=(const StreamingScene&) = delete;
