@@ -59,7 +59,8 @@ public:
     BlockView view(int level, const BlockOrigin& origin) const
     {
         BlockView v;
-        const Coord fine(origin[0] << level, origin[1] << level, origin[2] << level);
+        const int scale = 1 << level; // a multiplication: shifting a negative coordinate left is undefined
+        const Coord fine(origin[0] * scale, origin[1] * scale, origin[2] * scale);
         if (level == 0) {
             v.leaf = tree_.probeConstLeaf(fine);
         } else {
