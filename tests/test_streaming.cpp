@@ -18,6 +18,7 @@
 #include <cmath>
 #include <csignal>
 #include <filesystem>
+#include <optional>
 #include <random>
 #include <thread>
 
@@ -216,12 +217,7 @@ TEST_CASE("SIGKILL at any moment loses at most the edits since the last autosave
         runStrokeScript(next, one);
         after.push_back(std::move(next));
     }
-    std::mt19937 rng(12);
-    int killed = 0, finished = 0;
-    std::set<uint64_t> seenCommitted;
-    for (int trial = 0; trial < 50; ++trial) {
-        const std::string path = dir.file("victim.vdbclay");
-        std::filesystem::copy_file(original, path, std::filesystem::copy_options::overwrite_existing);
+    const auto run = [&](const std::string& path, std::optional<std::chrono::microseconds> killAfter) {
         const pid_t child = ::fork();
         if (child == 0) {
             const int devnull = ::open("/dev/null", O_WRONLY);
@@ -230,10 +226,32 @@ TEST_CASE("SIGKILL at any moment loses at most the edits since the last autosave
                     std::to_string(kEvery).c_str(), "--memory-budget", "16", static_cast<char*>(nullptr));
             ::_exit(127);
         }
-        std::this_thread::sleep_for(std::chrono::microseconds(rng() % 400000));
-        ::kill(child, SIGKILL);
+        if (killAfter) {
+            std::this_thread::sleep_for(*killAfter);
+            ::kill(child, SIGKILL);
+        }
         int status = 0;
         ::waitpid(child, &status, 0);
+        return status;
+    };
+    // One run to the end: it applies every edit, and tells how long a run takes, so the kills below
+    // land at moments spread over a run (a killed run ends early either way).
+    const std::string path = dir.file("victim.vdbclay");
+    std::filesystem::copy_file(original, path, std::filesystem::copy_options::overwrite_existing);
+    const auto start = std::chrono::steady_clock::now();
+    const int whole = run(path, std::nullopt);
+    const auto runTime = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - start);
+    REQUIRE(WIFEXITED(whole));
+    REQUIRE(WEXITSTATUS(whole) == 0);
+    REQUIRE(identical(loadScene(path), after[kOps]));
+
+    std::mt19937 rng(12);
+    int killed = 0, finished = 0;
+    std::set<uint64_t> seenCommitted;
+    for (int trial = 0; trial < 50; ++trial) {
+        std::filesystem::copy_file(original, path, std::filesystem::copy_options::overwrite_existing);
+        const auto delay = std::chrono::microseconds(rng() % std::max<int64_t>(1, int64_t(runTime.count() * 9 / 10)));
+        const int status = run(path, delay);
         (WIFSIGNALED(status) ? killed : finished)++;
         if (WIFEXITED(status)) REQUIRE(WEXITSTATUS(status) == 0);
         // The store reopens, for writing too, and holds the scene after the edits it committed.
