@@ -275,13 +275,7 @@ private:
 
     void checkSchema()
     {
-        int64_t application = 0;
-        try {
-            application = pragmaInt("PRAGMA application_id");
-        } catch (const StoreError&) {
-            throw;
-        }
-        if (application != kApplicationId)
+        if (pragmaInt("PRAGMA application_id") != kApplicationId)
             throw StoreError("'" + path_ + "' is an SQLite database but not a VDBClay scene store");
         const int64_t version = pragmaInt("PRAGMA user_version");
         if (version > kStoreFormatVersion || version < 1)

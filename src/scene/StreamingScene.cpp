@@ -373,7 +373,10 @@ uint64_t StreamingScene::dirtyBricks() const
 uint64_t StreamingScene::committedEdits(const SceneStore& scene)
 {
     const std::optional<std::string> text = scene.bricks().meta(kEditCountKey);
-    return text ? std::stoull(*text) : 0;
+    if (!text) return 0;
+    if (text->empty() || text->size() > 19 || text->find_first_not_of("0123456789") != std::string::npos)
+        throw StoreError("'" + scene.path() + "' is damaged: its edit count is not a number");
+    return std::stoull(*text);
 }
 
 uint64_t StreamingScene::residentBytes() const
