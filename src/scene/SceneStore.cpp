@@ -62,14 +62,14 @@ SceneStore SceneStore::create(const std::string& path, double voxelSize, const M
 {
     Volume probe(voxelSize); // checks the voxel size
     SceneStore scene(openSqliteStore(path, StoreAccess::Create));
-    scene.store_->begin();
+    StoreTransaction transaction(*scene.store_);
     scene.store_->putMeta(kFormatKey, kFormatValue);
     scene.store_->putMeta(kVoxelSizeKey, exactNumber(voxelSize));
     scene.store_->putMeta(kMaterialsKey, materials.toJson());
     scene.store_->putMeta(kBrickLeavesKey, std::to_string(kBrickLeaves));
     scene.store_->putMeta(kLodLevelsKey, "0");
     scene.store_->putMeta(kLodStaleKey, "0");
-    scene.store_->commit();
+    transaction.commit();
     scene.readMeta();
     return scene;
 }
