@@ -8,7 +8,6 @@
 #include "mesher/Mesher.h"
 #include "scene/SceneStore.h"
 #include "scene/StoreLod.h"
-#include "wavelet/LodPyramid.h"
 #include "sculpt/StrokeScript.h"
 #include "vdb_hermite/AtomicFile.h"
 #include "vdb_hermite/VolumeIO.h"
@@ -115,9 +114,7 @@ int runDemo(const DemoOptions& o)
     {
         SceneStore store = SceneStore::open(storePath, StoreAccess::ReadWrite);
         buildStoreLod(store, 2);
-        Mesh coarse = meshVolume(store.loadLevel(2), meshOptions);
-        const double shift = wavelet::LodPyramid::levelOffset(2) * volume.voxelSize();
-        translateMesh(coarse, {shift, shift, shift});
+        const Mesh coarse = meshLevelVolume(store.loadLevel(2), 2, meshOptions);
         writeMesh(coarse, volume.materials(), lodPath);
     }
     const double seconds = secondsSince(start);

@@ -95,9 +95,7 @@ int runMesh(const MeshCommandOptions& o)
         if (level > 0 && scene.lodStale())
             std::cerr << "vdbclay: warning: the levels of detail predate the last edit; 'vdbclay lod build' refreshes them\n";
         const Volume volume = scene.loadLevel(level);
-        mesh = meshVolume(volume, options);
-        const double shift = wavelet::LodPyramid::levelOffset(level) * scene.voxelSize();
-        translateMesh(mesh, {shift, shift, shift});
+        mesh = meshLevelVolume(volume, level, options);
         materials = scene.materials();
         voxelSize = volume.voxelSize();
     } else {

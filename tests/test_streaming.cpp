@@ -88,11 +88,17 @@ TEST_CASE("a view selects coarse bricks far away and fine ones close by, only in
         CHECK((b.key.level == 0 || b.screenError <= options.pixelTolerance));
     }
     CHECK(fine);
-    // Bricks behind the eye are not selected; each region is selected at one level only.
-    for (const SelectedBrick& b : near) {
-        const double edge = 64.0 * double(1 << b.key.level);
-        CHECK((b.key.brick[0] + 1) * edge >= 40.0 - 1e-9);
+    // From the middle of the lattice looking along +x: no brick wholly behind the eye is selected, and
+    // the bricks straight ahead are.
+    const auto middle = selectBricks(lookingAt({256, 30, 288}, {600, 30, 288}), options, stored);
+    bool ahead = false;
+    for (const SelectedBrick& b : middle) {
+        const int edge = 64 << b.key.level, scale = 1 << b.key.level;
+        CHECK((b.key.brick[0] + 1) * edge >= 256); // its box reaches the eye's plane or beyond
+        ahead = ahead || (b.key.brick[0] == 6 / scale && b.key.brick[2] == 4 / scale);
     }
+    CHECK(ahead);
+    // Each region is selected at one level only.
     std::set<IndexCoord> covered;
     for (const SelectedBrick& b : near) {
         const int scale = 1 << b.key.level;

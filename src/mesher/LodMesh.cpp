@@ -17,8 +17,15 @@ Mesh meshLevel(const Volume& fine, const wavelet::LodPyramid& pyramid, int level
         throw std::invalid_argument("level " + std::to_string(level) + " is outside 0 .. " +
                                     std::to_string(pyramid.levels()) + " (the pyramid's levels)");
     if (level == 0) return meshVolume(fine, options);
-    Mesh mesh = meshVolume(pyramid.coarseVolume(fine, level), options);
-    const double shift = wavelet::LodPyramid::levelOffset(level) * fine.voxelSize();
+    return meshLevelVolume(pyramid.coarseVolume(fine, level), level, options);
+}
+
+Mesh meshLevelVolume(const Volume& levelVolume, int level, const MeshOptions& options)
+{
+    Mesh mesh = meshVolume(levelVolume, options);
+    if (level == 0) return mesh;
+    const double fineVoxel = levelVolume.voxelSize() / double(1 << level);
+    const double shift = wavelet::LodPyramid::levelOffset(level) * fineVoxel;
     translateMesh(mesh, {shift, shift, shift});
     return mesh;
 }

@@ -38,6 +38,13 @@ struct BrickRecord {
     uint32_t leaves = 0;
 };
 
+/// Whether two stored states of a brick (nullopt: not stored, i.e. empty) hold the same bytes.
+inline bool sameBrick(const std::optional<BrickRecord>& a, const std::optional<BrickRecord>& b)
+{
+    if (!a || !b) return !a && !b;
+    return a->uniform == b->uniform && a->payload == b->payload;
+}
+
 /// What scan() tells about a brick without reading its payload.
 struct BrickSummary {
     std::optional<MaterialId> uniform;

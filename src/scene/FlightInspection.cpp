@@ -53,7 +53,7 @@ FlightInspection inspectFlight(StreamingScene& scene, const std::vector<CameraFr
         record(frame.viewer, false);
     }
     const double end = since(start) + settleSeconds;
-    for (std::size_t extra = 1; !out.frames.back().report.settled && since(start) < end; ++extra) {
+    while (!out.frames.back().report.settled && since(start) < end) {
         std::this_thread::sleep_for(std::chrono::duration<double>(1.0 / kDefaultFrameRate));
         record(flight.back().viewer, true);
     }

@@ -57,12 +57,6 @@ private:
     std::optional<Volume> volume_;
 };
 
-bool sameRecord(const std::optional<BrickRecord>& a, const std::optional<BrickRecord>& b)
-{
-    if (!a || !b) return !a && !b;
-    return a->uniform == b->uniform && a->payload == b->payload;
-}
-
 } // namespace
 
 bool SceneDiff::withinTolerance(double toleranceVoxels) const
@@ -86,7 +80,7 @@ SceneDiff diffScenes(const std::string& pathA, const std::string& pathB, bool me
     for (const IndexCoord& c : a.bricks()) all.insert(c);
     for (const IndexCoord& c : b.bricks()) all.insert(c);
     for (const IndexCoord& brick : all) {
-        if (sameRecord(a.record(brick), b.record(brick))) continue;
+        if (sameBrick(a.record(brick), b.record(brick))) continue;
         // Different bytes may still hold the same voxels (a tree laid out otherwise): compare those.
         const RegionDifference d = compareRegion(a.region({brick}), b.region({brick}), brickBox(brick));
         if (!d.any()) continue;

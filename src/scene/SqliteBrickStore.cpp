@@ -42,9 +42,9 @@ public:
     ~Statement() { sqlite3_finalize(stmt_); }
     Statement(const Statement&) = delete;
     Statement& operator=(const Statement&) = delete;
+    /// The statement with its bindings cleared; callers reset it after use (ResetOnExit).
     sqlite3_stmt* get() const
     {
-        sqlite3_reset(stmt_);
         sqlite3_clear_bindings(stmt_);
         return stmt_;
     }

@@ -79,10 +79,8 @@ StoreSculptReport sculptStore(SceneStore& scene, const StrokeScript& script,
     // Intersect clears what lies outside the loaded bricks too: every stored brick was loaded then.
     StoreTransaction transaction(scene.bricks());
     for (std::size_t i = 0; i < order.size(); ++i) {
-        std::optional<BrickRecord> after = encodeBrick(part, order[i]);
-        const bool same = after.has_value() == before[i].has_value() &&
-                          (!after || (after->uniform == before[i]->uniform && after->payload == before[i]->payload));
-        if (same) continue;
+        const std::optional<BrickRecord> after = encodeBrick(part, order[i]);
+        if (sameBrick(after, before[i])) continue;
         if (after) scene.bricks().put({0, order[i]}, *after);
         else scene.bricks().erase({0, order[i]});
         ++report.bricksWritten;

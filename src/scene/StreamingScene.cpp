@@ -224,9 +224,9 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     selection.pixelTolerance = s.options.pixelTolerance;
     selection.voxelSize = s.scene.voxelSize();
     selection.levels = s.levels;
-    const std::vector<SelectedBrick> selected = selectBricks(viewer, selection, s.present);
-
+    // Under the lock: an autosave on a loader thread (evicting a dirty brick) adds to `present`.
     std::unique_lock<std::mutex> lock(s.mutex);
+    const std::vector<SelectedBrick> selected = selectBricks(viewer, selection, s.present);
     ++s.frameNumber;
     FrameReport report;
     report.requested = selected.size();

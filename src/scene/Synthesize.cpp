@@ -145,8 +145,8 @@ Recipe csgStack(const SynthOptions& o)
     const double vs = o.voxelSize;
     r.materials = MaterialTable();
     r.materials.define(material("default", {0.75f, 0.75f, 0.78f, 1.0f}, 0.6f));
-    const MaterialId red = r.materials.define(material("red", {0.80f, 0.20f, 0.15f, 1.0f}, 0.5f));
-    const MaterialId blue = r.materials.define(material("blue", {0.15f, 0.30f, 0.80f, 1.0f}, 0.5f));
+    r.materials.define(material("red", {0.80f, 0.20f, 0.15f, 1.0f}, 0.5f));  // id 2
+    r.materials.define(material("blue", {0.15f, 0.30f, 0.80f, 1.0f}, 0.5f)); // id 3: storeys cycle through 1, 2, 3
     std::mt19937_64 rng(o.seed * 15485863 + 5);
     // Towers on a lattice of integer spacing; each storey sits exactly on the one below (coplanar faces),
     // neighbours touch where their sizes reach the spacing, some storeys turn by 45 degrees.
@@ -187,7 +187,6 @@ Recipe csgStack(const SynthOptions& o)
                 add(CsgMode::Remove, placedBrush(bore, Vec3d(x, y / 2.0, z), Vec3d(90.0, 0.0, 0.0)), 1);
             }
         }
-    (void)red, (void)blue;
     r.bricks.assign(bricks.begin(), bricks.end());
     return r;
 }

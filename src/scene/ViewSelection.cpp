@@ -42,8 +42,8 @@ struct Frustum {
         const V3 dirTop{forward[0] + trueUp[0] * tanY, forward[1] + trueUp[1] * tanY, forward[2] + trueUp[2] * tanY};
         const V3 dirBottom{forward[0] - trueUp[0] * tanY, forward[1] - trueUp[1] * tanY, forward[2] - trueUp[2] * tanY};
         normals = {forward, plane(trueUp, dirRight), plane(dirLeft, trueUp), plane(dirTop, right), plane(right, dirBottom)};
+        // Every plane passes through the eye (the near plane too: no near clip distance).
         for (int i = 0; i < 5; ++i) offsets[std::size_t(i)] = -dot(normals[std::size_t(i)], v.position);
-        offsets[0] += 0.0; // the near plane passes through the eye
     }
 
     /// Whether the box may intersect the frustum (conservative).

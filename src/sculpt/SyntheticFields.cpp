@@ -107,7 +107,7 @@ double TerrainField::height(double x, double z) const
 double TerrainField::distance(const Vec3d& p) const
 {
     // Far above or below every height, the bound needs no noise.
-    if (p.y() > maxHeight()) return (p.y() - maxHeight()) / slopeNorm_ + 0.0;
+    if (p.y() > maxHeight()) return (p.y() - maxHeight()) / slopeNorm_;
     if (p.y() < minHeight()) return (p.y() - minHeight()) / slopeNorm_;
     return (p.y() - height(p.x(), p.z())) / slopeNorm_;
 }
