@@ -29,6 +29,12 @@ constexpr int kFullDensity = 255;
 constexpr int kSolidDensity = 128;
 constexpr int kMaxLodLevels = 10;
 
+/// The level-(k+1) block whose footprint holds the level-k block at `origin`: floor(origin / 16) * 8.
+inline BlockOrigin parentBlock(const BlockOrigin& o)
+{
+    return {(o[0] >> 4) * kLeafDim, (o[1] >> 4) * kLeafDim, (o[2] >> 4) * kLeafDim};
+}
+
 /// 8^3 voxels of one level: the Haar low-pass of the solid density, and the material that holds most
 /// of each voxel's solid (0 where none).
 struct LodBlock {
