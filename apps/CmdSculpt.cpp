@@ -72,6 +72,7 @@ StoreSculptReport sculptStreaming(const SculptOptions& o, const StrokeScript& sc
         report.bricksWritten += scene->autosave();
         batch.ops.clear();
     }
+    report.lodBricksWritten = scene->lodBricksWritten();
     return report;
 }
 
@@ -96,11 +97,13 @@ int sculptStoreInPlace(const SculptOptions& o, const StrokeScript& script,
                    {"seconds", seconds},
                    {"bricks_read", report.bricksRead},
                    {"bricks_written", report.bricksWritten},
+                   {"lod_bricks_written", report.lodBricksWritten},
                    {"op_reports", ops}});
     } else {
         printFields({{"sculpted", o.input + " (in place)"},
                      {"ops", std::to_string(report.ops.size())},
                      {"bricks", std::to_string(report.bricksRead) + " read, " + std::to_string(report.bricksWritten) + " written"},
+                     {"lod bricks", std::to_string(report.lodBricksWritten) + " rewritten"},
                      {"total time", formatSeconds(seconds)}},
                     0);
     }

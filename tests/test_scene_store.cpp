@@ -1,7 +1,6 @@
 // The scene store: round trips against the native .vdb, sculpting in place against sculpting the
 // .vdb, and stores that are damaged, truncated, foreign, newer or open for writing elsewhere.
 #include "scene/SceneStore.h"
-#include "scene/StoreLod.h"
 #include "scene/StoreSculpt.h"
 #include "sculpt/StrokeScript.h"
 #include "support/HermiteProbe.h"
@@ -220,31 +219,4 @@ TEST_CASE("a store open for writing refuses a second writer and lets readers rea
     CHECK_THROWS_AS(writeStoreFile(Volume(0.5), path), StoreError);
     const SceneStore reader = SceneStore::open(path, StoreAccess::ReadOnly);
     CHECK(reader.summary(0).bricks == writer.summary(0).bricks);
-}
-
-TEST_CASE("lod build stores every level, and an edit marks them stale", "[store][lod]")
-{
-    TempDir dir;
-    const std::string path = dir.file("s.vdbclay");
-    const Volume v = multiBrickScene();
-    writeStoreFile(v, path);
-    SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
-    CHECK(buildStoreLod(scene, 3) == 3);
-    CHECK(scene.lodLevels() == 3);
-    CHECK_FALSE(scene.lodStale());
-    uint64_t previous = scene.summary(0).leaves;
-    for (int k = 1; k <= 3; ++k) {
-        const Volume level = scene.loadLevel(k);
-        CHECK(level.voxelSize() == v.voxelSize() * double(1 << k));
-        CHECK(checkInvariants(level).empty());
-        const uint64_t leaves = scene.summary(k).leaves;
-        CHECK(leaves > 0);
-        CHECK(leaves < previous);
-        previous = leaves;
-    }
-    sculptStore(scene, parseStrokeScript(R"({"ops": [{"mode": "add", "brush": {"shape": "sphere", "radius": 4}, "at": [0, 75, 0]}]})"));
-    CHECK(scene.lodStale());
-    buildStoreLod(scene, 2);
-    CHECK(scene.lodLevels() == 2);
-    CHECK(scene.summary(3).bricks == 0);
 }

@@ -1,13 +1,45 @@
-// The LOD pyramid of a store: built from level 0 and kept as coarse bricks, one level per voxel size.
+// The LOD pyramid of a store, built and kept current brick by brick: level k's densities
+// (DensityBrick.h) are made from level k-1's, and level k's coarse Hermite bricks from level k's
+// densities, so no step holds more than a few bricks of any level (and a bounded cache of them).
 #pragma once
 
 #include "scene/SceneStore.h"
 
+#include <cstdint>
+#include <vector>
+
 namespace vdbclay {
 
-/// Builds (or refreshes) levels 1 .. `levels` of the store from its level 0 (0 picks
-/// LodPyramid::levelsFor), replacing what was there, in one transaction. Returns the level count.
-/// For now the whole of level 0 is loaded to build the pyramid.
+/// What a pass over the pyramid did.
+struct LodRefresh {
+    /// Per level (index k - 1 for level k): the coarse Hermite bricks whose stored record changed, sorted.
+    std::vector<std::vector<IndexCoord>> changedBricks;
+    uint64_t densityBricksComputed = 0;
+    uint64_t hermiteBricksComputed = 0;
+
+    uint64_t bricksWritten() const
+    {
+        uint64_t n = 0;
+        for (const auto& level : changedBricks) n += level.size();
+        return n;
+    }
+};
+
+/// The number of levels that brings level 0's bounds (its bricks') down to about one brick per side.
+int lodLevelsFor(const SceneStore& scene);
+
+/// Builds (or rebuilds) levels 1 .. `levels` of the store from its level 0 (0 picks lodLevelsFor),
+/// replacing what was there, in one transaction, brick by brick. Returns the level count.
 int buildStoreLod(SceneStore& scene, int levels, const Progress& progress = {});
+
+/// Whether the store's pyramid can follow edits brick by brick: built, not stale, and with its
+/// densities stored (a pyramid built by an older VDBClay has none; it is marked stale on an edit).
+bool lodFollowsEdits(const SceneStore& scene);
+
+/// Brings every built level up to date after the given level-0 bricks were rewritten: recomputes the
+/// densities above them and the coarse bricks where those changed. Call inside the transaction that
+/// wrote the bricks; the store's pyramid must follow edits (lodFollowsEdits). Afterwards the store
+/// equals what buildStoreLod gives.
+LodRefresh updateStoreLod(SceneStore& scene, const std::vector<IndexCoord>& changedBricks);
 
 } // namespace vdbclay

@@ -1,5 +1,6 @@
 #include "scene/StoreSculpt.h"
 
+#include "scene/StoreLod.h"
 #include "sculpt/Brush.h"
 
 #include <cmath>
@@ -78,15 +79,20 @@ StoreSculptReport sculptStore(SceneStore& scene, const StrokeScript& script,
 
     // Intersect clears what lies outside the loaded bricks too: every stored brick was loaded then.
     StoreTransaction transaction(scene.bricks());
+    std::vector<IndexCoord> written;
     for (std::size_t i = 0; i < order.size(); ++i) {
         const std::optional<BrickRecord> after = encodeBrick(part, order[i]);
         if (sameBrick(after, before[i])) continue;
         if (after) scene.bricks().put({0, order[i]}, *after);
         else scene.bricks().erase({0, order[i]});
-        ++report.bricksWritten;
+        written.push_back(order[i]);
     }
+    report.bricksWritten = written.size();
     scene.setMaterials(part.materials());
-    if (report.bricksWritten > 0 && scene.lodLevels() > 0) scene.setLod(scene.lodLevels(), true);
+    if (!written.empty()) {
+        if (lodFollowsEdits(scene)) report.lodBricksWritten = updateStoreLod(scene, written).bricksWritten();
+        else if (scene.lodLevels() > 0) scene.setLod(scene.lodLevels(), true);
+    }
     transaction.commit();
     return report;
 }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "scene/SceneStore.h"
+#include "scene/StoreLod.h"
 #include "sculpt/StrokeScript.h"
 
 #include <functional>
@@ -14,6 +15,7 @@ struct StoreSculptReport {
     std::vector<ScriptOpReport> ops;
     uint64_t bricksRead = 0;
     uint64_t bricksWritten = 0;
+    uint64_t lodBricksWritten = 0; // coarse bricks the edit changed (none when no pyramid follows edits)
 };
 
 /// The level-0 bricks a script's ops can read or change (sorted): every brush's bounds, grown as the
@@ -23,7 +25,9 @@ std::vector<IndexCoord> bricksReachedBy(const StrokeScript& script, double voxel
                                         const std::function<std::vector<IndexCoord>()>& allBricks);
 
 /// Runs the script on the bricks its ops reach (all bricks for intersect and unbounded brushes) and
-/// commits the changed ones. The store must be open for writing. Marks a built LOD pyramid stale.
+/// commits the changed ones, with the LOD pyramid above them brought up to date in the same transaction
+/// (a pyramid that cannot follow edits, see lodFollowsEdits, is marked stale). The store must be open
+/// for writing.
 StoreSculptReport sculptStore(SceneStore& scene, const StrokeScript& script,
                               const std::function<void(const ScriptOpReport&)>& onOp = {});
 

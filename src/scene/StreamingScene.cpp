@@ -1,5 +1,6 @@
 #include "scene/StreamingScene.h"
 
+#include "scene/StoreLod.h"
 #include "scene/StoreSculpt.h"
 #include "vdb_hermite/VolumeRegions.h"
 
@@ -45,11 +46,13 @@ struct StreamingScene::Impl {
     std::map<BrickKey, Resident> resident;
     std::deque<BrickKey> queue;
     std::set<BrickKey> inFlight;
+    std::set<BrickKey> staleInFlight; // loads an autosave's LOD update overtook: discarded on arrival
     std::set<BrickKey> wanted; // the current frame's accepted selection and fallbacks
     uint64_t residentBytes = 0, inFlightBytes = 0;
     uint64_t frameNumber = 0;
     uint64_t bytesRead = 0, loads = 0, evictions = 0;
     uint64_t edits = 0;
+    uint64_t lodBricksWritten = 0;
     MaterialTable materials; // the scene's, with what edits defined since the last autosave
     bool stopping = false;
     std::vector<std::thread> workers;
@@ -165,6 +168,7 @@ struct StreamingScene::Impl {
             lock.lock();
             inFlight.erase(key);
             inFlightBytes -= estimate;
+            if (staleInFlight.erase(key)) loaded.first.reset(); // the next frame asks for it again
             if (loaded.first && !resident.count(key)) {
                 const uint64_t bytes = regionMemoryBytes(*loaded.first, brickBox(key.brick));
                 estimates[key] = bytes; // the next frames budget with what it really takes
@@ -191,14 +195,38 @@ struct StreamingScene::Impl {
                 scene.bricks().erase(key);
             }
         }
+        LodRefresh lod;
         if (!dirty.empty()) {
             scene.setMaterials(materials);
-            if (levels > 0) scene.setLod(levels, true);
+            std::vector<IndexCoord> bricks;
+            for (auto& [key, r] : dirty) bricks.push_back(key.brick);
+            if (lodFollowsEdits(scene)) lod = updateStoreLod(scene, bricks);
+            else if (levels > 0) scene.setLod(levels, true);
         }
         scene.bricks().putMeta(kEditCountKey, std::to_string(edits));
         transaction.commit();
         for (auto& [key, r] : dirty) r->dirty = false;
+        lodBricksWritten += lod.bricksWritten();
+        forgetCoarseBricks(lod);
         return dirty.size();
+    }
+
+    /// Coarse bricks an autosave rewrote: resident copies go (the view loads them again), as do loads
+    /// in flight, which may have read them half-written. Lock held.
+    void forgetCoarseBricks(const LodRefresh& lod)
+    {
+        for (std::size_t i = 0; i < lod.changedBricks.size(); ++i)
+            for (const IndexCoord& b : lod.changedBricks[i]) {
+                const BrickKey key{int(i) + 1, b};
+                present[std::size_t(key.level)].insert(b);
+                estimates.erase(key);
+                if (inFlight.count(key)) staleInFlight.insert(key);
+                const auto it = resident.find(key);
+                if (it == resident.end()) continue;
+                residentBytes -= it->second.bytes;
+                fillRegion(levelVolumes[std::size_t(key.level)], brickBox(b), kEmptyMaterial);
+                resident.erase(it);
+            }
     }
 };
 
@@ -360,6 +388,12 @@ uint64_t StreamingScene::autosave()
 {
     std::lock_guard<std::mutex> lock(impl_->mutex);
     return impl_->autosaveLocked();
+}
+
+uint64_t StreamingScene::lodBricksWritten() const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    return impl_->lodBricksWritten;
 }
 
 uint64_t StreamingScene::dirtyBricks() const

@@ -64,11 +64,15 @@ public:
         double pageInSeconds = 0.0;
     };
     /// Applies a script at level 0: the bricks its brushes reach are paged in first (loaded now if not
-    /// resident), the changed ones stay resident and dirty until autosave. Marks the LOD stale.
+    /// resident), the changed ones stay resident and dirty until autosave.
     EditReport sculpt(const StrokeScript& script);
-    /// Writes every dirty brick, and the count of edits applied, in one transaction. Returns the bricks written.
+    /// Writes every dirty brick, and the count of edits applied, in one transaction, with the LOD pyramid
+    /// above them brought up to date (resident coarse bricks it changed are loaded again). Returns the
+    /// level-0 bricks written.
     uint64_t autosave();
     uint64_t dirtyBricks() const;
+    /// Coarse bricks the autosaves so far rewrote to keep the pyramid current.
+    uint64_t lodBricksWritten() const;
     /// Edits (script ops) applied since the store was made, as of the last autosave.
     static uint64_t committedEdits(const SceneStore& scene);
 

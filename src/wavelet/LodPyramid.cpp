@@ -92,6 +92,11 @@ int LodPyramid::levelsFor(const Volume& volume)
     const VolumeStats s = volume.stats();
     int extent = 1;
     for (int i = 0; i < 3; ++i) extent = std::max(extent, s.bboxMax[std::size_t(i)] - s.bboxMin[std::size_t(i)] + 1);
+    return levelsForExtent(extent);
+}
+
+int LodPyramid::levelsForExtent(int extent)
+{
     int levels = 1;
     while (levels < kMaxLodLevels && (extent >> levels) > 64) ++levels;
     return levels;

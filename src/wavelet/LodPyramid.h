@@ -60,6 +60,8 @@ public:
 
     /// The number of levels that brings a volume's bounds down to about one brick of 64 voxels per side.
     static int levelsFor(const Volume& volume);
+    /// The same for bounds of `extent` voxels along their longest side.
+    static int levelsForExtent(int extent);
 
     int levels() const { return int(levels_.size()); }
 
