@@ -56,7 +56,7 @@ LodCommands addLodCommand(CLI::App& parent, LodOptions& o)
     CLI::App* lod = parent.add_subcommand("lod", "Levels of detail of a store: build them, list them");
     lod->require_subcommand(1);
     LodCommands cmds;
-    cmds.build = lod->add_subcommand("build", "Build or refresh the Haar-wavelet LOD pyramid of a store");
+    cmds.build = lod->add_subcommand("build", "Build or rebuild the Haar-wavelet LOD pyramid of a store, brick by brick (sculpting the store keeps it current)");
     cmds.build->add_option("scene", o.scene, "Store (.vdbclay)")->required()->type_name("SCENE.vdbclay");
     cmds.build->add_option("--levels", o.levels, "Coarse levels to build (0: enough to bring the scene to about one brick)")
         ->capture_default_str()
