@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <bitset>
 #include <list>
 #include <map>
 #include <memory>
@@ -26,12 +27,15 @@ using wavelet::LodBlock;
 constexpr const char* kLodDensitiesKey = "lod_densities";
 /// Decoded density bricks kept between bricks of a pass (a brick's 26 neighbours are read again by
 /// the bricks after it): more for a whole build, less beside a streaming scene's budget.
-constexpr std::size_t kBuildCacheBytes = std::size_t(128) << 20;
+constexpr std::size_t kBuildCacheBytes = std::size_t(64) << 20;
 constexpr std::size_t kUpdateCacheBytes = std::size_t(16) << 20;
 constexpr int kBlockEdge = kLeafDim;
 
 /// Level k's densities are kept under level -k, beside the coarse bricks of level k.
 BrickKey densityKey(int level, const IndexCoord& brick) { return {-level, brick}; }
+
+/// Block slots of one brick.
+using SlotSet = std::bitset<kBlocksPerBrick>;
 
 IndexCoord parentBrick(const IndexCoord& b) { return {b[0] >> 1, b[1] >> 1, b[2] >> 1}; }
 
@@ -104,6 +108,7 @@ public:
             entries_.erase(it);
         }
         insert({level, brick}, std::move(entry));
+        trim();
     }
 
 private:
@@ -222,7 +227,7 @@ public:
         for (int k = 1; k <= levels_ && !changed.empty(); ++k) {
             std::set<IndexCoord> targets;
             for (const IndexCoord& b : changed) targets.insert(parentBrick(b));
-            std::map<IndexCoord, std::set<int>> coarseSlots; // level-k blocks whose coarse data must be redone
+            std::map<IndexCoord, SlotSet> coarseSlots; // level-k blocks whose coarse data must be redone
             changed.clear();
             uint64_t done = 0;
             for (const IndexCoord& t : targets) {
@@ -247,7 +252,7 @@ private:
 
     /// Recomputes level k's densities of brick t from the level below; returns whether they changed
     /// and adds the blocks whose coarse data they reach to coarseSlots.
-    bool densityPass(int k, const IndexCoord& t, std::map<IndexCoord, std::set<int>>& coarseSlots)
+    bool densityPass(int k, const IndexCoord& t, std::map<IndexCoord, SlotSet>& coarseSlots)
     {
         ++result_.densityBricksComputed;
         std::optional<Volume> levelZero;
@@ -304,14 +309,14 @@ private:
                     for (int dz = -1; dz <= 1; ++dz) {
                         const BlockOrigin n{o[0] + dx * kBlockEdge, o[1] + dy * kBlockEdge, o[2] + dz * kBlockEdge};
                         const IndexCoord b = brickOfBlock(n);
-                        coarseSlots[b].insert(slotOfBlock(n, b));
+                        coarseSlots[b].set(std::size_t(slotOfBlock(n, b)));
                     }
         }
         return !changedSlots.empty();
     }
 
     /// Re-derives the coarse Hermite data of the given blocks of level-k brick `brick` and stores it.
-    void coarsePass(int k, const IndexCoord& brick, const std::set<int>& slots)
+    void coarsePass(int k, const IndexCoord& brick, const SlotSet& slots)
     {
         ++result_.hermiteBricksComputed;
         cache_.prefetch(k, neighbourBricks(brick));
@@ -320,7 +325,8 @@ private:
         std::vector<std::optional<BrickRecord>> before(1);
         if (!rebuilt_) scene_.loadBricks(k, {brick}, coarse, {}, &before);
         std::vector<BlockOrigin> origins;
-        for (int s : slots) origins.push_back(blockOfSlot(brick, s));
+        for (int s = 0; s < kBlocksPerBrick; ++s)
+            if (slots.test(std::size_t(s))) origins.push_back(blockOfSlot(brick, s));
         wavelet::writeCoarseBlocks(StoreLevelSource(cache_, nullptr), k, origins, coarse);
         const std::optional<BrickRecord> after = encodeBrick(coarse, brick);
         if (sameBrick(before[0], after)) return;

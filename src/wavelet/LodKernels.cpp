@@ -177,7 +177,20 @@ std::optional<LodBlock> lowPassBlock(const LevelSource& source, int level, const
 
 HermiteLeafData coarseBlockData(const LevelSource& source, int level, const BlockOrigin& origin)
 {
-    return coarseLeaf(gather(source, level, origin));
+    // Most blocks of a brick lie in empty space or deep inside: when the block and its 26 neighbours
+    // are all one tile, so is its coarse data (no edge changes material).
+    bool uniform = true;
+    MaterialId material = kEmptyMaterial;
+    for (int i = 0; i < 27 && uniform; ++i) {
+        const BlockView v = source.view(level, {origin[0] + (i % 3 - 1) * kDim, origin[1] + (i / 3 % 3 - 1) * kDim,
+                                                origin[2] + (i / 9 - 1) * kDim});
+        uniform = v.uniform() && (i == 0 || v.material == material);
+        material = v.material;
+    }
+    if (!uniform) return coarseLeaf(gather(source, level, origin));
+    HermiteLeafData data;
+    data.material.fill(MaterialValue{material});
+    return data;
 }
 
 std::vector<BlockChange> writeCoarseBlocks(const LevelSource& source, int level, const std::vector<BlockOrigin>& origins,
