@@ -145,6 +145,8 @@ void accumulate(std::array<double, 3>& sum, const std::array<T, 3>& v)
 /// neighbouring squares and cells never meet on a shared side. Under half the crossings' corner margin
 /// (kOffsetMarginCode, 2.4e-4), ten times the distance below which analyzeTopology merges vertices.
 constexpr double kFeatureInsetVoxels = 1e-4;
+/// How far apart two wedge chains reaching into one clear band from opposite sides stay at least.
+constexpr double kBandGapVoxels = 1e-2;
 
 /// Buffers reused from cell to cell and leaf to leaf.
 struct CubicalMarchingSquaresMesher::Buffers {
@@ -682,7 +684,9 @@ private:
                     if (cornerSolid(i, j) == solidTip) return false;
             return true;
         };
-        const double w = width * vs, lo0 = u0 * vs, lo1 = v0 * vs, bw = band * vs;
+        // A clear band can lie between two squares whose wedges both reach into it from opposite sides;
+        // each keeps to its own half (less a gap), so the two chains never share a point (a pinch).
+        const double w = width * vs, lo0 = u0 * vs, lo1 = v0 * vs, bw = 0.5 * band * vs - kBandGapVoxels * vs;
         if (!poly.clip({1.0, 0.0}, lo0 + w + (clear(1, 0) ? bw : 0.0)) ||
             !poly.clip({-1.0, 0.0}, -(lo0 - (clear(-1, 0) ? bw : 0.0))) ||
             !poly.clip({0.0, 1.0}, lo1 + w + (clear(0, 1) ? bw : 0.0)) ||
