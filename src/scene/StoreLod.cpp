@@ -297,10 +297,11 @@ private:
         std::vector<int> changedSlots;
         for (int s = 0; s < kBlocksPerBrick; ++s)
             if (!before || !after.brick || !before->sameSlot(*after.brick, s)) changedSlots.push_back(s);
-        if (!rebuilt_ || after.brick) {
-            if (after.brick) scene_.bricks().put(densityKey(k, t), {std::nullopt, encodeDensityBrick(*after.brick), uint32_t(after.brick->blocks.size())});
-            else if (before) scene_.bricks().erase(densityKey(k, t));
-        }
+        if (changedSlots.empty()) return false;
+        if (after.brick)
+            scene_.bricks().put(densityKey(k, t), {std::nullopt, encodeDensityBrick(*after.brick), uint32_t(after.brick->blocks.size())});
+        else if (before)
+            scene_.bricks().erase(densityKey(k, t));
         cache_.replace(k, t, std::move(after));
         for (int s : changedSlots) {
             const BlockOrigin o = blockOfSlot(t, s);
@@ -312,7 +313,7 @@ private:
                         coarseSlots[b].set(std::size_t(slotOfBlock(n, b)));
                     }
         }
-        return !changedSlots.empty();
+        return true;
     }
 
     /// Re-derives the coarse Hermite data of the given blocks of level-k brick `brick` and stores it.
