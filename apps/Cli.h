@@ -123,6 +123,10 @@ int runDemo(const DemoOptions& options);
 struct ImportOptions {
     std::string input;
     std::string output;
+    std::string grid;                // a standard .vdb's grid (default: the first level set)
+    std::optional<double> iso;       // a fog volume's iso value
+    std::optional<double> voxelSize; // resample a standard grid to it
+    std::string material = "default";
     bool json = false;
 };
 CLI::App* addImportCommand(CLI::App& parent, ImportOptions& options);

@@ -1,7 +1,8 @@
-// vdbclay import / export: whole scenes between a native .vdb and a store (.vdbclay). The output's
-// extension picks the form.
+// vdbclay import / export: whole scenes between a native .vdb and a store (.vdbclay), and standard
+// grids of other tools (level sets, fog volumes) in. The output's extension picks the form.
 #include "Cli.h"
 
+#include "interop/LevelSetImport.h"
 #include "scene/SceneStore.h"
 #include "vdb_hermite/VolumeIO.h"
 
@@ -46,25 +47,71 @@ void printSummary(const std::string& input, const std::string& output, const Vol
 
 CLI::App* addImportCommand(CLI::App& parent, ImportOptions& o)
 {
-    CLI::App* cmd = parent.add_subcommand("import", "Bring a scene in: a native .vdb into a store (.vdbclay) or a .vdb");
-    cmd->add_option("input", o.input, "Scene to bring in (.vdb, or a .vdbclay store)")->required()->type_name("IN");
+    CLI::App* cmd = parent.add_subcommand(
+        "import", "Bring a scene in: a VDBClay .vdb or store, or a level set or fog volume of another tool's .vdb");
+    cmd->add_option("input", o.input, "Scene to bring in (.vdb of VDBClay or of another tool, or a .vdbclay store)")
+        ->required()
+        ->type_name("IN");
     cmd->add_option("-o,--output", o.output, "Scene to write; the extension picks the form (.vdbclay store or .vdb)")
         ->required()
         ->type_name("OUT.vdbclay|OUT.vdb");
+    cmd->add_option("--grid", o.grid, "Grid of a standard .vdb to import (default: the first level set, else fog volume)")
+        ->type_name("NAME");
+    cmd->add_option("--iso", o.iso, "Iso value: a fog volume is solid where its density exceeds it (required for fog)")
+        ->type_name("VALUE");
+    cmd->add_option("--voxel-size", o.voxelSize, "Resample a standard grid to this voxel size (default: its own)")
+        ->type_name("V")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--material", o.material, "Material of what a standard grid brings in")->capture_default_str();
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text");
     cmd->footer("A store keeps the scene in bricks of 64^3 voxels, so that 'sculpt', 'mesh' and 'lod' read only what\n"
-                "they need. An existing output is replaced only once the new one is complete.");
+                "they need. A standard grid becomes Hermite data: materials from the sign at the lattice points,\n"
+                "crossings where the field crosses zero, normals from its gradient; a transform that is not a\n"
+                "uniform scale on VDBClay's lattice is resampled (the output says so). An existing output is\n"
+                "replaced only once the new one is complete.");
     return cmd;
 }
 
 int runImport(const ImportOptions& o)
 {
     const auto start = std::chrono::steady_clock::now();
-    const Volume volume = loadScene(o.input, terminalProgress("reading bricks", !o.json));
+    const bool standard = !isStorePath(o.input) && classifyVdbFile(o.input) == VdbFileKind::Other;
+    if (!standard && (!o.grid.empty() || o.iso || o.voxelSize))
+        throw UsageError("--grid, --iso and --voxel-size are for .vdb files of other tools; '" + o.input + "' is VDBClay's own");
+    LevelSetImportReport report;
+    Volume volume = standard ? [&] {
+        LevelSetImportOptions options;
+        options.grid = o.grid;
+        options.iso = o.iso;
+        options.voxelSize = o.voxelSize;
+        options.material = o.material;
+        try {
+            return importLevelSet(o.input, options, &report);
+        } catch (const std::invalid_argument& e) {
+            throw UsageError(e.what());
+        }
+    }()
+                             : loadScene(o.input, terminalProgress("reading bricks", !o.json));
     writeScene(volume, o.output, !o.json);
     const double seconds = secondsSince(start);
-    if (o.json) printJson(sceneSummaryJson(o.output, volume, seconds));
-    else printSummary(o.input, o.output, volume, seconds);
+    if (o.json) {
+        nlohmann::json out = sceneSummaryJson(o.output, volume, seconds);
+        if (standard)
+            out["levelset"] = {{"grid", report.grid},   {"class", report.gridClass}, {"value_type", report.valueType},
+                               {"fog", report.fog},     {"voxel_size", report.voxelSize},
+                               {"resampled", !report.resampled.empty()}, {"resampled_because", report.resampled},
+                               {"crossings", report.crossings}};
+        printJson(out);
+        return kExitOk;
+    }
+    if (standard) {
+        printFields({{"grid", report.grid + " (" + (report.gridClass.empty() ? "no class" : report.gridClass) + ", " + report.valueType + ")"},
+                     {"voxel size", formatNumber(report.voxelSize)},
+                     {"resampled", report.resampled.empty() ? "no" : "yes: " + report.resampled},
+                     {"crossings", std::to_string(report.crossings)}},
+                    0);
+    }
+    printSummary(o.input, o.output, volume, seconds);
     return kExitOk;
 }
 

@@ -266,9 +266,19 @@ void checkTree(PayloadReader& r, uint32_t compression, const TreeLayout& layout,
     summary.estimatedMemoryBytes += leavesOfTree * leafBytes;
 }
 
-/// The value type of a tree of the standard configuration ("Tree_float_5_4_3" -> "float"), or "".
-std::string valueTypeOf(const std::string& gridType)
+/// OpenVDB names a grid saved with half floats after its type with this suffix.
+const std::string kHalfFloatSuffix = "_HalfFloat";
+
+bool halfFloatType(const std::string& gridType)
 {
+    return gridType.size() > kHalfFloatSuffix.size() &&
+           gridType.compare(gridType.size() - kHalfFloatSuffix.size(), kHalfFloatSuffix.size(), kHalfFloatSuffix) == 0;
+}
+
+/// The value type of a tree of the standard configuration ("Tree_float_5_4_3" -> "float"), or "".
+std::string valueTypeOf(std::string gridType)
+{
+    if (halfFloatType(gridType)) gridType.resize(gridType.size() - kHalfFloatSuffix.size());
     const std::string prefix = "Tree_", suffix = "_5_4_3";
     if (gridType.size() <= prefix.size() + suffix.size() || gridType.compare(0, prefix.size(), prefix) != 0 ||
         gridType.compare(gridType.size() - suffix.size(), suffix.size(), suffix) != 0)
@@ -339,13 +349,13 @@ PayloadSummary checkPayload(std::istream& in, uint64_t payloadBytes, const std::
             r.fail("compression flags " + std::to_string(compression) + " VDBClay does not read");
         const GridMetadata meta = checkMetadata(r, foreign);
         header.gridClass = meta.gridClass;
-        header.halfFloat = meta.halfFloat;
+        header.halfFloat = meta.halfFloat || halfFloatType(header.type);
         header.transform = r.text("the transform's map type", 256);
         const uint64_t doubles = transformDoubles(header.transform, foreign);
         if (doubles == 0) r.fail("a transform of type '" + printable(header.transform) + "' VDBClay does not read");
         r.skip(doubles * 8, "the transform");
         const std::optional<TreeLayout> layout =
-            !foreign ? std::optional<TreeLayout>(TreeLayout{}) : instance ? std::nullopt : standardLayout(header.valueType, meta.halfFloat);
+            !foreign ? std::optional<TreeLayout>(TreeLayout{}) : instance ? std::nullopt : standardLayout(header.valueType, header.halfFloat);
         if (layout) {
             checkTree(r, compression, *layout, summary);
             header.treeChecked = true;

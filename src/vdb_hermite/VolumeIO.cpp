@@ -278,6 +278,25 @@ void saveVolume(const Volume& volume, const std::string& path)
     }
 }
 
+VdbFileKind classifyVdbFile(const std::string& path)
+{
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw VolumeIOError("'" + path + "' does not exist");
+    if (!fs::is_regular_file(path, ec)) throw VolumeIOError("'" + path + "' is not a regular file");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw VolumeIOError("cannot open '" + path + "': " + std::strerror(errno));
+    if (!hasVdbMagic(in)) return VdbFileKind::NotVdb;
+    // A trailer marks VDBClay's files; whether it verifies is loadVolume's to say (damaged, newer).
+    const uint64_t size = fs::file_size(path);
+    Trailer trailer{};
+    if (size >= sizeof(Trailer)) {
+        in.clear();
+        in.seekg(std::streamoff(size - sizeof(Trailer)));
+        in.read(reinterpret_cast<char*>(&trailer), sizeof(trailer));
+    }
+    return in && trailer.magic == kTrailerMagic ? VdbFileKind::VdbClay : VdbFileKind::Other;
+}
+
 Volume loadVolume(const std::string& path)
 {
     initializeHermiteGrid();

@@ -21,6 +21,13 @@ void saveVolume(const Volume& volume, const std::string& path);
 /// Reads the first VDBClay Hermite grid of a .vdb file (the one named "hermite" if there are several).
 Volume loadVolume(const std::string& path);
 
+/// What a file is: a native VDBClay volume (it ends in VDBClay's checksum trailer, which loadVolume
+/// verifies), another .vdb file (made by another tool, or a VDBClay file truncated before its
+/// trailer), or not a .vdb file at all.
+enum class VdbFileKind { VdbClay, Other, NotVdb };
+/// Throws VolumeIOError when the file cannot be opened.
+VdbFileKind classifyVdbFile(const std::string& path);
+
 /// The bytes saveVolume writes for `volume` (OpenVDB's data, Blosc-compressed, and the checksum
 /// trailer), for volumes kept elsewhere than in their own file (the scene store's bricks).
 std::string encodeVolume(const Volume& volume);

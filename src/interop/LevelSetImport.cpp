@@ -1,0 +1,249 @@
+#include "interop/LevelSetImport.h"
+
+#include "interop/StandardGridRead.h"
+#include "interop/StandardVdb.h"
+#include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/PrintableText.h"
+#include "vdb_hermite/Quantize.h"
+#include "vdb_hermite/VolumeIO.h"
+
+#include <openvdb/tools/GridTransformer.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <stdexcept>
+
+namespace vdbclay {
+
+namespace {
+
+using openvdb::FloatGrid;
+using FloatAccessor = openvdb::tree::ValueAccessor<const openvdb::FloatTree>;
+
+/// Where the field is solid: g < 0, with g the level set minus the iso value, or the iso value minus
+/// the density, so that the gradient of g points out of the solid.
+struct SignedField {
+    const openvdb::FloatTree& tree;
+    float iso;
+    bool fog;
+    openvdb::Coord shift; // our index = the grid's index + shift
+
+    float at(const FloatAccessor& a, const openvdb::Coord& ours) const
+    {
+        const float v = a.getValue(ours - shift);
+        return fog ? iso - v : v - iso;
+    }
+};
+
+std::array<double, 3> gradientAt(const SignedField& f, const FloatAccessor& a, const openvdb::Coord& p)
+{
+    std::array<double, 3> g{};
+    for (int axis = 0; axis < 3; ++axis) {
+        openvdb::Coord lo = p, hi = p;
+        lo[axis] -= 1;
+        hi[axis] += 1;
+        g[std::size_t(axis)] = 0.5 * (double(f.at(a, hi)) - double(f.at(a, lo)));
+    }
+    return g;
+}
+
+HermiteLeafData leafData(const SignedField& f, const openvdb::Coord& origin, MaterialId material, uint64_t& crossings)
+{
+    FloatAccessor a(f.tree);
+    HermiteLeafData data;
+    for (int x = 0; x < kLeafDim; ++x)
+        for (int y = 0; y < kLeafDim; ++y)
+            for (int z = 0; z < kLeafDim; ++z) {
+                const openvdb::Coord p = origin.offsetBy(x, y, z);
+                const int offset = (x << (2 * kLeafLog2Dim)) | (y << kLeafLog2Dim) | z;
+                const float gp = f.at(a, p);
+                const bool solid = gp < 0.0f;
+                data.material[std::size_t(offset)].id = solid ? material : kEmptyMaterial;
+                for (int axis = 0; axis < 3; ++axis) {
+                    openvdb::Coord q = p;
+                    q[axis] += 1;
+                    const float gq = f.at(a, q);
+                    if ((gq < 0.0f) == solid) continue;
+                    const double t = std::clamp(double(gp) / (double(gp) - double(gq)), 0.0, 1.0);
+                    const std::array<double, 3> np = gradientAt(f, a, p), nq = gradientAt(f, a, q);
+                    std::array<double, 3> n{};
+                    double length = 0.0;
+                    for (int i = 0; i < 3; ++i) {
+                        n[std::size_t(i)] = (1.0 - t) * np[std::size_t(i)] + t * nq[std::size_t(i)];
+                        length += n[std::size_t(i)] * n[std::size_t(i)];
+                    }
+                    if (!(length > 1e-24)) {
+                        n = {0.0, 0.0, 0.0};
+                        n[std::size_t(axis)] = solid ? 1.0 : -1.0; // out of the solid along the edge
+                    }
+                    const int bit = HermiteLeaf::edgeBit(Index(offset), axis);
+                    data.edgeBits[std::size_t(bit >> 6)] |= uint64_t(1) << (bit & 63);
+                    data.samples.push_back(packSample(t, n));
+                    ++crossings;
+                }
+            }
+    return data;
+}
+
+/// The leaves whose voxels or positive edges touch a leaf of the field, or the face of one of its
+/// solid tiles where the sign changes across it (a fog's dense tile beside an empty one).
+std::vector<Coord> candidateLeaves(const SignedField& f)
+{
+    std::set<Coord> out;
+    auto addWithLowerNeighbours = [&](const Coord& o) {
+        out.insert(o);
+        for (int axis = 0; axis < 3; ++axis) {
+            Coord n = o;
+            n[axis] -= kLeafDim;
+            out.insert(n);
+        }
+    };
+    for (auto leaf = f.tree.cbeginLeaf(); leaf; ++leaf) addWithLowerNeighbours(leaf->origin() + f.shift);
+    FloatAccessor a(f.tree);
+    auto tiles = f.tree.cbeginValueAll();
+    tiles.setMaxDepth(openvdb::FloatTree::ValueAllCIter::LEAF_DEPTH - 1);
+    for (; tiles; ++tiles) {
+        CoordBBox box;
+        tiles.getBoundingBox(box);
+        box.translate(f.shift);
+        // A sign change across a tile's face is found from its solid side (most tiles lie outside).
+        const bool solid = f.at(a, box.min()) < 0.0f;
+        if (!solid) continue;
+        // Each face: the leaves on both sides of it, where the value across differs in sign.
+        for (int axis = 0; axis < 3; ++axis)
+            for (int side = 0; side < 2; ++side) {
+                const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+                for (int i = box.min()[u]; i <= box.max()[u]; i += kLeafDim)
+                    for (int j = box.min()[v]; j <= box.max()[v]; j += kLeafDim) {
+                        Coord inside, outside;
+                        inside[axis] = side ? box.max()[axis] : box.min()[axis];
+                        outside[axis] = side ? box.max()[axis] + 1 : box.min()[axis] - 1;
+                        inside[u] = outside[u] = i;
+                        inside[v] = outside[v] = j;
+                        // Leaves beyond the face are candidates already; a tile beyond it of the other
+                        // sign is uniform over this leaf-sized patch.
+                        if (f.tree.probeConstLeaf(outside - f.shift) || (f.at(a, outside) < 0.0f) == solid) continue;
+                        out.insert(alignDown(inside, kLeafDim));
+                        out.insert(alignDown(outside, kLeafDim));
+                    }
+            }
+    }
+    return {out.begin(), out.end()};
+}
+
+/// The grid as a float grid on VDBClay's lattice at `voxelSize`: as it is where its transform allows
+/// (`shift` then moves its index space onto ours), else resampled. Returns why it was resampled.
+std::string onLattice(FloatGrid::Ptr& grid, double voxelSize, bool levelSet, openvdb::Coord& shift)
+{
+    const openvdb::math::Transform& xf = grid->transform();
+    std::string why;
+    if (!axisAligned(xf)) why = "its transform rotates or shears";
+    else if (!grid->hasUniformVoxels()) why = "its voxels are not cubes";
+    else if (std::fabs(grid->voxelSize()[0] - voxelSize) > 1e-9 * voxelSize) why = "another voxel size was asked for";
+    if (why.empty()) {
+        const openvdb::Vec3d origin = xf.indexToWorld(openvdb::Vec3d(0.0));
+        for (int i = 0; i < 3 && why.empty(); ++i) {
+            const double cells = origin[i] / voxelSize;
+            if (std::fabs(cells - std::round(cells)) > 1e-6) why = "its lattice is offset from VDBClay's";
+            else shift[i] = int32_t(std::round(cells));
+        }
+    }
+    if (why.empty()) return "";
+    FloatGrid::Ptr out = FloatGrid::create(grid->background());
+    out->setTransform(openvdb::math::Transform::createLinearTransform(voxelSize));
+    out->setGridClass(grid->getGridClass());
+    // Level sets are rebuilt as narrow bands at the new voxel size (resampleToMatch does so for
+    // GRID_LEVEL_SET); a fog is resampled with trilinear interpolation.
+    (void)levelSet;
+    openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*grid, *out);
+    grid = out;
+    shift = openvdb::Coord(0);
+    return why;
+}
+
+} // namespace
+
+Volume importLevelSet(const std::string& path, const LevelSetImportOptions& options, LevelSetImportReport* report)
+{
+    const StandardVdbInfo info = describeStandardVdb(path);
+    const StandardGridInfo& chosen = chooseImportGrid(info, options.grid, path);
+    const bool fog = chosen.fogVolume();
+    if (fog && !options.iso)
+        throw std::invalid_argument("grid '" + printableText(chosen.header.name, 64) + "' of '" + path +
+                                    "' is a fog volume: give --iso VALUE (solid where the density exceeds it)");
+    if (options.voxelSize && !(*options.voxelSize >= kMinVoxelSize && *options.voxelSize <= kMaxVoxelSize))
+        throw std::invalid_argument("a voxel size must be between " + std::to_string(kMinVoxelSize) + " and " +
+                                    std::to_string(kMaxVoxelSize));
+    const double voxelSize = options.voxelSize.value_or(chosen.voxelSize[0]);
+    if (!(voxelSize >= kMinVoxelSize && voxelSize <= kMaxVoxelSize))
+        throw std::invalid_argument("grid '" + printableText(chosen.header.name, 64) + "' has a voxel size of " +
+                                    std::to_string(voxelSize) + "; give --voxel-size");
+
+    openvdb::GridBase::Ptr base = readStandardGrid(path, chosen.header.name);
+    FloatGrid::Ptr grid = openvdb::gridPtrCast<FloatGrid>(base);
+    if (!grid) {
+        const openvdb::DoubleGrid::Ptr d = openvdb::gridPtrCast<openvdb::DoubleGrid>(base);
+        if (!d) throw VolumeIOError("'" + path + "': grid '" + printableText(chosen.header.name, 64) + "' is not a float grid");
+        grid = FloatGrid::create(std::make_shared<openvdb::FloatTree>(d->tree())); // values converted
+        grid->setTransform(d->transform().copy());
+        grid->setGridClass(d->getGridClass());
+    }
+    openvdb::Coord shift(0);
+    const std::string resampled = onLattice(grid, voxelSize, !fog, shift);
+
+    Volume volume(voxelSize);
+    const MaterialId material = volume.materials().find(options.material).value_or(0) != 0
+                                    ? *volume.materials().find(options.material)
+                                    : volume.materials().define(Material{options.material});
+    const SignedField field{grid->tree(), float(options.iso.value_or(0.0)), fog, shift};
+    HermiteTree& out = volume.impl().grid->tree();
+    // Solid tiles first; the leaves near the surface then replace what they cover.
+    {
+        FloatAccessor a(grid->tree());
+        auto tiles = grid->tree().cbeginValueAll();
+        tiles.setMaxDepth(openvdb::FloatTree::ValueAllCIter::LEAF_DEPTH - 1);
+        for (; tiles; ++tiles) {
+            CoordBBox box;
+            tiles.getBoundingBox(box);
+            box.translate(shift);
+            if (field.at(a, box.min()) < 0.0f) out.fill(box, MaterialValue{material}, false);
+        }
+    }
+    const std::vector<Coord> candidates = candidateLeaves(field);
+    std::vector<HermiteLeafData> data(candidates.size());
+    std::vector<uint64_t> crossings(candidates.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 16), [&](const auto& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) data[i] = leafData(field, candidates[i], material, crossings[i]);
+    });
+    std::set<Coord> lowers;
+    uint64_t total = 0;
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+        total += crossings[i];
+        const bool uniform = data[i].samples.empty() &&
+                             std::all_of(data[i].material.begin(), data[i].material.end(), [&](MaterialValue m) { return m == data[i].material[0]; });
+        if (uniform) {
+            if (!out.probeConstLeaf(candidates[i]) && out.getValue(candidates[i]) == data[i].material[0]) continue;
+            out.addTile(1, candidates[i], data[i].material[0], false);
+            lowers.insert(alignDown(candidates[i], kLowerDim));
+        } else {
+            out.touchLeaf(candidates[i])->assign(std::move(data[i]));
+        }
+    }
+    pruneNodes(out, lowers);
+    if (report) {
+        report->grid = chosen.header.name;
+        report->gridClass = chosen.header.gridClass;
+        report->valueType = chosen.header.valueType;
+        report->fog = fog;
+        report->voxelSize = voxelSize;
+        report->resampled = resampled;
+        report->crossings = total;
+    }
+    return volume;
+}
+
+} // namespace vdbclay

@@ -1,0 +1,37 @@
+// Standard grids in: a level set (or a fog volume at an iso value) of another tool's .vdb file becomes
+// Hermite data: materials from the sign at the lattice points, crossings where the linearly
+// interpolated field crosses zero, normals from its gradient there.
+//
+// Light header: no OpenVDB templates.
+#pragma once
+
+#include "vdb_hermite/Volume.h"
+
+#include <optional>
+#include <string>
+
+namespace vdbclay {
+
+struct LevelSetImportOptions {
+    std::string grid;                // empty: chooseImportGrid's pick
+    std::optional<double> iso;       // a fog volume needs it (solid where density > iso); a level set: solid where < iso (0)
+    std::optional<double> voxelSize; // resample to it (default: the grid's own, when uniform)
+    std::string material = "default";
+};
+
+struct LevelSetImportReport {
+    std::string grid, gridClass, valueType;
+    bool fog = false;
+    double voxelSize = 0.0;
+    std::string resampled; // why the grid was resampled ("" where it was not)
+    uint64_t crossings = 0;
+};
+
+/// Reads a level set or fog volume from a .vdb file that is not VDBClay's own (describeStandardVdb
+/// checks it first). A grid whose transform is not a uniform scale with a translation on its lattice
+/// (non-uniform voxels, rotation, shear, a translation off the lattice, another voxel size asked for) is
+/// resampled onto VDBClay's lattice, and the report says why. Throws VolumeIOError (the file) or
+/// std::invalid_argument (the options) with one line.
+Volume importLevelSet(const std::string& path, const LevelSetImportOptions& options, LevelSetImportReport* report = nullptr);
+
+} // namespace vdbclay

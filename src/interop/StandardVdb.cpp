@@ -1,0 +1,117 @@
+#include "interop/StandardVdb.h"
+
+#include "interop/StandardGridRead.h"
+#include "vdb_hermite/PrintableText.h"
+#include "vdb_hermite/VolumeIO.h"
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+namespace vdbclay {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Runs `read` with OpenVDB's failures turned into one printable line.
+template<typename Read>
+auto guarded(const std::string& path, Read&& read)
+{
+    try {
+        return read();
+    } catch (const VolumeIOError&) {
+        throw;
+    } catch (const std::bad_alloc&) {
+        throw VolumeIOError("'" + path + "' is corrupt (implausible sizes)");
+    } catch (const std::exception& e) {
+        throw VolumeIOError("'" + path + "' cannot be read: " + printableText(e.what())); // libraries quote the file
+    }
+}
+
+} // namespace
+
+StandardVdbInfo describeStandardVdb(const std::string& path)
+{
+    openvdb::initialize();
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) throw VolumeIOError("'" + path + "' is not a regular file");
+    const uint64_t size = fs::file_size(path, ec);
+    PayloadSummary summary;
+    {
+        std::ifstream in(path, std::ios::binary);
+        if (!in) throw VolumeIOError("cannot open '" + path + "': " + std::strerror(errno));
+        summary = checkPayload(in, size, path, "", AcceptedGrids::Standard);
+    }
+    // What OpenVDB allocates is held to a small multiple of the file, as for VDBClay's own files.
+    if (summary.estimatedMemoryBytes > 64 * size + (64u << 20))
+        throw VolumeIOError("'" + path + "' is corrupt: its trees would take " + std::to_string(summary.estimatedMemoryBytes >> 20) +
+                            " MiB for a " + std::to_string(size >> 10) + " KiB file");
+    StandardVdbInfo info;
+    guarded(path, [&] {
+        openvdb::io::File file(path);
+        file.open(/*delayLoad=*/false);
+        const openvdb::GridPtrVecPtr grids = file.readAllGridMetadata();
+        file.close();
+        if (grids->size() != summary.grids.size()) throw VolumeIOError("'" + path + "' holds grids its check did not see");
+        for (std::size_t i = 0; i < grids->size(); ++i) {
+            const openvdb::GridBase& grid = *(*grids)[i];
+            StandardGridInfo g;
+            g.header = summary.grids[i];
+            const openvdb::Vec3d voxel = grid.voxelSize();
+            g.voxelSize = {voxel[0], voxel[1], voxel[2]};
+            g.uniformVoxels = grid.hasUniformVoxels();
+            g.axisAligned = axisAligned(grid.transform());
+            if (const auto count = grid.getMetadata<openvdb::Int64Metadata>(openvdb::GridBase::META_FILE_VOXEL_COUNT))
+                g.activeVoxels = uint64_t(count->value());
+            info.grids.push_back(std::move(g));
+        }
+        return 0;
+    });
+    return info;
+}
+
+const StandardGridInfo& chooseImportGrid(const StandardVdbInfo& info, const std::string& name, const std::string& path)
+{
+    if (!name.empty()) {
+        for (const StandardGridInfo& g : info.grids) {
+            if (g.header.name != name) continue;
+            if (!g.importable())
+                throw VolumeIOError("grid '" + printableText(name, 64) + "' of '" + path + "' is a " + g.header.valueType +
+                                    " grid; VDBClay imports float and double grids");
+            return g;
+        }
+        throw VolumeIOError("'" + path + "' has no grid named '" + printableText(name, 64) + "'; it holds: " + listGrids(info));
+    }
+    for (const auto& wanted : {&StandardGridInfo::levelSet, &StandardGridInfo::fogVolume})
+        for (const StandardGridInfo& g : info.grids)
+            if (g.importable() && (g.*wanted)()) return g;
+    for (const StandardGridInfo& g : info.grids)
+        if (g.importable()) return g;
+    throw VolumeIOError("'" + path + "' holds no float or double grid to import; it holds: " + listGrids(info));
+}
+
+std::string listGrids(const StandardVdbInfo& info)
+{
+    std::string out;
+    for (const StandardGridInfo& g : info.grids) {
+        if (!out.empty()) out += ", ";
+        out += "'" + printableText(g.header.name, 64) + "' (" + (g.header.gridClass.empty() ? "no class" : printableText(g.header.gridClass, 32)) +
+               ", " + (g.header.valueType.empty() ? printableText(g.header.type, 64) : g.header.valueType) + ")";
+    }
+    return out;
+}
+
+openvdb::GridBase::Ptr readStandardGrid(const std::string& path, const std::string& name)
+{
+    return guarded(path, [&] {
+        openvdb::io::File file(path);
+        file.open(/*delayLoad=*/false);
+        openvdb::GridBase::Ptr grid = file.readGrid(name);
+        file.close();
+        return grid;
+    });
+}
+
+} // namespace vdbclay

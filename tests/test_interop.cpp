@@ -1,0 +1,254 @@
+// Standard .vdb files of other tools: described, checked before OpenVDB parses them, and level sets or
+// fog volumes imported as Hermite data within error bounds of the analytic surface.
+#include "interop/LevelSetImport.h"
+#include "interop/StandardVdb.h"
+#include "mesher/MeshMetrics.h"
+#include "mesher/Mesher.h"
+#include "support/HermiteProbe.h"
+#include "support/TestUtil.h"
+#include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/Quantize.h"
+#include "vdb_hermite/VolumeIO.h"
+
+#include <openvdb/io/File.h>
+#include <openvdb/tools/LevelSetSphere.h>
+#include <openvdb/tools/GridTransformer.h>
+#include <openvdb/tools/LevelSetUtil.h>
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+
+using namespace vdbclay;
+using namespace vdbclay::test;
+
+namespace {
+
+struct FileOptions {
+    uint32_t compression = openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK;
+    bool half = false;
+};
+
+/// A level-set sphere as OpenVDB's tools make it, with a fog volume and an int grid beside it.
+std::string writeSphereFile(const TempDir& dir, const std::string& name, double radius, double voxelSize,
+                            const openvdb::Vec3f& centre, const FileOptions& o = {},
+                            openvdb::math::Transform::Ptr transform = nullptr)
+{
+    openvdb::initialize();
+    openvdb::FloatGrid::Ptr sphere = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(float(radius), centre, float(voxelSize));
+    if (transform) {
+        openvdb::FloatGrid::Ptr moved = openvdb::FloatGrid::create(sphere->background());
+        moved->setTransform(transform);
+        moved->setGridClass(openvdb::GRID_LEVEL_SET);
+        openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*sphere, *moved);
+        sphere = moved;
+    }
+    sphere->setName("surface");
+    sphere->setSaveFloatAsHalf(o.half);
+    openvdb::FloatGrid::Ptr fog = sphere->deepCopy();
+    openvdb::tools::sdfToFogVolume(*fog);
+    fog->setName("density");
+    openvdb::Int32Grid::Ptr ids = openvdb::Int32Grid::create(0);
+    ids->setName("ids");
+    ids->tree().setValue(openvdb::Coord(1, 2, 3), 7);
+    const std::string path = dir.file(name);
+    openvdb::io::File file(path);
+    file.setCompression(o.compression);
+    file.write({sphere, fog, ids});
+    file.close();
+    return path;
+}
+
+/// The largest distance, in voxels, of an imported volume's crossings from the sphere's surface, and
+/// whether every lattice point farther than `margin` voxels from it has the right sign.
+struct SphereError {
+    double crossing = 0.0;
+    uint64_t wrongSigns = 0;
+    uint64_t crossings = 0;
+};
+
+SphereError sphereError(const Volume& v, double radius, const openvdb::Vec3d& centre, double margin)
+{
+    SphereError e;
+    const double vs = v.voxelSize();
+    const HermiteTree& tree = v.impl().grid->constTree();
+    for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf)
+        for (Index i = 0; i < Index(kLeafVoxels); ++i) {
+            const Coord p = leaf->offsetToGlobalCoord(i);
+            const openvdb::Vec3d w(p.x() * vs, p.y() * vs, p.z() * vs);
+            const double d = ((w - centre).length() - radius) / vs;
+            if (std::fabs(d) > margin && (d < 0.0) != leaf->getValue(i).solid()) ++e.wrongSigns;
+            for (int axis = 0; axis < 3; ++axis) {
+                const PackedSample* s = leaf->sample(i, axis);
+                if (!s) continue;
+                openvdb::Vec3d x = w;
+                x[axis] += unpackSample(*s).offset * vs;
+                e.crossing = std::max(e.crossing, std::fabs((x - centre).length() - radius) / vs);
+                ++e.crossings;
+            }
+        }
+    return e;
+}
+
+bool closedMesh(const Volume& v)
+{
+    const Mesh mesh = meshVolume(v);
+    return mesh.triangleCount() > 0 && analyzeTopology(mesh, kMergeDistanceVoxels * v.voxelSize()).watertight();
+}
+
+} // namespace
+
+TEST_CASE("a standard .vdb is described: grid names, classes, value types", "[interop]")
+{
+    TempDir dir;
+    const std::string path = writeSphereFile(dir, "s.vdb", 10.0, 0.5, {0, 0, 0});
+    CHECK(classifyVdbFile(path) == VdbFileKind::Other);
+    const StandardVdbInfo info = describeStandardVdb(path);
+    REQUIRE(info.grids.size() == 3);
+    CHECK(info.grids[0].header.name == "surface");
+    CHECK(info.grids[0].levelSet());
+    CHECK(info.grids[0].header.valueType == "float");
+    CHECK(info.grids[0].voxelSize[0] == Approx(0.5));
+    CHECK(info.grids[0].uniformVoxels);
+    CHECK(info.grids[1].fogVolume());
+    CHECK(info.grids[2].header.valueType == "int32");
+    CHECK_FALSE(info.grids[2].importable());
+    CHECK(&chooseImportGrid(info, "", path) == &info.grids[0]);
+    CHECK(&chooseImportGrid(info, "density", path) == &info.grids[1]);
+    CHECK_THROWS_AS(chooseImportGrid(info, "ids", path), VolumeIOError);
+    CHECK_THROWS_AS(chooseImportGrid(info, "missing", path), VolumeIOError);
+    // VDBClay's own files are told apart by their trailer.
+    Volume ours(1.0);
+    saveVolume(ours, dir.file("ours.vdb"));
+    CHECK(classifyVdbFile(dir.file("ours.vdb")) == VdbFileKind::VdbClay);
+}
+
+TEST_CASE("a level set imports within a tenth of a voxel of the sphere, for every compression", "[interop]")
+{
+    TempDir dir;
+    const double radius = 12.0, vs = 0.5;
+    const openvdb::Vec3d centre(1.25, -0.5, 3.0);
+    int index = 0;
+    for (const FileOptions& o : {FileOptions{}, FileOptions{openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK, false},
+                                 FileOptions{openvdb::io::COMPRESS_NONE, false}, FileOptions{openvdb::io::COMPRESS_BLOSC, true}}) {
+        CAPTURE(index);
+        const std::string path = writeSphereFile(dir, "s" + std::to_string(index++) + ".vdb", radius, vs, centre, o);
+        LevelSetImportReport report;
+        const Volume v = importLevelSet(path, {}, &report);
+        CHECK(report.grid == "surface");
+        CHECK(report.resampled.empty());
+        CHECK(v.voxelSize() == vs);
+        CHECK(checkInvariants(v).empty());
+        const SphereError e = sphereError(v, radius, centre, 0.5);
+        CHECK(e.wrongSigns == 0);
+        CHECK(e.crossings == report.crossings);
+        CHECK(e.crossings > 1000);
+        // Linear interpolation of a sampled distance, plus half-float rounding where saved as half.
+        CHECK(e.crossing < (o.half ? 0.1 : 0.05));
+        CHECK(closedMesh(v));
+    }
+}
+
+TEST_CASE("a fog volume imports at an iso value; without one it is refused", "[interop]")
+{
+    TempDir dir;
+    const double radius = 10.0, vs = 0.5;
+    const std::string path = writeSphereFile(dir, "s.vdb", radius, vs, {0, 0, 0});
+    LevelSetImportOptions o;
+    o.grid = "density";
+    CHECK_THROWS_AS(importLevelSet(path, o), std::invalid_argument);
+    o.iso = 0.5; // sdfToFogVolume: density 0 at the surface, 1 a half-band inside
+    LevelSetImportReport report;
+    const Volume v = importLevelSet(path, o, &report);
+    CHECK(report.fog);
+    CHECK(checkInvariants(v).empty());
+    CHECK(closedMesh(v));
+    // Density 0.5 lies half a band (3 voxels) inside: 1.5 voxels deep.
+    const SphereError e = sphereError(v, radius - 1.5 * vs, {0, 0, 0}, 0.5);
+    CHECK(e.wrongSigns == 0);
+    CHECK(e.crossing < 0.1);
+
+    // A dense tile beside empty space, with no leaf between them: the crossings on the tile's faces.
+    openvdb::FloatGrid::Ptr block = openvdb::FloatGrid::create(0.0f);
+    block->setName("block");
+    block->setGridClass(openvdb::GRID_FOG_VOLUME);
+    block->tree().fill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(127)), 1.0f, true);
+    REQUIRE(block->tree().leafCount() == 0);
+    openvdb::io::File file(dir.file("block.vdb"));
+    file.write({block});
+    file.close();
+    o.grid.clear(); // the first fog volume
+    const Volume cube = importLevelSet(dir.file("block.vdb"), o);
+    CHECK(checkInvariants(cube).empty());
+    const Mesh mesh = meshVolume(cube);
+    CHECK(analyzeTopology(mesh, kMergeDistanceVoxels).watertight());
+    CHECK(enclosedVolume(mesh) == Approx(128.0 * 128.0 * 128.0).epsilon(1e-3)); // crossings half-way: -0.5 .. 127.5
+}
+
+TEST_CASE("a rotated, non-uniform or offset grid is resampled onto the lattice, and says so", "[interop]")
+{
+    TempDir dir;
+    const double radius = 8.0;
+    openvdb::math::Transform::Ptr rotated = openvdb::math::Transform::createLinearTransform(0.5);
+    rotated->postRotate(0.4, openvdb::math::Y_AXIS);
+    openvdb::math::Transform::Ptr offset = openvdb::math::Transform::createLinearTransform(0.5);
+    offset->postTranslate(openvdb::Vec3d(0.2, 0.0, 0.0));
+    openvdb::math::Transform::Ptr scaled = openvdb::math::Transform::createLinearTransform(0.5);
+    scaled->postScale(openvdb::Vec3d(1.0, 1.2, 1.0));
+    int index = 0;
+    for (const auto& transform : {rotated, offset, scaled}) {
+        CAPTURE(index);
+        const std::string path = writeSphereFile(dir, "r" + std::to_string(index++) + ".vdb", radius, 0.5, {0, 0, 0}, {}, transform);
+        LevelSetImportOptions o;
+        o.voxelSize = 0.5;
+        LevelSetImportReport report;
+        const Volume v = importLevelSet(path, o, &report);
+        CHECK_FALSE(report.resampled.empty());
+        CHECK(checkInvariants(v).empty());
+        const SphereError e = sphereError(v, radius, {0, 0, 0}, 1.0);
+        CHECK(e.wrongSigns == 0);
+        CHECK(e.crossing < 0.35); // two trilinear resamplings of a distance field
+        CHECK(closedMesh(v));
+    }
+    // Another voxel size is a resampling too.
+    LevelSetImportOptions o;
+    o.voxelSize = 0.25;
+    LevelSetImportReport report;
+    const Volume v = importLevelSet(writeSphereFile(dir, "fine.vdb", radius, 0.5, {0, 0, 0}), o, &report);
+    CHECK(v.voxelSize() == 0.25);
+    CHECK_FALSE(report.resampled.empty());
+    CHECK(sphereError(v, radius, {0, 0, 0}, 1.0).wrongSigns == 0);
+}
+
+TEST_CASE("damaged standard files are refused with one line, never a crash", "[interop][fuzz]")
+{
+    TempDir dir;
+    const std::string path = writeSphereFile(dir, "s.vdb", 6.0, 0.5, {0, 0, 0});
+    const std::vector<char> original = readBytes(path);
+    const std::string bytes(original.begin(), original.end());
+    std::mt19937 rng(17);
+    int refused = 0;
+    for (int trial = 0; trial < 150; ++trial) {
+        std::string damaged = bytes;
+        const int kind = trial % 3;
+        if (kind == 0) damaged.resize(rng() % damaged.size());
+        else if (kind == 1)
+            for (int k = 0; k < 4; ++k) damaged[rng() % damaged.size()] = char(rng());
+        else
+            for (std::size_t k = 0; k < 8; ++k) damaged[std::min(damaged.size() - 1, std::size_t(rng() % 400) + k)] = char(0xff);
+        const std::string copy = dir.file("d.vdb");
+        writeText(copy, damaged);
+        try {
+            const Volume v = importLevelSet(copy, {});
+            CHECK(checkInvariants(v).empty());
+        } catch (const VolumeIOError& e) {
+            CHECK(std::string(e.what()).find('\n') == std::string::npos);
+            ++refused;
+        } catch (const std::invalid_argument& e) {
+            ++refused;
+        }
+    }
+    CHECK(refused > 50);
+}
