@@ -1,10 +1,13 @@
 // vdbclay info: what a volume file holds.
 #include "Cli.h"
 
+#include "interop/StandardVdb.h"
 #include "scene/SceneStore.h"
 #include "vdb_hermite/VolumeIO.h"
 
 #include <CLI/CLI.hpp>
+
+#include <algorithm>
 
 namespace vdbclay::cli {
 
@@ -63,11 +66,52 @@ int storeInfo(const InfoOptions& o)
     return kExitOk;
 }
 
+/// A .vdb of another tool: what it holds, and how to bring it in.
+int standardInfo(const InfoOptions& o)
+{
+    const StandardVdbInfo info = describeStandardVdb(o.input);
+    const std::string hint = "vdbclay import " + o.input + " -o scene.vdb";
+    if (o.json) {
+        nlohmann::json grids = nlohmann::json::array();
+        for (const StandardGridInfo& g : info.grids)
+            grids.push_back({{"name", g.header.name},
+                             {"type", g.header.type},
+                             {"value_type", g.header.valueType},
+                             {"class", g.header.gridClass},
+                             {"voxel_size", g.voxelSize},
+                             {"uniform_voxels", g.uniformVoxels},
+                             {"axis_aligned", g.axisAligned},
+                             {"half_float", g.header.halfFloat},
+                             {"active_voxels", g.activeVoxels},
+                             {"importable", g.importable()}});
+        printJson({{"form", "standard"}, {"grids", grids}, {"import", hint}});
+        return kExitOk;
+    }
+    std::vector<std::pair<std::string, std::string>> rows{{"file", o.input}, {"form", "standard .vdb (not VDBClay's own)"}};
+    for (const StandardGridInfo& g : info.grids) {
+        std::string text = (g.header.gridClass.empty() ? std::string("no class") : g.header.gridClass) + ", " +
+                           (g.header.valueType.empty() ? g.header.type : g.header.valueType) +
+                           (g.header.halfFloat ? " (saved as half)" : "") + ", voxel " + formatNumber(g.voxelSize[0]);
+        if (!g.uniformVoxels || !g.axisAligned) text += " (transform resampled on import)";
+        if (g.activeVoxels) text += ", " + std::to_string(g.activeVoxels) + " active voxels";
+        text += g.importable() ? "" : " (not importable)";
+        rows.push_back({"grid '" + g.header.name + "'", text});
+    }
+    rows.push_back({"import", hint + (std::any_of(info.grids.begin(), info.grids.end(), [](const StandardGridInfo& g) {
+                                          return g.fogVolume();
+                                      })
+                                          ? " (a fog volume needs --iso VALUE)"
+                                          : "")});
+    printFields(rows, 0);
+    return kExitOk;
+}
+
 } // namespace
 
 int runInfo(const InfoOptions& o)
 {
     if (isStorePath(o.input)) return storeInfo(o);
+    if (classifyVdbFile(o.input) == VdbFileKind::Other) return standardInfo(o);
     const Volume volume = loadVolume(o.input);
     const VolumeStats s = volume.stats();
     const std::vector<std::string> materials = volume.materials().names();

@@ -99,7 +99,7 @@ int runMesh(const MeshCommandOptions& o)
         materials = scene.materials();
         voxelSize = volume.voxelSize();
     } else {
-        const Volume volume = loadVolume(o.input);
+        const Volume volume = loadScene(o.input);
         if (level == 0) {
             mesh = meshVolume(volume, options);
         } else {

@@ -131,7 +131,7 @@ int runSculpt(const SculptOptions& o)
     };
     if (store) return sculptStoreInPlace(o, script, progress);
 
-    Volume volume = loadVolume(o.input);
+    Volume volume = loadScene(o.input);
     const std::vector<ScriptOpReport> reports = runStrokeScript(volume, script, progress);
     if (isStorePath(o.output)) writeStoreFile(volume, o.output);
     else saveVolume(volume, o.output);

@@ -4,6 +4,7 @@
 #include "interop/StandardVdb.h"
 #include "mesher/MeshMetrics.h"
 #include "mesher/Mesher.h"
+#include "support/CliRun.h"
 #include "support/HermiteProbe.h"
 #include "support/TestUtil.h"
 #include "vdb_hermite/HermiteGrid.h"
@@ -251,4 +252,42 @@ TEST_CASE("damaged standard files are refused with one line, never a crash", "[i
         }
     }
     CHECK(refused > 50);
+}
+
+TEST_CASE("cli: info describes a standard .vdb, import brings it in, other commands say how", "[interop][cli]")
+{
+    if (std::string(kCli).empty()) return; // no CLI in this build
+    TempDir dir;
+    writeSphereFile(dir, "houdini.vdb", 8.0, 0.5, {0, 0, 0});
+    const nlohmann::json info = parseJsonOutput(runCli(dir, "info houdini.vdb --json"));
+    CHECK(info["form"] == "standard");
+    REQUIRE(info["grids"].size() == 3);
+    CHECK(info["grids"][0]["name"] == "surface");
+    CHECK(info["grids"][0]["class"] == "level set");
+    CHECK(info["grids"][0]["value_type"] == "float");
+    CHECK(info["grids"][0]["importable"] == true);
+    CHECK(info["grids"][2]["importable"] == false);
+    const CommandResult text = runCli(dir, "info houdini.vdb");
+    CHECK(text.exitCode == 0);
+    CHECK(text.out.find("vdbclay import houdini.vdb") != std::string::npos);
+
+    const CommandResult mesh = runCli(dir, "mesh houdini.vdb -o m.obj");
+    checkCleanFailure(mesh);
+    CHECK(mesh.err.find("'surface' (level set, float)") != std::string::npos);
+    CHECK(mesh.err.find("vdbclay import") != std::string::npos);
+
+    const nlohmann::json imported = parseJsonOutput(runCli(dir, "import houdini.vdb -o s.vdbclay --json"));
+    CHECK(imported["levelset"]["grid"] == "surface");
+    CHECK(imported["levelset"]["resampled"] == false);
+    const nlohmann::json fog = parseJsonOutput(runCli(dir, "import houdini.vdb --grid density --iso 0.5 --material fog -o f.vdb --json"));
+    CHECK(fog["levelset"]["fog"] == true);
+    CHECK(parseJsonOutput(runCli(dir, "info f.vdb --json"))["materials"] == nlohmann::json::array({"default", "fog"}));
+    const nlohmann::json meshed = parseJsonOutput(runCli(dir, "mesh s.vdbclay -o s.obj --json"));
+    CHECK(meshed["watertight"] == true);
+
+    checkCleanFailure(runCli(dir, "import houdini.vdb --grid density -o x.vdb")); // fog without --iso
+    checkCleanFailure(runCli(dir, "import houdini.vdb --grid ids -o x.vdb"));
+    checkCleanFailure(runCli(dir, "import houdini.vdb --grid nothing -o x.vdb"));
+    checkCleanFailure(runCli(dir, "import s.vdbclay --iso 2 -o x.vdb")); // options for standard files only
+    CHECK_FALSE(std::filesystem::exists(dir.path() / "x.vdb"));
 }

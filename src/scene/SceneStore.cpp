@@ -1,5 +1,7 @@
 #include "scene/SceneStore.h"
 
+#include "interop/StandardVdb.h"
+
 #include "vdb_hermite/AtomicFile.h"
 #include "vdb_hermite/VolumeIO.h"
 #include "vdb_hermite/VolumeRegions.h"
@@ -274,7 +276,20 @@ void writeStoreFile(const Volume& volume, const std::string& path, const Progres
 
 Volume loadScene(const std::string& path, const Progress& progress)
 {
-    if (!isStorePath(path)) return loadVolume(path);
+    if (!isStorePath(path)) {
+        if (classifyVdbFile(path) == VdbFileKind::Other) {
+            // Another tool's file: say what it holds and how to bring it in, instead of a bare refusal.
+            std::string holds;
+            try {
+                holds = "; it holds " + listGrids(describeStandardVdb(path));
+            } catch (const VolumeIOError& e) {
+                throw VolumeIOError(std::string(e.what()) + " (it is not a VDBClay volume)");
+            }
+            throw VolumeIOError("'" + path + "' is a .vdb file of another tool, not a VDBClay volume" + holds +
+                                "; 'vdbclay import " + path + " -o scene.vdb' brings it in");
+        }
+        return loadVolume(path);
+    }
     return SceneStore::open(path, StoreAccess::ReadOnly).loadLevel(0, progress);
 }
 
