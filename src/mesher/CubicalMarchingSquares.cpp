@@ -1167,8 +1167,19 @@ private:
         bool sharp = false;
         if (minDot < ctx_.cosSharp || hasTransition) {
             if (const auto feature = componentFeature(loop, Eigen::Vector3d(normalSum[0], normalSum[1], normalSum[2]))) {
-                centre = {feature->x(), feature->y(), feature->z()};
-                sharp = true;
+                // Two components of one cell whose features are clamped to the same place in the cell
+                // (a corner of its inset box) would share their vertex: a pinch. The later one keeps
+                // its mean point.
+                const std::array<double, 3> at{feature->x(), feature->y(), feature->z()};
+                const double apart = kFeatureInsetVoxels * ctx_.voxelSize;
+                const bool taken = std::any_of(featuresPlaced_, featuresPlaced_ + featureCount_, [&](const std::array<double, 3>& p) {
+                    return std::hypot(p[0] - at[0], p[1] - at[1], p[2] - at[2]) < apart;
+                });
+                if (!taken) {
+                    centre = at;
+                    sharp = true;
+                    if (featureCount_ < kMaxFeatures) featuresPlaced_[featureCount_++] = at;
+                }
             }
         }
         ctx_.buffers.addFan(centre, normalSum, ids.data(), pieceMaterials.data(), n, sharp);
@@ -1180,6 +1191,10 @@ private:
     const MaterialValue* mats_;
     std::vector<Segment>& segments_;
     const EdgeCrossing* squareCrossings_[4] = {};
+    // The sharp vertices of this cell's components so far (a cell holds a few components at most).
+    static constexpr int kMaxFeatures = 8;
+    std::array<double, 3> featuresPlaced_[kMaxFeatures];
+    int featureCount_ = 0;
 };
 
 /// Slot offset of each cell edge from the slot of the cell's minimum corner (Buffers::edgeSlot).
