@@ -140,6 +140,16 @@ struct ExportOptions {
 CLI::App* addExportCommand(CLI::App& parent, ExportOptions& options);
 int runExport(const ExportOptions& options);
 
+struct ExportLevelSetOptions {
+    std::string input;
+    std::string output;
+    double halfWidth = 3.0;
+    bool fog = false;
+    bool json = false;
+};
+CLI::App* addExportLevelSetCommand(CLI::App& parent, ExportLevelSetOptions& options);
+int runExportLevelSet(const ExportLevelSetOptions& options);
+
 struct LodOptions {
     std::string scene;
     int levels = 0;

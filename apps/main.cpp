@@ -35,6 +35,7 @@ int run(int argc, char** argv)
     SelftestOptions selftestOptions;
     ImportOptions importOptions;
     ExportOptions exportOptions;
+    ExportLevelSetOptions exportLevelSetOptions;
     LodOptions lodOptions;
     SynthCommandOptions synthOptions;
     DiffOptions diffOptions;
@@ -48,6 +49,7 @@ int run(int argc, char** argv)
     CLI::App* selftestCmd = addSelftestCommand(app, selftestOptions);
     CLI::App* importCmd = addImportCommand(app, importOptions);
     CLI::App* exportCmd = addExportCommand(app, exportOptions);
+    CLI::App* exportLevelSetCmd = addExportLevelSetCommand(app, exportLevelSetOptions);
     const LodCommands lodCmds = addLodCommand(app, lodOptions);
     CLI::App* synthCmd = addSynthCommand(app, synthOptions);
     CLI::App* diffCmd = addDiffCommand(app, diffOptions);
@@ -95,6 +97,7 @@ int run(int argc, char** argv)
     if (*selftestCmd) return runSelftest(selftestOptions);
     if (*importCmd) return runImport(importOptions);
     if (*exportCmd) return runExport(exportOptions);
+    if (*exportLevelSetCmd) return runExportLevelSet(exportLevelSetOptions);
     if (*lodCmds.build) return runLodBuild(lodOptions);
     if (*lodCmds.info) return runLodInfo(lodOptions);
     if (*lodCmds.inspect) return runLodInspect(lodOptions);

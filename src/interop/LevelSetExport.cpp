@@ -1,0 +1,69 @@
+#include "interop/LevelSetExport.h"
+
+#include "mesher/Mesher.h"
+#include "vdb_hermite/AtomicFile.h"
+#include "vdb_hermite/HermiteGrid.h"
+
+#include <openvdb/io/File.h>
+#include <openvdb/tools/LevelSetUtil.h>
+#include <openvdb/tools/MeshToVolume.h>
+
+#include <stdexcept>
+
+namespace vdbclay {
+
+void exportLevelSet(const Volume& volume, const std::string& path, const LevelSetExportOptions& options,
+                    LevelSetExportReport* report)
+{
+    if (!(options.halfWidth >= 1.0 && options.halfWidth <= 64.0))
+        throw std::invalid_argument("a half width of " + std::to_string(options.halfWidth) + " voxels is outside 1 .. 64");
+    openvdb::initialize();
+    const Mesh mesh = meshVolume(volume);
+    std::vector<openvdb::Vec3s> points(mesh.positions.size());
+    for (std::size_t i = 0; i < points.size(); ++i) points[i] = {mesh.positions[i][0], mesh.positions[i][1], mesh.positions[i][2]};
+    std::vector<openvdb::Vec3I> triangles(mesh.triangles.size());
+    for (std::size_t i = 0; i < triangles.size(); ++i)
+        triangles[i] = {mesh.triangles[i][0], mesh.triangles[i][1], mesh.triangles[i][2]};
+    const openvdb::math::Transform::Ptr xf = openvdb::math::Transform::createLinearTransform(volume.voxelSize());
+
+    openvdb::GridPtrVec grids;
+    openvdb::FloatGrid::Ptr surface = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*xf, points, triangles, float(options.halfWidth));
+    surface->setName("surface");
+    surface->setGridClass(openvdb::GRID_LEVEL_SET);
+    grids.push_back(surface);
+
+    // Materials as their ids, voxel for voxel (tiles stay tiles); 0 is empty space.
+    openvdb::Int32Grid::Ptr material = openvdb::Int32Grid::create(0);
+    material->setTransform(xf->copy());
+    material->setName("material");
+    const HermiteTree& tree = volume.impl().grid->constTree();
+    for (auto value = tree.cbeginValueAll(); value; ++value) {
+        if (!value->solid()) continue;
+        CoordBBox box;
+        value.getBoundingBox(box);
+        if (value.isVoxelValue()) material->tree().setValueOn(box.min(), int32_t(value->id));
+        else material->tree().fill(box, int32_t(value->id), true);
+    }
+    grids.push_back(material);
+
+    if (options.fog) {
+        openvdb::FloatGrid::Ptr density = surface->deepCopy();
+        openvdb::tools::sdfToFogVolume(*density);
+        density->setName("density");
+        grids.push_back(density);
+    }
+    // OpenVDB's own file writer (grid offsets, Blosc), into a temporary file renamed over `path`.
+    writeFileAtomically(path, [](std::ostream&) {}, [&](const std::string& temp, uint64_t) {
+        openvdb::io::File file(temp);
+        file.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
+        file.write(grids);
+        file.close();
+    });
+    if (report) {
+        report->triangles = mesh.triangleCount();
+        report->surfaceVoxels = surface->activeVoxelCount();
+        report->materialVoxels = material->activeVoxelCount();
+    }
+}
+
+} // namespace vdbclay

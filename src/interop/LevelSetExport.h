@@ -1,0 +1,31 @@
+// Standard grids out: a scene as the OpenVDB ecosystem reads it (Houdini, Blender, OpenVDB's tools): a
+// narrow-band level set "surface", an Int32 grid "material", and optionally a fog volume "density".
+//
+// Light header: no OpenVDB templates.
+#pragma once
+
+#include "vdb_hermite/Volume.h"
+
+#include <cstdint>
+#include <string>
+
+namespace vdbclay {
+
+struct LevelSetExportOptions {
+    double halfWidth = 3.0; // voxels on each side of the surface
+    bool fog = false;       // also a density grid (FOG_VOLUME): 1 inside, falling to 0 across the band
+};
+
+struct LevelSetExportReport {
+    uint64_t triangles = 0;       // of the mesh the distances are measured to
+    uint64_t surfaceVoxels = 0;   // active voxels of the level set
+    uint64_t materialVoxels = 0;  // active voxels of the material grid
+};
+
+/// Writes the standard grids of `volume` to `path` (atomically). Distances are exact to the scene's
+/// CMS mesh (OpenVDB's meshToLevelSet over it), so sharp features keep their corners; the sign is
+/// negative inside. Throws std::invalid_argument for a half width outside 1 .. 64.
+void exportLevelSet(const Volume& volume, const std::string& path, const LevelSetExportOptions& options,
+                    LevelSetExportReport* report = nullptr);
+
+} // namespace vdbclay
