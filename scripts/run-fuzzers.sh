@@ -10,9 +10,10 @@ seconds="${2:-60}"
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 artifacts="$build/fuzz-artifacts"
 mkdir -p "$artifacts"
-for target in vdb_reader script_parser mesh_writers; do
+for target in vdb_reader standard_vdb script_parser mesh_writers; do
     case "$target" in
         vdb_reader) corpus_name=vdb ;;
+        standard_vdb) corpus_name=standard ;;
         script_parser) corpus_name=script ;;
         mesh_writers) corpus_name=mesh ;;
     esac

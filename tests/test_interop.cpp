@@ -135,7 +135,8 @@ TEST_CASE("a level set imports within a tenth of a voxel of the sphere, for ever
     const openvdb::Vec3d centre(1.25, -0.5, 3.0);
     int index = 0;
     for (const FileOptions& o : {FileOptions{}, FileOptions{openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK, false},
-                                 FileOptions{openvdb::io::COMPRESS_NONE, false}, FileOptions{openvdb::io::COMPRESS_BLOSC, true}}) {
+                                 FileOptions{openvdb::io::COMPRESS_NONE, false}, FileOptions{openvdb::io::COMPRESS_BLOSC, true},
+                                 FileOptions{openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK, true}}) {
         CAPTURE(index);
         const std::string path = writeSphereFile(dir, "s" + std::to_string(index++) + ".vdb", radius, vs, centre, o);
         LevelSetImportReport report;

@@ -158,6 +158,7 @@ struct TreeLayout {
     uint64_t valueBytes = 2;
     uint64_t fullValueBytes = 2;
     bool hermite = true;
+    bool half = false; // OpenVDB's half-float reader reads nothing for no values (no block header either)
 };
 
 /// A node's values as io::readCompressedValues reads them, for a node of `count` values with the given
@@ -178,6 +179,7 @@ void checkCompressedValues(PayloadReader& r, const std::bitset<N>& valueMask, ui
         r.skip(N / 8, "a selection mask");
     const bool maskCompressed = compression & openvdb::io::COMPRESS_ACTIVE_MASK;
     const uint64_t count = maskCompressed && metadata != NO_MASK_AND_ALL_VALS ? valueMask.count() : N;
+    if (layout.half && count == 0) return;
     checkDataBlock(r, count * layout.valueBytes, compression);
 }
 
@@ -292,7 +294,7 @@ std::optional<TreeLayout> standardLayout(const std::string& valueType, bool half
     static const std::array<std::tuple<const char*, uint64_t, uint64_t>, 7> kTypes{
         {{"float", 4, 2}, {"double", 8, 2}, {"int32", 4, 4}, {"int64", 8, 8}, {"vec3s", 12, 6}, {"vec3d", 24, 6}, {"vec3i", 12, 12}}};
     for (const auto& [name, bytes, halfBytes] : kTypes)
-        if (valueType == name) return TreeLayout{halfFloat ? halfBytes : bytes, bytes, false};
+        if (valueType == name) return TreeLayout{halfFloat && halfBytes != bytes ? halfBytes : bytes, bytes, false, halfFloat && halfBytes != bytes};
     return std::nullopt;
 }
 

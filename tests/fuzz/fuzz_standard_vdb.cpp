@@ -1,0 +1,46 @@
+// Another tool's .vdb on crafted bytes: the input is the whole file (no VDBClay trailer), so every input
+// reaches the standard-grid check (PayloadCheck with AcceptedGrids::Standard) and, when that passes,
+// OpenVDB's parser and the level-set import. They must import it or refuse it with one printable line.
+#include "interop/LevelSetImport.h"
+#include "vdb_hermite/VolumeIO.h"
+
+#include <cstdint>
+#include <cstdlib>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+#include <unistd.h>
+
+namespace {
+
+const std::string& scratchPath()
+{
+    static const std::string path = "/tmp/vdbclay-fuzz-standard-" + std::to_string(::getpid()) + ".vdb";
+    return path;
+}
+
+void requirePrintable(const char* message)
+{
+    for (const char* c = message; *c; ++c)
+        if (*c < 32 || *c > 126) std::abort(); // a message with raw bytes or several lines
+}
+
+} // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
+{
+    {
+        std::ofstream out(scratchPath(), std::ios::binary | std::ios::trunc);
+        out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
+    }
+    vdbclay::LevelSetImportOptions options;
+    options.iso = 0.5; // fog volumes import too
+    try {
+        (void)vdbclay::importLevelSet(scratchPath(), options);
+    } catch (const vdbclay::VolumeIOError& e) {
+        requirePrintable(e.what());
+    } catch (const std::invalid_argument& e) {
+        requirePrintable(e.what());
+    }
+    return 0;
+}
