@@ -743,21 +743,11 @@ private:
             if (poly.crossing[i] == 0) start = i;
         if (start < 0) return 0;
         // A point on a lattice line of the face (where the chain is clipped at a side, or a wedge tip
-        // on a voxel edge) moves kFeatureInsetVoxels off it, towards the square's centre: the chain of a
-        // square at right angles along that line can end on the same point, and the surface would pinch
-        // there (a wall thinner than a voxel).
-        const double centreU = lo0 + 0.5 * w, centreV = lo1 + 0.5 * w;
-        auto offLatticeLines = [&](Vec2 q) {
-            const double inset = kFeatureInsetVoxels * vs;
-            const double lineU = std::round(q.x / vs) * vs, lineV = std::round(q.y / vs) * vs;
-            if (std::fabs(q.x - lineU) < inset) q.x = lineU + (centreU > lineU ? inset : -inset);
-            if (std::fabs(q.y - lineV) < inset) q.y = lineV + (centreV > lineV ? inset : -inset);
-            return q;
-        };
+        // on a voxel edge) moves off it (offLatticeLines).
         int n = 0;
         Vec2 previous = pa;
         for (int k = 1; k < poly.count; ++k) {
-            const Vec2 q = offLatticeLines(poly.at[(start + k) % poly.count]);
+            const Vec2 q = offLatticeLines(sq, poly.at[(start + k) % poly.count]);
             if (poly.crossing[(start + k) % poly.count] == 1) break;
             // Clipping can leave two corners a rounding error apart: one vertex, not two.
             const double apart = kFeatureInsetVoxels * vs;
@@ -767,6 +757,21 @@ private:
         }
         if (n > 0 && std::hypot(out[n - 1].x - pb.x, out[n - 1].y - pb.y) < kFeatureInsetVoxels * vs) --n;
         return n;
+    }
+
+    /// A point of a face within kFeatureInsetVoxels of one of its lattice lines, moved that far off
+    /// it towards the square's centre: a square at right angles along that line can put a point of its
+    /// own there, and the surface would pinch (a wall thinner than a voxel).
+    Vec2 offLatticeLines(const Square& sq, Vec2 q) const
+    {
+        const double vs = ctx_.voxelSize, inset = kFeatureInsetVoxels * vs;
+        const int axis = sq.axis;
+        const double centreU = (sq.minCorner[(axis + 1) % 3] + 0.5 * sq.width) * vs;
+        const double centreV = (sq.minCorner[(axis + 2) % 3] + 0.5 * sq.width) * vs;
+        const double lineU = std::round(q.x / vs) * vs, lineV = std::round(q.y / vs) * vs;
+        if (std::fabs(q.x - lineU) < inset) q.x = lineU + (centreU > lineU ? inset : -inset);
+        if (std::fabs(q.y - lineV) < inset) q.y = lineV + (centreV > lineV ? inset : -inset);
+        return q;
     }
 
     void meshSquare(const Square& sq)
@@ -899,7 +904,9 @@ private:
                 const double keepOff = kFeatureInsetVoxels * ctx_.voxelSize / std::max(pieceLength, 1e-300);
                 if (keepOff >= 0.5) break;
                 const double t = std::clamp(fa / (fa - fb), keepOff, 1.0 - keepOff);
-                const Vec2 hit{poly[k].x + t * (poly[k + 1].x - poly[k].x), poly[k].y + t * (poly[k + 1].y - poly[k].y)};
+                // Off the face's lattice lines, where the square beside it at right angles could put
+                // its own transition (a segment can run along a side when its crossings lie at corners).
+                const Vec2 hit = offLatticeLines(sq, {poly[k].x + t * (poly[k + 1].x - poly[k].x), poly[k].y + t * (poly[k + 1].y - poly[k].y)});
                 points.insert(k, FacePoint{hit, toWorld(hit), 0, true, sq.mats[p].id, sq.mats[q].id, interface.normal});
                 break;
             }
