@@ -125,8 +125,10 @@ struct ImportOptions {
     std::string output;
     std::string grid;                // a standard .vdb's grid (default: the first level set)
     std::optional<double> iso;       // a fog volume's iso value
-    std::optional<double> voxelSize; // resample a standard grid to it
+    std::optional<double> voxelSize; // a mesh's voxel size, or resample a standard grid to it
+    std::optional<int> resolution;   // a mesh: voxels along its longest side
     std::string material = "default";
+    bool materialGiven = false;
     bool json = false;
 };
 CLI::App* addImportCommand(CLI::App& parent, ImportOptions& options);

@@ -5,6 +5,7 @@
 #include "interop/LevelSetExport.h"
 #include "interop/LevelSetImport.h"
 #include "scene/SceneStore.h"
+#include "voxelize/Voxelizer.h"
 #include "vdb_hermite/VolumeIO.h"
 
 #include <CLI/CLI.hpp>
@@ -46,11 +47,53 @@ void printSummary(const std::string& input, const std::string& output, const Vol
 
 } // namespace
 
+/// A mesh file, voxelized.
+int importMesh(const ImportOptions& o, std::chrono::steady_clock::time_point start)
+{
+    if (!o.grid.empty() || o.iso) throw UsageError("--grid and --iso are for .vdb files of other tools, not meshes");
+    VoxelizeOptions options;
+    options.voxelSize = o.voxelSize;
+    options.resolution = o.resolution;
+    if (o.materialGiven) options.material = o.material;
+    if (!options.voxelSize && !options.resolution) throw UsageError("a mesh needs --voxel-size V or --resolution N");
+    if (options.voxelSize && options.resolution) throw UsageError("give --voxel-size or --resolution, not both");
+    const TriangleSoup mesh = loadTriangleMesh(o.input);
+    VoxelizeReport report;
+    Volume volume = [&] {
+        try {
+            return voxelizeMesh(mesh, options, &report);
+        } catch (const std::invalid_argument& e) {
+            throw UsageError(e.what());
+        }
+    }();
+    writeScene(volume, o.output, !o.json);
+    const double seconds = secondsSince(start);
+    if (o.json) {
+        nlohmann::json out = sceneSummaryJson(o.output, volume, seconds);
+        out["mesh"] = {{"triangles", report.triangles},         {"dropped_triangles", report.droppedTriangles},
+                       {"voxel_size", report.voxelSize},        {"hits", report.hits},
+                       {"duplicate_hits", report.duplicateHits}, {"voted_points", report.votedPoints},
+                       {"patched_crossings", report.patchedCrossings}, {"crossings", report.crossings},
+                       {"solid_voxels", report.solidVoxels},    {"materials", volume.materials().names()}};
+        printJson(out);
+        return kExitOk;
+    }
+    printFields({{"mesh", std::to_string(report.triangles) + " triangles, voxel size " + formatNumber(report.voxelSize)},
+                 {"repaired", std::to_string(report.droppedTriangles) + " degenerate triangles dropped, " +
+                                  std::to_string(report.duplicateHits) + " duplicate hits merged, " +
+                                  std::to_string(report.votedPoints) + " lattice points settled by the 3-ray vote (holes, seams), " +
+                                  std::to_string(report.patchedCrossings) + " crossings patched"}},
+                0);
+    printSummary(o.input, o.output, volume, seconds);
+    return kExitOk;
+}
+
 CLI::App* addImportCommand(CLI::App& parent, ImportOptions& o)
 {
     CLI::App* cmd = parent.add_subcommand(
-        "import", "Bring a scene in: a VDBClay .vdb or store, or a level set or fog volume of another tool's .vdb");
-    cmd->add_option("input", o.input, "Scene to bring in (.vdb of VDBClay or of another tool, or a .vdbclay store)")
+        "import", "Bring a scene in: a VDBClay .vdb or store, a level set or fog volume of another tool's .vdb, or a mesh");
+    cmd->add_option("input", o.input, "Scene to bring in (.vdb of VDBClay or of another tool, a .vdbclay store, or a mesh: "
+                                      "obj ply stl off gltf glb fbx dae)")
         ->required()
         ->type_name("IN");
     cmd->add_option("-o,--output", o.output, "Scene to write; the extension picks the form (.vdbclay store or .vdb)")
@@ -60,22 +103,31 @@ CLI::App* addImportCommand(CLI::App& parent, ImportOptions& o)
         ->type_name("NAME");
     cmd->add_option("--iso", o.iso, "Iso value: a fog volume is solid where its density exceeds it (required for fog)")
         ->type_name("VALUE");
-    cmd->add_option("--voxel-size", o.voxelSize, "Resample a standard grid to this voxel size (default: its own)")
+    cmd->add_option("--voxel-size", o.voxelSize, "Voxel size of a voxelized mesh, or to resample a standard grid to (default: its own)")
         ->type_name("V")
         ->check(CLI::PositiveNumber);
-    cmd->add_option("--material", o.material, "Material of what a standard grid brings in")->capture_default_str();
+    cmd->add_option("--resolution", o.resolution, "Voxels along a mesh's longest side (instead of --voxel-size)")
+        ->type_name("N")
+        ->check(CLI::Range(1, 16384));
+    cmd->add_option("--material", o.material, "Material of what a standard grid or a mesh brings in (a mesh: default its own materials)")
+        ->capture_default_str()
+        ->each([&o](const std::string&) { o.materialGiven = true; });
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text");
     cmd->footer("A store keeps the scene in bricks of 64^3 voxels, so that 'sculpt', 'mesh' and 'lod' read only what\n"
                 "they need. A standard grid becomes Hermite data: materials from the sign at the lattice points,\n"
                 "crossings where the field crosses zero, normals from its gradient; a transform that is not a\n"
-                "uniform scale on VDBClay's lattice is resampled (the output says so). An existing output is\n"
-                "replaced only once the new one is complete.");
+                "uniform scale on VDBClay's lattice is resampled (the output says so). A mesh is voxelized by\n"
+                "axis-aligned rays (exact crossings, triangle normals), solid where two of three rays agree, which\n"
+                "closes holes and seams; the output says what was repaired. An existing output is replaced only\n"
+                "once the new one is complete.");
     return cmd;
 }
 
 int runImport(const ImportOptions& o)
 {
     const auto start = std::chrono::steady_clock::now();
+    if (isMeshPath(o.input)) return importMesh(o, start);
+    if (o.resolution) throw UsageError("--resolution is for meshes; '" + o.input + "' is a volume");
     const bool standard = !isStorePath(o.input) && classifyVdbFile(o.input) == VdbFileKind::Other;
     if (!standard && (!o.grid.empty() || o.iso || o.voxelSize))
         throw UsageError("--grid, --iso and --voxel-size are for .vdb files of other tools; '" + o.input + "' is VDBClay's own");

@@ -48,7 +48,7 @@ packages=(
     libopenvdb-dev libtbb-dev libblosc-dev libboost-iostreams-dev libimath-dev zlib1g-dev
     libeigen3-dev catch2 nlohmann-json3-dev libcli11-dev
     libsqlite3-dev libplplot-dev plplot-driver-cairo pkg-config
-    libopenvdb-tools python3-openvdb
+    libopenvdb-tools python3-openvdb libassimp-dev
     clang-14 libclang-rt-14-dev
 )
 

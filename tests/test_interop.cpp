@@ -97,7 +97,9 @@ SphereError sphereError(const Volume& v, double radius, const openvdb::Vec3d& ce
 
 bool closedMesh(const Volume& v)
 {
-    const Mesh mesh = meshVolume(v);
+    MeshOptions cms;
+    cms.kind = MesherKind::CubicalMarchingSquares;
+    const Mesh mesh = meshVolume(v, cms);
     return mesh.triangleCount() > 0 && analyzeTopology(mesh, kMergeDistanceVoxels * v.voxelSize()).watertight();
 }
 
@@ -186,7 +188,9 @@ TEST_CASE("a fog volume imports at an iso value; without one it is refused", "[i
     o.grid.clear(); // the first fog volume
     const Volume cube = importLevelSet(dir.file("block.vdb"), o);
     CHECK(checkInvariants(cube).empty());
-    const Mesh mesh = meshVolume(cube);
+    MeshOptions cms;
+    cms.kind = MesherKind::CubicalMarchingSquares;
+    const Mesh mesh = meshVolume(cube, cms);
     CHECK(analyzeTopology(mesh, kMergeDistanceVoxels).watertight());
     CHECK(enclosedVolume(mesh) == Approx(128.0 * 128.0 * 128.0).epsilon(1e-3)); // crossings half-way: -0.5 .. 127.5
 }
@@ -360,27 +364,45 @@ TEST_CASE("import, export-levelset, import again loses no more than quantization
     const Volume first = importLevelSet(path, {});
     exportLevelSet(first, dir.file("back.vdb"), {});
     const Volume second = importLevelSet(dir.file("back.vdb"), {});
-    // The same solid lattice points, the same crossing edges, crossings within a few hundredths of a voxel.
+    // The same solid lattice points and crossing edges, but where the surface passes within a hair of
+    // a lattice point (the level set's distances are measured to the CMS mesh, which may pass that point
+    // on its other side); crossings within a few hundredths of a voxel.
     const HermiteTree& a = first.impl().grid->constTree();
     const HermiteTree& b = second.impl().grid->constTree();
-    uint64_t compared = 0;
+    uint64_t compared = 0, differing = 0;
     double worst = 0.0;
     for (auto leaf = a.cbeginLeaf(); leaf; ++leaf) {
         const HermiteLeaf* other = b.probeConstLeaf(leaf->origin());
         REQUIRE(other);
         for (Index i = 0; i < Index(kLeafVoxels); ++i) {
-            CHECK(leaf->getValue(i) == other->getValue(i));
+            if (leaf->getValue(i) != other->getValue(i)) {
+                ++differing;
+                // Such a point lies a hair from the surface: one of its edges crosses right beside it.
+                bool beside = false;
+                for (int axis = 0; axis < 3; ++axis)
+                    if (const PackedSample* s = leaf->sample(i, axis)) beside = beside || unpackSample(*s).offset < 0.02;
+                const Coord p = leaf->offsetToGlobalCoord(i);
+                for (int axis = 0; axis < 3; ++axis) {
+                    Coord q = p;
+                    q[axis] -= 1;
+                    const HermiteLeaf* below = a.probeConstLeaf(q);
+                    if (!below) continue;
+                    if (const PackedSample* s = below->sample(below->coordToOffset(q), axis)) beside = beside || unpackSample(*s).offset > 0.98;
+                }
+                CHECK(beside);
+                continue;
+            }
             for (int axis = 0; axis < 3; ++axis) {
                 const PackedSample* s = leaf->sample(i, axis);
                 const PackedSample* t = other->sample(i, axis);
-                REQUIRE(bool(s) == bool(t));
-                if (!s) continue;
+                if (!s || !t) continue; // an edge of a point that changed side
                 worst = std::max(worst, double(std::fabs(unpackSample(*s).offset - unpackSample(*t).offset)));
                 ++compared;
             }
         }
     }
     CHECK(compared > 1000);
+    CHECK(differing * 100 < compared);
     CHECK(worst < 0.05);
 }
 

@@ -18,7 +18,12 @@ void exportLevelSet(const Volume& volume, const std::string& path, const LevelSe
     if (!(options.halfWidth >= 1.0 && options.halfWidth <= 64.0))
         throw std::invalid_argument("a half width of " + std::to_string(options.halfWidth) + " voxels is outside 1 .. 64");
     openvdb::initialize();
-    const Mesh mesh = meshVolume(volume);
+    // CMS on voxel cells: its sharp features keep the corners the Hermite data holds, and no wide cell
+    // cuts a chord through a curved stretch (distances are measured to this mesh).
+    MeshOptions cms;
+    cms.kind = MesherKind::CubicalMarchingSquares;
+    cms.maxCellWidth = 1;
+    const Mesh mesh = meshVolume(volume, cms);
     std::vector<openvdb::Vec3s> points(mesh.positions.size());
     for (std::size_t i = 0; i < points.size(); ++i) points[i] = {mesh.positions[i][0], mesh.positions[i][1], mesh.positions[i][2]};
     std::vector<openvdb::Vec3I> triangles(mesh.triangles.size());

@@ -23,8 +23,8 @@ struct LevelSetExportReport {
 };
 
 /// Writes the standard grids of `volume` to `path` (atomically). Distances are exact to the scene's
-/// CMS mesh (OpenVDB's meshToLevelSet over it), so sharp features keep their corners; the sign is
-/// negative inside. Throws std::invalid_argument for a half width outside 1 .. 64.
+/// CMS mesh on voxel cells (OpenVDB's meshToLevelSet over it), so sharp features keep their corners;
+/// the sign is negative inside. Throws std::invalid_argument for a half width outside 1 .. 64.
 void exportLevelSet(const Volume& volume, const std::string& path, const LevelSetExportOptions& options,
                     LevelSetExportReport* report = nullptr);
 

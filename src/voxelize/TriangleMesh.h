@@ -1,0 +1,41 @@
+// Meshes made elsewhere (scanners, CAD, DCC tools), read with Assimp into one triangle soup in world
+// units, with the materials the file names.
+//
+// Light header: no Assimp types.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace vdbclay {
+
+struct MeshMaterial {
+    std::string name;
+    std::array<float, 4> color{0.8f, 0.8f, 0.8f, 1.0f};
+};
+
+struct TriangleSoup {
+    std::vector<std::array<double, 3>> positions;
+    std::vector<std::array<uint32_t, 3>> triangles;
+    std::vector<uint32_t> triangleMaterials; // index into materials, per triangle
+    std::vector<MeshMaterial> materials;
+    uint64_t droppedTriangles = 0; // of zero area, or with a corner that is not a finite number
+};
+
+/// Every failure to read a mesh file; what() is one line meant for the user.
+class MeshImportError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// The extensions `vdbclay import` reads as meshes: obj ply stl off gltf glb fbx dae.
+bool isMeshPath(const std::string& path);
+
+/// Reads a mesh file (its whole scene, node transforms applied, polygons triangulated, points and lines
+/// dropped). Throws MeshImportError when Assimp cannot read it or it holds no triangle.
+TriangleSoup loadTriangleMesh(const std::string& path);
+
+} // namespace vdbclay

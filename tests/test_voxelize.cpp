@@ -1,0 +1,244 @@
+// The voxelizer: analytic meshes within error bounds of their surfaces, lattice-aligned boxes exact,
+// messy meshes (duplicated, flipped, holed, degenerate triangles) repaired, the real models closed.
+#include "mesher/MeshMetrics.h"
+#include "mesher/Mesher.h"
+#include "support/CliRun.h"
+#include "support/HermiteProbe.h"
+#include "support/TestUtil.h"
+#include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/Quantize.h"
+#include "voxelize/Voxelizer.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+
+using namespace vdbclay;
+using namespace vdbclay::test;
+
+namespace {
+
+using Vec = std::array<double, 3>;
+
+/// A UV sphere of `rings` x `sectors` quads, closed, counter-clockwise seen from outside.
+TriangleSoup uvSphere(double radius, const Vec& centre, int rings = 48, int sectors = 96)
+{
+    TriangleSoup s;
+    s.materials.push_back({});
+    s.positions.push_back({centre[0], centre[1], centre[2] + radius});
+    for (int i = 1; i < rings; ++i)
+        for (int j = 0; j < sectors; ++j) {
+            const double th = M_PI * i / rings, ph = 2.0 * M_PI * j / sectors;
+            s.positions.push_back({centre[0] + radius * std::sin(th) * std::cos(ph), centre[1] + radius * std::sin(th) * std::sin(ph),
+                                   centre[2] + radius * std::cos(th)});
+        }
+    s.positions.push_back({centre[0], centre[1], centre[2] - radius});
+    const uint32_t last = uint32_t(s.positions.size() - 1);
+    auto ring = [&](int i, int j) { return uint32_t(1 + i * sectors + (j % sectors)); };
+    for (int j = 0; j < sectors; ++j) s.triangles.push_back({0, ring(0, j), ring(0, j + 1)});
+    for (int i = 0; i + 1 < rings - 1; ++i)
+        for (int j = 0; j < sectors; ++j) {
+            s.triangles.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
+            s.triangles.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
+        }
+    for (int j = 0; j < sectors; ++j) s.triangles.push_back({last, ring(rings - 2, j + 1), ring(rings - 2, j)});
+    s.triangleMaterials.assign(s.triangles.size(), 0);
+    return s;
+}
+
+/// A box of half extents h about c, rotated by `degrees` about the axis (1, 1, 0) / sqrt 2.
+TriangleSoup box(const Vec& h, const Vec& c, double degrees = 0.0)
+{
+    TriangleSoup s;
+    s.materials.push_back({});
+    const double a = degrees * M_PI / 180.0, k = 1.0 / std::sqrt(2.0);
+    const double ca = std::cos(a), sa = std::sin(a);
+    const Vec axis{k, k, 0.0};
+    for (int i = 0; i < 8; ++i) {
+        const Vec p{(i & 1 ? 1 : -1) * h[0], (i & 2 ? 1 : -1) * h[1], (i & 4 ? 1 : -1) * h[2]};
+        // Rodrigues' rotation.
+        const double d = axis[0] * p[0] + axis[1] * p[1] + axis[2] * p[2];
+        const Vec x{axis[1] * p[2] - axis[2] * p[1], axis[2] * p[0] - axis[0] * p[2], axis[0] * p[1] - axis[1] * p[0]};
+        Vec r;
+        for (int j = 0; j < 3; ++j) r[std::size_t(j)] = c[std::size_t(j)] + p[std::size_t(j)] * ca + x[std::size_t(j)] * sa + axis[std::size_t(j)] * d * (1.0 - ca);
+        s.positions.push_back(r);
+    }
+    const uint32_t faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& f : faces) {
+        s.triangles.push_back({f[0], f[1], f[2]});
+        s.triangles.push_back({f[0], f[2], f[3]});
+    }
+    s.triangleMaterials.assign(s.triangles.size(), 0);
+    return s;
+}
+
+Mesh closedMesh(const Volume& v)
+{
+    REQUIRE(checkInvariants(v).empty());
+    MeshOptions cms;
+    cms.kind = MesherKind::CubicalMarchingSquares;
+    const Mesh mesh = meshVolume(v, cms);
+    const MeshTopology t = analyzeTopology(mesh, kMergeDistanceVoxels * v.voxelSize());
+    INFO(t.boundaryEdges << " boundary, " << t.nonManifoldEdges << " non-manifold, " << t.pinchedVertices << " pinched");
+    CHECK(t.watertight());
+    return mesh;
+}
+
+/// The largest distance of a volume's crossings from a sphere, in voxels.
+double crossingError(const Volume& v, double radius, const Vec& c)
+{
+    double worst = 0.0;
+    const double vs = v.voxelSize();
+    const HermiteTree& tree = v.impl().grid->constTree();
+    for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf)
+        for (Index i = 0; i < Index(kLeafVoxels); ++i)
+            for (int axis = 0; axis < 3; ++axis)
+                if (const PackedSample* s = leaf->sample(i, axis)) {
+                    const Coord p = leaf->offsetToGlobalCoord(i);
+                    Vec x{p.x() * vs - c[0], p.y() * vs - c[1], p.z() * vs - c[2]};
+                    x[std::size_t(axis)] += unpackSample(*s).offset * vs;
+                    worst = std::max(worst, std::fabs(std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) - radius) / vs);
+                }
+    return worst;
+}
+
+} // namespace
+
+TEST_CASE("a tessellated sphere voxelizes within its tessellation error, closed", "[voxelize]")
+{
+    const double radius = 10.0;
+    for (const Vec& centre : {Vec{0.0, 0.0, 0.0}, Vec{0.3, -0.7, 1.1}}) {
+        const TriangleSoup sphere = uvSphere(radius, centre);
+        VoxelizeOptions o;
+        o.voxelSize = 0.5;
+        VoxelizeReport report;
+        const Volume v = voxelizeMesh(sphere, o, &report);
+        CHECK(report.patchedCrossings == 0);
+        CHECK(report.votedPoints < 20); // rays grazing the poles, at most
+        // The facets lie inside the sphere by at most r (1 - cos(pi / rings)) = 0.021, 0.04 voxel.
+        CHECK(crossingError(v, radius, centre) < 0.06);
+        const Mesh mesh = closedMesh(v);
+        CHECK(enclosedVolume(mesh) == Approx(4.0 / 3.0 * M_PI * radius * radius * radius).epsilon(0.01));
+    }
+}
+
+TEST_CASE("boxes voxelize exactly: on the lattice, off it and rotated", "[voxelize]")
+{
+    struct Case {
+        Vec half, centre;
+        double degrees;
+    };
+    // Integer corners (users model on integers), half-voxel corners, and a rotated box.
+    for (const Case& c : {Case{{4, 3, 5}, {0, 0, 0}, 0.0}, Case{{4.25, 3, 2.5}, {1, 2, 0.5}, 0.0}, Case{{4, 3, 5}, {0.2, 0.1, 0.3}, 30.0}}) {
+        CAPTURE(c.degrees, c.half[0], c.centre[0]);
+        VoxelizeOptions o;
+        o.voxelSize = 0.25;
+        VoxelizeReport report;
+        const Volume v = voxelizeMesh(box(c.half, c.centre, c.degrees), o, &report);
+        CHECK(report.patchedCrossings == 0);
+        const Mesh mesh = closedMesh(v);
+        CHECK(enclosedVolume(mesh) == Approx(8.0 * c.half[0] * c.half[1] * c.half[2]).epsilon(c.degrees == 0.0 ? 1e-3 : 1e-2));
+    }
+}
+
+TEST_CASE("messy meshes: duplicated, flipped, holed and degenerate triangles are repaired", "[voxelize]")
+{
+    VoxelizeOptions o;
+    o.voxelSize = 0.5;
+    const TriangleSoup clean = uvSphere(8.0, {0.1, 0.2, 0.3}, 24, 48);
+    const Volume reference = voxelizeMesh(clean, o);
+    const double volume = enclosedVolume(closedMesh(reference));
+
+    TriangleSoup doubled = clean; // every triangle twice
+    doubled.triangles.insert(doubled.triangles.end(), clean.triangles.begin(), clean.triangles.end());
+    doubled.triangleMaterials.assign(doubled.triangles.size(), 0);
+    VoxelizeReport r;
+    CHECK(identical(voxelizeMesh(doubled, o, &r), reference));
+    CHECK(r.duplicateHits > 0);
+
+    TriangleSoup flipped = clean; // every other triangle wound the wrong way
+    for (std::size_t i = 0; i < flipped.triangles.size(); i += 2) std::swap(flipped.triangles[i][1], flipped.triangles[i][2]);
+    CHECK(identical(voxelizeMesh(flipped, o), reference));
+
+    TriangleSoup holed = clean; // a hole of 6 triangles
+    holed.triangles.erase(holed.triangles.begin() + 300, holed.triangles.begin() + 306);
+    holed.triangleMaterials.resize(holed.triangles.size());
+    const Volume patched = voxelizeMesh(holed, o, &r);
+    CHECK(r.votedPoints > 0);
+    CHECK(enclosedVolume(closedMesh(patched)) == Approx(volume).epsilon(0.01));
+}
+
+TEST_CASE("the real models voxelize into closed meshes", "[voxelize]")
+{
+    const std::string models = std::string(VDBCLAY_SHARED_DATA) + "/models/";
+    if (!std::filesystem::exists(models)) {
+        WARN("no " << models << ": the real models are not checked");
+        return;
+    }
+    for (const char* name : {"teapot.obj", "stanford-bunny.obj", "suzanne.obj", "fandisk.obj"}) {
+        CAPTURE(name);
+        const TriangleSoup mesh = loadTriangleMesh(models + name);
+        VoxelizeOptions o;
+        o.resolution = 64;
+        VoxelizeReport report;
+        const Volume v = voxelizeMesh(mesh, o, &report);
+        CHECK(report.solidVoxels > 1000);
+        closedMesh(v);
+    }
+}
+
+TEST_CASE("bad meshes and options are refused with one line", "[voxelize]")
+{
+    TempDir dir;
+    writeText(dir.file("junk.obj"), "this is not\x01 an obj file\nf 1 2 3\n");
+    writeText(dir.file("empty.obj"), "# nothing\n");
+    writeText(dir.file("lines.obj"), "v 0 0 0\nv 1 0 0\nl 1 2\n");
+    for (const char* f : {"junk.obj", "empty.obj", "lines.obj", "missing.obj"}) {
+        CAPTURE(f);
+        try {
+            (void)loadTriangleMesh(dir.file(f));
+            FAIL("loaded");
+        } catch (const MeshImportError& e) {
+            CHECK(std::string(e.what()).find('\n') == std::string::npos);
+        }
+    }
+    const TriangleSoup sphere = uvSphere(1.0, {0, 0, 0}, 8, 16);
+    CHECK_THROWS_AS(voxelizeMesh(sphere, {}), std::invalid_argument);
+    VoxelizeOptions tiny;
+    tiny.voxelSize = 1e-7; // 2e7 points a side
+    CHECK_THROWS_AS(voxelizeMesh(sphere, tiny), std::invalid_argument);
+    VoxelizeOptions zero;
+    zero.resolution = 0;
+    CHECK_THROWS_AS(voxelizeMesh(sphere, zero), std::invalid_argument);
+}
+
+TEST_CASE("cli: import voxelizes a mesh with its materials and says what it repaired", "[voxelize][cli]")
+{
+    if (std::string(kCli).empty()) return; // no CLI in this build
+    TempDir dir;
+    writeText(dir.file("two.mtl"), "newmtl red\nKd 1 0 0\nnewmtl blue\nKd 0 0 1\n");
+    std::string obj = "mtllib two.mtl\n";
+    const char* corners = "v 0 0 0\nv 4 0 0\nv 4 4 0\nv 0 4 0\nv 0 0 4\nv 4 0 4\nv 4 4 4\nv 0 4 4\n";
+    obj += corners;
+    obj += "usemtl red\nf 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nusemtl blue\nf 3 4 8 7\nf 1 5 8 4\nf 2 3 7 6\n";
+    writeText(dir.file("cube.obj"), obj);
+    const nlohmann::json out = parseJsonOutput(runCli(dir, "import cube.obj --voxel-size 0.5 -o cube.vdbclay --json"));
+    CHECK(out["mesh"]["triangles"] == 12);
+    CHECK(out["mesh"]["patched_crossings"] == 0);
+    CHECK(out["mesh"]["materials"] == nlohmann::json::array({"default", "red", "blue"}));
+    const nlohmann::json meshed = parseJsonOutput(runCli(dir, "mesh cube.vdbclay -o cube-out.obj --json"));
+    CHECK(meshed["watertight"] == true);
+    const CommandResult text = runCli(dir, "import cube.obj --resolution 16 --material clay -o c.vdb");
+    CHECK(text.exitCode == 0);
+    CHECK(text.out.find("repaired") != std::string::npos);
+    CHECK(parseJsonOutput(runCli(dir, "info c.vdb --json"))["materials"] == nlohmann::json::array({"default", "clay"}));
+    checkCleanFailure(runCli(dir, "import cube.obj -o x.vdb"));                 // no voxel size
+    checkCleanFailure(runCli(dir, "import cube.obj --resolution 0 -o x.vdb"));
+    checkCleanFailure(runCli(dir, "import cube.obj --voxel-size 1 --resolution 4 -o x.vdb"));
+    checkCleanFailure(runCli(dir, "import cube.obj --iso 1 --resolution 4 -o x.vdb"));
+    writeText(dir.file("junk.stl"), "solid junk\n garbage\n");
+    checkCleanFailure(runCli(dir, "import junk.stl --resolution 8 -o x.vdb"));
+    CHECK_FALSE(std::filesystem::exists(dir.path() / "x.vdb"));
+}
