@@ -25,6 +25,8 @@ CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& o)
                 "        Table 1 and this machine's copy bandwidth; the sparse pyramid vs tools::MultiResGrid\n"
                 "stream  a terrain store 4x the memory budget, flown over at 90 Hz with strokes: peak RSS, time to\n"
                 "        coarse and refined views, stroke latency, read rate vs the disk, bytes per voxel^2 of surface\n"
+                "import  fandisk.obj and rocker-arm.obj voxelized at 256 voxels and meshed by CMS vs meshToLevelSet +\n"
+                "        volumeToMesh: time, triangles, mean and Hausdorff distance to the input (VDBCLAY_MODELS: their folder)\n"
                 "Build in Release for meaningful figures; docs/BENCHMARKS.md has measured tables.");
     return cmd;
 }
@@ -33,7 +35,7 @@ int runBenchCommand(const BenchCommandOptions& o)
 {
     bool known = false;
     for (const auto& n : bench::benchNames()) known = known || n == o.which;
-    if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory, io, mesh, wavelet or stream)");
+    if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory, io, mesh, wavelet, stream or import)");
     return bench::runBench(o.which, o.json, o.quick);
 }
 

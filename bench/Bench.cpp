@@ -8,7 +8,7 @@
 
 namespace vdbclay::bench {
 
-std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream"}; }
+std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream", "import"}; }
 
 int runBench(const std::string& which, bool json, bool quick)
 {
@@ -19,7 +19,8 @@ int runBench(const std::string& which, bool json, bool quick)
     if (which == "mesh") return benchMesh(json, quick);
     if (which == "wavelet") return benchWavelet(json, quick);
     if (which == "stream") return benchStream(json, quick);
-    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet or stream)");
+    if (which == "import") return benchImport(json, quick);
+    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet, stream or import)");
 }
 
 } // namespace vdbclay::bench

@@ -9,5 +9,6 @@ int benchIo(bool json, bool quick);
 int benchMesh(bool json, bool quick);
 int benchWavelet(bool json, bool quick);
 int benchStream(bool json, bool quick);
+int benchImport(bool json, bool quick);
 
 } // namespace vdbclay::bench
