@@ -21,18 +21,6 @@ using namespace vdbclay::test;
 
 namespace {
 
-/// Spans several bricks on both sides of the origin, with two materials and a solid interior big
-/// enough for uniform bricks.
-Volume multiBrickScene()
-{
-    Volume v(0.5);
-    const MaterialId red = defineMaterial(v, "red", 0.5f);
-    apply(v, CsgMode::Add, sphere(70.0), at(Vec3d(3.1, -2.0, 1.0)));
-    apply(v, CsgMode::Add, box(Vec3d(20.0, 10.0, 12.0)), at(Vec3d(45.0, 20.0, -10.0), Vec3d(0.0, 30.0, 0.0)), red);
-    apply(v, CsgMode::Remove, sphere(12.0), at(Vec3d(-40.0, 0.0, 20.0)));
-    return v;
-}
-
 std::string randomScript(std::mt19937& rng)
 {
     std::uniform_real_distribution<double> pos(-60.0, 60.0), radius(2.0, 14.0);

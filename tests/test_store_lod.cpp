@@ -22,18 +22,6 @@ using namespace vdbclay::test;
 
 namespace {
 
-/// Several bricks on both sides of the origin, two materials, and a solid interior that spans whole
-/// bricks at level 0 and whole blocks at level 2.
-Volume solidScene()
-{
-    Volume v(0.5);
-    const MaterialId red = defineMaterial(v, "red", 0.5f);
-    apply(v, CsgMode::Add, sphere(70.0), at(Vec3d(3.1, -2.0, 1.0)));
-    apply(v, CsgMode::Add, box(Vec3d(20.0, 10.0, 12.0)), at(Vec3d(45.0, 20.0, -10.0), Vec3d(0.0, 30.0, 0.0)), red);
-    apply(v, CsgMode::Remove, sphere(12.0), at(Vec3d(-40.0, 0.0, 20.0)));
-    return v;
-}
-
 /// Solids on the lattice that touch, far from the origin: integer boxes as users type them.
 Volume latticeScene()
 {
@@ -67,7 +55,7 @@ TEST_CASE("lod build brick by brick equals the pyramid built in memory from the 
 {
     TempDir dir;
     int index = 0;
-    for (const Volume& v : {solidScene(), latticeScene()}) {
+    for (const Volume& v : {multiBrickScene(), latticeScene()}) {
         const std::string path = dir.file("s" + std::to_string(index++) + ".vdbclay");
         writeStoreFile(v, path);
         SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
@@ -100,7 +88,7 @@ TEST_CASE("sculpting a store keeps every level of its pyramid equal to a rebuild
 {
     TempDir dir;
     const std::string path = dir.file("s.vdbclay");
-    writeStoreFile(solidScene(), path);
+    writeStoreFile(multiBrickScene(), path);
     SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
     buildStoreLod(scene, 3);
     std::mt19937 rng(20261202);
@@ -120,7 +108,7 @@ TEST_CASE("an edit on a store whose pyramid has no densities marks it stale; a r
 {
     TempDir dir;
     const std::string path = dir.file("s.vdbclay");
-    writeStoreFile(solidScene(), path);
+    writeStoreFile(multiBrickScene(), path);
     SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
     buildStoreLod(scene, 3);
     // What a store built before densities were kept looks like.

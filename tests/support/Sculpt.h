@@ -95,4 +95,16 @@ inline MaterialId defineMaterial(Volume& v, const std::string& name, float tough
     return v.materials().define(m);
 }
 
+/// Spans several 64-voxel bricks on both sides of the origin, with two materials and a solid interior
+/// that spans whole bricks at level 0 (uniform bricks) and whole blocks at level 2.
+inline Volume multiBrickScene()
+{
+    Volume v(0.5);
+    const MaterialId red = defineMaterial(v, "red", 0.5f);
+    apply(v, CsgMode::Add, sphere(70.0), at(Vec3d(3.1, -2.0, 1.0)));
+    apply(v, CsgMode::Add, box(Vec3d(20.0, 10.0, 12.0)), at(Vec3d(45.0, 20.0, -10.0), Vec3d(0.0, 30.0, 0.0)), red);
+    apply(v, CsgMode::Remove, sphere(12.0), at(Vec3d(-40.0, 0.0, 20.0)));
+    return v;
+}
+
 } // namespace vdbclay::test
