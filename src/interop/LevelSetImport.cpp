@@ -24,6 +24,9 @@ namespace {
 using openvdb::FloatGrid;
 using FloatAccessor = openvdb::tree::ValueAccessor<const openvdb::FloatTree>;
 
+/// The most voxels a resampling may make (an absurd transform or voxel size is refused, not run).
+constexpr double kMaxResampledVoxels = double(1u << 28);
+
 /// Where the field is solid: g < 0, with g the level set minus the iso value, or the iso value minus
 /// the density, so that the gradient of g points out of the solid.
 struct SignedField {
@@ -153,6 +156,12 @@ std::string onLattice(FloatGrid::Ptr& grid, double voxelSize, bool levelSet, ope
         }
     }
     if (why.empty()) return "";
+    // Resampling makes about as many voxels as the grid has, times its voxels' volume over the new one's.
+    const double sourceVolume = std::fabs(xf.baseMap()->getAffineMap()->getMat4().getMat3().det());
+    const double expected = double(grid->activeVoxelCount()) * sourceVolume / (voxelSize * voxelSize * voxelSize);
+    if (!(expected <= kMaxResampledVoxels))
+        throw std::invalid_argument("resampling this grid at a voxel size of " + std::to_string(voxelSize) + " would make about " +
+                                    std::to_string(expected) + " voxels; give a larger --voxel-size");
     FloatGrid::Ptr out = FloatGrid::create(grid->background());
     out->setTransform(openvdb::math::Transform::createLinearTransform(voxelSize));
     out->setGridClass(grid->getGridClass());
@@ -193,7 +202,13 @@ Volume importLevelSet(const std::string& path, const LevelSetImportOptions& opti
         grid->setGridClass(d->getGridClass());
     }
     openvdb::Coord shift(0);
-    const std::string resampled = onLattice(grid, voxelSize, !fog, shift);
+    std::string resampled;
+    try {
+        resampled = onLattice(grid, voxelSize, !fog, shift);
+    } catch (const std::exception& e) { // OpenVDB's own failures (a transform it cannot invert, ...)
+        throw VolumeIOError("'" + path + "': grid '" + printableText(chosen.header.name, 64) +
+                            "' cannot be resampled onto VDBClay's lattice: " + printableText(e.what(), 200));
+    }
 
     Volume volume(voxelSize);
     const MaterialId material = volume.materials().find(options.material).value_or(0) != 0

@@ -2,9 +2,11 @@
 
 #include "interop/StandardGridRead.h"
 #include "vdb_hermite/PrintableText.h"
+#include "vdb_hermite/Volume.h"
 #include "vdb_hermite/VolumeIO.h"
 
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -28,6 +30,20 @@ auto guarded(const std::string& path, Read&& read)
     } catch (const std::exception& e) {
         throw VolumeIOError("'" + path + "' cannot be read: " + printableText(e.what())); // libraries quote the file
     }
+}
+
+/// A transform resampling can invert: finite, not singular, with voxels VDBClay can hold.
+bool usableTransform(const openvdb::math::Transform& xf)
+{
+    if (!xf.isLinear()) return false;
+    const openvdb::Mat4d m = xf.baseMap()->getAffineMap()->getMat4();
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j)
+            if (!std::isfinite(m(i, j))) return false;
+    const openvdb::Vec3d voxel = xf.voxelSize();
+    for (int i = 0; i < 3; ++i)
+        if (!(voxel[i] >= kMinVoxelSize && voxel[i] <= kMaxVoxelSize)) return false;
+    return std::fabs(m.getMat3().det()) > 1e-6 * voxel[0] * voxel[1] * voxel[2];
 }
 
 } // namespace
@@ -63,6 +79,7 @@ StandardVdbInfo describeStandardVdb(const std::string& path)
             g.voxelSize = {voxel[0], voxel[1], voxel[2]};
             g.uniformVoxels = grid.hasUniformVoxels();
             g.axisAligned = axisAligned(grid.transform());
+            g.usableTransform = usableTransform(grid.transform());
             if (const auto count = grid.getMetadata<openvdb::Int64Metadata>(openvdb::GridBase::META_FILE_VOXEL_COUNT))
                 g.activeVoxels = uint64_t(count->value());
             info.grids.push_back(std::move(g));
@@ -77,6 +94,9 @@ const StandardGridInfo& chooseImportGrid(const StandardVdbInfo& info, const std:
     if (!name.empty()) {
         for (const StandardGridInfo& g : info.grids) {
             if (g.header.name != name) continue;
+            if (g.header.treeChecked && !g.usableTransform)
+                throw VolumeIOError("grid '" + printableText(name, 64) + "' of '" + path +
+                                    "' has a transform that is singular, not finite, or of voxels outside VDBClay's range");
             if (!g.importable())
                 throw VolumeIOError("grid '" + printableText(name, 64) + "' of '" + path + "' is a " + g.header.valueType +
                                     " grid; VDBClay imports float and double grids");

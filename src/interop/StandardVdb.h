@@ -18,11 +18,15 @@ struct StandardGridInfo {
     std::array<double, 3> voxelSize{0.0, 0.0, 0.0};
     bool uniformVoxels = false;
     bool axisAligned = false; // a scale and translation only (no rotation or shear)
+    bool usableTransform = false; // finite, invertible, voxels within VDBClay's voxel size range
     uint64_t activeVoxels = 0;
     bool levelSet() const { return header.gridClass == "level set"; }
     bool fogVolume() const { return header.gridClass == "fog volume"; }
     /// Whether `vdbclay import` can bring it in: a float or double grid.
-    bool importable() const { return header.treeChecked && (header.valueType == "float" || header.valueType == "double"); }
+    bool importable() const
+    {
+        return header.treeChecked && usableTransform && (header.valueType == "float" || header.valueType == "double");
+    }
 };
 
 struct StandardVdbInfo {

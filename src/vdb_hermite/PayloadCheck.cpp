@@ -6,6 +6,9 @@
 #include <openvdb/io/Compression.h>
 #include <openvdb/version.h>
 
+#include <blosc.h>
+#include <zlib.h>
+
 #include <array>
 #include <bitset>
 #include <cstring>
@@ -116,8 +119,21 @@ GridMetadata checkMetadata(PayloadReader& r, bool foreign)
 constexpr uint32_t kHermiteCompression = openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK;
 constexpr uint32_t kStandardCompression = kHermiteCompression | openvdb::io::COMPRESS_ZIP;
 
-/// One block of `expectedBytes` values as io::readData writes them with this compression.
-void checkDataBlock(PayloadReader& r, uint64_t expectedBytes, uint32_t compression)
+void checkBloscHeader(PayloadReader& r, const unsigned char* header, uint64_t expectedBytes, int64_t stored)
+{
+    uint32_t nbytes, blocksize, cbytes;
+    std::memcpy(&nbytes, header + 4, 4);
+    std::memcpy(&blocksize, header + 8, 4);
+    std::memcpy(&cbytes, header + 12, 4);
+    if (nbytes != expectedBytes) r.fail("a compressed block expands to " + std::to_string(nbytes) + " bytes where " + std::to_string(expectedBytes) + " belong");
+    if (cbytes != uint64_t(stored)) r.fail("a compressed block's header disagrees with its size");
+    if (nbytes > 0 && blocksize == 0) r.fail("a compressed block has no block size");
+}
+
+/// One block of `expectedBytes` values as io::readData writes them with this compression. With
+/// `decode`, compressed data is also decompressed here: OpenVDB throws where it does not decode, from
+/// inside RootNode::readTopology, which then leaks the node it was reading.
+void checkDataBlock(PayloadReader& r, uint64_t expectedBytes, uint32_t compression, bool decode)
 {
     if (!(compression & (openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ZIP))) {
         r.skip(expectedBytes, "an uncompressed block");
@@ -133,21 +149,34 @@ void checkDataBlock(PayloadReader& r, uint64_t expectedBytes, uint32_t compressi
     }
     if (uint64_t(stored) > r.remaining()) r.fail("a compressed block of " + std::to_string(stored) + " bytes runs past the end of the payload");
     if (compression & openvdb::io::COMPRESS_ZIP) {
-        // zlib inflates into a buffer of expectedBytes and fails where the data would not fit it.
-        r.skip(uint64_t(stored), "a zip block");
+        if (!decode) {
+            r.skip(uint64_t(stored), "a zip block"); // zlib fails where the data would not fit its buffer
+            return;
+        }
+        std::string zipped(std::size_t(stored), '\0');
+        r.read(zipped.data(), uint64_t(stored), "a zip block");
+        std::string out(std::size_t(expectedBytes), '\0');
+        uLongf size = uLongf(expectedBytes);
+        if (uncompress(reinterpret_cast<Bytef*>(out.data()), &size, reinterpret_cast<const Bytef*>(zipped.data()), uLong(stored)) != Z_OK ||
+            size != expectedBytes)
+            r.fail("a zip block does not decompress to the " + std::to_string(expectedBytes) + " bytes it must hold");
         return;
     }
     // Blosc's header: version, versionlz, flags, typesize, then nbytes, blocksize, cbytes (uint32 each).
     unsigned char header[16];
     if (stored < 16) r.fail("a compressed block is shorter than its header");
+    if (decode) {
+        std::string block(std::size_t(stored), '\0');
+        r.read(block.data(), uint64_t(stored), "a compressed block");
+        std::memcpy(header, block.data(), sizeof(header));
+        checkBloscHeader(r, header, expectedBytes, stored);
+        std::string out(std::size_t(expectedBytes) + 1, '\0');
+        if (expectedBytes > 0 && blosc_decompress_ctx(block.data(), out.data(), out.size(), 1) != int(expectedBytes))
+            r.fail("a compressed block does not decompress to the " + std::to_string(expectedBytes) + " bytes it must hold");
+        return;
+    }
     r.read(header, sizeof(header), "a compressed block's header");
-    uint32_t nbytes, blocksize, cbytes;
-    std::memcpy(&nbytes, header + 4, 4);
-    std::memcpy(&blocksize, header + 8, 4);
-    std::memcpy(&cbytes, header + 12, 4);
-    if (nbytes != expectedBytes) r.fail("a compressed block expands to " + std::to_string(nbytes) + " bytes where " + std::to_string(expectedBytes) + " belong");
-    if (cbytes != uint64_t(stored)) r.fail("a compressed block's header disagrees with its size");
-    if (nbytes > 0 && blocksize == 0) r.fail("a compressed block has no block size");
+    checkBloscHeader(r, header, expectedBytes, stored);
     r.skip(uint64_t(stored) - sizeof(header), "a compressed block");
 }
 
@@ -159,6 +188,7 @@ struct TreeLayout {
     uint64_t fullValueBytes = 2;
     bool hermite = true;
     bool half = false; // OpenVDB's half-float reader reads nothing for no values (no block header either)
+    bool decode = false; // decompress every block (files of other tools)
 };
 
 /// A node's values as io::readCompressedValues reads them, for a node of `count` values with the given
@@ -180,7 +210,7 @@ void checkCompressedValues(PayloadReader& r, const std::bitset<N>& valueMask, ui
     const bool maskCompressed = compression & openvdb::io::COMPRESS_ACTIVE_MASK;
     const uint64_t count = maskCompressed && metadata != NO_MASK_AND_ALL_VALS ? valueMask.count() : N;
     if (layout.half && count == 0) return;
-    checkDataBlock(r, count * layout.valueBytes, compression);
+    checkDataBlock(r, count * layout.valueBytes, compression, layout.decode);
 }
 
 template<std::size_t N>
@@ -261,7 +291,7 @@ void checkTree(PayloadReader& r, uint32_t compression, const TreeLayout& layout,
         for (uint64_t w : edges) crossings += uint64_t(__builtin_popcountll(w));
         const uint32_t samples = r.value<uint32_t>("a leaf's sample count");
         if (samples != crossings) r.fail("a leaf holds " + std::to_string(samples) + " samples for " + std::to_string(crossings) + " crossing edges");
-        if (samples > 0) checkDataBlock(r, uint64_t(samples) * 6, compression);
+        if (samples > 0) checkDataBlock(r, uint64_t(samples) * 6, compression, layout.decode);
     }
     summary.leaves += leavesOfTree;
     const uint64_t leafBytes = layout.fullValueBytes * kLeafSize + 64 + 64 + (layout.hermite ? kHermiteLeafExtraBytes : 0);
@@ -294,7 +324,7 @@ std::optional<TreeLayout> standardLayout(const std::string& valueType, bool half
     static const std::array<std::tuple<const char*, uint64_t, uint64_t>, 7> kTypes{
         {{"float", 4, 2}, {"double", 8, 2}, {"int32", 4, 4}, {"int64", 8, 8}, {"vec3s", 12, 6}, {"vec3d", 24, 6}, {"vec3i", 12, 12}}};
     for (const auto& [name, bytes, halfBytes] : kTypes)
-        if (valueType == name) return TreeLayout{halfFloat && halfBytes != bytes ? halfBytes : bytes, bytes, false, halfFloat && halfBytes != bytes};
+        if (valueType == name) return TreeLayout{halfFloat && halfBytes != bytes ? halfBytes : bytes, bytes, false, halfFloat && halfBytes != bytes, true};
     return std::nullopt;
 }
 
