@@ -5,11 +5,14 @@
 #include "vdb_hermite/Volume.h"
 #include "vdb_hermite/VolumeIO.h"
 
+#include <openvdb/io/DelayedLoadMetadata.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 
 namespace vdbclay {
 
@@ -46,11 +49,24 @@ bool usableTransform(const openvdb::math::Transform& xf)
     return std::fabs(m.getMat3().det()) > 1e-6 * voxel[0] * voxel[1] * voxel[2];
 }
 
+/// OpenVDB, with the delayed-load metadata that files of other tools carry read as opaque bytes: its
+/// reader allocates arrays of whatever length the file states (found by fuzzing), and VDBClay never
+/// loads lazily. Its bytes are checked like any other metadata value's (they must fit the file).
+void initializeForForeignFiles()
+{
+    static std::once_flag once;
+    std::call_once(once, [] {
+        openvdb::initialize();
+        if (openvdb::Metadata::isRegisteredType(openvdb::io::DelayedLoadMetadata::staticTypeName()))
+            openvdb::Metadata::unregisterType(openvdb::io::DelayedLoadMetadata::staticTypeName());
+    });
+}
+
 } // namespace
 
 StandardVdbInfo describeStandardVdb(const std::string& path)
 {
-    openvdb::initialize();
+    initializeForForeignFiles();
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) throw VolumeIOError("'" + path + "' is not a regular file");
     const uint64_t size = fs::file_size(path, ec);

@@ -231,7 +231,8 @@ constexpr uint64_t kUpperBytes = 8 * kUpperSize + 2 * kUpperSize / 8 + 64; // no
 constexpr uint64_t kLowerBytes = 8 * kLowerSize + 2 * kLowerSize / 8 + 64;
 constexpr uint64_t kHermiteLeafExtraBytes = 192 + 48; // edge mask, prefix counts
 
-void checkTree(PayloadReader& r, uint32_t compression, const TreeLayout& layout, PayloadSummary& summary)
+/// Returns where the tree's buffers (its leaves' values) begin.
+uint64_t checkTree(PayloadReader& r, uint32_t compression, const TreeLayout& layout, PayloadSummary& summary)
 {
     const uint32_t buffers = r.value<uint32_t>("the tree's buffer count");
     if (buffers != 1) r.fail("the tree has " + std::to_string(buffers) + " buffers per node (OpenVDB writes one)");
@@ -281,6 +282,7 @@ void checkTree(PayloadReader& r, uint32_t compression, const TreeLayout& layout,
         }
     }
     // The buffers: each leaf's value mask and values (and for Hermite leaves, edge mask and samples).
+    const uint64_t buffersAt = r.position();
     for (uint64_t leaf = 0; leaf < leavesOfTree; ++leaf) {
         const auto values = readMask<kLeafSize>(r, "a leaf's value mask");
         checkCompressedValues(r, values, compression, layout);
@@ -296,6 +298,7 @@ void checkTree(PayloadReader& r, uint32_t compression, const TreeLayout& layout,
     summary.leaves += leavesOfTree;
     const uint64_t leafBytes = layout.fullValueBytes * kLeafSize + 64 + 64 + (layout.hermite ? kHermiteLeafExtraBytes : 0);
     summary.estimatedMemoryBytes += leavesOfTree * leafBytes;
+    return buffersAt;
 }
 
 /// OpenVDB names a grid saved with half floats after its type with this suffix.
@@ -358,7 +361,8 @@ PayloadSummary checkPayload(std::istream& in, uint64_t payloadBytes, const std::
                             std::to_string(openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION) + " to " +
                             std::to_string(openvdb::OPENVDB_FILE_VERSION));
     r.skip(4 + 4, "the library version");
-    r.skip(1, "the grid-offsets flag");
+    // With grid offsets OpenVDB seeks to each grid's stream positions: they must be where its parts are.
+    const bool offsets = r.value<uint8_t>("the grid-offsets flag") != 0;
     r.skip(36, "the file's UUID");
     checkMetadata(r, foreign);
     const uint32_t grids = r.value<uint32_t>("the grid count");
@@ -374,8 +378,10 @@ PayloadSummary checkPayload(std::istream& in, uint64_t payloadBytes, const std::
                                 " (" + printable(header.type) + ")");
         const bool instance = !r.text("a grid's instance parent", 4096).empty();
         if (instance && !foreign) r.fail("an instanced grid (VDBClay writes none)");
-        r.skip(8 + 8, "a grid's stream positions");
+        const int64_t gridAt = r.value<int64_t>("a grid's position");
+        const int64_t blocksAt = r.value<int64_t>("a grid's block position");
         const int64_t end = r.value<int64_t>("a grid's end position");
+        if (offsets && gridAt != int64_t(r.position())) r.fail("a grid's position is not where its data begins");
         const uint32_t compression = r.value<uint32_t>("a grid's compression flags");
         if (compression & ~(foreign ? kStandardCompression : kHermiteCompression))
             r.fail("compression flags " + std::to_string(compression) + " VDBClay does not read");
@@ -389,15 +395,16 @@ PayloadSummary checkPayload(std::istream& in, uint64_t payloadBytes, const std::
         const std::optional<TreeLayout> layout =
             !foreign ? std::optional<TreeLayout>(TreeLayout{}) : instance ? std::nullopt : standardLayout(header.valueType, header.halfFloat);
         if (layout) {
-            checkTree(r, compression, *layout, summary);
+            const uint64_t buffersAt = checkTree(r, compression, *layout, summary);
+            if (offsets && blocksAt != int64_t(buffersAt)) r.fail("a grid's block position is not where its buffers begin");
             header.treeChecked = true;
         } else {
             // Skipped by the positions the file gives for it (OpenVDB seeks to them too).
-            if (end <= int64_t(r.position()) || uint64_t(end) > payloadBytes)
-                r.fail("a grid of type '" + printable(header.type) + "' VDBClay cannot check, without a valid end position");
+            if (end <= int64_t(r.position()) || uint64_t(end) > payloadBytes || blocksAt < int64_t(r.position()) || blocksAt > end)
+                r.fail("a grid of type '" + printable(header.type) + "' VDBClay cannot check, without valid stream positions");
             r.skip(uint64_t(end) - r.position(), "a grid VDBClay does not read");
         }
-        if (end != 0 && uint64_t(end) != r.position()) r.fail("a grid does not end where its descriptor says");
+        if ((offsets || end != 0) && uint64_t(end) != r.position()) r.fail("a grid does not end where its descriptor says");
         summary.grids.push_back(std::move(header));
     }
     if (r.remaining() != 0) r.fail("the grids end " + std::to_string(r.remaining()) + " bytes before the end");
