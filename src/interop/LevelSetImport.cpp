@@ -24,9 +24,6 @@ namespace {
 using openvdb::FloatGrid;
 using FloatAccessor = openvdb::tree::ValueAccessor<const openvdb::FloatTree>;
 
-/// The most voxels a resampling may make (an absurd transform or voxel size is refused, not run).
-constexpr double kMaxResampledVoxels = double(1u << 28);
-
 /// Where the field is solid: g < 0, with g the level set minus the iso value, or the iso value minus
 /// the density, so that the gradient of g points out of the solid.
 struct SignedField {
@@ -140,7 +137,7 @@ std::vector<Coord> candidateLeaves(const SignedField& f)
 
 /// The grid as a float grid on VDBClay's lattice at `voxelSize`: as it is where its transform allows
 /// (`shift` then moves its index space onto ours), else resampled. Returns why it was resampled.
-std::string onLattice(FloatGrid::Ptr& grid, double voxelSize, bool levelSet, openvdb::Coord& shift)
+std::string onLattice(FloatGrid::Ptr& grid, double voxelSize, double maxVoxels, openvdb::Coord& shift)
 {
     const openvdb::math::Transform& xf = grid->transform();
     std::string why;
@@ -159,7 +156,7 @@ std::string onLattice(FloatGrid::Ptr& grid, double voxelSize, bool levelSet, ope
     // Resampling makes about as many voxels as the grid has, times its voxels' volume over the new one's.
     const double sourceVolume = std::fabs(xf.baseMap()->getAffineMap()->getMat4().getMat3().det());
     const double expected = double(grid->activeVoxelCount()) * sourceVolume / (voxelSize * voxelSize * voxelSize);
-    if (!(expected <= kMaxResampledVoxels))
+    if (!(expected <= maxVoxels))
         throw std::invalid_argument("resampling this grid at a voxel size of " + std::to_string(voxelSize) + " would make about " +
                                     std::to_string(expected) + " voxels; give a larger --voxel-size");
     FloatGrid::Ptr out = FloatGrid::create(grid->background());
@@ -167,7 +164,6 @@ std::string onLattice(FloatGrid::Ptr& grid, double voxelSize, bool levelSet, ope
     out->setGridClass(grid->getGridClass());
     // Level sets are rebuilt as narrow bands at the new voxel size (resampleToMatch does so for
     // GRID_LEVEL_SET); a fog is resampled with trilinear interpolation.
-    (void)levelSet;
     openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*grid, *out);
     grid = out;
     shift = openvdb::Coord(0);
@@ -204,7 +200,7 @@ Volume importLevelSet(const std::string& path, const LevelSetImportOptions& opti
     openvdb::Coord shift(0);
     std::string resampled;
     try {
-        resampled = onLattice(grid, voxelSize, !fog, shift);
+        resampled = onLattice(grid, voxelSize, options.maxResampledVoxels, shift);
     } catch (const std::exception& e) { // OpenVDB's own failures (a transform it cannot invert, ...)
         throw VolumeIOError("'" + path + "': grid '" + printableText(chosen.header.name, 64) +
                             "' cannot be resampled onto VDBClay's lattice: " + printableText(e.what(), 200));

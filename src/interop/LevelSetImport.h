@@ -17,6 +17,7 @@ struct LevelSetImportOptions {
     std::optional<double> iso;       // a fog volume needs it (solid where density > iso); a level set: solid where < iso (0)
     std::optional<double> voxelSize; // resample to it (default: the grid's own, when uniform)
     std::string material = "default";
+    double maxResampledVoxels = double(1u << 28); // a resampling that would make more is refused, not run
 };
 
 struct LevelSetImportReport {
