@@ -230,21 +230,9 @@ Volume importLevelSet(const std::string& path, const LevelSetImportOptions& opti
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 16), [&](const auto& range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) data[i] = leafData(field, candidates[i], material, crossings[i]);
     });
-    std::set<Coord> lowers;
     uint64_t total = 0;
-    for (std::size_t i = 0; i < candidates.size(); ++i) {
-        total += crossings[i];
-        const bool uniform = data[i].samples.empty() &&
-                             std::all_of(data[i].material.begin(), data[i].material.end(), [&](MaterialValue m) { return m == data[i].material[0]; });
-        if (uniform) {
-            if (!out.probeConstLeaf(candidates[i]) && out.getValue(candidates[i]) == data[i].material[0]) continue;
-            out.addTile(1, candidates[i], data[i].material[0], false);
-            lowers.insert(alignDown(candidates[i], kLowerDim));
-        } else {
-            out.touchLeaf(candidates[i])->assign(std::move(data[i]));
-        }
-    }
-    pruneNodes(out, lowers);
+    for (uint64_t c : crossings) total += c;
+    placeLeaves(out, candidates, data);
     if (report) {
         report->grid = chosen.header.name;
         report->gridClass = chosen.header.gridClass;

@@ -256,6 +256,14 @@ inline Coord alignDown(const Coord& c, int dim) { return Coord(c.x() & ~(dim - 1
 /// would fold a leaf of one material whose border edges carry samples.
 void pruneNodes(HermiteTree& tree, const std::set<Coord>& lowers);
 
+/// Whether a leaf's data is one material throughout without a sample (then `value` holds it).
+bool uniformWithoutSamples(const HermiteLeafData& data, MaterialValue& value);
+
+/// Puts leaves built as plain data into a tree, where the tree holds no leaf of theirs yet: a leaf of one
+/// material without samples becomes a tile (none where the tree already has that value), the others
+/// leaves; then the nodes made uniform are pruned. `data` is moved from.
+void placeLeaves(HermiteTree& tree, const std::vector<Coord>& origins, std::vector<HermiteLeafData>& data);
+
 /// Metadata keys stored on the grid.
 constexpr const char* kFormatVersionKey = "vdbclay_format_version";
 constexpr const char* kMaterialsKey = "vdbclay_materials";

@@ -203,3 +203,30 @@ void pruneNodes(HermiteTree& tree, const std::set<Coord>& lowers)
 
 
 } // namespace vdbclay
+
+namespace vdbclay {
+
+bool uniformWithoutSamples(const HermiteLeafData& data, MaterialValue& value)
+{
+    if (!data.samples.empty()) return false;
+    value = data.material[0];
+    return std::all_of(data.material.begin(), data.material.end(), [&](MaterialValue m) { return m == value; });
+}
+
+void placeLeaves(HermiteTree& tree, const std::vector<Coord>& origins, std::vector<HermiteLeafData>& data)
+{
+    std::set<Coord> lowers;
+    for (std::size_t i = 0; i < origins.size(); ++i) {
+        MaterialValue uniform;
+        if (uniformWithoutSamples(data[i], uniform)) {
+            if (tree.getValue(origins[i]) == uniform && !tree.probeConstLeaf(origins[i])) continue;
+            tree.addTile(1, origins[i], uniform, false);
+            lowers.insert(alignDown(origins[i], kLowerDim));
+        } else {
+            tree.touchLeaf(origins[i])->assign(std::move(data[i]));
+        }
+    }
+    pruneNodes(tree, lowers);
+}
+
+} // namespace vdbclay

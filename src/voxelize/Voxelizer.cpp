@@ -318,20 +318,11 @@ Volume voxelizeMesh(const TriangleSoup& mesh, const VoxelizeOptions& options, Vo
         }
     });
     // Leaves wholly inside one material without a crossing become tiles.
-    HermiteTree& out = volume.impl().grid->tree();
-    std::set<Coord> lowers;
-    for (std::size_t l = 0; l < origins.size(); ++l) {
-        if (!any[l]) continue;
-        const HermiteLeafData& d = data[l];
-        const bool uniform = d.samples.empty() && std::all_of(d.material.begin(), d.material.end(), [&](MaterialValue m) { return m == d.material[0]; });
-        if (uniform) {
-            out.addTile(1, origins[l], d.material[0], false);
-            lowers.insert(alignDown(origins[l], kLowerDim));
-        } else {
-            out.touchLeaf(origins[l])->assign(std::move(data[l]));
-        }
-    }
-    pruneNodes(out, lowers);
+    std::vector<Coord> placed;
+    std::vector<HermiteLeafData> placedData;
+    for (std::size_t l = 0; l < origins.size(); ++l)
+        if (any[l]) placed.push_back(origins[l]), placedData.push_back(std::move(data[l]));
+    placeLeaves(volume.impl().grid->tree(), placed, placedData);
     r.votedPoints = voted;
     r.patchedCrossings = patched;
     r.crossings = crossings;

@@ -115,13 +115,6 @@ HermiteLeafData coarseLeaf(const Surroundings& s)
     return data;
 }
 
-bool uniformWithoutSamples(const HermiteLeafData& data, MaterialValue& value)
-{
-    if (!data.samples.empty()) return false;
-    value = data.material[0];
-    return std::all_of(data.material.begin(), data.material.end(), [&](MaterialValue m) { return m == value; });
-}
-
 } // namespace
 
 std::optional<LodBlock> lowPassBlock(const LevelSource& source, int level, const BlockOrigin& origin)
