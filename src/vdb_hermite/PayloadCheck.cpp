@@ -142,8 +142,9 @@ void checkDataBlock(PayloadReader& r, uint64_t expectedBytes, uint32_t compressi
     const int64_t stored = r.value<int64_t>("a compressed block's size");
     if (stored <= 0) {
         // Stored uncompressed: OpenVDB reads -stored bytes into a buffer of expectedBytes before it checks.
-        if (uint64_t(-stored) != expectedBytes)
-            r.fail("an uncompressed block of " + std::to_string(-stored) + " bytes where " + std::to_string(expectedBytes) + " belong");
+        const uint64_t raw = uint64_t(0) - uint64_t(stored); // -stored, defined for INT64_MIN too
+        if (raw != expectedBytes)
+            r.fail("an uncompressed block of " + std::to_string(raw) + " bytes where " + std::to_string(expectedBytes) + " belong");
         r.skip(expectedBytes, "an uncompressed block");
         return;
     }
