@@ -33,6 +33,16 @@ Volume latticeScene()
     return v;
 }
 
+/// multiBrickScene in a store of `dir`, opened for writing, with three levels built.
+SceneStore storeWithPyramid(const TempDir& dir)
+{
+    const std::string path = dir.file("s.vdbclay");
+    writeStoreFile(multiBrickScene(), path);
+    SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
+    buildStoreLod(scene, 3);
+    return scene;
+}
+
 std::string randomEdit(std::mt19937& rng)
 {
     std::uniform_real_distribution<double> pos(-70.0, 70.0), radius(2.0, 16.0);
@@ -87,10 +97,7 @@ TEST_CASE("lod build brick by brick equals the pyramid built in memory from the 
 TEST_CASE("sculpting a store keeps every level of its pyramid equal to a rebuild", "[store][lod]")
 {
     TempDir dir;
-    const std::string path = dir.file("s.vdbclay");
-    writeStoreFile(multiBrickScene(), path);
-    SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
-    buildStoreLod(scene, 3);
+    SceneStore scene = storeWithPyramid(dir);
     std::mt19937 rng(20261202);
     uint64_t changedCoarse = 0;
     for (int edit = 0; edit < 10; ++edit) {
@@ -107,10 +114,7 @@ TEST_CASE("sculpting a store keeps every level of its pyramid equal to a rebuild
 TEST_CASE("an edit on a store whose pyramid has no densities marks it stale; a rebuild replaces levels", "[store][lod]")
 {
     TempDir dir;
-    const std::string path = dir.file("s.vdbclay");
-    writeStoreFile(multiBrickScene(), path);
-    SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
-    buildStoreLod(scene, 3);
+    SceneStore scene = storeWithPyramid(dir);
     // What a store built before densities were kept looks like.
     {
         StoreTransaction t(scene.bricks());

@@ -22,6 +22,8 @@ namespace {
 /// voxels): a mesh vertex, edge or face on the lattice (users model on integers) then lies on one side
 /// of the point for every ray, so the three rays agree, and a ray grazing a vertex hits it twice or not.
 constexpr std::array<double, 3> kPointOffset{1.23e-5, 0.71e-5, 0.97e-5};
+/// The most lattice points a mesh's box may span (the lattice is dense).
+constexpr double kMaxLatticePoints = double(1u << 28);
 /// How far past an edge's end, in voxels, a hit still counts as that edge's crossing.
 constexpr double kEndTolerance = 1e-3;
 
@@ -121,13 +123,17 @@ struct RayHits {
     std::vector<uint32_t> first; // per ray, into hits; size rays + 1
 };
 
-RayHits groupByRay(std::vector<Hit> hits, std::size_t rays, uint64_t& duplicates)
+RayHits groupByRay(std::vector<Hit> hits, std::size_t rays, int axis, uint64_t& duplicates)
 {
     RayHits out;
     out.hits.reserve(hits.size());
     for (std::size_t i = 0; i < hits.size(); ++i) {
-        if (!out.hits.empty() && out.hits.back().ray == hits[i].ray && std::fabs(out.hits.back().at - hits[i].at) < 1e-9) {
-            ++duplicates; // a duplicated triangle, or two faces of a seam at one place
+        // A duplicated triangle: one place, facing the same way along the ray. (Two hits at one place
+        // facing opposite ways are a fold the ray grazes: both count, or parity would flip.)
+        const Hit& last = out.hits.empty() ? hits[i] : out.hits.back();
+        if (!out.hits.empty() && last.ray == hits[i].ray && std::fabs(last.at - hits[i].at) < 1e-9 &&
+            (last.normal[std::size_t(axis)] > 0.0f) == (hits[i].normal[std::size_t(axis)] > 0.0f)) {
+            ++duplicates;
             continue;
         }
         out.hits.push_back(hits[i]);
@@ -170,9 +176,10 @@ Volume voxelizeMesh(const TriangleSoup& mesh, const VoxelizeOptions& options, Vo
         lattice.dim[a] = int32_t(last - first) + 1;
         points *= double(lattice.dim[a]);
     }
-    if (points > double(1u << 31))
+    // Five bytes a lattice point (votes, materials): 2^28 points is 1.3 GB.
+    if (points > kMaxLatticePoints)
         throw std::invalid_argument("the mesh spans " + std::to_string(uint64_t(points)) +
-                                    " lattice points at this voxel size (at most 2^31): choose a coarser one");
+                                    " lattice points at this voxel size (at most 2^28): choose a coarser one");
 
     VoxelizeReport r;
     r.voxelSize = voxelSize;
@@ -187,7 +194,7 @@ Volume voxelizeMesh(const TriangleSoup& mesh, const VoxelizeOptions& options, Vo
         const std::size_t count = std::size_t(lattice.dim[std::size_t(u)]) * std::size_t(lattice.dim[std::size_t(v)]);
         std::vector<Hit> hits = castRays(mesh, lattice, axis);
         r.hits += hits.size();
-        rays[std::size_t(axis)] = groupByRay(std::move(hits), count, r.duplicateHits);
+        rays[std::size_t(axis)] = groupByRay(std::move(hits), count, axis, r.duplicateHits);
         const RayHits& rh = rays[std::size_t(axis)];
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 64), [&](const auto& range) {
             for (std::size_t ray = range.begin(); ray != range.end(); ++ray) {

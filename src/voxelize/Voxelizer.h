@@ -34,7 +34,7 @@ struct VoxelizeReport {
 };
 
 /// Voxelizes a triangle soup. Throws std::invalid_argument for a missing or absurd voxel size or
-/// resolution, or a grid of more than 2^31 lattice points.
+/// resolution, or a grid of more than 2^28 lattice points.
 Volume voxelizeMesh(const TriangleSoup& mesh, const VoxelizeOptions& options, VoxelizeReport* report = nullptr);
 
 } // namespace vdbclay
