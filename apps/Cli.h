@@ -173,6 +173,18 @@ int runLodBuild(const LodOptions& options);
 int runLodInfo(const LodOptions& options);
 int runLodInspect(const LodOptions& options);
 
+struct ToolMakeOptions {
+    std::string scene;
+    std::vector<double> bbox; // x0 y0 z0 x1 y1 z1, world units; empty: the whole scene
+    std::string output;
+    bool json = false;
+};
+struct ToolCommands {
+    CLI::App* make = nullptr;
+};
+ToolCommands addToolCommand(CLI::App& parent, ToolMakeOptions& options);
+int runToolMake(const ToolMakeOptions& options);
+
 struct SynthCommandOptions {
     std::string kind;
     int extent = 512;

@@ -27,6 +27,8 @@ CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& o)
                 "        coarse and refined views, stroke latency, read rate vs the disk, bytes per voxel^2 of surface\n"
                 "import  fandisk.obj and rocker-arm.obj voxelized at 256 voxels and meshed by CMS vs meshToLevelSet +\n"
                 "        volumeToMesh: time, triangles, mean and Hausdorff distance to the input (VDBCLAY_MODELS: their folder)\n"
+                "tool    rotated 8^3 .. 128^3 box tools stamped onto a slab vs the analytic box brush and vs\n"
+                "        GridTransformer resampling + csgUnion of the tool's level set\n"
                 "Build in Release for meaningful figures; docs/BENCHMARKS.md has measured tables.");
     return cmd;
 }
@@ -35,7 +37,7 @@ int runBenchCommand(const BenchCommandOptions& o)
 {
     bool known = false;
     for (const auto& n : bench::benchNames()) known = known || n == o.which;
-    if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory, io, mesh, wavelet, stream or import)");
+    if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory, io, mesh, wavelet, stream, import or tool)");
     return bench::runBench(o.which, o.json, o.quick);
 }
 

@@ -39,6 +39,7 @@ int run(int argc, char** argv)
     LodOptions lodOptions;
     SynthCommandOptions synthOptions;
     DiffOptions diffOptions;
+    ToolMakeOptions toolOptions;
 
     CLI::App* newCmd = addNewCommand(app, newOptions);
     CLI::App* sculptCmd = addSculptCommand(app, sculptOptions);
@@ -53,7 +54,8 @@ int run(int argc, char** argv)
     const LodCommands lodCmds = addLodCommand(app, lodOptions);
     CLI::App* synthCmd = addSynthCommand(app, synthOptions);
     CLI::App* diffCmd = addDiffCommand(app, diffOptions);
-    for (CLI::App* cmd : {newCmd, sculptCmd, meshCmd, demoCmd, benchCmd, importCmd, exportCmd, lodCmds.build, lodCmds.inspect, synthCmd}) addThreadsOption(*cmd, threads);
+    const ToolCommands toolCmds = addToolCommand(app, toolOptions);
+    for (CLI::App* cmd : {newCmd, sculptCmd, meshCmd, demoCmd, benchCmd, importCmd, exportCmd, lodCmds.build, lodCmds.inspect, synthCmd, toolCmds.make}) addThreadsOption(*cmd, threads);
     // Set after the subcommands exist: CLI11 copies the parent's footer into subcommands created later.
     app.footer("Run 'vdbclay COMMAND --help' for the options of one command.\n"
                "Exit codes: 0 success, 1 the command failed, 2 wrong command line.");
@@ -69,7 +71,7 @@ int run(int argc, char** argv)
     } catch (const CLI::ParseError& e) {
         if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-') {
             printError(std::string("unknown command '") + argv[1] +
-                       "' (expected new, sculpt, mesh, info, import, export, lod, synth, diff, demo, bench or selftest; see 'vdbclay --help')");
+                       "' (expected new, sculpt, mesh, info, import, export, export-levelset, lod, synth, diff, tool, demo, bench or selftest; see 'vdbclay --help')");
             return kExitUsage;
         }
         std::string hint = "vdbclay --help";
@@ -103,6 +105,7 @@ int run(int argc, char** argv)
     if (*lodCmds.inspect) return runLodInspect(lodOptions);
     if (*synthCmd) return runSynth(synthOptions);
     if (*diffCmd) return runDiff(diffOptions);
+    if (*toolCmds.make) return runToolMake(toolOptions);
     printError("no command given (see 'vdbclay --help')");
     return kExitUsage;
 }

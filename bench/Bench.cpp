@@ -8,7 +8,7 @@
 
 namespace vdbclay::bench {
 
-std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream", "import"}; }
+std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream", "import", "tool"}; }
 
 int runBench(const std::string& which, bool json, bool quick)
 {
@@ -20,7 +20,8 @@ int runBench(const std::string& which, bool json, bool quick)
     if (which == "wavelet") return benchWavelet(json, quick);
     if (which == "stream") return benchStream(json, quick);
     if (which == "import") return benchImport(json, quick);
-    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet, stream or import)");
+    if (which == "tool") return benchTool(json, quick);
+    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet, stream, import or tool)");
 }
 
 } // namespace vdbclay::bench

@@ -10,5 +10,6 @@ int benchMesh(bool json, bool quick);
 int benchWavelet(bool json, bool quick);
 int benchStream(bool json, bool quick);
 int benchImport(bool json, bool quick);
+int benchTool(bool json, bool quick);
 
 } // namespace vdbclay::bench

@@ -19,17 +19,8 @@ int32_t floorDiv(int64_t v, int64_t d) { return int32_t(v >= 0 ? v / d : -((-v +
 std::optional<std::pair<IndexCoord, IndexCoord>> brickRange(const ScriptOp& op, double voxelSize)
 {
     if (op.mode == CsgMode::Intersect) return std::nullopt;
-    WorldBounds b = op.brush.bounds();
+    const WorldBounds b = opBounds(op);
     if (!b.bounded()) return std::nullopt;
-    if (!op.path.empty()) {
-        Vec3d lo = op.path.front(), hi = op.path.front();
-        for (const Vec3d& p : op.path)
-            for (int i = 0; i < 3; ++i) lo[i] = std::min(lo[i], p[i]), hi[i] = std::max(hi[i], p[i]);
-        for (int i = 0; i < 3; ++i) {
-            b.min[i] += lo[i] - op.path.front()[i];
-            b.max[i] += hi[i] - op.path.front()[i];
-        }
-    }
     IndexCoord lo, hi;
     for (int i = 0; i < 3; ++i) {
         const double min = std::floor(b.min[i] / voxelSize) - 2.0, max = std::ceil(b.max[i] / voxelSize) + kLeafDim + 2.0;

@@ -46,6 +46,8 @@ std::pair<double, double> cosSinDegrees(double degrees)
     return {std::cos(r), std::sin(r)};
 }
 
+} // namespace
+
 Mat3d rotationFromEuler(const Vec3d& degrees)
 {
     const auto [cx, sx] = cosSinDegrees(degrees.x());
@@ -57,7 +59,11 @@ Mat3d rotationFromEuler(const Vec3d& degrees)
     return rz * ry * rx; // column-vector convention: x first
 }
 
-Mat3d scaleMatrix(const Vec3d& s) { return Mat3d(s.x(), 0.0, 0.0, 0.0, s.y(), 0.0, 0.0, 0.0, s.z()); }
+Mat3d placementLinear(const Placement& p)
+{
+    const Vec3d& s = p.scale;
+    return rotationFromEuler(p.rotationDegrees) * Mat3d(s.x(), 0.0, 0.0, 0.0, s.y(), 0.0, 0.0, 0.0, s.z());
+}
 
 void validatePlacement(const Placement& p)
 {
@@ -67,6 +73,8 @@ void validatePlacement(const Placement& p)
             throw std::invalid_argument("positions and rotations must be finite numbers");
     }
 }
+
+namespace {
 
 /// Axis-aligned bounds of the primitive in its local frame (infinite for a half-space).
 WorldBounds primitiveBounds(const Primitive& p)
@@ -241,7 +249,7 @@ void Brush::compile(const std::vector<BrushPart>& parts, const Placement& placem
 {
     validatePlacement(placement);
     translation_ = placement.translation;
-    const Mat3d brushLinear = rotationFromEuler(placement.rotationDegrees) * scaleMatrix(placement.scale);
+    const Mat3d brushLinear = placementLinear(placement);
     const double brushMinScale = std::min({placement.scale.x(), placement.scale.y(), placement.scale.z()});
 
     parts_.clear();
@@ -251,7 +259,7 @@ void Brush::compile(const std::vector<BrushPart>& parts, const Placement& placem
     for (const auto& part : parts) {
         part.primitive.validate();
         validatePlacement(part.placement);
-        const Mat3d partLinear = rotationFromEuler(part.placement.rotationDegrees) * scaleMatrix(part.placement.scale);
+        const Mat3d partLinear = placementLinear(part.placement);
         const Mat3d localToWorld = brushLinear * partLinear;
         CompiledPart compiled;
         compiled.primitive = part.primitive;
@@ -414,13 +422,19 @@ double Brush::roundSphereRadius() const
     return round ? part.primitive.radius * part.minScale : 0.0;
 }
 
-SweptBrush::SweptBrush(Brush brush, std::vector<Vec3d> path) : brush_(std::move(brush)), path_(std::move(path))
+SweptBrush::SweptBrush(Brush brush, std::vector<Vec3d> path)
+    : SweptBrush(std::make_shared<const Brush>(std::move(brush)), std::move(path))
+{
+}
+
+SweptBrush::SweptBrush(std::shared_ptr<const PlaceableField> brush, std::vector<Vec3d> path)
+    : brush_(std::move(brush)), path_(std::move(path))
 {
     if (path_.empty()) throw std::invalid_argument("a stroke path needs at least one point");
-    reach_ = brush_.boundingRadius();
+    reach_ = brush_->boundingRadius();
     if (!std::isfinite(reach_)) throw std::invalid_argument("an unbounded brush (half-space) cannot follow a path");
-    step_ = std::max(0.25 * brush_.innerRadius(), 1e-6);
-    capsuleRadius_ = brush_.roundSphereRadius();
+    step_ = std::max(0.25 * brush_->innerRadius(), 1e-6);
+    capsuleRadius_ = brush_->roundSphereRadius();
 
     // Pieces at most one reach long; cells two reaches wide (built in grid()).
     const double pieceLength = std::max(reach_, 1e-9);
@@ -484,7 +498,7 @@ uint64_t SweptBrush::cellHash(const Vec3d& p) const
 
 double SweptBrush::distance(const Vec3d& x) const
 {
-    if (path_.size() == 1) return brush_.distanceAt(x, path_.front());
+    if (path_.size() == 1) return brush_->distanceAt(x, path_.front());
     const PieceGrid& g = grid();
     const auto found = g.cells.find(cellHash(x));
     double best = 0.5 * cell_; // every piece not listed here lies farther away
@@ -498,7 +512,7 @@ double SweptBrush::pieceDistance(const Piece& piece, const Vec3d& x, double best
     const Vec3d& a = piece.start;
     const Vec3d& dir = piece.direction;
     const double len = piece.length;
-    if (len < 1e-12) return brush_.distanceAt(x, a);
+    if (len < 1e-12) return brush_->distanceAt(x, a);
     const double along = std::clamp((x - a).dot(dir), 0.0, len);
     const double toSegment = (x - (a + dir * along)).length();
     if (capsuleRadius_ > 0.0) return toSegment - capsuleRadius_; // a swept round sphere is a capsule
@@ -513,7 +527,7 @@ double SweptBrush::pieceDistance(const Piece& piece, const Vec3d& x, double best
     // convex brushes, whose distance is convex along the path).
     const double lo = std::max(0.0, along - reach_);
     const double hi = std::min(len, along + reach_);
-    auto eval = [&](double s) { return brush_.distanceAt(x, a + dir * s); };
+    auto eval = [&](double s) { return brush_->distanceAt(x, a + dir * s); };
     double bestS = lo, bestD = eval(lo);
     for (double s = std::ceil(lo / step_) * step_; s < hi; s += step_) {
         const double d = eval(s);
@@ -540,10 +554,10 @@ WorldBounds SweptBrush::bounds() const
 {
     WorldBounds b{Vec3d(kInf), Vec3d(-kInf)};
     for (const auto& p : path_) {
-        const WorldBounds one = brush_.bounds();
+        const WorldBounds one = brush_->bounds();
         for (int i = 0; i < 3; ++i) {
-            b.min[i] = std::min(b.min[i], one.min[i] - brush_.translation()[i] + p[i]);
-            b.max[i] = std::max(b.max[i], one.max[i] - brush_.translation()[i] + p[i]);
+            b.min[i] = std::min(b.min[i], one.min[i] - brush_->translation()[i] + p[i]);
+            b.max[i] = std::max(b.max[i], one.max[i] - brush_->translation()[i] + p[i]);
         }
     }
     return b;

@@ -10,6 +10,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -53,10 +54,24 @@ struct Placement {
     Vec3d scale{1.0, 1.0, 1.0};
 };
 
+/// The rotation of Euler angles in degrees (R = Rz*Ry*Rx), exact for multiples of 90.
+Mat3d rotationFromEuler(const Vec3d& degrees);
+/// Rotation times scale: local to world, less the translation.
+Mat3d placementLinear(const Placement& placement);
+/// Throws std::invalid_argument on a non-positive or non-finite scale, or a non-finite position or angle.
+void validatePlacement(const Placement& placement);
+
 struct WorldBounds {
     Vec3d min{-std::numeric_limits<double>::infinity()};
     Vec3d max{std::numeric_limits<double>::infinity()};
     bool bounded() const;
+};
+
+/// Where a field's surface crosses one lattice edge: the offset along the edge (0..1) and the unit
+/// normal there, pointing out of the field's solid.
+struct EdgeCrossing {
+    double offset = 0.5;
+    Vec3d normal{0.0, 0.0, 1.0};
 };
 
 /// Anything the CSG kernel can carve with.
@@ -80,6 +95,33 @@ public:
     virtual double surfaceAreaBound() const;
     /// Primitive distances one distance() evaluates (a blend evaluates each of its parts).
     virtual double evaluationCost() const { return 1.0; }
+    /// The most the distance changes per world unit moved. Analytic brushes are Lipschitz-1 bounds; a
+    /// sampled field (a grid tool) can change faster between its samples, and the kernel widens every
+    /// "this region lies on one side" test, and the steps of its crossing search, by this factor.
+    virtual double lipschitz() const { return 1.0; }
+    /// The exact crossing of the lattice edge from `start` one voxel (`voxelSize`) along +`axis`, for a
+    /// field built from Hermite data and placed on the volume's lattice (a grid tool stamped at whole
+    /// voxels and quarter turns), so that such a stamp copies the tool's samples instead of resampling
+    /// them. Nullopt where the field has no such crossing; the kernel then searches the distance's zero.
+    virtual std::optional<EdgeCrossing> latticeCrossing(const Vec3d& /*start*/, int /*axis*/, double /*voxelSize*/) const
+    {
+        return std::nullopt;
+    }
+};
+
+/// A field with an origin that strokes move along their path: an analytic Brush or a placed grid tool.
+class PlaceableField : public SdfField {
+public:
+    /// The distance with the field's origin moved to `origin`.
+    virtual double distanceAt(const Vec3d& world, const Vec3d& origin) const = 0;
+    /// Where the field's origin is.
+    virtual const Vec3d& translation() const = 0;
+    /// Radius of a sphere about the origin that holds the whole (bounded) field: beyond it, the distance
+    /// is at least the distance to that sphere.
+    virtual double boundingRadius() const = 0;
+    /// World radius of a lone sphere centred on the origin, or 0 for any other field: sweeping such a
+    /// sphere has a closed form.
+    virtual double roundSphereRadius() const { return 0.0; }
 };
 
 enum class PartOp { Add, Remove };
@@ -91,7 +133,7 @@ struct BrushPart {
 };
 
 /// One primitive, or several blended with smooth min/max (polynomial, radius `smoothness`).
-class Brush : public SdfField {
+class Brush : public PlaceableField {
 public:
     Brush() = default;
     Brush(const Primitive& primitive, const Placement& placement);
@@ -104,14 +146,11 @@ public:
     double innerRadius() const override;
     double evaluationCost() const override { return double(parts_.size()); }
 
-    /// Distance with the brush's own translation replaced by `origin`.
-    double distanceAt(const Vec3d& world, const Vec3d& origin) const { return distanceAtOrigin(world - origin); }
-    const Vec3d& translation() const { return translation_; }
-    /// Radius of a sphere about the brush origin that holds the whole (bounded) brush.
-    double boundingRadius() const;
-    /// World radius of a lone sphere centred on the brush origin with a uniform scale, or 0 for any
-    /// other brush: sweeping such a sphere has a closed form.
-    double roundSphereRadius() const;
+    double distanceAt(const Vec3d& world, const Vec3d& origin) const override { return distanceAtOrigin(world - origin); }
+    const Vec3d& translation() const override { return translation_; }
+    double boundingRadius() const override;
+    /// Non-zero for a lone sphere with a uniform scale.
+    double roundSphereRadius() const override;
 
 private:
     struct CompiledPart {
@@ -135,7 +174,8 @@ private:
     double innerRadius_ = 0.0;
 };
 
-/// A brush swept along a polyline of origins: the union of the brush at every point of the path.
+/// A brush (or any placeable field) swept along a polyline of origins: the union of the brush at every
+/// point of the path.
 ///
 /// A distance looks only at the pieces of the path near the point: the path is cut into pieces no
 /// longer than the brush is wide, kept in a hash grid by the cells their reach overlaps, so a stroke
@@ -149,16 +189,18 @@ public:
     static constexpr double kMaxPieces = 1e6;
     /// Throws std::invalid_argument on an empty path, an unbounded brush or a path over kMaxPieces.
     SweptBrush(Brush brush, std::vector<Vec3d> path);
+    SweptBrush(std::shared_ptr<const PlaceableField> brush, std::vector<Vec3d> path);
     double distance(const Vec3d& world) const override;
     WorldBounds bounds() const override;
-    double innerRadius() const override { return brush_.innerRadius(); }
+    double innerRadius() const override { return brush_->innerRadius(); }
+    double lipschitz() const override { return brush_->lipschitz(); }
     /// Finite differences no finer than the window search's precision (a thousandth of the reach), except
     /// for a swept sphere, whose distance is exact.
     Vec3d gradient(const Vec3d& world, double step) const override;
     /// The tube around the path the brush's reach sweeps, or the bounds' box where that is smaller.
     double surfaceAreaBound() const override;
     /// The brush evaluated along the pieces near a point (about four, with a window search each).
-    double evaluationCost() const override { return brush_.evaluationCost() * (capsuleRadius_ > 0.0 ? 4.0 : 200.0); }
+    double evaluationCost() const override { return brush_->evaluationCost() * (capsuleRadius_ > 0.0 ? 4.0 : 200.0); }
     /// Length of the path (world units).
     double pathLength() const { return pathLength_; }
     /// Radius of a sphere about the brush origin that holds the brush (world units).
@@ -179,7 +221,7 @@ private:
     uint64_t cellHash(const Vec3d& p) const;
     uint64_t cellHash(int64_t i, int64_t j, int64_t k) const;
 
-    Brush brush_;
+    std::shared_ptr<const PlaceableField> brush_;
     std::vector<Vec3d> path_;
     double reach_;  // bounding radius of the brush
     double step_;   // sampling step along the path

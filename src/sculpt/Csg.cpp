@@ -52,6 +52,7 @@ struct EditContext {
     double onSurface; // kOnSurfaceVoxels in world units
     std::vector<double> erodeOffset; // per material id; empty unless eroding
     double maxErodeOffset = 0.0;
+    double lipschitz = 1.0; // field.lipschitz(): every one-side test scales its reach by it
 
     double offsetFor(MaterialValue m) const { return erodeOffset.empty() ? 0.0 : erodeOffset[m.id]; }
 
@@ -105,7 +106,7 @@ RegionClass classifyRegion(const EditContext& ctx, const Coord& origin, int size
 {
     const double half = 0.5 * size;
     const Vec3d centre = ctx.world(origin) + Vec3d(half * ctx.voxelSize);
-    const double radius = (std::sqrt(3.0) * half + kSideMargin) * ctx.voxelSize;
+    const double radius = (std::sqrt(3.0) * half + kSideMargin) * ctx.voxelSize * ctx.lipschitz;
     const double d = ctx.field.distance(centre);
     if (d > radius) return RegionClass::Outside;
     if (d + ctx.maxErodeOffset < -radius) return RegionClass::Inside;
@@ -141,11 +142,12 @@ double findCrossing(const EditContext& ctx, const Vec3d& p0, const Vec3d& edge, 
                     double fhi, double offset)
 {
     const double len = ctx.voxelSize;
+    const double step = ctx.voxelSize * ctx.lipschitz; // the distance changes at most this much per unit t
     bool bisectNext = false;
     for (int it = 0; it < 64 && hi - lo > 4e-6; ++it) { // offsets are stored to 1/65535 of an edge
         const double width = hi - lo;
-        const double a = std::min(hi, lo + std::fabs(flo) / len);
-        const double b = std::max(lo, hi - std::fabs(fhi) / len);
+        const double a = std::min(hi, lo + std::fabs(flo) / step);
+        const double b = std::max(lo, hi - std::fabs(fhi) / step);
         double t;
         if (a >= b) t = 0.5 * (a + b);
         else if (bisectNext) t = 0.5 * (a + b);
@@ -190,11 +192,15 @@ bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValu
         const bool inA = d0 + off < 0.0, inB = d1 + off < 0.0;
         const MaterialValue before = ctx.apply(m0, inA), after = ctx.apply(m0, inB);
         if (before == after) return false;
+        ++crossings;
+        // A field that knows this edge's crossing exactly (a grid tool on the lattice) gives it; the
+        // erosion offset moves the zero away from the field's surface, so it is searched then.
+        const std::optional<EdgeCrossing> exact = off == 0.0 ? ctx.field.latticeCrossing(p0, axis, ctx.voxelSize)
+                                                             : std::nullopt;
         // The normal is taken where the crossing is stored: kept off the corner, as a box edge through the
         // corner has no single normal there.
-        const double t = storedOffset(findCrossing(ctx, p0, edge, 0.0, 1.0, d0 + off, d1 + off, off));
-        ++crossings;
-        Vec3d normal = brushGradient(ctx, p0 + edge * t, axis); // points out of the brush
+        const double t = storedOffset(exact ? exact->offset : findCrossing(ctx, p0, edge, 0.0, 1.0, d0 + off, d1 + off, off));
+        Vec3d normal = exact ? exact->normal : brushGradient(ctx, p0 + edge * t, axis); // points out of the brush
         if (!(inA ? before : after).solid()) normal = -normal; // surface normals point into empty space
         out = packSample(t, {normal.x(), normal.y(), normal.z()});
         return true;
@@ -208,7 +214,7 @@ bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValu
     constexpr int segCount = 2;
 
     enum class Kind { Start, Old, Brush };
-    struct Run { double t; MaterialValue m; Kind kind; bool insideBefore; bool atOld; };
+    struct Run { double t; MaterialValue m; Kind kind; bool insideBefore; bool atOld; std::optional<Vec3d> normal; };
     Run runs[4];
     int runCount = 0;
     auto push = [&](const Run& r) {
@@ -220,15 +226,19 @@ bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValu
         const double off = ctx.offsetFor(seg.m);
         const bool inA = seg.fa + off < 0.0, inB = seg.fb + off < 0.0;
         const MaterialValue before = ctx.apply(seg.m, inA), after = ctx.apply(seg.m, inB);
-        push({seg.ta, before, s == 0 ? Kind::Start : Kind::Old, false, false});
+        push({seg.ta, before, s == 0 ? Kind::Start : Kind::Old, false, false, std::nullopt});
         if (before != after) {
-            const double tc = findCrossing(ctx, p0, edge, seg.ta, seg.tb, seg.fa + off, seg.fb + off, off);
+            std::optional<EdgeCrossing> exact = off == 0.0 ? ctx.field.latticeCrossing(p0, axis, ctx.voxelSize)
+                                                           : std::nullopt;
+            if (exact && !(exact->offset >= seg.ta && exact->offset <= seg.tb)) exact.reset();
+            const double tc =
+                exact ? exact->offset : findCrossing(ctx, p0, edge, seg.ta, seg.tb, seg.fa + off, seg.fb + off, off);
             ++crossings;
             // The brush surface runs through the old surface point when its distance there is below
             // the offset quantization (1/65535 of an edge); on an edge the surface grazes, the found
             // crossing can still drift from it by more than kSameCrossing.
             const bool atOld = std::fabs(dOld + off) < 1e-5 * ctx.voxelSize;
-            push({tc, after, Kind::Brush, inA, atOld});
+            push({tc, after, Kind::Brush, inA, atOld, exact ? std::optional<Vec3d>(exact->normal) : std::nullopt});
         }
     }
     if (runCount < 2) return false;
@@ -248,7 +258,7 @@ bool resolveEdge(const EditContext& ctx, const Vec3d& p0, int axis, MaterialValu
     double t = storedOffset(b.t);
     Vec3d normal;
     if (b.kind == Kind::Brush) {
-        normal = brushGradient(ctx, p0 + edge * t, axis); // points out of the brush
+        normal = b.normal ? *b.normal : brushGradient(ctx, p0 + edge * t, axis); // points out of the brush
         const MaterialValue insideMaterial = b.insideBefore ? runs[chosen - 1].m : b.m;
         if (!insideMaterial.solid()) normal = -normal;    // surface normals point into empty space
     } else {
@@ -307,11 +317,11 @@ BlockResult computeBlockFor(const EditContext& ctx, const BlockTask& task, Const
     // its half-diagonal is on one side of it: its voxels get a sign-correct bound |d(c)| - |p - c| instead
     // of an exact distance, which is all the inside tests and the crossing search need from them.
     const double vs = ctx.voxelSize;
-    const double cubeReach = (std::sqrt(3.0) + kSideMargin) * vs;
-    double offsetLength[27]; // distance of each voxel of a cube from the cube's centre
+    const double cubeReach = (std::sqrt(3.0) + kSideMargin) * vs * ctx.lipschitz;
+    double offsetLength[27]; // most the distance changes from the cube's centre to each of its voxels
     for (int n = 0; n < 27; ++n) {
         const int di = n / 9 - 1, dj = (n / 3) % 3 - 1, dk = n % 3 - 1;
-        offsetLength[n] = vs * std::sqrt(double(di * di + dj * dj + dk * dk));
+        offsetLength[n] = vs * ctx.lipschitz * std::sqrt(double(di * di + dj * dj + dk * dk));
     }
     Vec3d points[27];
     double values[27];
@@ -552,7 +562,7 @@ EditStats applyCsg(Volume& volume, const SdfField& brush, const CsgOp& op)
     const MaterialTable& materials = volume.materials();
 
     EditContext ctx{brush, op.mode, MaterialValue{op.material}, volume.voxelSize(), kOnSurfaceVoxels * volume.voxelSize(),
-                    {}, 0.0};
+                    {}, 0.0, brush.lipschitz()};
     if (op.mode == CsgMode::Erode) {
         const double depth = op.erodeDepth ? *op.erodeDepth : brush.innerRadius();
         if (!(depth > 0.0) || !std::isfinite(depth))

@@ -11,7 +11,9 @@
 #include <sys/stat.h>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -190,15 +192,26 @@ ScriptOp parseOp(const json& o, const std::string& where)
     }
     const Vec3d at = op.path.empty() ? vec3Or(o, "at", where, Vec3d(0.0)) : op.path.front();
     if (!o.contains("brush")) fail(where, "missing 'brush'");
-    op.brush = parseBrush(o.at("brush"), where + ".brush", parsePlacement(o, where, at));
+    op.placement = parsePlacement(o, where, at);
+    const json& brush = o.at("brush");
+    const bool grid = brush.is_object() && brush.contains("shape") && brush.at("shape") == "grid";
+    if (grid) {
+        checkKeys(brush, where + ".brush", {"shape", "file"});
+        op.toolFile = text(brush, "file", where + ".brush");
+        if (op.toolFile.empty()) fail(where + ".brush.file", "must not be empty");
+    } else {
+        op.brush = parseBrush(brush, where + ".brush", op.placement);
+    }
     if (o.contains("material")) op.material = text(o, "material", where);
-    if (op.mode == CsgMode::Paint && op.material.empty()) fail(where, "paint needs a 'material'");
+    if (op.mode == CsgMode::Paint && op.material.empty() && !grid)
+        fail(where, "paint needs a 'material' (or a grid tool, which paints with its own)");
     op.strength = number(o, "strength", where, 1.0);
     if (op.strength < 0.0 || op.strength > 1.0) fail(where + ".strength", "must lie in [0,1]");
     if (o.contains("depth")) {
         op.depth = number(o, "depth", where);
         if (!(*op.depth > 0.0)) fail(where + ".depth", "must be positive");
     }
+    if (grid) return op; // bounded, with an inner radius: its checks wait for the tool's file
     if (op.mode == CsgMode::Erode && !op.depth && !std::isfinite(op.brush.innerRadius()))
         fail(where, "eroding with an unbounded brush (half-space) needs a 'depth'");
     if (op.path.size() > 1 && !std::isfinite(op.brush.boundingRadius()))
@@ -278,52 +291,133 @@ StrokeScript loadStrokeScript(const std::string& path)
     std::ostringstream text;
     text << in.rdbuf();
     if (in.bad()) throw ScriptError("cannot read script '" + path + "'");
-    return parseStrokeScript(text.str());
+    StrokeScript script = parseStrokeScript(text.str());
+    loadScriptTools(script, std::filesystem::path(path).parent_path().string());
+    return script;
 }
+
+void loadScriptTools(StrokeScript& script, const std::string& folder)
+{
+    std::map<std::string, std::shared_ptr<const GridTool>> loaded;
+    for (std::size_t i = 0; i < script.ops.size(); ++i) {
+        ScriptOp& op = script.ops[i];
+        if (op.toolFile.empty()) continue;
+        const std::filesystem::path named(op.toolFile);
+        const std::string file = named.is_absolute() || folder.empty() ? named.string() : (std::filesystem::path(folder) / named).string();
+        auto found = loaded.find(file);
+        if (found == loaded.end()) {
+            try {
+                found = loaded.emplace(file, GridTool::load(file)).first;
+            } catch (const std::exception& e) {
+                throw ScriptError("ops[" + std::to_string(i) + "].brush.file: cannot use '" + file + "' as a tool: " + e.what());
+            }
+        }
+        op.tool = found->second;
+    }
+}
+
+WorldBounds opBounds(const ScriptOp& op)
+{
+    if (!op.toolFile.empty() && !op.tool) throw ScriptError("the tool '" + op.toolFile + "' is not loaded");
+    const WorldBounds one = op.tool ? PlacedTool(op.tool, op.placement).bounds() : op.brush.bounds();
+    if (!one.bounded() || op.path.empty()) return one;
+    WorldBounds b = one;
+    const Vec3d first = op.path.front();
+    for (const Vec3d& p : op.path)
+        for (int i = 0; i < 3; ++i) {
+            b.min[i] = std::min(b.min[i], one.min[i] + p[i] - first[i]);
+            b.max[i] = std::max(b.max[i], one.max[i] + p[i] - first[i]);
+        }
+    return b;
+}
+
+namespace {
+
+/// One application of the CSG kernel: a script op is one, or one per material of a tool that brings
+/// its own.
+struct OpStep {
+    std::shared_ptr<const SdfField> field;
+    CsgOp op;
+};
+
+/// The field an op carves with, with the tool's region `region` where it uses a tool.
+std::shared_ptr<const SdfField> opField(const ScriptOp& s, MaterialId region)
+{
+    std::shared_ptr<const PlaceableField> placed;
+    if (s.tool) placed = std::make_shared<PlacedTool>(s.tool, s.placement, region);
+    else placed = std::make_shared<Brush>(s.brush);
+    if (s.path.size() > 1) return std::make_shared<SweptBrush>(std::move(placed), s.path);
+    return placed;
+}
+
+std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTable& table)
+{
+    const std::string where = "ops[" + std::to_string(index) + "]";
+    if (!s.toolFile.empty() && !s.tool) throw ScriptError(where + ".brush.file: the tool '" + s.toolFile + "' is not loaded");
+    CsgOp op;
+    op.mode = s.mode;
+    op.strength = s.strength;
+    op.erodeDepth = s.depth;
+    if (!s.material.empty()) {
+        const auto id = table.find(s.material);
+        if (!id) throw ScriptError(where + ".material: '" + s.material + "' is neither in the volume nor in the script's materials");
+        op.material = *id;
+    }
+    const bool toolMaterials = s.tool && s.material.empty() && (s.mode == CsgMode::Add || s.mode == CsgMode::Paint);
+    try {
+        if (!toolMaterials) return {{opField(s, kEmptyMaterial), op}};
+        // Each material of the tool over its own region: regions share their boundaries, so each
+        // material boundary of the tool becomes one in the volume, with its crossings and normals.
+        std::vector<OpStep> steps;
+        for (MaterialId region : s.tool->regions()) {
+            const Material& m = s.tool->materials().at(region);
+            const auto existing = table.find(m.name);
+            op.material = existing ? *existing : table.define(m);
+            steps.push_back({opField(s, region), op});
+        }
+        return steps;
+    } catch (const std::invalid_argument& e) {
+        throw ScriptError(where + ": " + e.what());
+    }
+}
+
+} // namespace
 
 std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& script,
                                             const std::function<void(const ScriptOpReport&)>& onOp)
 {
     MaterialTable table = volume.materials();
     for (const Material& m : script.materials) table.define(m);
-    std::vector<CsgOp> csgOps;
-    for (std::size_t i = 0; i < script.ops.size(); ++i) {
-        const ScriptOp& s = script.ops[i];
-        CsgOp op;
-        op.mode = s.mode;
-        op.strength = s.strength;
-        op.erodeDepth = s.depth;
-        if (!s.material.empty()) {
-            const auto id = table.find(s.material);
-            if (!id) {
-                throw ScriptError("ops[" + std::to_string(i) + "].material: '" + s.material +
-                                  "' is neither in the volume nor in the script's materials");
-            }
-            op.material = *id;
-        }
-        csgOps.push_back(op);
-    }
     // Every op's limits are checked before the first one runs: a script is refused whole, not half done.
-    std::vector<std::unique_ptr<SweptBrush>> strokes(script.ops.size());
+    std::vector<std::vector<OpStep>> steps;
     for (std::size_t i = 0; i < script.ops.size(); ++i) {
-        const ScriptOp& s = script.ops[i];
-        try {
-            if (s.path.size() > 1) strokes[i] = std::make_unique<SweptBrush>(s.brush, s.path);
-            checkCsgLimits(volume.voxelSize(), table, strokes[i] ? static_cast<const SdfField&>(*strokes[i]) : s.brush, csgOps[i]);
-        } catch (const std::invalid_argument& e) {
-            throw ScriptError("ops[" + std::to_string(i) + "]: " + e.what());
+        steps.push_back(compileOp(script.ops[i], i, table));
+        for (const OpStep& step : steps.back()) {
+            try {
+                checkCsgLimits(volume.voxelSize(), table, *step.field, step.op);
+            } catch (const std::invalid_argument& e) {
+                throw ScriptError("ops[" + std::to_string(i) + "]: " + e.what());
+            }
         }
     }
     volume.materials() = table;
 
     std::vector<ScriptOpReport> reports;
     for (std::size_t i = 0; i < script.ops.size(); ++i) {
-        const ScriptOp& s = script.ops[i];
         const auto start = std::chrono::steady_clock::now();
         ScriptOpReport report;
         report.index = i;
-        report.mode = s.mode;
-        report.stats = applyCsg(volume, strokes[i] ? static_cast<const SdfField&>(*strokes[i]) : s.brush, csgOps[i]);
+        report.mode = script.ops[i].mode;
+        for (const OpStep& step : steps[i]) {
+            EditStats stats = applyCsg(volume, *step.field, step.op);
+            EditStats& total = report.stats;
+            total.blocksComputed += stats.blocksComputed;
+            total.leavesWritten += stats.leavesWritten;
+            total.tilesWritten += stats.tilesWritten;
+            total.crossingsComputed += stats.crossingsComputed;
+            total.dirtyBlocks.insert(total.dirtyBlocks.end(), stats.dirtyBlocks.begin(), stats.dirtyBlocks.end());
+            total.blockChanges.insert(total.blockChanges.end(), stats.blockChanges.begin(), stats.blockChanges.end());
+        }
         report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (onOp) onOp(report);
         reports.push_back(std::move(report));

@@ -3,10 +3,12 @@
 
 #include "sculpt/Brush.h"
 #include "sculpt/Csg.h"
+#include "sculpt/GridTool.h"
 #include "vdb_hermite/Materials.h"
 #include "vdb_hermite/Volume.h"
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -27,7 +29,10 @@ constexpr uint64_t kMaxScriptBytes = 64ull << 20;
 
 struct ScriptOp {
     CsgMode mode = CsgMode::Add;
-    Brush brush;                 // placed at "at" (or at the first path point)
+    Brush brush;                 // placed at "at" (or at the first path point); unused with a tool
+    std::string toolFile;        // {"shape": "grid", "file": ...}: the tool's file as the script names it
+    Placement placement;         // the op's at (or first path point), rotate and scale
+    std::shared_ptr<const GridTool> tool; // the loaded tool (loadScriptTools)
     std::vector<Vec3d> path;     // empty for a single stamp
     std::string material;        // empty: add uses the volume's first material
     double strength = 1.0;
@@ -39,8 +44,17 @@ struct StrokeScript {
     std::vector<ScriptOp> ops;
 };
 
+/// Parses a script; grid tools are named but not loaded (loadScriptTools).
 StrokeScript parseStrokeScript(const std::string& jsonText);
-StrokeScript loadStrokeScript(const std::string& path); // ScriptError also for unreadable files
+/// Parses the script file and loads its tools (file names relative to the script's folder). ScriptError
+/// also for unreadable files and tools.
+StrokeScript loadStrokeScript(const std::string& path);
+/// Loads each op's grid tool, once per file; relative names are taken from `folder`. Throws ScriptError
+/// naming the op when a tool cannot be loaded.
+void loadScriptTools(StrokeScript& script, const std::string& folder);
+
+/// The world bounds an op can change (a stroke's whole path included): infinite for an unbounded brush.
+WorldBounds opBounds(const ScriptOp& op);
 
 struct ScriptOpReport {
     std::size_t index = 0;
@@ -51,7 +65,9 @@ struct ScriptOpReport {
 
 /// Defines the script's materials in the volume, checks every op's material and limits
 /// (checkCsgLimits), then applies the ops in order. Throws ScriptError, before touching the volume, when
-/// an op names an unknown material or asks for more than the limits allow.
+/// an op names an unknown material, asks for more than the limits allow or names a tool not loaded.
+/// A tool that adds or paints without a `material` brings its own: each of its materials is defined in
+/// the volume (by name, unless the volume has it already) and applied over its region of the tool.
 std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& script,
                                             const std::function<void(const ScriptOpReport&)>& onOp = {});
 

@@ -74,6 +74,14 @@ inline std::array<double, 3> decodeOctahedral(double u, double v)
 
 } // namespace quantize_detail
 
+/// The unit normal of a code in double precision: quantizing it gives the code back, so Hermite data
+/// copied through it (a grid tool stamped on the lattice) keep their codes exactly.
+inline std::array<double, 3> decodeNormal(uint16_t u, uint16_t v)
+{
+    using namespace quantize_detail;
+    return decodeOctahedral(kCodeCoords[std::min(u, kNormalMax)], kCodeCoords[std::min(v, kNormalMax)]);
+}
+
 inline std::array<float, 3> dequantizeNormal(uint16_t u, uint16_t v)
 {
     using namespace quantize_detail;

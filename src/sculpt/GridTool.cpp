@@ -1,0 +1,461 @@
+#include "sculpt/GridTool.h"
+
+#include "sculpt/Csg.h"
+#include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/VolumeIO.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <stdexcept>
+
+namespace vdbclay {
+
+namespace {
+
+/// Lattice points between the tool's solid and the outer layer of its fields' box: room for the
+/// distances rebuilt next to the surface (two voxels on either side of a crossing).
+constexpr int kMargin = 3;
+/// The least |distance| of a lattice point, in tool voxels: its sign is its material's, even where a
+/// crossing lies on it.
+constexpr float kLeastDistance = 1e-5f;
+/// A crossing's tangent plane stands for the surface within this many voxels of it (half a cell's
+/// diagonal); farther away only the distance to the crossing itself, less this, bounds the surface.
+constexpr double kPlaneReach = 0.87;
+
+struct Crossing {
+    Vec3d point;  // index space of the tool
+    Vec3d normal;
+    std::array<int32_t, 3> end; // the voxel at the edge's end
+    MaterialId before, after;   // the materials at the edge's start and end
+};
+
+struct Box {
+    std::array<int32_t, 3> origin, dims;
+    std::size_t index(int i, int j, int k) const
+    {
+        return (std::size_t(i) * std::size_t(dims[1]) + std::size_t(j)) * std::size_t(dims[2]) + std::size_t(k);
+    }
+    std::size_t size() const { return std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]); }
+};
+
+bool inRegion(MaterialId m, MaterialId region) { return region == kEmptyMaterial ? m != kEmptyMaterial : m == region; }
+
+/// Unsigned distances to the region's boundary, in voxels: tangent-plane distances next to each crossing
+/// that bounds the region, carried through the box by a two-pass 3x3x3 chamfer transform (weights 1, √2,
+/// √3), which keeps neighbouring values within their Euclidean spacing.
+std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>& crossings, MaterialId region)
+{
+    std::vector<float> d(box.size(), std::numeric_limits<float>::max());
+    for (const Crossing& c : crossings) {
+        if (inRegion(c.before, region) == inRegion(c.after, region)) continue;
+        const int base[3] = {int(std::floor(c.point[0])) - box.origin[0], int(std::floor(c.point[1])) - box.origin[1],
+                             int(std::floor(c.point[2])) - box.origin[2]};
+        for (int i = base[0] - 1; i <= base[0] + 2; ++i)
+            for (int j = base[1] - 1; j <= base[1] + 2; ++j)
+                for (int k = base[2] - 1; k <= base[2] + 2; ++k) {
+                    const Vec3d p(i + box.origin[0], j + box.origin[1], k + box.origin[2]);
+                    const Vec3d r = p - c.point;
+                    const double candidate = std::max(std::fabs(c.normal.dot(r)), r.length() - kPlaneReach);
+                    float& slot = d[box.index(i, j, k)];
+                    slot = std::min(slot, float(candidate));
+                }
+    }
+    // Chamfer passes: forward over the 13 neighbours already visited, then backward over the others.
+    struct Step { int di, dj, dk; float w; };
+    std::vector<Step> backSteps;
+    for (int di = -1; di <= 1; ++di)
+        for (int dj = -1; dj <= 1; ++dj)
+            for (int dk = -1; dk <= 1; ++dk) {
+                const int order = di * 9 + dj * 3 + dk;
+                if (order >= 0) continue;
+                backSteps.push_back({di, dj, dk, float(std::sqrt(double(di * di + dj * dj + dk * dk)))});
+            }
+    const int nx = box.dims[0], ny = box.dims[1], nz = box.dims[2];
+    auto relax = [&](int i, int j, int k, int sign) {
+        float& v = d[box.index(i, j, k)];
+        for (const Step& s : backSteps) {
+            const int a = i + sign * s.di, b = j + sign * s.dj, c = k + sign * s.dk;
+            if (a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz) continue;
+            v = std::min(v, d[box.index(a, b, c)] + s.w);
+        }
+    };
+    for (int i = 0; i < nx; ++i)
+        for (int j = 0; j < ny; ++j)
+            for (int k = 0; k < nz; ++k) relax(i, j, k, 1);
+    for (int i = nx - 1; i >= 0; --i)
+        for (int j = ny - 1; j >= 0; --j)
+            for (int k = nz - 1; k >= 0; --k) relax(i, j, k, -1);
+    return d;
+}
+
+/// The signed field of one region: signs from the materials, outside values capped so that the outer
+/// layer holds one value (the field's continuation beyond the box, that value plus the distance to the
+/// box, is then continuous and changes at rate 1), and the largest gradient of its interpolant.
+ToolField regionField(const Box& box, const std::vector<MaterialId>& materials, const std::vector<Crossing>& crossings,
+                      MaterialId region)
+{
+    ToolField field;
+    field.region = region;
+    field.distance = boundaryDistances(box, crossings, region);
+    std::vector<float>& d = field.distance;
+    const int nx = box.dims[0], ny = box.dims[1], nz = box.dims[2];
+    for (std::size_t n = 0; n < d.size(); ++n) {
+        const float magnitude = std::max(d[n], kLeastDistance);
+        d[n] = inRegion(materials[n], region) ? -magnitude : magnitude;
+    }
+    auto layersIn = [&](int i, int j, int k) { // how far inside the box's outer layer a point lies
+        return std::min({i, j, k, nx - 1 - i, ny - 1 - j, nz - 1 - k});
+    };
+    float outer = std::numeric_limits<float>::max();
+    for (int i = 0; i < nx; ++i)
+        for (int j = 0; j < ny; ++j)
+            for (int k = 0; k < nz; ++k)
+                if (layersIn(i, j, k) == 0) outer = std::min(outer, d[box.index(i, j, k)]);
+    // Outside values are capped by `outer` plus the distance to the outer layer (a 1-Lipschitz cap), so the
+    // outer layer holds one value and the field's continuation beyond the box, that value plus the
+    // distance to the box, joins it continuously; deep in the box the cap is far above any value.
+    for (int i = 0; i < nx; ++i)
+        for (int j = 0; j < ny; ++j)
+            for (int k = 0; k < nz; ++k) {
+                float& v = d[box.index(i, j, k)];
+                if (v > 0.0f) v = std::min(v, outer + float(layersIn(i, j, k)));
+            }
+    field.outerValue = outer;
+
+    // The trilinear interpolant's gradient is largest at a cell corner, where its components are the
+    // differences along the corner's three edges; the largest of those per axis and point bounds it.
+    double worst = 0.0, deepest = 0.0;
+    const std::size_t stride[3] = {std::size_t(ny) * std::size_t(nz), std::size_t(nz), 1};
+    for (int i = 0; i < nx; ++i)
+        for (int j = 0; j < ny; ++j)
+            for (int k = 0; k < nz; ++k) {
+                const std::size_t n = box.index(i, j, k);
+                const int at[3] = {i, j, k};
+                double sum = 0.0;
+                for (int a = 0; a < 3; ++a) {
+                    double largest = 0.0;
+                    if (at[a] > 0) largest = std::fabs(double(d[n]) - d[n - stride[a]]);
+                    if (at[a] + 1 < box.dims[std::size_t(a)]) largest = std::max(largest, std::fabs(double(d[n + stride[a]]) - d[n]));
+                    sum += largest * largest;
+                }
+                worst = std::max(worst, sum);
+                deepest = std::max(deepest, -double(d[n]));
+            }
+    field.lipschitz = std::sqrt(worst);
+    field.deepest = deepest;
+    return field;
+}
+
+} // namespace
+
+Volume toolFromScene(Volume scene, const std::optional<WorldBounds>& box)
+{
+    if (box) {
+        for (int a = 0; a < 3; ++a)
+            if (!(box->max[a] > box->min[a]) || !std::isfinite(box->min[a]) || !std::isfinite(box->max[a]))
+                throw std::invalid_argument("the box must have finite corners with x0 < x1, y0 < y1 and z0 < z1");
+        Primitive cut;
+        cut.shape = Shape::Box;
+        cut.size = (box->max - box->min) * 0.5;
+        Placement at;
+        at.translation = (box->max + box->min) * 0.5;
+        CsgOp intersect;
+        intersect.mode = CsgMode::Intersect;
+        applyCsg(scene, Brush(cut, at), intersect);
+    }
+    if (scene.stats().empty) throw std::invalid_argument(box ? "the box holds no solid voxel of the scene" : "the scene holds no solid voxel");
+    return scene;
+}
+
+GridTool::GridTool(Volume volume) : volume_(std::move(volume))
+{
+    const VolumeStats stats = volume_.stats();
+    if (stats.empty) throw std::invalid_argument("the tool holds no solid voxel");
+    double points = 1.0;
+    for (std::size_t a = 0; a < 3; ++a) {
+        origin_[a] = stats.bboxMin[a] - kMargin;
+        dims_[a] = stats.bboxMax[a] - stats.bboxMin[a] + 1 + 2 * kMargin;
+        points *= dims_[a];
+    }
+    if (points > kMaxToolPoints) {
+        throw std::invalid_argument("the tool spans " + std::to_string(dims_[0]) + " x " + std::to_string(dims_[1]) + " x " +
+                                    std::to_string(dims_[2]) + " voxels, more than the " +
+                                    std::to_string(uint64_t(kMaxToolPoints)) +
+                                    " a tool may hold (make it from a smaller box or a coarser scene)");
+    }
+    const Box box{origin_, dims_};
+    material_.assign(box.size(), kEmptyMaterial);
+    const HermiteTree& tree = volume_.impl().grid->tree();
+    const CoordBBox dense(Coord(origin_[0], origin_[1], origin_[2]),
+                          Coord(origin_[0] + dims_[0] - 1, origin_[1] + dims_[1] - 1, origin_[2] + dims_[2] - 1));
+    auto put = [&](const Coord& c, MaterialValue v) {
+        material_[box.index(c.x() - origin_[0], c.y() - origin_[1], c.z() - origin_[2])] = v.id;
+    };
+    forEachTile(tree, [&](const CoordBBox& tile, MaterialValue value) {
+        if (!value.solid()) return;
+        CoordBBox clipped = tile;
+        clipped.intersect(dense);
+        for (auto it = clipped.begin(); it; ++it) put(*it, value);
+    });
+    std::vector<Crossing> crossings;
+    for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
+        for (Index n = 0; n < Index(kLeafVoxels); ++n) {
+            const Coord c = leaf->offsetToGlobalCoord(n);
+            const MaterialValue m = leaf->getValue(n);
+            if (m.solid()) put(c, m);
+            for (int a = 0; a < 3; ++a) {
+                const PackedSample* s = leaf->sample(n, a);
+                if (!s) continue;
+                Crossing x;
+                x.point = Vec3d(c.x(), c.y(), c.z());
+                x.point[a] += dequantizeOffset(s->offset);
+                const auto normal = decodeNormal(s->normalU, s->normalV);
+                x.normal = Vec3d(normal[0], normal[1], normal[2]);
+                x.end = {c.x(), c.y(), c.z()};
+                x.end[std::size_t(a)] += 1;
+                x.before = m.id;
+                crossings.push_back(x);
+            }
+        }
+    }
+    // The pivot: the middle of the solid voxels' box (the stats' box also holds empty surface voxels).
+    std::array<int32_t, 3> lo{INT32_MAX, INT32_MAX, INT32_MAX}, hi{INT32_MIN, INT32_MIN, INT32_MIN};
+    for (int32_t i = 0; i < dims_[0]; ++i)
+        for (int32_t j = 0; j < dims_[1]; ++j)
+            for (int32_t k = 0; k < dims_[2]; ++k) {
+                if (material_[box.index(i, j, k)] == kEmptyMaterial) continue;
+                const int32_t at[3] = {i, j, k};
+                for (std::size_t a = 0; a < 3; ++a) {
+                    lo[a] = std::min(lo[a], origin_[a] + at[a]);
+                    hi[a] = std::max(hi[a], origin_[a] + at[a]);
+                }
+            }
+    for (std::size_t a = 0; a < 3; ++a) pivot_[a] = int32_t((int64_t(lo[a]) + hi[a]) >> 1); // floor of the mean
+    // The material at each crossing's far end, read once the dense materials are complete.
+    for (Crossing& x : crossings) x.after = materialAt(x.end);
+
+    const std::vector<MaterialId> present = regions();
+    std::vector<MaterialId> wanted{kEmptyMaterial};
+    if (present.size() > 1) wanted.insert(wanted.end(), present.begin(), present.end());
+    fields_.resize(wanted.size());
+    tbb::parallel_for(std::size_t(0), wanted.size(),
+                      [&](std::size_t f) { fields_[f] = regionField(box, material_, crossings, wanted[f]); });
+}
+
+GridTool::~GridTool() = default;
+
+std::shared_ptr<const GridTool> GridTool::load(const std::string& path)
+{
+    return std::make_shared<const GridTool>(loadVolume(path));
+}
+
+std::vector<MaterialId> GridTool::regions() const
+{
+    std::vector<bool> seen(volume_.materials().size() + 1, false);
+    for (MaterialId m : material_)
+        if (m < seen.size()) seen[m] = true;
+    std::vector<MaterialId> out;
+    for (MaterialId m = 1; m < seen.size(); ++m)
+        if (seen[m]) out.push_back(m);
+    return out;
+}
+
+const ToolField* GridTool::field(MaterialId region) const
+{
+    if (region == kEmptyMaterial || fields_.size() == 1) {
+        if (region == kEmptyMaterial) return &fields_.front();
+        const std::vector<MaterialId> present = regions();
+        return std::find(present.begin(), present.end(), region) != present.end() ? &fields_.front() : nullptr;
+    }
+    for (const ToolField& f : fields_)
+        if (f.region == region) return &f;
+    return nullptr;
+}
+
+std::size_t GridTool::index(const std::array<int32_t, 3>& ijk) const
+{
+    return Box{origin_, dims_}.index(ijk[0] - origin_[0], ijk[1] - origin_[1], ijk[2] - origin_[2]);
+}
+
+MaterialId GridTool::materialAt(const std::array<int32_t, 3>& ijk) const
+{
+    for (std::size_t a = 0; a < 3; ++a)
+        if (ijk[a] < origin_[a] || ijk[a] >= origin_[a] + dims_[a]) return kEmptyMaterial;
+    return material_[index(ijk)];
+}
+
+std::optional<PackedSample> GridTool::sampleAt(const std::array<int32_t, 3>& ijk, int axis) const
+{
+    const Coord c(ijk[0], ijk[1], ijk[2]);
+    const HermiteLeaf* leaf = volume_.impl().grid->tree().probeConstLeaf(c);
+    const PackedSample* s = leaf ? leaf->sample(HermiteLeaf::coordToOffset(c), axis) : nullptr;
+    if (!s) return std::nullopt;
+    return *s;
+}
+
+// --- PlacedTool ----------------------------------------------------------------------------------
+
+PlacedTool::PlacedTool(std::shared_ptr<const GridTool> tool, const Placement& placement, MaterialId region)
+    : tool_(std::move(tool)), field_(tool_->field(region)), placement_(placement)
+{
+    if (!field_) throw std::invalid_argument("the tool holds no voxel of material id " + std::to_string(region));
+    validatePlacement(placement);
+    const double h = tool_->voxelSize();
+    const Mat3d linear = placementLinear(placement);
+    latticeToWorld_ = linear * h;
+    worldToLattice_ = linear.inverse() * (1.0 / h);
+    toWorldDistance_ = h * std::min({placement.scale.x(), placement.scale.y(), placement.scale.z()});
+
+    const auto& o = tool_->origin();
+    const auto& n = tool_->dims();
+    const auto& pivot = tool_->pivot();
+    bounds_ = WorldBounds{Vec3d(std::numeric_limits<double>::infinity()), Vec3d(-std::numeric_limits<double>::infinity())};
+    for (int corner = 0; corner < 8; ++corner) {
+        Vec3d local;
+        for (int a = 0; a < 3; ++a) local[a] = double(o[std::size_t(a)] + ((corner >> a) & 1) * (n[std::size_t(a)] - 1) - pivot[std::size_t(a)]);
+        const Vec3d w = latticeToWorld_ * local;
+        boundingRadius_ = std::max(boundingRadius_, w.length());
+        for (int a = 0; a < 3; ++a) {
+            bounds_.min[a] = std::min(bounds_.min[a], w[a] + placement.translation[a]);
+            bounds_.max[a] = std::max(bounds_.max[a], w[a] + placement.translation[a]);
+        }
+    }
+
+    // On the lattice: unit scale, a rotation of quarter turns (rotationFromEuler makes those exact) and a
+    // whole-voxel position.
+    const Mat3d rotation = rotationFromEuler(placement.rotationDegrees);
+    onLattice_ = placement.scale == Vec3d(1.0);
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+            const double v = rotation(r, c);
+            onLattice_ = onLattice_ && (v == 0.0 || v == 1.0 || v == -1.0);
+            quarterTurn_[std::size_t(r)][std::size_t(c)] = int(v);
+        }
+    for (int a = 0; a < 3; ++a) {
+        const double t = placement.translation[a] / h;
+        onLattice_ = onLattice_ && std::fabs(t - std::round(t)) < 1e-7;
+    }
+}
+
+Vec3d PlacedTool::toLattice(const Vec3d& world, const Vec3d& origin) const
+{
+    const auto& pivot = tool_->pivot();
+    Vec3d q = worldToLattice_ * (world - origin);
+    for (int a = 0; a < 3; ++a) {
+        q[a] += pivot[std::size_t(a)];
+        // On the lattice, a volume's lattice point is a tool's lattice point: snap away the rounding of
+        // coordinates such as 0.1 * i so that it reads the stored value exactly.
+        if (onLattice_ && std::fabs(q[a] - std::round(q[a])) < 1e-7) q[a] = std::round(q[a]);
+    }
+    return q;
+}
+
+double PlacedTool::sample(const Vec3d& q) const
+{
+    const auto& o = tool_->origin();
+    const auto& n = tool_->dims();
+    Vec3d rel, clamped;
+    bool inside = true;
+    for (int a = 0; a < 3; ++a) {
+        rel[a] = q[a] - o[std::size_t(a)];
+        clamped[a] = std::clamp(rel[a], 0.0, double(n[std::size_t(a)] - 1));
+        inside = inside && clamped[a] == rel[a];
+    }
+    if (!inside) return field_->outerValue + (rel - clamped).length();
+    int i0[3];
+    double w[3];
+    for (int a = 0; a < 3; ++a) {
+        i0[a] = std::min(int(rel[a]), n[std::size_t(a)] - 2);
+        w[a] = rel[a] - i0[a];
+    }
+    const float* d = field_->distance.data();
+    const std::size_t sy = std::size_t(n[2]), sx = std::size_t(n[1]) * sy;
+    const std::size_t base = std::size_t(i0[0]) * sx + std::size_t(i0[1]) * sy + std::size_t(i0[2]);
+    auto lerp = [](double a, double b, double t) { return t == 0.0 ? a : t == 1.0 ? b : a + (b - a) * t; };
+    const double c00 = lerp(d[base], d[base + 1], w[2]);
+    const double c01 = lerp(d[base + sy], d[base + sy + 1], w[2]);
+    const double c10 = lerp(d[base + sx], d[base + sx + 1], w[2]);
+    const double c11 = lerp(d[base + sx + sy], d[base + sx + sy + 1], w[2]);
+    return lerp(lerp(c00, c01, w[1]), lerp(c10, c11, w[1]), w[0]);
+}
+
+double PlacedTool::distanceAt(const Vec3d& world, const Vec3d& origin) const
+{
+    return sample(toLattice(world, origin)) * toWorldDistance_;
+}
+
+void PlacedTool::distances(const Vec3d* points, double* out, std::size_t count) const
+{
+    for (std::size_t i = 0; i < count; ++i) out[i] = sample(toLattice(points[i], placement_.translation)) * toWorldDistance_;
+}
+
+Vec3d PlacedTool::gradient(const Vec3d& world, double step) const
+{
+    // The interpolant's gradient on the lattice (one-sided on cell faces), by the chain rule in world space.
+    const Vec3d q = toLattice(world, placement_.translation);
+    const double h = 1e-4; // tool voxels: inside one cell for all but points within h of a face
+    Vec3d g;
+    for (int a = 0; a < 3; ++a) {
+        Vec3d lo = q, hi = q;
+        lo[a] -= h;
+        hi[a] += h;
+        g[a] = (sample(hi) - sample(lo)) / (2.0 * h);
+    }
+    const Vec3d worldGradient = worldToLattice_.transpose() * g;
+    const double len = worldGradient.length();
+    if (len > 0.0 && std::isfinite(len)) return worldGradient / len;
+    return SdfField::gradient(world, step);
+}
+
+WorldBounds PlacedTool::bounds() const { return bounds_; }
+
+double PlacedTool::innerRadius() const { return field_->deepest * toWorldDistance_; }
+
+std::optional<EdgeCrossing> PlacedTool::latticeCrossing(const Vec3d& start, int axis, double voxelSize) const
+{
+    if (!onLattice_ || std::fabs(voxelSize - tool_->voxelSize()) > 1e-12 * voxelSize) return std::nullopt;
+    const Vec3d q = toLattice(start, placement_.translation);
+    std::array<int32_t, 3> from;
+    for (int a = 0; a < 3; ++a) {
+        if (q[a] != std::round(q[a])) return std::nullopt; // not a lattice point
+        from[std::size_t(a)] = int32_t(q[a]);
+    }
+    // The world edge's direction in the tool: the rotation's row `axis` (its inverse is its transpose).
+    int toolAxis = 0, sign = 1;
+    for (int b = 0; b < 3; ++b) {
+        const int v = quarterTurn_[std::size_t(axis)][std::size_t(b)];
+        if (v != 0) toolAxis = b, sign = v;
+    }
+    std::array<int32_t, 3> to = from;
+    to[std::size_t(toolAxis)] += sign;
+    const MaterialId region = field_->region;
+    const MaterialId mFrom = tool_->materialAt(from), mTo = tool_->materialAt(to);
+    const bool inFrom = inRegion(mFrom, region);
+    if (inFrom == inRegion(mTo, region)) return std::nullopt;
+    const std::optional<PackedSample> sample = tool_->sampleAt(sign > 0 ? from : to, toolAxis);
+    if (!sample) return std::nullopt;
+    // A reversed edge's offset is the code's mirror, so that storing it again gives that code exactly.
+    const double offset = dequantizeOffset(sign > 0 ? sample->offset : uint16_t(65535 - sample->offset));
+    const auto decoded = decodeNormal(sample->normalU, sample->normalV);
+    Vec3d normal(decoded[0], decoded[1], decoded[2]);
+    // Solid/empty normals point into empty space, out of any region; a boundary between two materials
+    // is turned to point out of this region.
+    if (mFrom != kEmptyMaterial && mTo != kEmptyMaterial) {
+        const double outward = (inFrom ? sign : -sign) * normal[toolAxis];
+        if (outward < 0.0) normal = -normal;
+    }
+    Vec3d worldNormal;
+    for (int r = 0; r < 3; ++r) {
+        worldNormal[r] = 0.0;
+        for (int c = 0; c < 3; ++c) worldNormal[r] += quarterTurn_[std::size_t(r)][std::size_t(c)] * normal[c];
+    }
+    return EdgeCrossing{offset, worldNormal};
+}
+
+} // namespace vdbclay
