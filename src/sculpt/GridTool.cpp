@@ -46,51 +46,63 @@ struct Box {
 
 bool inRegion(MaterialId m, MaterialId region) { return region == kEmptyMaterial ? m != kEmptyMaterial : m == region; }
 
-/// Unsigned distances to the region's boundary, in voxels: tangent-plane distances next to each crossing
-/// that bounds the region, carried through the box by a two-pass 3x3x3 chamfer transform (weights 1, √2,
-/// √3), which keeps neighbouring values within their Euclidean spacing.
+/// How far a lattice point lies from the surface near one crossing, in voxels: the tangent-plane distance
+/// where the crossing's plane stands for the surface, and a lower bound through the crossing point
+/// farther along the plane.
+inline float crossingDistance(const Crossing& c, const Vec3d& p)
+{
+    const Vec3d r = p - c.point;
+    return float(std::max(std::fabs(c.normal.dot(r)), r.length() - kPlaneReach));
+}
+
+/// Unsigned distances to the region's boundary, in voxels. Each lattice point within two voxels of a
+/// crossing that bounds the region takes the nearest such crossing; a two-pass vector propagation
+/// (each point offered its 26 neighbours' crossings, forward then backward) carries the nearest
+/// crossing through the box, so far values are Euclidean distances to the surface's samples and the
+/// field's gradient stays close to 1 (a chamfer transform's diagonal steps made it √3).
 std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>& crossings, MaterialId region)
 {
     std::vector<float> d(box.size(), std::numeric_limits<float>::max());
-    for (const Crossing& c : crossings) {
+    std::vector<int32_t> nearest(box.size(), -1);
+    auto point = [&](int i, int j, int k) { return Vec3d(i + box.origin[0], j + box.origin[1], k + box.origin[2]); };
+    for (std::size_t id = 0; id < crossings.size(); ++id) {
+        const Crossing& c = crossings[id];
         if (inRegion(c.before, region) == inRegion(c.after, region)) continue;
         const int base[3] = {int(std::floor(c.point[0])) - box.origin[0], int(std::floor(c.point[1])) - box.origin[1],
                              int(std::floor(c.point[2])) - box.origin[2]};
         for (int i = base[0] - 1; i <= base[0] + 2; ++i)
             for (int j = base[1] - 1; j <= base[1] + 2; ++j)
                 for (int k = base[2] - 1; k <= base[2] + 2; ++k) {
-                    const Vec3d p(i + box.origin[0], j + box.origin[1], k + box.origin[2]);
-                    const Vec3d r = p - c.point;
-                    const double candidate = std::max(std::fabs(c.normal.dot(r)), r.length() - kPlaneReach);
-                    float& slot = d[box.index(i, j, k)];
-                    slot = std::min(slot, float(candidate));
+                    const float candidate = crossingDistance(c, point(i, j, k));
+                    const std::size_t n = box.index(i, j, k);
+                    if (candidate < d[n]) d[n] = candidate, nearest[n] = int32_t(id);
                 }
     }
-    // Chamfer passes: forward over the 13 neighbours already visited, then backward over the others.
-    struct Step { int di, dj, dk; float w; };
-    std::vector<Step> backSteps;
+    struct Step { int di, dj, dk; };
+    std::vector<Step> earlier; // the 13 neighbours a forward raster scan has visited
     for (int di = -1; di <= 1; ++di)
         for (int dj = -1; dj <= 1; ++dj)
-            for (int dk = -1; dk <= 1; ++dk) {
-                const int order = di * 9 + dj * 3 + dk;
-                if (order >= 0) continue;
-                backSteps.push_back({di, dj, dk, float(std::sqrt(double(di * di + dj * dj + dk * dk)))});
-            }
+            for (int dk = -1; dk <= 1; ++dk)
+                if (di * 9 + dj * 3 + dk < 0) earlier.push_back({di, dj, dk});
     const int nx = box.dims[0], ny = box.dims[1], nz = box.dims[2];
-    auto relax = [&](int i, int j, int k, int sign) {
-        float& v = d[box.index(i, j, k)];
-        for (const Step& s : backSteps) {
+    auto offer = [&](int i, int j, int k, int sign) {
+        const std::size_t n = box.index(i, j, k);
+        const Vec3d p = point(i, j, k);
+        for (const Step& s : earlier) {
             const int a = i + sign * s.di, b = j + sign * s.dj, c = k + sign * s.dk;
             if (a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz) continue;
-            v = std::min(v, d[box.index(a, b, c)] + s.w);
+            const int32_t id = nearest[box.index(a, b, c)];
+            if (id < 0 || id == nearest[n]) continue;
+            const float candidate = crossingDistance(crossings[std::size_t(id)], p);
+            if (candidate < d[n]) d[n] = candidate, nearest[n] = id;
         }
     };
     for (int i = 0; i < nx; ++i)
         for (int j = 0; j < ny; ++j)
-            for (int k = 0; k < nz; ++k) relax(i, j, k, 1);
+            for (int k = 0; k < nz; ++k) offer(i, j, k, 1);
     for (int i = nx - 1; i >= 0; --i)
         for (int j = ny - 1; j >= 0; --j)
-            for (int k = nz - 1; k >= 0; --k) relax(i, j, k, -1);
+            for (int k = nz - 1; k >= 0; --k) offer(i, j, k, -1);
     return d;
 }
 
@@ -117,14 +129,16 @@ ToolField regionField(const Box& box, const std::vector<MaterialId>& materials, 
         for (int j = 0; j < ny; ++j)
             for (int k = 0; k < nz; ++k)
                 if (layersIn(i, j, k) == 0) outer = std::min(outer, d[box.index(i, j, k)]);
-    // Outside values are capped by `outer` plus the distance to the outer layer (a 1-Lipschitz cap), so the
-    // outer layer holds one value and the field's continuation beyond the box, that value plus the
-    // distance to the box, joins it continuously; deep in the box the cap is far above any value.
+    // Outside values are capped by `outer` plus the layers to the outer layer over √3, so the outer layer
+    // holds one value and the field's continuation beyond the box, that value plus the distance to the
+    // box, joins it continuously. The cap rises by 1/√3 per layer: in a corner of the box, where a point's
+    // three neighbours towards the corner all lie a layer lower, its gradient is then 1, not √3.
+    const float capSlope = float(1.0 / std::sqrt(3.0));
     for (int i = 0; i < nx; ++i)
         for (int j = 0; j < ny; ++j)
             for (int k = 0; k < nz; ++k) {
                 float& v = d[box.index(i, j, k)];
-                if (v > 0.0f) v = std::min(v, outer + float(layersIn(i, j, k)));
+                if (v > 0.0f) v = std::min(v, outer + capSlope * float(layersIn(i, j, k)));
             }
     field.outerValue = outer;
 
