@@ -53,9 +53,23 @@ constexpr const char* kDemoScript = R"json({
   ]
 })json";
 
+// Sculptures as tools: the stone knob under the ball (cut out of the scene by `tool make`'s box) stamped
+// turned on both sides of the ball, then swept at half size around its waist.
+constexpr const char* kToolScript = R"json({
+  "ops": [
+    {"mode": "add", "brush": {"shape": "grid", "file": "knob.vdb"}, "at": [-27, 6, 0], "rotate": [0, 0, -70]},
+    {"mode": "add", "brush": {"shape": "grid", "file": "knob.vdb"}, "at": [27, 6, 0], "rotate": [0, 0, 70]},
+    {"mode": "add", "brush": {"shape": "grid", "file": "knob.vdb"}, "scale": [0.4, 0.4, 0.4], "rotate": [90, 0, 0],
+     "path": [[-16, -12, 14], [0, -15, 18], [16, -12, 14]], "material": "moss"}
+  ]
+})json";
+// The box `tool make` cuts the knob out with: the blended stone bump below the clay ball.
+const WorldBounds kKnobBox{Vec3d(-7.0, -38.0, -7.0), Vec3d(7.0, -25.0, 7.0)};
+
 std::string describeOp(const ScriptOp& op)
 {
     std::string text = csgModeName(op.mode);
+    if (!op.toolFile.empty()) text += " tool " + op.toolFile;
     if (!op.material.empty()) text += " " + op.material;
     if (op.path.size() > 1) text += ", stroke of " + std::to_string(op.path.size()) + " points";
     return text;
@@ -71,7 +85,8 @@ CLI::App* addDemoCommand(CLI::App& parent, DemoOptions& o)
         ->type_name("DIR");
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text");
     cmd->footer("Writes DIR/scene.vdb, DIR/scene.obj, DIR/scene.ply and DIR/script.json (the stroke script it ran;\n"
-                "replay it with 'vdbclay sculpt'), then the same scene as a store with two levels of detail\n"
+                "replay it with 'vdbclay sculpt'); DIR/knob.vdb, a part of the sculpture made a tool, and DIR/tools.json,\n"
+                "the second script, which stamps and sweeps it; then the same scene as a store with two levels of detail\n"
                 "(DIR/scene.vdbclay) and the mesh of level 2 (DIR/scene-lod2.obj). No picture yet: the renderer is not built.");
     return cmd;
 }
@@ -89,15 +104,28 @@ int runDemo(const DemoOptions& o)
     const std::string objPath = (dir / "scene.obj").string();
     const std::string plyPath = (dir / "scene.ply").string();
     const std::string scriptPath = (dir / "script.json").string();
+    const std::string toolPath = (dir / "knob.vdb").string();
+    const std::string toolScriptPath = (dir / "tools.json").string();
 
     const StrokeScript script = parseStrokeScript(kDemoScript);
     Volume volume(kDemoVoxelSize);
     const auto sculptStart = std::chrono::steady_clock::now();
-    const std::vector<ScriptOpReport> reports = runStrokeScript(volume, script);
+    std::vector<std::pair<std::string, ScriptOpReport>> reports;
+    for (ScriptOpReport& r : runStrokeScript(volume, script)) reports.emplace_back(describeOp(script.ops[r.index]), std::move(r));
+    // A part of the sculpture becomes a tool, and the second script sculpts with it.
+    saveVolume(toolFromScene(volume.clone(), kKnobBox), toolPath);
+    StrokeScript toolScript = parseStrokeScript(kToolScript);
+    loadScriptTools(toolScript, dir.string());
+    for (ScriptOpReport& r : runStrokeScript(volume, toolScript)) {
+        const std::string what = describeOp(toolScript.ops[r.index]);
+        r.index += script.ops.size();
+        reports.emplace_back(what, std::move(r));
+    }
     const double sculptSeconds = secondsSince(sculptStart);
 
     saveVolume(volume, vdbPath);
     writeFileAtomically(scriptPath, [](std::ostream& out) { out << kDemoScript << '\n'; });
+    writeFileAtomically(toolScriptPath, [](std::ostream& out) { out << kToolScript << '\n'; });
 
     const auto meshStart = std::chrono::steady_clock::now();
     MeshOptions meshOptions;
@@ -122,9 +150,9 @@ int runDemo(const DemoOptions& o)
 
     if (o.json) {
         nlohmann::json ops = nlohmann::json::array();
-        for (const auto& r : reports) {
+        for (const auto& [what, r] : reports) {
             nlohmann::json op = opReportJson(r);
-            op["description"] = describeOp(script.ops[r.index]);
+            op["description"] = what;
             ops.push_back(std::move(op));
         }
         printJson({{"out_dir", o.outDir},
@@ -141,7 +169,7 @@ int runDemo(const DemoOptions& o)
                    {"triangles", mesh.triangleCount()},
                    {"watertight", topology.watertight()},
                    {"files", {{"volume", vdbPath}, {"obj", objPath}, {"ply", plyPath}, {"script", scriptPath},
-                              {"store", storePath}, {"lod2_obj", lodPath}}},
+                              {"tool", toolPath}, {"tool_script", toolScriptPath}, {"store", storePath}, {"lod2_obj", lodPath}}},
                    {"picture", nullptr},
                    {"seconds", seconds}});
         return kExitOk;
@@ -149,10 +177,9 @@ int runDemo(const DemoOptions& o)
 
     std::cout << "VDBClay demo: " << reports.size() << " ops on a " << formatNumber(kDemoVoxelSize)
               << "-unit voxel grid, materials stone (toughness 0.9), clay (0.2), moss (0.5)\n";
-    for (const auto& r : reports) {
+    for (const auto& [what, r] : reports) {
         char line[160];
-        std::snprintf(line, sizeof line, "  op %zu/%zu  %-40s %8llu blocks  %s\n", r.index + 1, reports.size(),
-                      describeOp(script.ops[r.index]).c_str(),
+        std::snprintf(line, sizeof line, "  op %2zu/%zu  %-44s %8llu blocks  %s\n", r.index + 1, reports.size(), what.c_str(),
                       static_cast<unsigned long long>(r.stats.blocksComputed), formatSeconds(r.seconds).c_str());
         std::cout << line;
     }
@@ -165,7 +192,7 @@ int runDemo(const DemoOptions& o)
                  {"watertight", topology.watertight() ? "yes" : "no"},
                  {"volume", vdbPath},
                  {"meshes", objPath + ", " + plyPath},
-                 {"script", scriptPath},
+                 {"scripts", scriptPath + ", then " + toolScriptPath + " with the tool " + toolPath},
                  {"store", storePath + " (2 levels of detail; level 2 meshed to " + lodPath + ")"},
                  {"total time", formatSeconds(seconds)}},
                 0);

@@ -5,7 +5,7 @@
 #include "interop/LevelSetExport.h"
 #include "interop/LevelSetImport.h"
 #include "scene/SceneStore.h"
-#include "voxelize/Voxelizer.h"
+#include "voxelize/VoxelizeToStore.h"
 #include "vdb_hermite/VolumeIO.h"
 
 #include <CLI/CLI.hpp>
@@ -24,22 +24,28 @@ void writeScene(const Volume& volume, const std::string& path, bool progress)
     else saveVolume(volume, path);
 }
 
-nlohmann::json sceneSummaryJson(const std::string& path, const Volume& volume, double seconds)
+/// What a written scene holds, for the summary.
+struct SceneCounts {
+    uint64_t leaves = 0, activeVoxels = 0;
+    explicit SceneCounts(const Volume& volume) : leaves(volume.stats().leafCount), activeVoxels(volume.stats().activeVoxels) {}
+    SceneCounts(uint64_t leafCount, uint64_t active) : leaves(leafCount), activeVoxels(active) {}
+};
+
+nlohmann::json sceneSummaryJson(const std::string& path, const SceneCounts& counts, double seconds)
 {
-    const VolumeStats s = volume.stats();
     return {{"output", path},
             {"form", isStorePath(path) ? "store" : "vdb"},
-            {"leaf_count", s.leafCount},
-            {"active_voxels", s.activeVoxels},
+            {"leaf_count", counts.leaves},
+            {"active_voxels", counts.activeVoxels},
             {"bytes", std::filesystem::file_size(path)},
             {"seconds", seconds}};
 }
 
-void printSummary(const std::string& input, const std::string& output, const Volume& volume, double seconds)
+void printSummary(const std::string& input, const std::string& output, const SceneCounts& counts, double seconds)
 {
     printFields({{"converted", input + " -> " + output},
                  {"form", isStorePath(output) ? "store (bricks of 64^3 voxels)" : "native .vdb"},
-                 {"leaves", std::to_string(volume.stats().leafCount)},
+                 {"leaves", std::to_string(counts.leaves)},
                  {"size", formatBytes(double(std::filesystem::file_size(output)))},
                  {"time", formatSeconds(seconds)}},
                 0);
@@ -58,23 +64,33 @@ int importMesh(const ImportOptions& o, std::chrono::steady_clock::time_point sta
     if (!options.voxelSize && !options.resolution) throw UsageError("a mesh needs --voxel-size V or --resolution N");
     if (options.voxelSize && options.resolution) throw UsageError("give --voxel-size or --resolution, not both");
     const TriangleSoup mesh = loadTriangleMesh(o.input);
+    // A store is written brick by brick as the mesh is voxelized: the volume is never whole in memory.
     VoxelizeReport report;
-    Volume volume = [&] {
+    std::vector<std::string> materials;
+    const SceneCounts counts = [&] {
         try {
-            return voxelizeMesh(mesh, options, &report);
+            if (isStorePath(o.output)) {
+                const StoreVoxelizeReport stored = voxelizeMeshToStore(mesh, options, o.output, terminalProgress("voxelizing bricks", !o.json));
+                report = stored.mesh;
+                materials = stored.materials.names();
+                return SceneCounts(stored.leaves, stored.activeVoxels);
+            }
+            const Volume volume = voxelizeMesh(mesh, options, &report);
+            saveVolume(volume, o.output);
+            materials = volume.materials().names();
+            return SceneCounts(volume);
         } catch (const std::invalid_argument& e) {
             throw UsageError(e.what());
         }
     }();
-    writeScene(volume, o.output, !o.json);
     const double seconds = secondsSince(start);
     if (o.json) {
-        nlohmann::json out = sceneSummaryJson(o.output, volume, seconds);
+        nlohmann::json out = sceneSummaryJson(o.output, counts, seconds);
         out["mesh"] = {{"triangles", report.triangles},         {"dropped_triangles", report.droppedTriangles},
                        {"voxel_size", report.voxelSize},        {"hits", report.hits},
                        {"duplicate_hits", report.duplicateHits}, {"voted_points", report.votedPoints},
                        {"patched_crossings", report.patchedCrossings}, {"crossings", report.crossings},
-                       {"solid_voxels", report.solidVoxels},    {"materials", volume.materials().names()}};
+                       {"solid_voxels", report.solidVoxels},    {"materials", materials}};
         printJson(out);
         return kExitOk;
     }
@@ -84,7 +100,7 @@ int importMesh(const ImportOptions& o, std::chrono::steady_clock::time_point sta
                                   std::to_string(report.votedPoints) + " lattice points settled by the 3-ray vote (holes, seams), " +
                                   std::to_string(report.patchedCrossings) + " crossings patched"}},
                 0);
-    printSummary(o.input, o.output, volume, seconds);
+    printSummary(o.input, o.output, counts, seconds);
     return kExitOk;
 }
 
@@ -148,7 +164,7 @@ int runImport(const ImportOptions& o)
     writeScene(volume, o.output, !o.json);
     const double seconds = secondsSince(start);
     if (o.json) {
-        nlohmann::json out = sceneSummaryJson(o.output, volume, seconds);
+        nlohmann::json out = sceneSummaryJson(o.output, SceneCounts(volume), seconds);
         if (standard)
             out["levelset"] = {{"grid", report.grid},   {"class", report.gridClass}, {"value_type", report.valueType},
                                {"fog", report.fog},     {"voxel_size", report.voxelSize},
@@ -164,7 +180,7 @@ int runImport(const ImportOptions& o)
                      {"crossings", std::to_string(report.crossings)}},
                     0);
     }
-    printSummary(o.input, o.output, volume, seconds);
+    printSummary(o.input, o.output, SceneCounts(volume), seconds);
     return kExitOk;
 }
 
@@ -186,8 +202,8 @@ int runExport(const ExportOptions& o)
     const Volume volume = loadScene(o.input, terminalProgress("reading bricks", !o.json));
     saveVolume(volume, o.output);
     const double seconds = secondsSince(start);
-    if (o.json) printJson(sceneSummaryJson(o.output, volume, seconds));
-    else printSummary(o.input, o.output, volume, seconds);
+    if (o.json) printJson(sceneSummaryJson(o.output, SceneCounts(volume), seconds));
+    else printSummary(o.input, o.output, SceneCounts(volume), seconds);
     return kExitOk;
 }
 

@@ -101,7 +101,7 @@ case "$action" in
             step "build: ninja -C build-asan -j${jobs}"
             ninja -C build-asan -j"${jobs}"
             step "test: the suite under AddressSanitizer and UBSan"
-            ASAN_OPTIONS=detect_leaks=1 VDBCLAY_SWEEP_STEP=1 LSAN_OPTIONS="suppressions=${repo}/tests/sanitizer/lsan.supp" \
+            ASAN_OPTIONS=detect_leaks=1 VDBCLAY_SWEEP_STEP=1 VDBCLAY_KILL_TRIALS=12 LSAN_OPTIONS="suppressions=${repo}/tests/sanitizer/lsan.supp" \
                 UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=${repo}/tests/sanitizer/ubsan.supp" \
                 ctest --test-dir build-asan --output-on-failure -j"${jobs}"
             step "test: fuzzers, ${FUZZ_SECONDS:-60} s each"

@@ -203,14 +203,18 @@ TEST_CASE("cli: demo writes a volume, meshes and the script it ran", "[cli]")
     TempDir dir;
     const json j = parseJsonOutput(runCli(dir, "demo --out demo-out --json"));
     CHECK(j["watertight"] == true);
-    for (const char* name : {"scene.vdb", "scene.obj", "scene.ply", "script.json", "scene.vdbclay", "scene-lod2.obj"}) {
+    for (const char* name : {"scene.vdb", "scene.obj", "scene.ply", "script.json", "knob.vdb", "tools.json", "scene.vdbclay",
+                             "scene-lod2.obj"}) {
         INFO(name);
         CHECK(std::filesystem::file_size(dir.path() / "demo-out" / name) > 0);
     }
-    // Replaying the written script on a fresh volume of the demo's voxel size gives the written volume.
+    // Replaying the written scripts (the second with the tool it wrote) on a fresh volume of the demo's
+    // voxel size gives the written volume.
     const Volume scene = loadVolume((dir.path() / "demo-out" / "scene.vdb").string());
     Volume replay(scene.voxelSize());
     runStrokeScript(replay, loadStrokeScript((dir.path() / "demo-out" / "script.json").string()));
+    CHECK_FALSE(identical(scene, replay));
+    runStrokeScript(replay, loadStrokeScript((dir.path() / "demo-out" / "tools.json").string()));
     CHECK(identical(scene, replay));
 }
 

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <cstdlib>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
@@ -254,10 +255,14 @@ TEST_CASE("SIGKILL at any moment loses at most the edits since the last autosave
     REQUIRE(WEXITSTATUS(whole) == 0);
     REQUIRE(identical(loadScene(path), after[kOps]));
 
+    // The sanitizer build runs fewer trials (VDBCLAY_KILL_TRIALS, set by scripts/bootstrap.sh): each
+    // run there is several times slower, and a dozen kills still land at different moments.
+    const char* trialsText = std::getenv("VDBCLAY_KILL_TRIALS");
+    const int trials = trialsText && std::atoi(trialsText) >= 6 ? std::atoi(trialsText) : 50;
     std::mt19937 rng(12);
     int killed = 0, finished = 0;
     std::set<uint64_t> seenCommitted;
-    for (int trial = 0; trial < 50; ++trial) {
+    for (int trial = 0; trial < trials; ++trial) {
         std::filesystem::copy_file(original, path, std::filesystem::copy_options::overwrite_existing);
         const auto delay = std::chrono::microseconds(rng() % std::max<int64_t>(1, int64_t(runTime.count() * 9 / 10)));
         const int status = run(path, delay);
@@ -273,6 +278,6 @@ TEST_CASE("SIGKILL at any moment loses at most the edits since the last autosave
         seenCommitted.insert(committed);
         REQUIRE(identical(scene.loadLevel(0), after[committed]));
     }
-    CHECK(killed >= 25);
+    CHECK(killed >= trials / 2);
     CHECK(seenCommitted.size() >= 3); // the kills landed at different moments
 }

@@ -9,9 +9,9 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <set>
+#include <iterator>
+#include <memory>
 #include <stdexcept>
 
 namespace vdbclay {
@@ -22,8 +22,13 @@ namespace {
 /// voxels): a mesh vertex, edge or face on the lattice (users model on integers) then lies on one side
 /// of the point for every ray, so the three rays agree, and a ray grazing a vertex hits it twice or not.
 constexpr std::array<double, 3> kPointOffset{1.23e-5, 0.71e-5, 0.97e-5};
-/// The most lattice points a mesh's box may span (the lattice is dense).
-constexpr double kMaxLatticePoints = double(1u << 28);
+/// The most lattice points a mesh's box may span (2^36, 4096^3: the work grows with them), and the most
+/// rays along one axis (each keeps an index into the hits: 4 bytes).
+constexpr double kMaxLatticePoints = double(uint64_t(1) << 36);
+constexpr double kMaxRaysPerAxis = double(uint64_t(1) << 26);
+/// The edge of the blocks the whole-mesh voxelization works in, voxels: their votes (5 bytes a point)
+/// stay in a core's cache.
+constexpr int32_t kWholeMeshBlockEdge = 64;
 /// How far past an edge's end, in voxels, a hit still counts as that edge's crossing.
 constexpr double kEndTolerance = 1e-3;
 
@@ -42,8 +47,6 @@ struct Lattice {
     std::array<int32_t, 3> lo{};
     std::array<int32_t, 3> dim{};
     double voxelSize = 1.0;
-    std::size_t index(int x, int y, int z) const { return (std::size_t(x) * dim[1] + std::size_t(y)) * dim[2] + std::size_t(z); }
-    std::size_t size() const { return std::size_t(dim[0]) * dim[1] * dim[2]; }
 };
 
 /// The hits of every ray along `axis`, sorted by ray then position. A lattice point lies inside a
@@ -144,15 +147,103 @@ RayHits groupByRay(std::vector<Hit> hits, std::size_t rays, int axis, uint64_t& 
     return out;
 }
 
+
+/// The votes of the lattice points of one box (lattice indices lo .. lo + dim - 1, which may reach past
+/// the lattice: no ray runs there, so those points are empty): a bit per axis whose ray has the point
+/// inside, and the material of the hit that ray entered at.
+struct WindowVotes {
+    std::array<int32_t, 3> lo{};
+    int32_t dim = 0;
+    std::vector<uint8_t> votes;
+    std::vector<uint32_t> material;
+
+    std::size_t index(int x, int y, int z) const
+    {
+        return (std::size_t(x - lo[0]) * std::size_t(dim) + std::size_t(y - lo[1])) * std::size_t(dim) + std::size_t(z - lo[2]);
+    }
+    /// Solid where two rays of three agree.
+    bool solidAt(int x, int y, int z) const
+    {
+        const uint8_t b = votes[index(x, y, z)];
+        return ((b & 1) + ((b >> 1) & 1) + ((b >> 2) & 1)) >= 2;
+    }
+};
+
+/// Fills the votes of a cube of lattice points from the rays through it. A ray's parity where the cube
+/// starts is the number of its hits before: the same answer as walking the ray from the lattice's start.
+/// Returns false when no point of the cube is inside along any ray (then it holds nothing).
+bool fillVotes(const Lattice& lattice, const std::array<RayHits, 3>& rays, WindowVotes& window)
+{
+    const std::size_t points = std::size_t(window.dim) * std::size_t(window.dim) * std::size_t(window.dim);
+    window.votes.assign(points, 0);
+    window.material.assign(points, 0);
+    bool any = false;
+    for (int axis = 0; axis < 3; ++axis) {
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        const RayHits& rh = rays[std::size_t(axis)];
+        const double offset = kPointOffset[std::size_t(axis)];
+        const int w0 = std::max(window.lo[std::size_t(axis)], 0);
+        const int w1 = std::min(window.lo[std::size_t(axis)] + window.dim, lattice.dim[std::size_t(axis)]);
+        for (int iu = std::max(window.lo[std::size_t(u)], 0); iu < std::min(window.lo[std::size_t(u)] + window.dim, lattice.dim[std::size_t(u)]); ++iu)
+            for (int iv = std::max(window.lo[std::size_t(v)], 0); iv < std::min(window.lo[std::size_t(v)] + window.dim, lattice.dim[std::size_t(v)]); ++iv) {
+                const std::size_t ray = std::size_t(iu) * std::size_t(lattice.dim[std::size_t(v)]) + std::size_t(iv);
+                const Hit* first = rh.hits.data() + rh.first[ray];
+                const Hit* end = rh.hits.data() + rh.first[ray + 1];
+                if (first == end) continue;
+                const Hit* h = std::partition_point(first, end, [&](const Hit& hit) { return hit.at < double(w0) + offset; });
+                bool inside = ((h - first) & 1) != 0;
+                uint32_t entering = h != first ? h[-1].material : 0;
+                for (int w = w0; w < w1; ++w) {
+                    for (; h != end && h->at < double(w) + offset; ++h) {
+                        inside = !inside;
+                        entering = h->material;
+                    }
+                    if (!inside) continue;
+                    int c[3];
+                    c[axis] = w, c[u] = iu, c[v] = iv;
+                    const std::size_t at = window.index(c[0], c[1], c[2]);
+                    window.votes[at] |= uint8_t(1u << axis);
+                    if (axis == 0 || window.material[at] == 0) window.material[at] = entering + 1;
+                    any = true;
+                }
+            }
+    }
+    return any;
+}
+
+/// What the voxelization of one block counts.
+struct BlockCounts {
+    uint64_t voted = 0, patched = 0, crossings = 0, solid = 0;
+};
+
+/// One block's leaves, built as plain data.
+struct BlockLeaves {
+    std::vector<Coord> origins;
+    std::vector<HermiteLeafData> data;
+    BlockCounts counts;
+};
+
 } // namespace
 
-Volume voxelizeMesh(const TriangleSoup& mesh, const VoxelizeOptions& options, VoxelizeReport* report)
+/// The mesh cast into rays: the sorted hits of every lattice line along X, Y and Z (memory that grows
+/// with the mesh's surface), and the lattice they run on.
+struct MeshVoxelizer::Impl {
+    Lattice lattice;
+    std::array<RayHits, 3> rays;
+    MaterialTable materials;
+    std::vector<MaterialId> ids; // per mesh material
+    VoxelizeReport cast;         // what casting counted: triangles, hits, duplicates
+
+    BlockLeaves voxelizeBlock(const LeafAlignedBox& box) const;
+};
+
+MeshVoxelizer::MeshVoxelizer(const TriangleSoup& mesh, const VoxelizeOptions& options) : impl_(std::make_unique<Impl>())
 {
+    if (mesh.triangles.empty()) throw std::invalid_argument("the mesh holds no triangle");
     std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
     for (const auto& t : mesh.triangles)
         for (uint32_t i : t)
             for (std::size_t a = 0; a < 3; ++a) lo[a] = std::min(lo[a], mesh.positions[i][a]), hi[a] = std::max(hi[a], mesh.positions[i][a]);
-    if (mesh.triangles.empty()) throw std::invalid_argument("the mesh holds no triangle");
     const double longest = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
     double voxelSize = 0.0;
     if (options.voxelSize) voxelSize = *options.voxelSize;
@@ -166,82 +257,84 @@ Volume voxelizeMesh(const TriangleSoup& mesh, const VoxelizeOptions& options, Vo
     if (!(voxelSize >= kMinVoxelSize && voxelSize <= kMaxVoxelSize))
         throw std::invalid_argument("a voxel size of " + std::to_string(voxelSize) + " is outside " + std::to_string(kMinVoxelSize) +
                                     " .. " + std::to_string(kMaxVoxelSize));
-    Lattice lattice;
+    Lattice& lattice = impl_->lattice;
     lattice.voxelSize = voxelSize;
-    double points = 1.0;
+    std::array<double, 3> extent{};
     for (std::size_t a = 0; a < 3; ++a) {
         const double first = std::floor(lo[a] / voxelSize) - 1.0, last = std::ceil(hi[a] / voxelSize) + 1.0;
         if (!(std::fabs(first) < 1e9 && std::fabs(last) < 1e9)) throw std::invalid_argument("the mesh lies too far out for this voxel size");
         lattice.lo[a] = int32_t(first);
         lattice.dim[a] = int32_t(last - first) + 1;
-        points *= double(lattice.dim[a]);
+        extent[a] = double(lattice.dim[a]);
     }
-    // Five bytes a lattice point (votes, materials): 2^28 points is 1.3 GB.
-    if (points > kMaxLatticePoints)
-        throw std::invalid_argument("the mesh spans " + std::to_string(uint64_t(points)) +
-                                    " lattice points at this voxel size (at most 2^28): choose a coarser one");
+    const double points = extent[0] * extent[1] * extent[2];
+    const double face = std::max({extent[0] * extent[1], extent[1] * extent[2], extent[0] * extent[2]});
+    if (points > kMaxLatticePoints || face > kMaxRaysPerAxis)
+        throw std::invalid_argument("the mesh spans " + std::to_string(lattice.dim[0]) + " x " + std::to_string(lattice.dim[1]) + " x " +
+                                    std::to_string(lattice.dim[2]) +
+                                    " lattice points at this voxel size (at most 2^36, and 2^26 on a face): choose a coarser one");
 
-    VoxelizeReport r;
+    VoxelizeReport& r = impl_->cast;
     r.voxelSize = voxelSize;
     r.triangles = mesh.triangles.size();
     r.droppedTriangles = mesh.droppedTriangles;
-    // Per axis: parity along its rays, and the material of the hit each inside section starts at.
-    std::array<RayHits, 3> rays;
-    std::vector<uint8_t> votes(lattice.size(), 0);
-    std::vector<uint32_t> material(lattice.size(), 0);
     for (int axis = 0; axis < 3; ++axis) {
         const int u = (axis + 1) % 3, v = (axis + 2) % 3;
         const std::size_t count = std::size_t(lattice.dim[std::size_t(u)]) * std::size_t(lattice.dim[std::size_t(v)]);
         std::vector<Hit> hits = castRays(mesh, lattice, axis);
+        if (hits.size() >= std::size_t(UINT32_MAX))
+            throw std::invalid_argument("the mesh crosses the lattice's lines more than 2^32 times at this voxel size: choose a coarser one");
         r.hits += hits.size();
-        rays[std::size_t(axis)] = groupByRay(std::move(hits), count, axis, r.duplicateHits);
-        const RayHits& rh = rays[std::size_t(axis)];
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 64), [&](const auto& range) {
-            for (std::size_t ray = range.begin(); ray != range.end(); ++ray) {
-                const int iu = int(ray / std::size_t(lattice.dim[std::size_t(v)])), iv = int(ray % std::size_t(lattice.dim[std::size_t(v)]));
-                uint32_t h = rh.first[ray];
-                const uint32_t end = rh.first[ray + 1];
-                bool inside = false;
-                uint32_t entering = 0;
-                for (int w = 0; w < lattice.dim[std::size_t(axis)]; ++w) {
-                    for (; h < end && rh.hits[h].at < double(w) + kPointOffset[std::size_t(axis)]; ++h) {
-                        inside = !inside;
-                        entering = rh.hits[h].material;
-                    }
-                    if (!inside) continue;
-                    int c[3];
-                    c[axis] = w, c[u] = iu, c[v] = iv;
-                    const std::size_t at = lattice.index(c[0], c[1], c[2]);
-                    // Rays of different axes write different bits of one byte: no two rays of one axis
-                    // share a point, and the axes run one after another.
-                    votes[at] |= uint8_t(1u << axis);
-                    if (axis == 0 || material[at] == 0) material[at] = entering + 1;
-                }
-            }
-        });
+        impl_->rays[std::size_t(axis)] = groupByRay(std::move(hits), count, axis, r.duplicateHits);
     }
 
-    // The volume, leaf by leaf: solid where two rays of three agree, crossings from the hits.
-    Volume volume(voxelSize);
-    std::vector<MaterialId> ids(mesh.materials.size(), 1);
+    impl_->ids.assign(mesh.materials.size(), 1);
+    MaterialTable& table = impl_->materials;
     if (!options.material.empty()) {
-        const auto found = volume.materials().find(options.material);
-        const MaterialId id = found ? *found : volume.materials().define(Material{options.material});
-        std::fill(ids.begin(), ids.end(), id);
+        const auto found = table.find(options.material);
+        const MaterialId id = found ? *found : table.define(Material{options.material});
+        std::fill(impl_->ids.begin(), impl_->ids.end(), id);
     } else if (mesh.materials.size() > 1 || !mesh.materials[0].name.empty()) {
         for (std::size_t m = 0; m < mesh.materials.size(); ++m) {
             if (mesh.materials[m].name.empty()) continue; // unnamed: the default material
             Material out;
             out.name = mesh.materials[m].name;
             out.color = mesh.materials[m].color;
-            ids[m] = volume.materials().define(out);
+            impl_->ids[m] = table.define(out);
         }
     }
-    auto solidAt = [&](int x, int y, int z) {
-        if (x < 0 || y < 0 || z < 0 || x >= lattice.dim[0] || y >= lattice.dim[1] || z >= lattice.dim[2]) return false;
-        const uint8_t b = votes[lattice.index(x, y, z)];
-        return ((b & 1) + ((b >> 1) & 1) + ((b >> 2) & 1)) >= 2;
-    };
+}
+
+MeshVoxelizer::MeshVoxelizer(MeshVoxelizer&&) noexcept = default;
+MeshVoxelizer& MeshVoxelizer::operator=(MeshVoxelizer&&) noexcept = default;
+MeshVoxelizer::~MeshVoxelizer() = default;
+
+double MeshVoxelizer::voxelSize() const { return impl_->lattice.voxelSize; }
+const MaterialTable& MeshVoxelizer::materials() const { return impl_->materials; }
+const VoxelizeReport& MeshVoxelizer::castReport() const { return impl_->cast; }
+
+std::vector<LeafAlignedBox> MeshVoxelizer::blocks(int32_t edge) const
+{
+    if (edge < kLeafDim || edge % kLeafDim != 0) throw std::invalid_argument("a block's edge must be a multiple of 8 voxels");
+    const Lattice& lattice = impl_->lattice;
+    auto down = [&](int32_t c) { return c >= 0 ? c / edge * edge : -((-c + edge - 1) / edge) * edge; };
+    std::vector<LeafAlignedBox> out;
+    for (int32_t x = down(lattice.lo[0]); x < lattice.lo[0] + lattice.dim[0]; x += edge)
+        for (int32_t y = down(lattice.lo[1]); y < lattice.lo[1] + lattice.dim[1]; y += edge)
+            for (int32_t z = down(lattice.lo[2]); z < lattice.lo[2] + lattice.dim[2]; z += edge) out.push_back({{x, y, z}, edge});
+    return out;
+}
+
+BlockLeaves MeshVoxelizer::Impl::voxelizeBlock(const LeafAlignedBox& box) const
+{
+    BlockLeaves out;
+    // The block's points and a margin: one point below for the normals a patched crossing takes from
+    // its ends' neighbourhoods, two above for the edges leaving the block and those neighbourhoods.
+    WindowVotes window;
+    window.dim = box.edge + 3;
+    for (std::size_t a = 0; a < 3; ++a) window.lo[a] = box.min[a] - lattice.lo[a] - 1;
+    if (!fillVotes(lattice, rays, window)) return out;
+
     // A crossing the vote made where no ray hit: the normal of the solid's shape around the edge (its
     // occupancy's gradient over the 3x3x3 points about each end), else along the edge.
     auto patchNormal = [&](const int* p, const int* q, int axis, double sign) {
@@ -250,7 +343,7 @@ Volume voxelizeMesh(const TriangleSoup& mesh, const VoxelizeOptions& options, Vo
             for (int dx = -1; dx <= 1; ++dx)
                 for (int dy = -1; dy <= 1; ++dy)
                     for (int dz = -1; dz <= 1; ++dz) {
-                        if (!solidAt(c[0] + dx, c[1] + dy, c[2] + dz)) continue;
+                        if (!window.solidAt(c[0] + dx, c[1] + dy, c[2] + dz)) continue;
                         n[0] -= dx, n[1] -= dy, n[2] -= dz; // out of the solid: away from its points
                     }
         if (n[std::size_t(axis)] * sign <= 0.0) {
@@ -259,81 +352,104 @@ Volume voxelizeMesh(const TriangleSoup& mesh, const VoxelizeOptions& options, Vo
         }
         return n;
     };
-    std::vector<Coord> origins;
-    for (int32_t x = lattice.lo[0] & ~(kLeafDim - 1); x < lattice.lo[0] + lattice.dim[0]; x += kLeafDim)
-        for (int32_t y = lattice.lo[1] & ~(kLeafDim - 1); y < lattice.lo[1] + lattice.dim[1]; y += kLeafDim)
-            for (int32_t z = lattice.lo[2] & ~(kLeafDim - 1); z < lattice.lo[2] + lattice.dim[2]; z += kLeafDim) origins.emplace_back(x, y, z);
-    std::vector<HermiteLeafData> data(origins.size());
-    std::vector<uint8_t> any(origins.size(), 0);
-    std::atomic<uint64_t> voted{0}, patched{0}, crossings{0}, solid{0};
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, origins.size(), 8), [&](const auto& range) {
-        for (std::size_t l = range.begin(); l != range.end(); ++l) {
-            HermiteLeafData& d = data[l];
-            uint64_t leafVoted = 0, leafPatched = 0, leafCrossings = 0, leafSolid = 0;
-            for (int x = 0; x < kLeafDim; ++x)
-                for (int y = 0; y < kLeafDim; ++y)
-                    for (int z = 0; z < kLeafDim; ++z) {
-                        const int g[3] = {origins[l].x() + x - lattice.lo[0], origins[l].y() + y - lattice.lo[1], origins[l].z() + z - lattice.lo[2]};
-                        const int offset = (x << (2 * kLeafLog2Dim)) | (y << kLeafLog2Dim) | z;
-                        const bool s = solidAt(g[0], g[1], g[2]);
-                        if (s) {
-                            const std::size_t at = lattice.index(g[0], g[1], g[2]);
-                            const uint8_t b = votes[at];
-                            if (b != 7) ++leafVoted;
-                            d.material[std::size_t(offset)].id = ids[std::min<std::size_t>(material[at] ? material[at] - 1 : 0, ids.size() - 1)];
-                            ++leafSolid;
-                        } else if (g[0] >= 0 && g[1] >= 0 && g[2] >= 0 && g[0] < lattice.dim[0] && g[1] < lattice.dim[1] &&
-                                   g[2] < lattice.dim[2] && votes[lattice.index(g[0], g[1], g[2])] != 0) {
-                            ++leafVoted;
-                        }
-                        for (int axis = 0; axis < 3; ++axis) {
-                            int n[3] = {g[0], g[1], g[2]};
-                            n[axis] += 1;
-                            if (solidAt(n[0], n[1], n[2]) == s) continue;
-                            // The hit on this edge whose normal leaves the solid the right way, else
-                            // any hit on it, else (the vote made it cross) mid-edge along the axis. A hit a
-                            // hair past an end counts (a face a rounding error off a lattice plane, whose
-                            // points the vote settles): it lands on that end.
-                            const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-                            const RayHits& rh = rays[std::size_t(axis)];
-                            const std::size_t ray = std::size_t(g[u]) * std::size_t(lattice.dim[std::size_t(v)]) + std::size_t(g[v]);
-                            const double sign = s ? 1.0 : -1.0;
-                            const Hit* best = nullptr;
-                            for (uint32_t h = rh.first[ray]; h < rh.first[ray + 1]; ++h) {
-                                const Hit& hit = rh.hits[h];
-                                if (hit.at < double(g[axis]) - kEndTolerance || hit.at > double(g[axis] + 1) + kEndTolerance) continue;
-                                if (!best || (best->normal[std::size_t(axis)] * sign <= 0.0 && hit.normal[std::size_t(axis)] * sign > 0.0)) best = &hit;
+    BlockCounts& counts = out.counts;
+    for (int32_t lx = 0; lx < box.edge; lx += kLeafDim)
+        for (int32_t ly = 0; ly < box.edge; ly += kLeafDim)
+            for (int32_t lz = 0; lz < box.edge; lz += kLeafDim) {
+                const Coord origin(box.min[0] + lx, box.min[1] + ly, box.min[2] + lz);
+                HermiteLeafData d;
+                uint64_t leafSolid = 0, leafCrossings = 0;
+                for (int x = 0; x < kLeafDim; ++x)
+                    for (int y = 0; y < kLeafDim; ++y)
+                        for (int z = 0; z < kLeafDim; ++z) {
+                            const int g[3] = {origin.x() + x - lattice.lo[0], origin.y() + y - lattice.lo[1], origin.z() + z - lattice.lo[2]};
+                            const int offset = (x << (2 * kLeafLog2Dim)) | (y << kLeafLog2Dim) | z;
+                            const std::size_t at = window.index(g[0], g[1], g[2]);
+                            const bool s = window.solidAt(g[0], g[1], g[2]);
+                            if (s) {
+                                if (window.votes[at] != 7) ++counts.voted;
+                                d.material[std::size_t(offset)].id = ids[std::min<std::size_t>(window.material[at] ? window.material[at] - 1 : 0, ids.size() - 1)];
+                                ++leafSolid;
+                            } else if (window.votes[at] != 0) {
+                                ++counts.voted;
                             }
-                            double t = 0.5;
-                            std::array<double, 3> normal = patchNormal(g, n, axis, sign);
-                            if (best) {
-                                t = std::clamp(best->at - double(g[axis]), 0.0, 1.0);
-                                // Out of the solid along this edge, whatever the triangle's winding.
-                                const double flip = best->normal[std::size_t(axis)] * sign < 0.0 ? -1.0 : 1.0;
-                                for (int i = 0; i < 3; ++i) normal[std::size_t(i)] = flip * best->normal[std::size_t(i)];
-                            } else {
-                                ++leafPatched;
+                            for (int axis = 0; axis < 3; ++axis) {
+                                int n[3] = {g[0], g[1], g[2]};
+                                n[axis] += 1;
+                                if (window.solidAt(n[0], n[1], n[2]) == s) continue;
+                                // The hit on this edge whose normal leaves the solid the right way, else
+                                // any hit on it, else (the vote made it cross) mid-edge along the axis. A hit a
+                                // hair past an end counts (a face a rounding error off a lattice plane, whose
+                                // points the vote settles): it lands on that end.
+                                const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+                                const RayHits& rh = rays[std::size_t(axis)];
+                                const std::size_t ray = std::size_t(g[u]) * std::size_t(lattice.dim[std::size_t(v)]) + std::size_t(g[v]);
+                                const double sign = s ? 1.0 : -1.0;
+                                const Hit* best = nullptr;
+                                for (uint32_t h = rh.first[ray]; h < rh.first[ray + 1]; ++h) {
+                                    const Hit& hit = rh.hits[h];
+                                    if (hit.at < double(g[axis]) - kEndTolerance || hit.at > double(g[axis] + 1) + kEndTolerance) continue;
+                                    if (!best || (best->normal[std::size_t(axis)] * sign <= 0.0 && hit.normal[std::size_t(axis)] * sign > 0.0)) best = &hit;
+                                }
+                                double t = 0.5;
+                                std::array<double, 3> normal = patchNormal(g, n, axis, sign);
+                                if (best) {
+                                    t = std::clamp(best->at - double(g[axis]), 0.0, 1.0);
+                                    // Out of the solid along this edge, whatever the triangle's winding.
+                                    const double flip = best->normal[std::size_t(axis)] * sign < 0.0 ? -1.0 : 1.0;
+                                    for (int i = 0; i < 3; ++i) normal[std::size_t(i)] = flip * best->normal[std::size_t(i)];
+                                } else {
+                                    ++counts.patched;
+                                }
+                                const int bit = HermiteLeaf::edgeBit(Index(offset), axis);
+                                d.edgeBits[std::size_t(bit >> 6)] |= uint64_t(1) << (bit & 63);
+                                d.samples.push_back(packSample(t, normal));
+                                ++leafCrossings;
                             }
-                            const int bit = HermiteLeaf::edgeBit(Index(offset), axis);
-                            d.edgeBits[std::size_t(bit >> 6)] |= uint64_t(1) << (bit & 63);
-                            d.samples.push_back(packSample(t, normal));
-                            ++leafCrossings;
                         }
-                    }
-            any[l] = leafSolid > 0 || leafCrossings > 0;
-            voted += leafVoted, patched += leafPatched, crossings += leafCrossings, solid += leafSolid;
-        }
+                counts.solid += leafSolid;
+                counts.crossings += leafCrossings;
+                if (leafSolid > 0 || leafCrossings > 0) out.origins.push_back(origin), out.data.push_back(std::move(d));
+            }
+    return out;
+}
+
+Volume MeshVoxelizer::voxelizeBlock(const LeafAlignedBox& box, VoxelizeReport& counts) const
+{
+    BlockLeaves leaves = impl_->voxelizeBlock(box);
+    Volume volume(impl_->lattice.voxelSize);
+    volume.materials() = impl_->materials;
+    placeLeaves(volume.impl().grid->tree(), leaves.origins, leaves.data);
+    counts.votedPoints += leaves.counts.voted;
+    counts.patchedCrossings += leaves.counts.patched;
+    counts.crossings += leaves.counts.crossings;
+    counts.solidVoxels += leaves.counts.solid;
+    return volume;
+}
+
+Volume voxelizeMesh(const TriangleSoup& mesh, const VoxelizeOptions& options, VoxelizeReport* report)
+{
+    const MeshVoxelizer voxelizer(mesh, options);
+    const std::vector<LeafAlignedBox> blocks = voxelizer.blocks(kWholeMeshBlockEdge);
+    std::vector<BlockLeaves> leaves(blocks.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 1), [&](const auto& range) {
+        for (std::size_t b = range.begin(); b != range.end(); ++b) leaves[b] = voxelizer.impl_->voxelizeBlock(blocks[b]);
     });
-    // Leaves wholly inside one material without a crossing become tiles.
-    std::vector<Coord> placed;
-    std::vector<HermiteLeafData> placedData;
-    for (std::size_t l = 0; l < origins.size(); ++l)
-        if (any[l]) placed.push_back(origins[l]), placedData.push_back(std::move(data[l]));
-    placeLeaves(volume.impl().grid->tree(), placed, placedData);
-    r.votedPoints = voted;
-    r.patchedCrossings = patched;
-    r.crossings = crossings;
-    r.solidVoxels = solid;
+    VoxelizeReport r = voxelizer.castReport();
+    std::vector<Coord> origins;
+    std::vector<HermiteLeafData> data;
+    for (BlockLeaves& block : leaves) {
+        r.votedPoints += block.counts.voted;
+        r.patchedCrossings += block.counts.patched;
+        r.crossings += block.counts.crossings;
+        r.solidVoxels += block.counts.solid;
+        origins.insert(origins.end(), block.origins.begin(), block.origins.end());
+        std::move(block.data.begin(), block.data.end(), std::back_inserter(data));
+        block = {};
+    }
+    Volume volume(voxelizer.voxelSize());
+    volume.materials() = voxelizer.materials();
+    placeLeaves(volume.impl().grid->tree(), origins, data);
     if (report) *report = r;
     return volume;
 }

@@ -4,15 +4,22 @@
 // normals stored as Hermite samples. Real meshes are not clean: a lattice point is solid where at least
 // two of its three rays say so, which closes holes and seams that one ray slips through.
 //
+// Only the hits are kept (memory that grows with the mesh's surface); the lattice's points are voted
+// block by block, so a mesh of more voxels than memory holds goes into a store one brick at a time
+// (voxelize/VoxelizeToStore.h).
+//
 // Light header: no OpenVDB templates.
 #pragma once
 
 #include "vdb_hermite/Volume.h"
+#include "vdb_hermite/VolumeRegions.h"
 #include "voxelize/TriangleMesh.h"
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace vdbclay {
 
@@ -33,8 +40,35 @@ struct VoxelizeReport {
     uint64_t solidVoxels = 0;
 };
 
-/// Voxelizes a triangle soup. Throws std::invalid_argument for a missing or absurd voxel size or
-/// resolution, or a grid of more than 2^28 lattice points.
+/// A mesh cast into rays, ready to be voxelized block by block.
+class MeshVoxelizer {
+public:
+    /// Casts the rays. Throws std::invalid_argument for a missing or absurd voxel size or resolution,
+    /// or a lattice of more than 2^36 points (2^26 on a face).
+    MeshVoxelizer(const TriangleSoup& mesh, const VoxelizeOptions& options);
+    MeshVoxelizer(MeshVoxelizer&&) noexcept;
+    MeshVoxelizer& operator=(MeshVoxelizer&&) noexcept;
+    ~MeshVoxelizer();
+
+    double voxelSize() const;
+    /// The materials the voxels use: the mesh's (names and colours), or the one named in the options.
+    const MaterialTable& materials() const;
+    /// What casting counted: triangles, dropped triangles, hits, duplicate hits.
+    const VoxelizeReport& castReport() const;
+
+    /// The boxes of `edge` voxels (a multiple of 8, aligned to it) that cover the mesh's lattice.
+    std::vector<LeafAlignedBox> blocks(int32_t edge) const;
+    /// The voxels inside one box (a volume holding nothing else), exactly what the whole mesh's
+    /// voxelization holds there; adds what it counted to `counts`. Safe to call from several threads.
+    Volume voxelizeBlock(const LeafAlignedBox& box, VoxelizeReport& counts) const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+    friend Volume voxelizeMesh(const TriangleSoup&, const VoxelizeOptions&, VoxelizeReport*);
+};
+
+/// Voxelizes a triangle soup into one volume. Throws as MeshVoxelizer's constructor.
 Volume voxelizeMesh(const TriangleSoup& mesh, const VoxelizeOptions& options, VoxelizeReport* report = nullptr);
 
 } // namespace vdbclay
