@@ -29,6 +29,12 @@ constexpr double kMaxRaysPerAxis = double(uint64_t(1) << 26);
 /// The edge of the blocks the whole-mesh voxelization works in, voxels: their votes (5 bytes a point)
 /// stay in a core's cache.
 constexpr int32_t kWholeMeshBlockEdge = 64;
+/// Mesh coordinates this close to a lattice plane, in voxels, are moved onto it. Exported models keep
+/// faces that were modelled on a plane a rounding error off it (fandisk's x = 0 side spans 0 .. 2e-6):
+/// rays running along such a face a hair inside it would graze its bumps and vote its points at random.
+/// Snapped, the face lies on the plane and the offset above settles it. A vertex moves by at most 0.002
+/// voxel, and shared vertices move alike, so nothing opens.
+constexpr double kLatticeSnap = 2e-3;
 /// How far past an edge's end, in voxels, a hit still counts as that edge's crossing.
 constexpr double kEndTolerance = 1e-3;
 
@@ -64,7 +70,11 @@ std::vector<Hit> castRays(const TriangleSoup& mesh, const Lattice& lattice, int 
             // Lattice coordinates of the corners (relative to the grid's first point).
             double p[3][3];
             for (int k = 0; k < 3; ++k)
-                for (int a = 0; a < 3; ++a) p[k][a] = mesh.positions[tri[std::size_t(k)]][std::size_t(a)] * inv - lattice.lo[std::size_t(a)];
+                for (int a = 0; a < 3; ++a) {
+                    const double c = mesh.positions[tri[std::size_t(k)]][std::size_t(a)] * inv - lattice.lo[std::size_t(a)];
+                    const double plane = std::round(c);
+                    p[k][a] = std::fabs(c - plane) < kLatticeSnap ? plane : c;
+                }
             double area = (p[1][u] - p[0][u]) * (p[2][v] - p[0][v]) - (p[2][u] - p[0][u]) * (p[1][v] - p[0][v]);
             if (area == 0.0) continue; // parallel to the rays
             int order[3] = {0, 1, 2};
