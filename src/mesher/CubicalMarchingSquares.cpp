@@ -557,6 +557,16 @@ private:
         std::optional<Vec2> sharp() const { return count ? std::optional<Vec2>(points[0]) : std::nullopt; }
     };
 
+    /// A crossing in a face's plane. Off its edge's axis it lies exactly on lattice lines (its float
+    /// position rounds up to ~1e-4 voxel off them far from the origin at voxel sizes that are not
+    /// whole), so a square's sides never cut off the crossings on them.
+    Vec2 onFace(const EdgeCrossing& c, int axis) const
+    {
+        std::array<double, 3> p;
+        for (int k = 0; k < 3; ++k) p[std::size_t(k)] = k == c.axis ? double(c.position[std::size_t(k)]) : c.start[k] * ctx_.voxelSize;
+        return project(p, axis);
+    }
+
     /// A segment has a 2D sharp feature where its crossings' tangent lines meet, if their normals span
     /// the sharp angle and the point lies on the square. Solved with the crossings in key order, so
     /// both cells sharing the square get the same bits. The only segment of a square of one material
@@ -574,7 +584,7 @@ private:
         SegmentShape shape;
         shape.plausible = false;
         if (std::fabs(det) < 1e-9) return shape;
-        const Vec2 pa = project(a.position, axis), pb = project(b.position, axis);
+        const Vec2 pa = onFace(a, axis), pb = onFace(b, axis);
         const double ca = na.x * pa.x + na.y * pa.y, cb = nb.x * pb.x + nb.y * pb.y;
         const Vec2 p{(ca * nb.y - cb * na.y) / det, (na.x * cb - nb.x * ca) / det};
         if (onlySegment && !mixedMaterials(sq)) {
@@ -686,10 +696,13 @@ private:
         };
         // A clear band can lie between two squares whose wedges both reach into it from opposite sides;
         // each keeps to its own half (less a gap), so the two chains never share a point (a pinch).
-        const double w = width * vs, lo0 = u0 * vs, lo1 = v0 * vs, bw = 0.5 * band * vs - kBandGapVoxels * vs;
-        if (!poly.clip({1.0, 0.0}, lo0 + w + (clear(1, 0) ? bw : 0.0)) ||
+        // Each side from its own lattice index, as the crossings on it are (lo + width * vs can round
+        // off the side and clip a crossing away).
+        const double lo0 = u0 * vs, lo1 = v0 * vs, hi0 = (u0 + width) * vs, hi1 = (v0 + width) * vs;
+        const double bw = 0.5 * band * vs - kBandGapVoxels * vs;
+        if (!poly.clip({1.0, 0.0}, hi0 + (clear(1, 0) ? bw : 0.0)) ||
             !poly.clip({-1.0, 0.0}, -(lo0 - (clear(-1, 0) ? bw : 0.0))) ||
-            !poly.clip({0.0, 1.0}, lo1 + w + (clear(0, 1) ? bw : 0.0)) ||
+            !poly.clip({0.0, 1.0}, hi1 + (clear(0, 1) ? bw : 0.0)) ||
             !poly.clip({0.0, -1.0}, -(lo1 - (clear(0, -1) ? bw : 0.0))))
             return 0;
 
@@ -721,8 +734,8 @@ private:
             minU = std::min(minU, poly.at[i].x), maxU = std::max(maxU, poly.at[i].x);
             minV = std::min(minV, poly.at[i].y), maxV = std::max(maxV, poly.at[i].y);
         }
-        const int du = minU < lo0 - margin ? -1 : (maxU > lo0 + w + margin ? 1 : 0);
-        const int dv = minV < lo1 - margin ? -1 : (maxV > lo1 + w + margin ? 1 : 0);
+        const int du = minU < lo0 - margin ? -1 : (maxU > hi0 + margin ? 1 : 0);
+        const int dv = minV < lo1 - margin ? -1 : (maxV > hi1 + margin ? 1 : 0);
         if (du != 0 && dv != 0 && !clear(du, dv)) return 0;
         for (int i = u0 - band; i <= u0 + width + band; ++i)
             for (int j = v0 - band; j <= v0 + width + band; ++j) {
@@ -886,14 +899,14 @@ private:
             const double len = std::sqrt(n.x * n.x + n.y * n.y);
             if (len < 1e-6) continue;
             n = {n.x / len, n.y / len};
-            const Vec2 c = project(interface.position, axis);
+            const Vec2 c = onFace(interface, axis);
             if (points.count == 4) break;
             // The segment as a polyline: in, the points so far, out.
             Vec2 poly[6];
             int size = 0;
-            poly[size++] = project(seg.in.position, axis);
+            poly[size++] = onFace(seg.in, axis);
             for (int k = 0; k < points.count; ++k) poly[size++] = points.items[k].onFace;
-            poly[size++] = project(seg.out.position, axis);
+            poly[size++] = onFace(seg.out, axis);
             for (int k = 0; k + 1 < size; ++k) {
                 const double fa = n.x * (poly[k].x - c.x) + n.y * (poly[k].y - c.y);
                 const double fb = n.x * (poly[k + 1].x - c.x) + n.y * (poly[k + 1].y - c.y);
@@ -930,9 +943,9 @@ private:
             const bool forward = in.key < out.key;
             minKey[s] = std::min(in.key, out.key);
             sizes[s] = 0;
-            poly[s][sizes[s]++] = project(forward ? in.position : out.position, sq.axis);
+            poly[s][sizes[s]++] = onFace(forward ? in : out, sq.axis);
             if (*sharps[s]) poly[s][sizes[s]++] = **sharps[s];
-            poly[s][sizes[s]++] = project(forward ? out.position : in.position, sq.axis);
+            poly[s][sizes[s]++] = onFace(forward ? out : in, sq.axis);
         }
         if (minKey[1] < minKey[0]) {
             std::swap(poly[0], poly[1]);
