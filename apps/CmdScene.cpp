@@ -90,7 +90,8 @@ int importMesh(const ImportOptions& o, std::chrono::steady_clock::time_point sta
                        {"voxel_size", report.voxelSize},        {"hits", report.hits},
                        {"duplicate_hits", report.duplicateHits}, {"voted_points", report.votedPoints},
                        {"patched_crossings", report.patchedCrossings}, {"crossings", report.crossings},
-                       {"solid_voxels", report.solidVoxels},    {"materials", materials}};
+                       {"solid_voxels", report.solidVoxels},    {"material_interfaces", report.materialInterfaces},
+                       {"materials", materials}};
         printJson(out);
         return kExitOk;
     }

@@ -40,6 +40,7 @@ StoreVoxelizeReport voxelizeMeshToStore(const TriangleSoup& mesh, const Voxelize
                 report.mesh.patchedCrossings += counts[i].patchedCrossings;
                 report.mesh.crossings += counts[i].crossings;
                 report.mesh.solidVoxels += counts[i].solidVoxels;
+                report.mesh.materialInterfaces += counts[i].materialInterfaces;
                 report.leaves += stats[i].leafCount;
                 report.activeVoxels += stats[i].activeVoxels;
                 if (!records[i]) continue;

@@ -223,7 +223,7 @@ bool fillVotes(const Lattice& lattice, const std::array<RayHits, 3>& rays, Windo
 
 /// What the voxelization of one block counts.
 struct BlockCounts {
-    uint64_t voted = 0, patched = 0, crossings = 0, solid = 0;
+    uint64_t voted = 0, patched = 0, crossings = 0, solid = 0, interfaces = 0;
 };
 
 /// One block's leaves, built as plain data.
@@ -362,6 +362,25 @@ BlockLeaves MeshVoxelizer::Impl::voxelizeBlock(const LeafAlignedBox& box) const
         }
         return n;
     };
+    auto materialInterface = [&](const int* g, int axis) {
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        const RayHits& rh = rays[std::size_t(axis)];
+        const std::size_t ray = std::size_t(g[u]) * std::size_t(lattice.dim[std::size_t(v)]) + std::size_t(g[v]);
+        for (uint32_t h = rh.first[ray]; h < rh.first[ray + 1]; ++h) {
+            const Hit& hit = rh.hits[h];
+            if (hit.at < double(g[axis]) - kEndTolerance || hit.at > double(g[axis] + 1) + kEndTolerance) continue;
+            const std::array<double, 3> normal{hit.normal[0], hit.normal[1], hit.normal[2]};
+            return packSample(std::clamp(hit.at - double(g[axis]), 0.0, 1.0), normal);
+        }
+        std::array<double, 3> along{0.0, 0.0, 0.0};
+        along[std::size_t(axis)] = 1.0;
+        return packSample(0.5, along);
+    };
+    auto materialAt = [&](const int* c) -> MaterialId {
+        if (!window.solidAt(c[0], c[1], c[2])) return kEmptyMaterial;
+        const uint32_t m = window.material[window.index(c[0], c[1], c[2])];
+        return ids[std::min<std::size_t>(m ? m - 1 : 0, ids.size() - 1)];
+    };
     BlockCounts& counts = out.counts;
     for (int32_t lx = 0; lx < box.edge; lx += kLeafDim)
         for (int32_t ly = 0; ly < box.edge; ly += kLeafDim)
@@ -375,10 +394,11 @@ BlockLeaves MeshVoxelizer::Impl::voxelizeBlock(const LeafAlignedBox& box) const
                             const int g[3] = {origin.x() + x - lattice.lo[0], origin.y() + y - lattice.lo[1], origin.z() + z - lattice.lo[2]};
                             const int offset = (x << (2 * kLeafLog2Dim)) | (y << kLeafLog2Dim) | z;
                             const std::size_t at = window.index(g[0], g[1], g[2]);
-                            const bool s = window.solidAt(g[0], g[1], g[2]);
+                            const MaterialId here = materialAt(g);
+                            const bool s = here != kEmptyMaterial;
                             if (s) {
                                 if (window.votes[at] != 7) ++counts.voted;
-                                d.material[std::size_t(offset)].id = ids[std::min<std::size_t>(window.material[at] ? window.material[at] - 1 : 0, ids.size() - 1)];
+                                d.material[std::size_t(offset)].id = here;
                                 ++leafSolid;
                             } else if (window.votes[at] != 0) {
                                 ++counts.voted;
@@ -386,7 +406,18 @@ BlockLeaves MeshVoxelizer::Impl::voxelizeBlock(const LeafAlignedBox& box) const
                             for (int axis = 0; axis < 3; ++axis) {
                                 int n[3] = {g[0], g[1], g[2]};
                                 n[axis] += 1;
-                                if (window.solidAt(n[0], n[1], n[2]) == s) continue;
+                                const MaterialId there = materialAt(n);
+                                if (there == here) continue;
+                                const int bit = HermiteLeaf::edgeBit(Index(offset), axis);
+                                d.edgeBits[std::size_t(bit >> 6)] |= uint64_t(1) << (bit & 63);
+                                ++leafCrossings;
+                                if (s && there != kEmptyMaterial) {
+                                    // Two materials meet inside the solid: where touching parts of the mesh
+                                    // meet on this edge (a hit), else mid-edge, facing along it.
+                                    d.samples.push_back(materialInterface(g, axis));
+                                    ++counts.interfaces;
+                                    continue;
+                                }
                                 // The hit on this edge whose normal leaves the solid the right way, else
                                 // any hit on it, else (the vote made it cross) mid-edge along the axis. A hit a
                                 // hair past an end counts (a face a rounding error off a lattice plane, whose
@@ -411,10 +442,7 @@ BlockLeaves MeshVoxelizer::Impl::voxelizeBlock(const LeafAlignedBox& box) const
                                 } else {
                                     ++counts.patched;
                                 }
-                                const int bit = HermiteLeaf::edgeBit(Index(offset), axis);
-                                d.edgeBits[std::size_t(bit >> 6)] |= uint64_t(1) << (bit & 63);
                                 d.samples.push_back(packSample(t, normal));
-                                ++leafCrossings;
                             }
                         }
                 counts.solid += leafSolid;
@@ -434,6 +462,7 @@ Volume MeshVoxelizer::voxelizeBlock(const LeafAlignedBox& box, VoxelizeReport& c
     counts.patchedCrossings += leaves.counts.patched;
     counts.crossings += leaves.counts.crossings;
     counts.solidVoxels += leaves.counts.solid;
+    counts.materialInterfaces += leaves.counts.interfaces;
     return volume;
 }
 
@@ -453,6 +482,7 @@ Volume voxelizeMesh(const TriangleSoup& mesh, const VoxelizeOptions& options, Vo
         r.patchedCrossings += block.counts.patched;
         r.crossings += block.counts.crossings;
         r.solidVoxels += block.counts.solid;
+        r.materialInterfaces += block.counts.interfaces;
         origins.insert(origins.end(), block.origins.begin(), block.origins.end());
         std::move(block.data.begin(), block.data.end(), std::back_inserter(data));
         block = {};

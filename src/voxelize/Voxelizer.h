@@ -36,7 +36,8 @@ struct VoxelizeReport {
     uint64_t duplicateHits = 0;   // hits of one ray at one place (duplicated triangles), merged
     uint64_t votedPoints = 0;     // lattice points whose three rays disagreed (holes, seams, self-intersections)
     uint64_t patchedCrossings = 0; // edges the vote made cross with no hit on them (placed mid-edge)
-    uint64_t crossings = 0;
+    uint64_t crossings = 0;          // edge samples, material interfaces included
+    uint64_t materialInterfaces = 0; // edges between two solid materials (where touching parts meet)
     uint64_t solidVoxels = 0;
 };
 
