@@ -260,14 +260,14 @@ TEST_CASE("block by block equals whole: any block size, and into a store brick b
     }
 }
 
-TEST_CASE("random triangle soups voxelize into valid volumes whose meshes have no boundary", "[voxelize][fuzz]")
+TEST_CASE("random triangle soups voxelize into valid volumes whose meshes are closed", "[voxelize][fuzz]")
 {
     // What real files hold at worst: triangles at random, open, crossing each other, zero-area and
     // repeated ones, corners on lattice points (users type integers) or anywhere.
     std::mt19937 rng(29);
     std::uniform_int_distribution<int> lattice(-6, 6);
     std::uniform_real_distribution<double> anywhere(-6.0, 6.0);
-    for (int trial = 0; trial < 40; ++trial) {
+    for (int trial = 0; trial < 120; ++trial) {
         CAPTURE(trial);
         TriangleSoup soup;
         soup.materials = {{}, {"red", {1.0f, 0.0f, 0.0f, 1.0f}}};
@@ -290,14 +290,9 @@ TEST_CASE("random triangle soups voxelize into valid volumes whose meshes have n
         CHECK(report.crossings >= report.patchedCrossings + report.materialInterfaces);
         INFO(checkInvariants(v));
         REQUIRE(checkInvariants(v).empty());
-        MeshOptions cms;
-        cms.kind = MesherKind::CubicalMarchingSquares;
-        const MeshTopology t = analyzeTopology(meshVolume(v, cms), kMergeDistanceVoxels * v.voxelSize());
-        // Closed and consistently oriented. (Not yet manifold everywhere: where such soups leave solid
-        // voxels touching along an edge, CMS can join four sheets at it; the issue's notes track it.)
-        CHECK(t.boundaryEdges == 0);
-        CHECK(t.misorientedEdges == 0);
-        CHECK(t.degenerateTriangles == 0);
+        // Such soups leave solids touching along voxel edges with every tangent line through one point
+        // (CMS pinched the surface there until it cut those corners straight).
+        if (report.solidVoxels > 0) closedMesh(v);
     }
 }
 

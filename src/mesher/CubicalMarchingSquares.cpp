@@ -52,6 +52,14 @@ bool segmentsCross(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d)
     return ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0)) && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0));
 }
 
+double pointSegmentDistance(const Vec2& p, const Vec2& a, const Vec2& b)
+{
+    const Vec2 ab = sub2(b, a), ap = sub2(p, a);
+    const double length2 = ab.x * ab.x + ab.y * ab.y;
+    const double t = length2 > 0.0 ? std::clamp((ap.x * ab.x + ap.y * ab.y) / length2, 0.0, 1.0) : 0.0;
+    return std::hypot(ap.x - t * ab.x, ap.y - t * ab.y);
+}
+
 /// A vertex inside a face segment: its 2D sharp feature, or a material transition (where the
 /// tangent line of a material interface on the face meets the segment, seed 004 Algorithm 2).
 struct FacePoint {
@@ -831,6 +839,13 @@ private:
         if (count == 4) {
             const Pairings joined = pairUp(3);
             if (overlap(chosen) || (!chosen.plausible() && joined.plausible() && !overlap(joined))) chosen = joined;
+            // Where every tangent line meets at one point (two solids touching along a voxel edge), both
+            // pairings' sharp points land there and the surface would pinch: the solid corners are cut
+            // off straight.
+            if (overlap(chosen)) {
+                chosen = pairUp(1);
+                for (Pairing& pairing : chosen.segments) pairing.shape = {};
+            }
         }
         const Pairing* pairs = chosen.segments;
         const int nSeg = chosen.count;
@@ -951,9 +966,16 @@ private:
             std::swap(poly[0], poly[1]);
             std::swap(sizes[0], sizes[1]);
         }
+        // Crossing, or touching: closer than the inset that keeps distinct points apart.
+        const double apart = kFeatureInsetVoxels * ctx_.voxelSize;
         for (int i = 0; i + 1 < sizes[0]; ++i)
-            for (int j = 0; j + 1 < sizes[1]; ++j)
-                if (segmentsCross(poly[0][i], poly[0][i + 1], poly[1][j], poly[1][j + 1])) return true;
+            for (int j = 0; j + 1 < sizes[1]; ++j) {
+                const Vec2 &a = poly[0][i], &b = poly[0][i + 1], &c = poly[1][j], &d = poly[1][j + 1];
+                if (segmentsCross(a, b, c, d)) return true;
+                if (std::min({pointSegmentDistance(a, c, d), pointSegmentDistance(b, c, d), pointSegmentDistance(c, a, b),
+                              pointSegmentDistance(d, a, b)}) < apart)
+                    return true;
+            }
         return false;
     }
 
