@@ -835,15 +835,16 @@ private:
         // on an ambiguous square, the other pairing (joining the solid corners) when that one's
         // segments cross, or when its segments join crossings whose normals disagree without a sharp
         // feature on the square while the other pairing's do not.
-        Pairings chosen = pairUp(1);
+        const Pairings separate = pairUp(1);
+        Pairings chosen = separate;
         if (count == 4) {
             const Pairings joined = pairUp(3);
-            if (overlap(chosen) || (!chosen.plausible() && joined.plausible() && !overlap(joined))) chosen = joined;
+            if (overlap(separate) || (!separate.plausible() && joined.plausible() && !overlap(joined))) chosen = joined;
             // Where every tangent line meets at one point (two solids touching along a voxel edge), both
             // pairings' sharp points land there and the surface would pinch: the solid corners are cut
             // off straight.
             if (overlap(chosen)) {
-                chosen = pairUp(1);
+                chosen = separate;
                 for (Pairing& pairing : chosen.segments) pairing.shape = {};
             }
         }

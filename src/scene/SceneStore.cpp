@@ -236,6 +236,34 @@ std::optional<BrickRecord> encodeBrick(const Volume& volume, const IndexCoord& b
     return BrickRecord{std::nullopt, encodeVolume(part), uint32_t(part.stats().leafCount)};
 }
 
+StoredBricks putNewBricks(SceneStore& scene, int level, const std::vector<IndexCoord>& bricks,
+                          const std::function<std::optional<BrickRecord>(std::size_t)>& make, const Progress& progress)
+{
+    // A batch keeps the cores busy while its records stay a few MB.
+    constexpr std::size_t kBatch = 64;
+    StoredBricks stored;
+    for (std::size_t first = 0; first < bricks.size(); first += kBatch) {
+        const std::size_t count = std::min(kBatch, bricks.size() - first);
+        std::vector<std::optional<BrickRecord>> records(count);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1), [&](const auto& range) {
+            for (std::size_t i = range.begin(); i != range.end(); ++i) records[i] = make(first + i);
+        });
+        for (std::size_t i = 0; i < count; ++i) {
+            if (!records[i]) continue;
+            scene.bricks().put({level, bricks[first + i]}, *records[i]);
+            ++stored.bricks;
+            stored.leaves += records[i]->leaves;
+            stored.bytes += records[i]->payload.size();
+        }
+        if ((first / kBatch) % 16 == 15) {
+            scene.bricks().commit();
+            scene.bricks().begin();
+        }
+        if (progress) progress(first + count, bricks.size());
+    }
+    return stored;
+}
+
 void createStoreFile(const std::string& path, double voxelSize, const MaterialTable& materials,
                      const std::function<void(SceneStore&)>& fill)
 {

@@ -100,6 +100,19 @@ std::optional<BrickRecord> encodeBrick(const Volume& volume, const IndexCoord& b
 void createStoreFile(const std::string& path, double voxelSize, const MaterialTable& materials,
                      const std::function<void(SceneStore&)>& fill);
 
+/// What putNewBricks stored.
+struct StoredBricks {
+    uint64_t bricks = 0; // payloads and uniform records
+    uint64_t leaves = 0;
+    uint64_t bytes = 0;  // payload bytes
+};
+
+/// Fills a level of a new store brick by brick: `make` builds the record of bricks[i] (called in parallel,
+/// a batch at a time; nullopt: empty space, nothing stored), and the records are put in order, committing
+/// every few batches so the write-ahead log stays small. Call inside createStoreFile's `fill`.
+StoredBricks putNewBricks(SceneStore& scene, int level, const std::vector<IndexCoord>& bricks,
+                          const std::function<std::optional<BrickRecord>(std::size_t)>& make, const Progress& progress = {});
+
 /// Writes `volume` as a new store at `path`, replacing an existing store there only once the new one is
 /// complete (a crash leaves the old one or none). Refuses a store another process has open for writing.
 void writeStoreFile(const Volume& volume, const std::string& path, const Progress& progress = {});

@@ -3,9 +3,6 @@
 #include "sculpt/Csg.h"
 #include "sculpt/SyntheticFields.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -259,28 +256,11 @@ SynthReport synthesizeStore(const SynthOptions& options, const std::string& path
     SynthReport report;
     report.bricksVisited = recipe.bricks.size();
     createStoreFile(path, options.voxelSize, recipe.materials, [&](SceneStore& scene) {
-        constexpr std::size_t kBatch = 64;
-        for (std::size_t first = 0; first < recipe.bricks.size(); first += kBatch) {
-            const std::size_t count = std::min(kBatch, recipe.bricks.size() - first);
-            std::vector<std::optional<BrickRecord>> records(count);
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1), [&](const auto& range) {
-                for (std::size_t i = range.begin(); i != range.end(); ++i)
-                    records[i] = makeBrick(recipe, recipe.bricks[first + i], options.voxelSize);
-            });
-            for (std::size_t i = 0; i < count; ++i) {
-                if (!records[i]) continue;
-                scene.bricks().put({0, recipe.bricks[first + i]}, *records[i]);
-                ++report.bricks;
-                report.leaves += records[i]->leaves;
-                report.bytes += records[i]->payload.size();
-            }
-            // Commit as it goes: the WAL stays small, and the file is a temporary until complete.
-            if ((first / kBatch) % 16 == 15) {
-                scene.bricks().commit();
-                scene.bricks().begin();
-            }
-            if (progress) progress(first + count, recipe.bricks.size());
-        }
+        const StoredBricks stored = putNewBricks(
+            scene, 0, recipe.bricks, [&](std::size_t i) { return makeBrick(recipe, recipe.bricks[i], options.voxelSize); }, progress);
+        report.bricks = stored.bricks;
+        report.leaves = stored.leaves;
+        report.bytes = stored.bytes;
     });
     return report;
 }

@@ -221,19 +221,23 @@ bool fillVotes(const Lattice& lattice, const std::array<RayHits, 3>& rays, Windo
     return any;
 }
 
-/// What the voxelization of one block counts.
-struct BlockCounts {
-    uint64_t voted = 0, patched = 0, crossings = 0, solid = 0, interfaces = 0;
-};
-
-/// One block's leaves, built as plain data.
+/// One block's leaves, built as plain data, and what building them counted.
 struct BlockLeaves {
     std::vector<Coord> origins;
     std::vector<HermiteLeafData> data;
-    BlockCounts counts;
+    VoxelizeReport counts;
 };
 
 } // namespace
+
+void addBlockCounts(VoxelizeReport& total, const VoxelizeReport& block)
+{
+    total.votedPoints += block.votedPoints;
+    total.patchedCrossings += block.patchedCrossings;
+    total.crossings += block.crossings;
+    total.materialInterfaces += block.materialInterfaces;
+    total.solidVoxels += block.solidVoxels;
+}
 
 /// The mesh cast into rays: the sorted hits of every lattice line along X, Y and Z (memory that grows
 /// with the mesh's surface), and the lattice they run on.
@@ -362,16 +366,25 @@ BlockLeaves MeshVoxelizer::Impl::voxelizeBlock(const LeafAlignedBox& box) const
         }
         return n;
     };
-    auto materialInterface = [&](const int* g, int axis) {
+    // The hits on the edge from lattice point g along `axis`; a hit a hair past an end counts (a face a
+    // rounding error off a lattice plane, whose points the vote settles) and lands on that end.
+    auto edgeHits = [&](const int* g, int axis) {
         const int u = (axis + 1) % 3, v = (axis + 2) % 3;
         const RayHits& rh = rays[std::size_t(axis)];
         const std::size_t ray = std::size_t(g[u]) * std::size_t(lattice.dim[std::size_t(v)]) + std::size_t(g[v]);
-        for (uint32_t h = rh.first[ray]; h < rh.first[ray + 1]; ++h) {
-            const Hit& hit = rh.hits[h];
-            if (hit.at < double(g[axis]) - kEndTolerance || hit.at > double(g[axis] + 1) + kEndTolerance) continue;
-            const std::array<double, 3> normal{hit.normal[0], hit.normal[1], hit.normal[2]};
-            return packSample(std::clamp(hit.at - double(g[axis]), 0.0, 1.0), normal);
-        }
+        const Hit* first = rh.hits.data() + rh.first[ray];
+        const Hit* last = rh.hits.data() + rh.first[ray + 1];
+        first = std::partition_point(first, last, [&](const Hit& h) { return h.at < double(g[axis]) - kEndTolerance; });
+        last = std::partition_point(first, last, [&](const Hit& h) { return h.at <= double(g[axis] + 1) + kEndTolerance; });
+        return std::make_pair(first, last);
+    };
+    // Two materials meet inside the solid: where touching parts of the mesh meet on this edge (a hit),
+    // else mid-edge, facing along it.
+    auto materialInterface = [&](const int* g, int axis) {
+        const auto [first, last] = edgeHits(g, axis);
+        if (first != last)
+            return packSample(std::clamp(first->at - double(g[axis]), 0.0, 1.0),
+                              std::array<double, 3>{first->normal[0], first->normal[1], first->normal[2]});
         std::array<double, 3> along{0.0, 0.0, 0.0};
         along[std::size_t(axis)] = 1.0;
         return packSample(0.5, along);
@@ -381,7 +394,7 @@ BlockLeaves MeshVoxelizer::Impl::voxelizeBlock(const LeafAlignedBox& box) const
         const uint32_t m = window.material[window.index(c[0], c[1], c[2])];
         return ids[std::min<std::size_t>(m ? m - 1 : 0, ids.size() - 1)];
     };
-    BlockCounts& counts = out.counts;
+    VoxelizeReport& counts = out.counts;
     for (int32_t lx = 0; lx < box.edge; lx += kLeafDim)
         for (int32_t ly = 0; ly < box.edge; ly += kLeafDim)
             for (int32_t lz = 0; lz < box.edge; lz += kLeafDim) {
@@ -397,11 +410,11 @@ BlockLeaves MeshVoxelizer::Impl::voxelizeBlock(const LeafAlignedBox& box) const
                             const MaterialId here = materialAt(g);
                             const bool s = here != kEmptyMaterial;
                             if (s) {
-                                if (window.votes[at] != 7) ++counts.voted;
+                                if (window.votes[at] != 7) ++counts.votedPoints;
                                 d.material[std::size_t(offset)].id = here;
                                 ++leafSolid;
                             } else if (window.votes[at] != 0) {
-                                ++counts.voted;
+                                ++counts.votedPoints;
                             }
                             for (int axis = 0; axis < 3; ++axis) {
                                 int n[3] = {g[0], g[1], g[2]};
@@ -412,26 +425,17 @@ BlockLeaves MeshVoxelizer::Impl::voxelizeBlock(const LeafAlignedBox& box) const
                                 d.edgeBits[std::size_t(bit >> 6)] |= uint64_t(1) << (bit & 63);
                                 ++leafCrossings;
                                 if (s && there != kEmptyMaterial) {
-                                    // Two materials meet inside the solid: where touching parts of the mesh
-                                    // meet on this edge (a hit), else mid-edge, facing along it.
                                     d.samples.push_back(materialInterface(g, axis));
-                                    ++counts.interfaces;
+                                    ++counts.materialInterfaces;
                                     continue;
                                 }
                                 // The hit on this edge whose normal leaves the solid the right way, else
-                                // any hit on it, else (the vote made it cross) mid-edge along the axis. A hit a
-                                // hair past an end counts (a face a rounding error off a lattice plane, whose
-                                // points the vote settles): it lands on that end.
-                                const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-                                const RayHits& rh = rays[std::size_t(axis)];
-                                const std::size_t ray = std::size_t(g[u]) * std::size_t(lattice.dim[std::size_t(v)]) + std::size_t(g[v]);
+                                // any hit on it, else (the vote made it cross) mid-edge along the axis.
                                 const double sign = s ? 1.0 : -1.0;
                                 const Hit* best = nullptr;
-                                for (uint32_t h = rh.first[ray]; h < rh.first[ray + 1]; ++h) {
-                                    const Hit& hit = rh.hits[h];
-                                    if (hit.at < double(g[axis]) - kEndTolerance || hit.at > double(g[axis] + 1) + kEndTolerance) continue;
-                                    if (!best || (best->normal[std::size_t(axis)] * sign <= 0.0 && hit.normal[std::size_t(axis)] * sign > 0.0)) best = &hit;
-                                }
+                                const auto [first, last] = edgeHits(g, axis);
+                                for (const Hit* hit = first; hit != last; ++hit)
+                                    if (!best || (best->normal[std::size_t(axis)] * sign <= 0.0 && hit->normal[std::size_t(axis)] * sign > 0.0)) best = hit;
                                 double t = 0.5;
                                 std::array<double, 3> normal = patchNormal(g, n, axis, sign);
                                 if (best) {
@@ -440,12 +444,12 @@ BlockLeaves MeshVoxelizer::Impl::voxelizeBlock(const LeafAlignedBox& box) const
                                     const double flip = best->normal[std::size_t(axis)] * sign < 0.0 ? -1.0 : 1.0;
                                     for (int i = 0; i < 3; ++i) normal[std::size_t(i)] = flip * best->normal[std::size_t(i)];
                                 } else {
-                                    ++counts.patched;
+                                    ++counts.patchedCrossings;
                                 }
                                 d.samples.push_back(packSample(t, normal));
                             }
                         }
-                counts.solid += leafSolid;
+                counts.solidVoxels += leafSolid;
                 counts.crossings += leafCrossings;
                 if (leafSolid > 0 || leafCrossings > 0) out.origins.push_back(origin), out.data.push_back(std::move(d));
             }
@@ -458,11 +462,7 @@ Volume MeshVoxelizer::voxelizeBlock(const LeafAlignedBox& box, VoxelizeReport& c
     Volume volume(impl_->lattice.voxelSize);
     volume.materials() = impl_->materials;
     placeLeaves(volume.impl().grid->tree(), leaves.origins, leaves.data);
-    counts.votedPoints += leaves.counts.voted;
-    counts.patchedCrossings += leaves.counts.patched;
-    counts.crossings += leaves.counts.crossings;
-    counts.solidVoxels += leaves.counts.solid;
-    counts.materialInterfaces += leaves.counts.interfaces;
+    addBlockCounts(counts, leaves.counts);
     return volume;
 }
 
@@ -478,11 +478,7 @@ Volume voxelizeMesh(const TriangleSoup& mesh, const VoxelizeOptions& options, Vo
     std::vector<Coord> origins;
     std::vector<HermiteLeafData> data;
     for (BlockLeaves& block : leaves) {
-        r.votedPoints += block.counts.voted;
-        r.patchedCrossings += block.counts.patched;
-        r.crossings += block.counts.crossings;
-        r.solidVoxels += block.counts.solid;
-        r.materialInterfaces += block.counts.interfaces;
+        addBlockCounts(r, block.counts);
         origins.insert(origins.end(), block.origins.begin(), block.origins.end());
         std::move(block.data.begin(), block.data.end(), std::back_inserter(data));
         block = {};

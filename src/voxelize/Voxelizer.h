@@ -41,6 +41,10 @@ struct VoxelizeReport {
     uint64_t solidVoxels = 0;
 };
 
+/// Adds what voxelizing a block counted (voted and solid points, crossings, patches, interfaces) to a
+/// total; the casting counts (triangles, hits) are the voxelizer's, not a block's.
+void addBlockCounts(VoxelizeReport& total, const VoxelizeReport& block);
+
 /// A mesh cast into rays, ready to be voxelized block by block.
 class MeshVoxelizer {
 public:
