@@ -176,6 +176,7 @@ int runImport(const ImportOptions& o)
     }
     if (standard) {
         printFields({{"grid", report.grid + " (" + (report.gridClass.empty() ? "no class" : report.gridClass) + ", " + report.valueType + ")"},
+                     {"read as", report.fog ? "fog volume (solid where the value exceeds --iso)" : "level set (solid below the iso value)"},
                      {"voxel size", formatNumber(report.voxelSize)},
                      {"resampled", report.resampled.empty() ? "no" : "yes: " + report.resampled},
                      {"crossings", std::to_string(report.crossings)}},

@@ -195,6 +195,55 @@ TEST_CASE("a fog volume imports at an iso value; without one it is refused", "[i
     CHECK(enclosedVolume(mesh) == Approx(128.0 * 128.0 * 128.0).epsilon(1e-3)); // crossings half-way: -0.5 .. 127.5
 }
 
+TEST_CASE("a grid of no class is a density when its background is below the iso value; a solid background is refused",
+          "[interop]")
+{
+    TempDir dir;
+    // As many tools write a density: no class, background 0, dense tiles inside (no leaf between them
+    // and empty space), one leaf with a single denser voxel.
+    openvdb::FloatGrid::Ptr block = openvdb::FloatGrid::create(0.0f);
+    block->setName("density");
+    block->tree().fill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(255)), 1.0f, true);
+    block->tree().setValue(openvdb::Coord(300, 300, 300), 2.0f);
+    REQUIRE(block->tree().leafCount() == 1);
+    openvdb::io::File file(dir.file("block.vdb"));
+    file.write({block});
+    file.close();
+
+    LevelSetImportOptions o;
+    o.iso = 0.5;
+    LevelSetImportReport report;
+    const Volume cube = importLevelSet(dir.file("block.vdb"), o, &report);
+    CHECK(report.fog);
+    CHECK(checkInvariants(cube).empty());
+    MeshOptions cms;
+    cms.kind = MesherKind::CubicalMarchingSquares;
+    const Mesh mesh = meshVolume(cube, cms);
+    CHECK(analyzeTopology(mesh, kMergeDistanceVoxels).watertight());
+    // The block (crossings half-way: -0.5 .. 255.5) and the lone voxel's octahedron-like cell.
+    CHECK(enclosedVolume(mesh) == Approx(256.0 * 256.0 * 256.0).epsilon(1e-4));
+    const CoordBBox bounds = cube.impl().grid->evalActiveVoxelBoundingBox();
+    CHECK(bounds.min().x() >= -8);
+    CHECK(bounds.max().x() <= 308);
+
+    // Without an iso value it reads as a level set (solid below 0): nothing is.
+    const Volume none = importLevelSet(dir.file("block.vdb"), {}, &report);
+    CHECK_FALSE(report.fog);
+    CHECK(none.impl().grid->tree().activeVoxelCount() == 0);
+
+    // A reading that makes the background solid would fill everything outside the grid: refused.
+    block->setGridClass(openvdb::GRID_FOG_VOLUME);
+    openvdb::io::File fogFile(dir.file("fog.vdb"));
+    fogFile.write({block});
+    fogFile.close();
+    o.iso = -0.5;
+    CHECK_THROWS_WITH(importLevelSet(dir.file("fog.vdb"), o), Catch::Contains("solid everywhere outside"));
+    const std::string sphere = writeSphereFile(dir, "s.vdb", 10.0, 0.5, {0, 0, 0});
+    o.grid = "surface";
+    o.iso = 100.0; // above the level set's background
+    CHECK_THROWS_WITH(importLevelSet(sphere, o), Catch::Contains("solid everywhere outside"));
+}
+
 TEST_CASE("a rotated, non-uniform or offset grid is resampled onto the lattice, and says so", "[interop]")
 {
     TempDir dir;

@@ -31,7 +31,9 @@ struct LevelSetImportReport {
 /// Reads a level set or fog volume from a .vdb file that is not VDBClay's own (describeStandardVdb
 /// checks it first). A grid whose transform is not a uniform scale with a translation on its lattice
 /// (non-uniform voxels, rotation, shear, a translation off the lattice, another voxel size asked for) is
-/// resampled onto VDBClay's lattice, and the report says why. Throws VolumeIOError (the file) or
+/// resampled onto VDBClay's lattice, and the report says why. A grid of no class reads as a fog volume
+/// when its background is below the iso value, else as a level set; a reading that would make the
+/// background solid (everything outside the grid's active voxels) is refused. Throws VolumeIOError (the file) or
 /// std::invalid_argument (the options) with one line.
 Volume importLevelSet(const std::string& path, const LevelSetImportOptions& options, LevelSetImportReport* report = nullptr);
 
