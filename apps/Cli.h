@@ -2,6 +2,8 @@
 // them, errors mapped to exit codes, and small output helpers. Light header: no OpenVDB trees here.
 #pragma once
 
+#include "vdb_hermite/NumberText.h"
+
 #include <nlohmann/json.hpp>
 
 #include <chrono>
@@ -16,6 +18,7 @@
 
 namespace CLI {
 class App;
+class Validator;
 }
 
 namespace vdbclay {
@@ -55,12 +58,16 @@ nlohmann::json opReportJson(const ScriptOpReport& report);
 /// Short human-readable forms.
 std::string formatSeconds(double seconds); // "812 ms", "3.42 s"
 std::string formatBytes(double bytes);     // "12.3 MiB"
-std::string formatNumber(double value);    // shortest form that round-trips reasonably ("0.5", "24")
 
 /// Lower-cased extension of a path including the dot (".obj"), or "" when it has none.
 std::string lowerExtension(const std::string& path);
 /// Throws UsageError unless `path` ends in .obj, .ply or .glb (any case).
 void requireMeshExtension(const std::string& path, const char* optionName);
+/// Throws UsageError unless `path` ends in .vdb or .vdbclay (the forms a scene is written in).
+void requireSceneExtension(const std::string& path);
+/// An option check that refuses zero, negative and non-finite numbers with a short message
+/// (CLI::PositiveNumber quotes the largest double as its limit).
+const CLI::Validator& positiveNumber();
 
 /// A progress bar on stderr ("label [=====     ] 52%"), redrawn in place, when stderr is a terminal and
 /// `enabled`; otherwise a function that does nothing. Call with done == total to end the line.

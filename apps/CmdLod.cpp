@@ -74,11 +74,11 @@ LodCommands addLodCommand(CLI::App& parent, LodOptions& o)
     cmds.inspect->add_option("--memory-budget", o.memoryBudgetMB, "Resident bricks may take at most this many MB")
         ->required()
         ->type_name("MB")
-        ->check(CLI::PositiveNumber);
+        ->check(positiveNumber());
     cmds.inspect->add_option("--pixel-error", o.pixelError, "Screen-space error a brick may show, in pixels")
         ->capture_default_str()
         ->type_name("PX")
-        ->check(CLI::PositiveNumber);
+        ->check(positiveNumber());
     cmds.inspect->add_option("--csv", o.csv, "Write one row per frame")->type_name("OUT.csv");
     cmds.inspect->add_option("--plot", o.plot, "Draw the figures over the flight (PNG, PLplot)")->type_name("OUT.png");
     cmds.inspect->add_flag("--json", o.json, "Print {\"frames\": [one object per camera frame], \"summary\": {...}}");

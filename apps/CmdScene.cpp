@@ -56,6 +56,7 @@ void printSummary(const std::string& input, const std::string& output, const Sce
 /// A mesh file, voxelized.
 int importMesh(const ImportOptions& o, std::chrono::steady_clock::time_point start)
 {
+    if (!std::filesystem::is_regular_file(o.input)) throw MeshImportError("'" + o.input + "' does not exist or is not a file");
     if (!o.grid.empty() || o.iso) throw UsageError("--grid and --iso are for .vdb files of other tools, not meshes");
     VoxelizeOptions options;
     options.voxelSize = o.voxelSize;
@@ -122,7 +123,7 @@ CLI::App* addImportCommand(CLI::App& parent, ImportOptions& o)
         ->type_name("VALUE");
     cmd->add_option("--voxel-size", o.voxelSize, "Voxel size of a voxelized mesh, or to resample a standard grid to (default: its own)")
         ->type_name("V")
-        ->check(CLI::PositiveNumber);
+        ->check(positiveNumber());
     cmd->add_option("--resolution", o.resolution, "Voxels along a mesh's longest side (instead of --voxel-size)")
         ->type_name("N")
         ->check(CLI::Range(1, 16384));
@@ -143,8 +144,10 @@ CLI::App* addImportCommand(CLI::App& parent, ImportOptions& o)
 int runImport(const ImportOptions& o)
 {
     const auto start = std::chrono::steady_clock::now();
+    requireSceneExtension(o.output);
     if (isMeshPath(o.input)) return importMesh(o, start);
-    if (o.resolution) throw UsageError("--resolution is for meshes; '" + o.input + "' is a volume");
+    if (o.resolution)
+        throw UsageError("--resolution is for meshes (obj ply stl off gltf glb fbx dae); '" + o.input + "' is not one");
     const bool standard = !isStorePath(o.input) && classifyVdbFile(o.input) == VdbFileKind::Other;
     if (!standard && (!o.grid.empty() || o.iso || o.voxelSize))
         throw UsageError("--grid, --iso and --voxel-size are for .vdb files of other tools; '" + o.input + "' is VDBClay's own");
@@ -199,6 +202,7 @@ CLI::App* addExportCommand(CLI::App& parent, ExportOptions& o)
 
 int runExport(const ExportOptions& o)
 {
+    requireSceneExtension(o.output);
     if (isStorePath(o.output)) throw UsageError("export writes a native .vdb; use 'vdbclay import' to make a store");
     const auto start = std::chrono::steady_clock::now();
     const Volume volume = loadScene(o.input, terminalProgress("reading bricks", !o.json));

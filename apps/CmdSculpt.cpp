@@ -28,11 +28,11 @@ CLI::App* addSculptCommand(CLI::App& parent, SculptOptions& o)
     cmd->add_option("--memory-budget", o.memoryBudgetMB,
                     "Stores: keep at most this many MB of bricks resident, paging bricks in and out as the ops reach them")
         ->type_name("MB")
-        ->check(CLI::PositiveNumber);
+        ->check(positiveNumber());
     cmd->add_option("--autosave-every", o.autosaveEvery,
                     "Stores: commit the changed bricks every N ops (a crash loses at most the ops since the last commit)")
         ->type_name("N")
-        ->check(CLI::PositiveNumber);
+        ->check(positiveNumber());
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text (no progress lines)");
     cmd->footer("Without --json, one progress line per op goes to stderr, e.g. \"op 3/7 remove: 120 blocks, 0.8 ms\".\n"
                 "The script is checked completely before the volume is touched. On a store only the bricks the\n"

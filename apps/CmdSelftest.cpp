@@ -25,7 +25,7 @@ CLI::App* addSelftestCommand(CLI::App& parent, SelftestOptions& o)
                   "Instead of random scenes, every primitive of 'vdbclay new' at sizes --from .. --to voxels in --step steps");
     cmd->add_option("--from", o.sweepFrom, "First size of --sweep (voxels)")->capture_default_str();
     cmd->add_option("--to", o.sweepTo, "Last size of --sweep (voxels)")->capture_default_str();
-    cmd->add_option("--step", o.sweepStep, "Step of --sweep (voxels)")->capture_default_str()->check(CLI::PositiveNumber);
+    cmd->add_option("--step", o.sweepStep, "Step of --sweep (voxels)")->capture_default_str()->check(positiveNumber());
     cmd->add_flag("--keep-going", o.keepGoing, "Check every scene, printing one line per failure, instead of stopping at the first");
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text (no progress lines)");
     cmd->footer("Each scene is a voxel size and a stroke script; the checks are listed in src/selftest/SceneChecks.h.\n"

@@ -70,18 +70,30 @@ std::string formatBytes(double bytes)
     return buf;
 }
 
-std::string formatNumber(double value)
-{
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.6g", value);
-    return buf;
-}
-
 std::string lowerExtension(const std::string& path)
 {
     std::string ext = std::filesystem::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     return ext;
+}
+
+void requireSceneExtension(const std::string& path)
+{
+    const std::string ext = lowerExtension(path);
+    if (ext != ".vdb" && ext != ".vdbclay")
+        throw UsageError("'" + path + "': the output's extension picks its form; end it in .vdb (native volume) or .vdbclay (store)");
+}
+
+const CLI::Validator& positiveNumber()
+{
+    static const CLI::Validator check(
+        [](const std::string& text) {
+            double value = 0.0;
+            const bool parsed = CLI::detail::lexical_cast(text, value);
+            return parsed && std::isfinite(value) && value > 0.0 ? std::string() : "must be a positive number, not " + text;
+        },
+        "POSITIVE");
+    return check;
 }
 
 void requireMeshExtension(const std::string& path, const char* optionName)

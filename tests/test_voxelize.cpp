@@ -347,5 +347,21 @@ TEST_CASE("cli: import voxelizes a mesh with its materials and says what it repa
     checkCleanFailure(runCli(dir, "import cube.obj --iso 1 --resolution 4 -o x.vdb"));
     writeText(dir.file("junk.stl"), "solid junk\n garbage\n");
     checkCleanFailure(runCli(dir, "import junk.stl --resolution 8 -o x.vdb"));
+    // Errors say what is wrong in the user's terms: a missing file before missing options, an output
+    // whose extension picks no form, a voxel size of zero without quoting the largest double.
+    const CommandResult missing = runCli(dir, "import nothere.obj -o x.vdb");
+    checkCleanFailure(missing);
+    CHECK(missing.err.find("does not exist") != std::string::npos);
+    const CommandResult typo = runCli(dir, "import cube.obj --resolution 8 -o x.vbd");
+    checkCleanFailure(typo);
+    CHECK(typo.err.find(".vdbclay") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir.path() / "x.vbd"));
+    const CommandResult zero = runCli(dir, "import cube.obj --voxel-size 0 -o x.vdb");
+    checkCleanFailure(zero);
+    CHECK(zero.err.find("positive") != std::string::npos);
+    CHECK(zero.err.size() < 200);
+    const CommandResult tiny = runCli(dir, "import cube.obj --voxel-size 1e-9 -o x.vdb");
+    checkCleanFailure(tiny);
+    CHECK(tiny.err.find("1e-09 is outside 0.0001 .. 1e+06") != std::string::npos);
     CHECK_FALSE(std::filesystem::exists(dir.path() / "x.vdb"));
 }

@@ -3,6 +3,7 @@
 #include "mesher/Mesher.h"
 #include "vdb_hermite/AtomicFile.h"
 #include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/NumberText.h"
 
 #include <openvdb/io/File.h>
 #include <openvdb/tools/LevelSetUtil.h>
@@ -16,7 +17,7 @@ void exportLevelSet(const Volume& volume, const std::string& path, const LevelSe
                     LevelSetExportReport* report)
 {
     if (!(options.halfWidth >= 1.0 && options.halfWidth <= 64.0))
-        throw std::invalid_argument("a half width of " + std::to_string(options.halfWidth) + " voxels is outside 1 .. 64");
+        throw std::invalid_argument("a half width of " + formatNumber(options.halfWidth) + " voxels is outside 1 .. 64");
     openvdb::initialize();
     // CMS on voxel cells: its sharp features keep the corners the Hermite data holds, and no wide cell
     // cuts a chord through a curved stretch (distances are measured to this mesh).

@@ -3,6 +3,7 @@
 #include "interop/StandardGridRead.h"
 #include "interop/StandardVdb.h"
 #include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/NumberText.h"
 #include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/Quantize.h"
 #include "vdb_hermite/VolumeIO.h"
@@ -173,8 +174,8 @@ std::string onLattice(FloatGrid::Ptr& grid, double voxelSize, double maxVoxels, 
     const double sourceVolume = std::fabs(xf.baseMap()->getAffineMap()->getMat4().getMat3().det());
     const double expected = double(grid->activeVoxelCount()) * sourceVolume / (voxelSize * voxelSize * voxelSize);
     if (!(expected <= maxVoxels))
-        throw std::invalid_argument("resampling this grid at a voxel size of " + std::to_string(voxelSize) + " would make about " +
-                                    std::to_string(expected) + " voxels; give a larger --voxel-size");
+        throw std::invalid_argument("resampling this grid at a voxel size of " + formatNumber(voxelSize) + " would make about " +
+                                    formatNumber(expected) + " voxels; give a larger --voxel-size");
     FloatGrid::Ptr out = FloatGrid::create(grid->background());
     out->setTransform(openvdb::math::Transform::createLinearTransform(voxelSize));
     out->setGridClass(grid->getGridClass());
@@ -196,12 +197,12 @@ Volume importLevelSet(const std::string& path, const LevelSetImportOptions& opti
         throw std::invalid_argument("grid '" + printableText(chosen.header.name, 64) + "' of '" + path +
                                     "' is a fog volume: give --iso VALUE (solid where the density exceeds it)");
     if (options.voxelSize && !(*options.voxelSize >= kMinVoxelSize && *options.voxelSize <= kMaxVoxelSize))
-        throw std::invalid_argument("a voxel size must be between " + std::to_string(kMinVoxelSize) + " and " +
-                                    std::to_string(kMaxVoxelSize));
+        throw std::invalid_argument("a voxel size must be between " + formatNumber(kMinVoxelSize) + " and " +
+                                    formatNumber(kMaxVoxelSize));
     const double voxelSize = options.voxelSize.value_or(chosen.voxelSize[0]);
     if (!(voxelSize >= kMinVoxelSize && voxelSize <= kMaxVoxelSize))
         throw std::invalid_argument("grid '" + printableText(chosen.header.name, 64) + "' has a voxel size of " +
-                                    std::to_string(voxelSize) + "; give --voxel-size");
+                                    formatNumber(voxelSize) + "; give --voxel-size");
 
     openvdb::GridBase::Ptr base = readStandardGrid(path, chosen.header.name);
     FloatGrid::Ptr grid = openvdb::gridPtrCast<FloatGrid>(base);
@@ -218,8 +219,8 @@ Volume importLevelSet(const std::string& path, const LevelSetImportOptions& opti
         throw std::invalid_argument("grid '" + printableText(chosen.header.name, 64) + "' read as a " +
                                     (fog ? "fog volume (solid above the iso value)" : "level set (solid below the iso value)") +
                                     " would be solid everywhere outside its active voxels: its background " +
-                                    std::to_string(grid->background()) + " is " + (fog ? "above" : "below") + " the iso value " +
-                                    std::to_string(iso) + "; give another --iso");
+                                    formatNumber(grid->background()) + " is " + (fog ? "above" : "below") + " the iso value " +
+                                    formatNumber(iso) + "; give another --iso");
     openvdb::Coord shift(0);
     std::string resampled;
     try {

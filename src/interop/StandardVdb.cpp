@@ -114,8 +114,8 @@ const StandardGridInfo& chooseImportGrid(const StandardVdbInfo& info, const std:
                 throw VolumeIOError("grid '" + printableText(name, 64) + "' of '" + path +
                                     "' has a transform that is singular, not finite, or of voxels outside VDBClay's range");
             if (!g.importable())
-                throw VolumeIOError("grid '" + printableText(name, 64) + "' of '" + path + "' is a " + g.header.valueType +
-                                    " grid; VDBClay imports float and double grids");
+                throw VolumeIOError("grid '" + printableText(name, 64) + "' of '" + path + "' holds " + g.header.valueType +
+                                    " values; VDBClay imports float and double grids");
             return g;
         }
         throw VolumeIOError("'" + path + "' has no grid named '" + printableText(name, 64) + "'; it holds: " + listGrids(info));

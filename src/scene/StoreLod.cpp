@@ -1,6 +1,7 @@
 #include "scene/StoreLod.h"
 
 #include "scene/DensityBrick.h"
+#include "vdb_hermite/NumberText.h"
 #include "wavelet/LodKernels.h"
 
 #include <tbb/blocked_range.h>
@@ -365,7 +366,7 @@ int buildStoreLod(SceneStore& scene, int levels, const Progress& progress)
         throw std::invalid_argument("a pyramid has 1 to " + std::to_string(wavelet::kMaxLodLevels) + " levels, not " +
                                     std::to_string(levels));
     if (scene.voxelSize() * double(1 << levels) > kMaxVoxelSize)
-        throw std::invalid_argument("a voxel size of " + std::to_string(scene.voxelSize()) + " leaves room for fewer than " +
+        throw std::invalid_argument("a voxel size of " + formatNumber(scene.voxelSize()) + " leaves room for fewer than " +
                                     std::to_string(levels) + " levels");
     StoreTransaction transaction(scene.bricks());
     for (int k = 1; k <= std::max(levels, scene.lodLevels()); ++k)

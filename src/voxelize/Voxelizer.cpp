@@ -1,6 +1,7 @@
 #include "voxelize/Voxelizer.h"
 
 #include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/NumberText.h"
 #include "vdb_hermite/Quantize.h"
 
 #include <tbb/blocked_range.h>
@@ -269,8 +270,8 @@ MeshVoxelizer::MeshVoxelizer(const TriangleSoup& mesh, const VoxelizeOptions& op
         throw std::invalid_argument("give --voxel-size V or --resolution N (voxels along the longest side)");
     }
     if (!(voxelSize >= kMinVoxelSize && voxelSize <= kMaxVoxelSize))
-        throw std::invalid_argument("a voxel size of " + std::to_string(voxelSize) + " is outside " + std::to_string(kMinVoxelSize) +
-                                    " .. " + std::to_string(kMaxVoxelSize));
+        throw std::invalid_argument("a voxel size of " + formatNumber(voxelSize) + " is outside " + formatNumber(kMinVoxelSize) + " .. " +
+                                    formatNumber(kMaxVoxelSize));
     Lattice& lattice = impl_->lattice;
     lattice.voxelSize = voxelSize;
     std::array<double, 3> extent{};
