@@ -92,7 +92,8 @@ int importMesh(const ImportOptions& o, std::chrono::steady_clock::time_point sta
                        {"duplicate_hits", report.duplicateHits}, {"voted_points", report.votedPoints},
                        {"patched_crossings", report.patchedCrossings}, {"crossings", report.crossings},
                        {"solid_voxels", report.solidVoxels},    {"material_interfaces", report.materialInterfaces},
-                       {"materials", materials}};
+                       {"materials", materials},                {"colour_materials", mesh.colourMaterials},
+                       {"colours_binned", mesh.colourBinned}};
         printJson(out);
         return kExitOk;
     }
@@ -100,7 +101,11 @@ int importMesh(const ImportOptions& o, std::chrono::steady_clock::time_point sta
                  {"repaired", std::to_string(report.droppedTriangles) + " degenerate triangles dropped, " +
                                   std::to_string(report.duplicateHits) + " duplicate hits merged, " +
                                   std::to_string(report.votedPoints) + " lattice points settled by the 3-ray vote (holes, seams), " +
-                                  std::to_string(report.patchedCrossings) + " crossings patched"}},
+                                  std::to_string(report.patchedCrossings) + " crossings patched"},
+                 {"materials", std::to_string(materials.size()) +
+                                   (mesh.colourMaterials == 0 ? std::string()
+                                                              : ", " + std::to_string(mesh.colourMaterials) + " from vertex colours" +
+                                                                    (mesh.colourBinned ? " (binned: 4 levels per channel)" : ""))}},
                 0);
     printSummary(o.input, o.output, counts, seconds);
     return kExitOk;

@@ -12,7 +12,10 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
+#include <set>
 #include <fstream>
 #include <random>
 
@@ -319,6 +322,85 @@ TEST_CASE("bad meshes and options are refused with one line", "[voxelize]")
     VoxelizeOptions zero;
     zero.resolution = 0;
     CHECK_THROWS_AS(voxelizeMesh(sphere, zero), std::invalid_argument);
+}
+
+namespace {
+
+/// An ASCII PLY of an axis-aligned cube [0, 4]^3 whose faces carry vertex colours: face f takes
+/// colour(f), and corner 0 of each face a stray colour (two corners out of three agree anyway).
+std::string colouredCubePly(const std::function<std::array<int, 3>(int face)>& colour)
+{
+    // Per face: the axis it is normal to, its side, then four corners counter-clockwise seen from outside.
+    const int quads[6][4][3] = {{{0, 0, 0}, {0, 0, 4}, {0, 4, 4}, {0, 4, 0}}, {{4, 0, 0}, {4, 4, 0}, {4, 4, 4}, {4, 0, 4}},
+                                {{0, 0, 0}, {4, 0, 0}, {4, 0, 4}, {0, 0, 4}}, {{0, 4, 0}, {0, 4, 4}, {4, 4, 4}, {4, 4, 0}},
+                                {{0, 0, 0}, {0, 4, 0}, {4, 4, 0}, {4, 0, 0}}, {{0, 0, 4}, {4, 0, 4}, {4, 4, 4}, {0, 4, 4}}};
+    std::string ply = "ply\nformat ascii 1.0\nelement vertex 24\nproperty float x\nproperty float y\nproperty float z\n"
+                      "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 12\n"
+                      "property list uchar int vertex_indices\nend_header\n";
+    for (int f = 0; f < 6; ++f)
+        for (int c = 0; c < 4; ++c) {
+            const std::array<int, 3> rgb = c == 1 ? std::array<int, 3>{1, 2, 3} : colour(f); // corner 1: a stray colour
+            ply += std::to_string(quads[f][c][0]) + " " + std::to_string(quads[f][c][1]) + " " + std::to_string(quads[f][c][2]) + " " +
+                   std::to_string(rgb[0]) + " " + std::to_string(rgb[1]) + " " + std::to_string(rgb[2]) + "\n";
+        }
+    for (int f = 0; f < 6; ++f) {
+        const int v = 4 * f;
+        ply += "3 " + std::to_string(v) + " " + std::to_string(v + 1) + " " + std::to_string(v + 2) + "\n";
+        ply += "3 " + std::to_string(v) + " " + std::to_string(v + 2) + " " + std::to_string(v + 3) + "\n";
+    }
+    return ply;
+}
+
+} // namespace
+
+TEST_CASE("vertex colours become materials: few exactly, many binned", "[voxelize]")
+{
+    TempDir dir;
+    // Two colours: the x faces red, the others blue.
+    writeText(dir.file("two.ply"), colouredCubePly([](int face) { return face < 2 ? std::array<int, 3>{255, 0, 0} : std::array<int, 3>{0, 0, 255}; }));
+    const TriangleSoup two = loadTriangleMesh(dir.file("two.ply"));
+    REQUIRE(two.triangles.size() == 12);
+    CHECK(two.colourMaterials == 2);
+    CHECK_FALSE(two.colourBinned);
+    std::set<std::string> names;
+    for (std::size_t t = 0; t < two.triangles.size(); ++t) names.insert(two.materials[two.triangleMaterials[t]].name);
+    CHECK(names == std::set<std::string>{"colour-0000ff", "colour-ff0000"}); // the stray corner outvoted
+    const std::size_t red = std::size_t(std::find_if(two.materials.begin(), two.materials.end(),
+                                                     [](const MeshMaterial& m) { return m.name == "colour-ff0000"; }) -
+                                        two.materials.begin());
+    CHECK(two.materials[red].color == std::array<float, 4>{1.0f, 0.0f, 0.0f, 1.0f});
+    VoxelizeOptions o;
+    o.voxelSize = 0.5;
+    const Volume v = voxelizeMesh(two, o);
+    CHECK(v.materials().find("colour-ff0000").has_value());
+    CHECK(v.materials().find("colour-0000ff").has_value());
+    CHECK(checkInvariants(v).empty());
+
+    // Six faces of different colours but each face's 2 triangles alike; then a cube whose faces spread
+    // over more than 64 colours per channel mix: binned onto 4 levels per channel.
+    writeText(dir.file("six.ply"), colouredCubePly([](int face) { return std::array<int, 3>{40 * face, 255 - 40 * face, 7}; }));
+    CHECK(loadTriangleMesh(dir.file("six.ply")).colourMaterials == 6);
+    std::string many = "ply\nformat ascii 1.0\nelement vertex 300\nproperty float x\nproperty float y\nproperty float z\n"
+                       "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 100\n"
+                       "property list uchar int vertex_indices\nend_header\n";
+    for (int t = 0; t < 100; ++t)
+        for (int c = 0; c < 3; ++c)
+            many += std::to_string(t + (c == 1 ? 1 : 0)) + " " + std::to_string(c == 2 ? 1 : 0) + " " + std::to_string(t % 7) + " " +
+                    std::to_string((t * 37) % 256) + " " + std::to_string((t * 91) % 256) + " " + std::to_string((t * 13) % 256) + "\n";
+    for (int t = 0; t < 100; ++t) many += "3 " + std::to_string(3 * t) + " " + std::to_string(3 * t + 1) + " " + std::to_string(3 * t + 2) + "\n";
+    writeText(dir.file("many.ply"), many);
+    const TriangleSoup binned = loadTriangleMesh(dir.file("many.ply"));
+    CHECK(binned.colourBinned);
+    CHECK(binned.colourMaterials <= 64);
+    CHECK(binned.colourMaterials > 8);
+    for (std::size_t t = 0; t < binned.triangles.size(); ++t) {
+        const std::array<float, 4>& c = binned.materials[binned.triangleMaterials[t]].color;
+        const int exact[3] = {int((t * 37) % 256), int((t * 91) % 256), int((t * 13) % 256)};
+        for (int i = 0; i < 3; ++i) {
+            CHECK(std::fabs(c[std::size_t(i)] * 255.0f - float(exact[i])) <= 42.5f + 1e-3f); // the nearest of 0, 85, 170, 255
+            CHECK(std::fmod(std::lround(c[std::size_t(i)] * 255.0f), 85) == 0);
+        }
+    }
 }
 
 TEST_CASE("cli: import voxelizes a mesh with its materials and says what it repaired", "[voxelize][cli]")

@@ -10,9 +10,62 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <map>
+#include <utility>
 
 namespace vdbclay {
+
+namespace {
+
+/// Few distinct vertex colours (a painted model, VDBClay's own PLY) each become a material; more (a
+/// colour scan) are binned on a palette of 4 levels per channel, so the table stays small.
+constexpr std::size_t kMaxExactColours = 64;
+
+uint32_t packColour(const aiColor4D& c)
+{
+    auto byte = [](float v) { return uint32_t(std::lround(std::clamp(std::isfinite(v) ? v : 0.0f, 0.0f, 1.0f) * 255.0f)); };
+    return byte(c.r) << 16 | byte(c.g) << 8 | byte(c.b);
+}
+
+/// The colour of a triangle: the one at least two of its corners share, else its first corner's.
+uint32_t triangleColour(const aiMesh& mesh, const aiFace& face)
+{
+    const uint32_t a = packColour(mesh.mColors[0][face.mIndices[0]]), b = packColour(mesh.mColors[0][face.mIndices[1]]),
+                   c = packColour(mesh.mColors[0][face.mIndices[2]]);
+    return (b == c && a != b) ? b : a;
+}
+
+uint32_t binColour(uint32_t rgb)
+{
+    uint32_t out = 0;
+    for (int shift : {16, 8, 0}) out |= ((((rgb >> shift) & 0xffu) + 42u) / 85u * 85u) << shift;
+    return out;
+}
+
+/// Appends a material per colour of the coloured triangles and points them at it.
+void coloursToMaterials(TriangleSoup& soup, const std::vector<std::pair<std::size_t, uint32_t>>& coloured)
+{
+    std::map<uint32_t, uint32_t> material;
+    for (const auto& [triangle, rgb] : coloured) material.emplace(rgb, 0);
+    const bool binned = material.size() > kMaxExactColours;
+    if (binned) {
+        material.clear();
+        for (const auto& [triangle, rgb] : coloured) material.emplace(binColour(rgb), 0);
+    }
+    for (auto& [rgb, index] : material) {
+        index = uint32_t(soup.materials.size());
+        char name[16];
+        std::snprintf(name, sizeof name, "colour-%06x", rgb);
+        soup.materials.push_back({name, {float(rgb >> 16) / 255.0f, float((rgb >> 8) & 0xffu) / 255.0f, float(rgb & 0xffu) / 255.0f, 1.0f}});
+    }
+    for (const auto& [triangle, rgb] : coloured) soup.triangleMaterials[triangle] = material.at(binned ? binColour(rgb) : rgb);
+    soup.colourMaterials = material.size();
+    soup.colourBinned = binned;
+}
+
+} // namespace
 
 bool isMeshPath(const std::string& path)
 {
@@ -28,11 +81,15 @@ TriangleSoup loadTriangleMesh(const std::string& path)
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw MeshImportError("'" + path + "' does not exist or is not a file");
     Assimp::Importer importer;
-    // Points and lines are no surface; vertices shared by position so that duplicated corners of one
-    // seam become one. No normals are asked for: the voxelizer takes each triangle's own.
+    // Points and lines are no surface. No normals are asked for: the voxelizer takes each triangle's own.
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-    const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
-                                                       aiProcess_PreTransformVertices);
+    const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_PreTransformVertices);
+    if (!scene) throw MeshImportError("'" + path + "' cannot be read as a mesh: " + printableText(importer.GetErrorString(), 200));
+    // Vertices shared by position save memory (an STL repeats each corner per triangle), but Assimp's
+    // join ignores vertex colours: it would give a corner where two colours meet only one of them.
+    bool vertexColours = false;
+    for (unsigned k = 0; k < scene->mNumMeshes; ++k) vertexColours = vertexColours || scene->mMeshes[k]->HasVertexColors(0);
+    if (!vertexColours) scene = importer.ApplyPostProcessing(aiProcess_JoinIdenticalVertices);
     if (!scene) throw MeshImportError("'" + path + "' cannot be read as a mesh: " + printableText(importer.GetErrorString(), 200));
     TriangleSoup soup;
     for (unsigned m = 0; m < scene->mNumMaterials; ++m) {
@@ -48,6 +105,7 @@ TriangleSoup loadTriangleMesh(const std::string& path)
                          std::clamp(color.a, 0.0f, 1.0f)};
         soup.materials.push_back(out);
     }
+    std::vector<std::pair<std::size_t, uint32_t>> coloured; // triangle, colour: for meshes with vertex colours
     for (unsigned k = 0; k < scene->mNumMeshes; ++k) {
         const aiMesh* mesh = scene->mMeshes[k];
         if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
@@ -70,11 +128,13 @@ TriangleSoup loadTriangleMesh(const std::string& path)
                 ++soup.droppedTriangles;
                 continue;
             }
+            if (mesh->HasVertexColors(0)) coloured.emplace_back(soup.triangles.size(), triangleColour(*mesh, face));
             soup.triangles.push_back(t);
             soup.triangleMaterials.push_back(mesh->mMaterialIndex < soup.materials.size() ? mesh->mMaterialIndex : 0);
         }
     }
     if (soup.materials.empty()) soup.materials.push_back({});
+    if (!coloured.empty()) coloursToMaterials(soup, coloured);
     if (soup.triangles.empty()) throw MeshImportError("'" + path + "' holds no triangle");
     return soup;
 }

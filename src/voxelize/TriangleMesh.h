@@ -1,10 +1,11 @@
 // Meshes made elsewhere (scanners, CAD, DCC tools), read with Assimp into one triangle soup in world
-// units, with the materials the file names.
+// units, with the materials the file names or its vertex colours.
 //
 // Light header: no Assimp types.
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -23,6 +24,11 @@ struct TriangleSoup {
     std::vector<uint32_t> triangleMaterials; // index into materials, per triangle
     std::vector<MeshMaterial> materials;
     uint64_t droppedTriangles = 0; // of zero area, or with a corner that is not a finite number
+    /// Materials made from vertex colours ("colour-rrggbb"): a triangle with coloured corners takes the
+    /// colour two of them share, else its first corner's, over its mesh's material. Binned: the colours
+    /// were too many and were rounded to 4 levels per channel.
+    std::size_t colourMaterials = 0;
+    bool colourBinned = false;
 };
 
 /// Every failure to read a mesh file; what() is one line meant for the user.
