@@ -381,6 +381,10 @@ TEST_CASE("scripts use tools: grid shapes, relative files, strokes, clear errors
     writeText(dir.file("garbage.vdb"), "not a volume");
     CHECK_THAT(scriptError(R"({"ops": [{"mode": "remove", "brush": {"shape": "grid", "file": "garbage.vdb"}}]})"),
                Catch::Contains("ops[0].brush.file"));
+    // A store named as a tool: the error says how to make one of it.
+    writeText(dir.file("scene.vdbclay"), "SQLite format 3");
+    CHECK_THAT(scriptError(R"({"ops": [{"mode": "add", "brush": {"shape": "grid", "file": "scene.vdbclay"}}]})"),
+               Catch::Contains("vdbclay tool make"));
     CHECK_THAT(scriptError(R"({"ops": [{"mode": "add", "brush": {"shape": "grid"}}]})"), Catch::Contains("ops[0].brush") && Catch::Contains("file"));
     CHECK_THAT(scriptError(R"({"ops": [{"mode": "add", "brush": {"shape": "grid", "file": "tools/knob.vdb", "radius": 2}}]})"),
                Catch::Contains("unknown key 'radius'"));

@@ -1,10 +1,12 @@
 #include "sculpt/StrokeScript.h"
 
 #include "vdb_hermite/PrintableText.h"
+#include "vdb_hermite/VolumeIO.h"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <memory>
@@ -296,6 +298,25 @@ StrokeScript loadStrokeScript(const std::string& path)
     return script;
 }
 
+namespace {
+
+/// What to run when a script names a scene that is not a tool file yet.
+std::string toolFileHint(const std::string& file)
+{
+    std::string ext = std::filesystem::path(file).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    bool foreign = false;
+    try {
+        foreign = ext == ".vdb" && classifyVdbFile(file) == VdbFileKind::Other;
+    } catch (const std::exception&) { // unreadable: the error says so already
+    }
+    if (ext == ".vdbclay") return " (a store: make a tool of it with 'vdbclay tool make " + file + " -o TOOL.vdb')";
+    if (foreign) return " (bring it in with 'vdbclay import', then 'vdbclay tool make')";
+    return "";
+}
+
+} // namespace
+
 void loadScriptTools(StrokeScript& script, const std::string& folder)
 {
     std::map<std::string, std::shared_ptr<const GridTool>> loaded;
@@ -309,7 +330,8 @@ void loadScriptTools(StrokeScript& script, const std::string& folder)
             try {
                 found = loaded.emplace(file, GridTool::load(file)).first;
             } catch (const std::exception& e) {
-                throw ScriptError("ops[" + std::to_string(i) + "].brush.file: cannot use '" + file + "' as a tool: " + e.what());
+                throw ScriptError("ops[" + std::to_string(i) + "].brush.file: cannot use '" + file + "' as a tool: " + e.what() +
+                                  toolFileHint(file));
             }
         }
         op.tool = found->second;
