@@ -10,12 +10,13 @@ seconds="${2:-60}"
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 artifacts="$build/fuzz-artifacts"
 mkdir -p "$artifacts"
-for target in vdb_reader standard_vdb script_parser mesh_writers; do
+for target in vdb_reader standard_vdb script_parser mesh_writers mesh_import; do
     case "$target" in
         vdb_reader) corpus_name=vdb ;;
         standard_vdb) corpus_name=standard ;;
         script_parser) corpus_name=script ;;
         mesh_writers) corpus_name=mesh ;;
+        mesh_import) corpus_name=import ;;
     esac
     work="$build/fuzz-corpus/$target"
     mkdir -p "$work"
@@ -23,7 +24,7 @@ for target in vdb_reader standard_vdb script_parser mesh_writers; do
     printf '==> fuzz %s for %ss\n' "$target" "$seconds"
     log="$artifacts/$target.log"
     status=0
-    ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=$repo/tests/sanitizer/ubsan.supp" \
+    ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 LSAN_OPTIONS="suppressions=$repo/tests/sanitizer/lsan.supp" UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=$repo/tests/sanitizer/ubsan.supp" \
         "$build/bin/fuzz_$target" "$work" -seed="${FUZZ_SEED:-20261201}" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=2048 \
         -max_len=65536 -print_final_stats=1 -artifact_prefix="$artifacts/$target-" >"$log" 2>&1 || status=$?
     grep -E '^#[0-9]+.*(DONE|pulse)|stat::number_of_executed_units|stat::peak_rss_mb' "$log" | tail -n 3 || true

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <iterator>
 #include <set>
 #include <fstream>
 #include <random>
@@ -312,6 +313,41 @@ TEST_CASE("bad meshes and options are refused with one line", "[voxelize]")
             FAIL("loaded");
         } catch (const MeshImportError& e) {
             CHECK(std::string(e.what()).find('\n') == std::string::npos);
+        }
+    }
+    // Files that take Debian's Assimp 5.2 down (found by fuzz_mesh_import) cost only the child process
+    // that reads them: a binary PLY cut short (a segmentation fault), an ASCII PLY whose header never
+    // ends (an endless loop), an OFF whose face counts lie (an assertion that aborts).
+    {
+        std::string ply = "ply\nformat binary_little_endian 1.0\nelement vertex 300\nproperty float x\nproperty float y\n"
+                          "property float z\nelement face 100\nproperty list uchar uint vertex_indices\nend_header\n";
+        for (int v = 0; v < 300; ++v)
+            for (int a = 0; a < 3; ++a) {
+                const float x = float((v * (a + 3)) % 17);
+                ply.append(reinterpret_cast<const char*>(&x), 4);
+            }
+        for (uint32_t t = 0; t < 40; ++t) { // 60 faces short
+            ply += char(3);
+            for (uint32_t k = 0; k < 3; ++k) {
+                const uint32_t index = 3 * t + k;
+                ply.append(reinterpret_cast<const char*>(&index), 4);
+            }
+        }
+        writeText(dir.file("cut.ply"), ply);
+        writeText(dir.file("unended.ply"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n0\n1\n2\n");
+        // The fuzzer's input: a format byte, a resolution byte, then the file.
+        std::ifstream found(std::string(VDBCLAY_FUZZ_CORPUS) + "/import/found-off-assimp-assert.bin", std::ios::binary);
+        const std::string bytes((std::istreambuf_iterator<char>(found)), std::istreambuf_iterator<char>());
+        REQUIRE(bytes.size() > 2);
+        writeText(dir.file("lying.off"), bytes.substr(2));
+        for (const char* f : {"cut.ply", "unended.ply", "lying.off"}) {
+            CAPTURE(f);
+            try {
+                (void)loadTriangleMesh(dir.file(f));
+                FAIL("loaded");
+            } catch (const MeshImportError& e) {
+                CHECK(std::string(e.what()).find('\n') == std::string::npos);
+            }
         }
     }
     const TriangleSoup sphere = uvSphere(1.0, {0, 0, 0}, 8, 16);

@@ -1,68 +1,154 @@
 #include "voxelize/TriangleMesh.h"
 
-#include "vdb_hermite/PrintableText.h"
+#include "voxelize/AssimpMeshReader.h"
 
-#include <assimp/Importer.hpp>
-#include <assimp/material.h>
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
-#include <cmath>
-#include <cstdio>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
 #include <filesystem>
-#include <map>
-#include <utility>
+#include <type_traits>
 
 namespace vdbclay {
 
 namespace {
 
-/// Few distinct vertex colours (a painted model, VDBClay's own PLY) each become a material; more (a
-/// colour scan) are binned on a palette of 4 levels per channel, so the table stays small.
-constexpr std::size_t kMaxExactColours = 64;
+using Clock = std::chrono::steady_clock;
 
-uint32_t packColour(const aiColor4D& c)
-{
-    auto byte = [](float v) { return uint32_t(std::lround(std::clamp(std::isfinite(v) ? v : 0.0f, 0.0f, 1.0f) * 255.0f)); };
-    return byte(c.r) << 16 | byte(c.g) << 8 | byte(c.b);
-}
+/// The child's answer on the pipe: a tag, then either the soup's parts (counts first, so the parent can
+/// size its vectors) or the one-line reason Assimp gave for refusing the file.
+enum class Answer : uint8_t { Soup = 1, Refused = 2 };
 
-/// The colour of a triangle: the one at least two of its corners share, else its first corner's.
-uint32_t triangleColour(const aiMesh& mesh, const aiFace& face)
-{
-    const uint32_t a = packColour(mesh.mColors[0][face.mIndices[0]]), b = packColour(mesh.mColors[0][face.mIndices[1]]),
-                   c = packColour(mesh.mColors[0][face.mIndices[2]]);
-    return (b == c && a != b) ? b : a;
-}
-
-uint32_t binColour(uint32_t rgb)
-{
-    uint32_t out = 0;
-    for (int shift : {16, 8, 0}) out |= ((((rgb >> shift) & 0xffu) + 42u) / 85u * 85u) << shift;
-    return out;
-}
-
-/// Appends a material per colour of the coloured triangles and points them at it.
-void coloursToMaterials(TriangleSoup& soup, const std::vector<std::pair<std::size_t, uint32_t>>& coloured)
-{
-    std::map<uint32_t, uint32_t> material;
-    for (const auto& [triangle, rgb] : coloured) material.emplace(rgb, 0);
-    const bool binned = material.size() > kMaxExactColours;
-    if (binned) {
-        material.clear();
-        for (const auto& [triangle, rgb] : coloured) material.emplace(binColour(rgb), 0);
+class PipeWriter {
+public:
+    explicit PipeWriter(int fd) : fd_(fd) {}
+    void bytes(const void* data, std::size_t size)
+    {
+        const char* p = static_cast<const char*>(data);
+        while (size > 0) {
+            const ssize_t n = ::write(fd_, p, size);
+            if (n < 0 && errno == EINTR) continue;
+            if (n <= 0) ::_exit(3); // the parent has gone or given up
+            p += n, size -= std::size_t(n);
+        }
     }
-    for (auto& [rgb, index] : material) {
-        index = uint32_t(soup.materials.size());
-        char name[16];
-        std::snprintf(name, sizeof name, "colour-%06x", rgb);
-        soup.materials.push_back({name, {float(rgb >> 16) / 255.0f, float((rgb >> 8) & 0xffu) / 255.0f, float(rgb & 0xffu) / 255.0f, 1.0f}});
+    template<typename T> void value(const T& v)
+    {
+        static_assert(std::is_trivially_copyable_v<T>);
+        bytes(&v, sizeof v);
     }
-    for (const auto& [triangle, rgb] : coloured) soup.triangleMaterials[triangle] = material.at(binned ? binColour(rgb) : rgb);
-    soup.colourMaterials = material.size();
-    soup.colourBinned = binned;
+    template<typename T> void vector(const std::vector<T>& v)
+    {
+        value(uint64_t(v.size()));
+        bytes(v.data(), v.size() * sizeof(T));
+    }
+    void text(const std::string& s)
+    {
+        value(uint64_t(s.size()));
+        bytes(s.data(), s.size());
+    }
+
+private:
+    int fd_;
+};
+
+/// Reads what the child writes, giving up at a deadline (a parser in an endless loop).
+class PipeReader {
+public:
+    PipeReader(int fd, Clock::time_point deadline, const std::string& path) : fd_(fd), deadline_(deadline), path_(path) {}
+    void bytes(void* data, std::size_t size)
+    {
+        char* p = static_cast<char*>(data);
+        while (size > 0) {
+            const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline_ - Clock::now()).count();
+            if (left <= 0) throw Timeout{};
+            pollfd waiting{fd_, POLLIN, 0};
+            const int ready = ::poll(&waiting, 1, int(std::min<long long>(left, 1000)));
+            if (ready < 0 && errno != EINTR) throw MeshImportError("reading '" + path_ + "': " + std::strerror(errno));
+            if (ready <= 0) continue;
+            const ssize_t n = ::read(fd_, p, size);
+            if (n < 0 && errno == EINTR) continue;
+            if (n <= 0) throw Ended{};
+            p += n, size -= std::size_t(n);
+        }
+    }
+    template<typename T> T value()
+    {
+        T v{};
+        bytes(&v, sizeof v);
+        return v;
+    }
+    template<typename T> void vector(std::vector<T>& v, uint64_t maxCount)
+    {
+        const uint64_t count = value<uint64_t>();
+        if (count > maxCount) throw Ended{};
+        v.resize(std::size_t(count));
+        bytes(v.data(), v.size() * sizeof(T));
+    }
+    std::string text()
+    {
+        std::string s(std::size_t(std::min<uint64_t>(value<uint64_t>(), 4096)), '\0');
+        bytes(s.data(), s.size());
+        return s;
+    }
+
+    struct Timeout {};
+    struct Ended {}; // the child stopped writing early: it crashed
+
+private:
+    int fd_;
+    Clock::time_point deadline_;
+    const std::string& path_;
+};
+
+void sendSoup(PipeWriter& out, const TriangleSoup& soup)
+{
+    out.value(Answer::Soup);
+    out.vector(soup.positions);
+    out.vector(soup.triangles);
+    out.vector(soup.triangleMaterials);
+    out.value(uint64_t(soup.materials.size()));
+    for (const MeshMaterial& m : soup.materials) {
+        out.text(m.name);
+        out.value(m.color);
+    }
+    out.value(soup.droppedTriangles);
+    out.value(uint64_t(soup.colourMaterials));
+    out.value(uint8_t(soup.colourBinned));
+}
+
+TriangleSoup receiveSoup(PipeReader& in)
+{
+    constexpr uint64_t kMaxItems = uint64_t(1) << 36; // far beyond memory: only a garbled stream reaches it
+    TriangleSoup soup;
+    in.vector(soup.positions, kMaxItems);
+    in.vector(soup.triangles, kMaxItems);
+    in.vector(soup.triangleMaterials, kMaxItems);
+    soup.materials.resize(std::size_t(std::min<uint64_t>(in.value<uint64_t>(), kMaxItems)));
+    for (MeshMaterial& m : soup.materials) {
+        m.name = in.text();
+        m.color = in.value<std::array<float, 4>>();
+    }
+    soup.droppedTriangles = in.value<uint64_t>();
+    soup.colourMaterials = std::size_t(in.value<uint64_t>());
+    soup.colourBinned = in.value<uint8_t>() != 0;
+    return soup;
+}
+
+/// How long a reader may take: a minute, and a second for every MB over 60 (Assimp reads tens of MB a
+/// second), so only a parser that is stuck runs into it.
+std::chrono::seconds readingTimeLimit(const std::string& path)
+{
+    std::error_code ec;
+    const auto bytes = std::filesystem::file_size(path, ec);
+    return std::chrono::seconds(60 + (ec ? 0 : bytes >> 20));
 }
 
 } // namespace
@@ -80,63 +166,63 @@ TriangleSoup loadTriangleMesh(const std::string& path)
 {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw MeshImportError("'" + path + "' does not exist or is not a file");
-    Assimp::Importer importer;
-    // Points and lines are no surface. No normals are asked for: the voxelizer takes each triangle's own.
-    importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-    const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_PreTransformVertices);
-    if (!scene) throw MeshImportError("'" + path + "' cannot be read as a mesh: " + printableText(importer.GetErrorString(), 200));
-    // Vertices shared by position save memory (an STL repeats each corner per triangle), but Assimp's
-    // join ignores vertex colours: it would give a corner where two colours meet only one of them.
-    bool vertexColours = false;
-    for (unsigned k = 0; k < scene->mNumMeshes; ++k) vertexColours = vertexColours || scene->mMeshes[k]->HasVertexColors(0);
-    if (!vertexColours) scene = importer.ApplyPostProcessing(aiProcess_JoinIdenticalVertices);
-    if (!scene) throw MeshImportError("'" + path + "' cannot be read as a mesh: " + printableText(importer.GetErrorString(), 200));
-    TriangleSoup soup;
-    for (unsigned m = 0; m < scene->mNumMaterials; ++m) {
-        const aiMaterial* material = scene->mMaterials[m];
-        MeshMaterial out;
-        aiString name;
-        // Assimp names the material it makes for a file that has none; that one stays unnamed.
-        if (material->Get(AI_MATKEY_NAME, name) == AI_SUCCESS && name.length > 0 && std::string(name.C_Str()) != AI_DEFAULT_MATERIAL_NAME)
-            out.name = printableText(name.C_Str(), 64);
-        aiColor4D color;
-        if (material->Get(AI_MATKEY_COLOR_DIFFUSE, color) == AI_SUCCESS)
-            out.color = {std::clamp(color.r, 0.0f, 1.0f), std::clamp(color.g, 0.0f, 1.0f), std::clamp(color.b, 0.0f, 1.0f),
-                         std::clamp(color.a, 0.0f, 1.0f)};
-        soup.materials.push_back(out);
+    // Assimp runs in a child process: a crash or an endless loop on a damaged file (Debian's 5.2 has
+    // both, on truncated PLY files) costs the child, and the user gets one line instead of losing the
+    // session.
+    int fds[2];
+    if (::pipe2(fds, O_CLOEXEC) != 0) throw MeshImportError("cannot read '" + path + "': " + std::strerror(errno));
+    const pid_t child = ::fork();
+    if (child < 0) {
+        ::close(fds[0]), ::close(fds[1]);
+        throw MeshImportError("cannot read '" + path + "': " + std::strerror(errno));
     }
-    std::vector<std::pair<std::size_t, uint32_t>> coloured; // triangle, colour: for meshes with vertex colours
-    for (unsigned k = 0; k < scene->mNumMeshes; ++k) {
-        const aiMesh* mesh = scene->mMeshes[k];
-        if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
-        const uint32_t base = uint32_t(soup.positions.size());
-        for (unsigned v = 0; v < mesh->mNumVertices; ++v)
-            soup.positions.push_back({double(mesh->mVertices[v].x), double(mesh->mVertices[v].y), double(mesh->mVertices[v].z)});
-        for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
-            const aiFace& face = mesh->mFaces[f];
-            if (face.mNumIndices != 3) continue;
-            const std::array<uint32_t, 3> t{base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]};
-            const auto& a = soup.positions[t[0]];
-            const auto& b = soup.positions[t[1]];
-            const auto& c = soup.positions[t[2]];
-            bool finite = true;
-            for (const auto* p : {&a, &b, &c})
-                for (double x : *p) finite = finite && std::isfinite(x);
-            const std::array<double, 3> u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w{c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-            const double nx = u[1] * w[2] - u[2] * w[1], ny = u[2] * w[0] - u[0] * w[2], nz = u[0] * w[1] - u[1] * w[0];
-            if (!finite || !(nx * nx + ny * ny + nz * nz > 0.0)) {
-                ++soup.droppedTriangles;
-                continue;
-            }
-            if (mesh->HasVertexColors(0)) coloured.emplace_back(soup.triangles.size(), triangleColour(*mesh, face));
-            soup.triangles.push_back(t);
-            soup.triangleMaterials.push_back(mesh->mMaterialIndex < soup.materials.size() ? mesh->mMaterialIndex : 0);
+    if (child == 0) {
+        ::close(fds[0]);
+        // A crash is the child's own: the parent's handlers (a test framework's, a crash reporter's)
+        // must not run here as if the parent had crashed.
+        for (const int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGPIPE}) ::signal(sig, SIG_DFL);
+        PipeWriter out(fds[1]);
+        try {
+            const TriangleSoup soup = readMeshWithAssimp(path);
+            sendSoup(out, soup);
+        } catch (const std::exception& e) {
+            out.value(Answer::Refused);
+            out.text(e.what());
         }
+        ::_exit(0); // no atexit handlers or static destructors: they belong to the parent
     }
-    if (soup.materials.empty()) soup.materials.push_back({});
-    if (!coloured.empty()) coloursToMaterials(soup, coloured);
-    if (soup.triangles.empty()) throw MeshImportError("'" + path + "' holds no triangle");
-    return soup;
+    ::close(fds[1]);
+    const std::chrono::seconds limit = readingTimeLimit(path);
+    PipeReader in(fds[0], Clock::now() + limit, path);
+    auto reap = [&](bool kill) {
+        if (kill) ::kill(child, SIGKILL);
+        int status = 0;
+        while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+        }
+        ::close(fds[0]);
+        return status;
+    };
+    try {
+        const Answer answer = in.value<Answer>();
+        if (answer == Answer::Refused) {
+            const std::string reason = in.text();
+            reap(false);
+            throw MeshImportError(reason);
+        }
+        if (answer != Answer::Soup) throw PipeReader::Ended{};
+        TriangleSoup soup = receiveSoup(in);
+        reap(false);
+        return soup;
+    } catch (const PipeReader::Timeout&) {
+        reap(true);
+        throw MeshImportError("reading '" + path + "' took over " + std::to_string(limit.count()) +
+                              " s and was stopped: the file is damaged or Assimp cannot parse it");
+    } catch (const PipeReader::Ended&) {
+        const int status = reap(false);
+        throw MeshImportError("Assimp failed reading '" + path + "' (" +
+                              (WIFSIGNALED(status) ? "signal " + std::to_string(WTERMSIG(status)) : "exit " + std::to_string(WEXITSTATUS(status))) +
+                              "): the file is damaged or in a form it cannot read");
+    }
 }
 
 } // namespace vdbclay

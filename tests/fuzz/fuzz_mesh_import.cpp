@@ -1,0 +1,53 @@
+// A mesh file of another tool on crafted bytes: the first byte picks the format (obj, ply, stl, off,
+// glb), the rest is the file. Assimp reads it and the voxelizer turns it into Hermite data at a small
+// resolution; every input must be imported or refused with one printable line.
+#include "voxelize/TriangleMesh.h"
+#include "voxelize/Voxelizer.h"
+
+#include <cstdint>
+#include <cstdlib>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+#include <unistd.h>
+
+namespace {
+
+const char* const kExtensions[] = {".obj", ".ply", ".stl", ".off", ".glb"};
+
+std::string scratchPath(const char* extension)
+{
+    return "/tmp/vdbclay-fuzz-mesh-" + std::to_string(::getpid()) + extension;
+}
+
+void requirePrintable(const char* message)
+{
+    for (const char* c = message; *c; ++c)
+        if (*c < 32 || *c > 126) std::abort(); // a message with raw bytes or several lines
+}
+
+} // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
+{
+    if (size < 2) return 0;
+    const std::string path = scratchPath(kExtensions[data[0] % 5]);
+    {
+        std::ofstream out(path, std::ios::binary | std::ios::trunc);
+        out.write(reinterpret_cast<const char*>(data + 2), std::streamsize(size - 2));
+    }
+    try {
+        const vdbclay::TriangleSoup soup = vdbclay::loadTriangleMesh(path);
+        vdbclay::VoxelizeOptions options;
+        options.resolution = 4 + data[1] % 28;
+        vdbclay::VoxelizeReport report;
+        const vdbclay::Volume volume = vdbclay::voxelizeMesh(soup, options, &report);
+        if (report.triangles + report.droppedTriangles == 0) std::abort(); // loaded, so it held a triangle
+    } catch (const vdbclay::MeshImportError& e) {
+        requirePrintable(e.what());
+    } catch (const std::invalid_argument& e) {
+        requirePrintable(e.what());
+    }
+    std::remove(path.c_str());
+    return 0;
+}
