@@ -17,7 +17,8 @@ Usage: bash scripts/bootstrap.sh demo|test
   test   install missing packages, build, then run every test:
            1. the Catch2 suite on the Release build (`ctest --test-dir build`);
            2. the same suite built with AddressSanitizer and UBSan by clang (build-asan/);
-           3. each libFuzzer target (.vdb reader, stroke scripts, mesh writers) for FUZZ_SECONDS.
+           3. each libFuzzer target (.vdb reader, standard .vdb import, stroke scripts, mesh writers,
+              mesh import) for FUZZ_SECONDS.
 
 Every step is skipped when it is already done, so a second run only rebuilds what changed.
 Environment: BUILD_JOBS (default 2) sets the parallel build and test jobs; FUZZ_SECONDS (default 60)
