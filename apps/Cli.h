@@ -215,6 +215,7 @@ struct BenchCommandOptions {
     std::string which;
     bool json = false;
     bool quick = false;
+    double memoryBudgetMb = 0.0; // stream only; 0: the benchmark's default
 };
 CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& options);
 int runBenchCommand(const BenchCommandOptions& options);

@@ -15,6 +15,9 @@ CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& o)
     cmd->add_option("name", o.which, "Which benchmark: " + names)->required()->type_name("NAME");
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of a table");
     cmd->add_flag("--quick", o.quick, "Small sizes (seconds, for CI); the default runs the full sizes");
+    cmd->add_option("--memory-budget", o.memoryBudgetMb, "stream: the memory budget (default 192, or 6 with --quick)")
+        ->type_name("MB")
+        ->check(positiveNumber());
     cmd->footer("csg     sphere creation, then median time of remove-sphere stamps on its surface\n"
                 "        vs createLevelSetSphere + csgDifference on a FloatGrid level set\n"
                 "memory  bytes per surface voxel of a sphere and a box vs a narrow-band level set\n"
@@ -38,7 +41,8 @@ int runBenchCommand(const BenchCommandOptions& o)
     bool known = false;
     for (const auto& n : bench::benchNames()) known = known || n == o.which;
     if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory, io, mesh, wavelet, stream, import or tool)");
-    return bench::runBench(o.which, o.json, o.quick);
+    if (o.memoryBudgetMb > 0.0 && o.which != "stream") throw UsageError("--memory-budget is for 'bench stream'");
+    return bench::runBench(o.which, o.json, o.quick, o.memoryBudgetMb);
 }
 
 } // namespace vdbclay::cli

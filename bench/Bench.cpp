@@ -10,7 +10,7 @@ namespace vdbclay::bench {
 
 std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream", "import", "tool"}; }
 
-int runBench(const std::string& which, bool json, bool quick)
+int runBench(const std::string& which, bool json, bool quick, double memoryBudgetMb)
 {
     openvdb::initialize(); // the FloatGrid baselines need the standard grid types registered
     if (which == "csg") return benchCsg(json, quick);
@@ -18,7 +18,7 @@ int runBench(const std::string& which, bool json, bool quick)
     if (which == "io") return benchIo(json, quick);
     if (which == "mesh") return benchMesh(json, quick);
     if (which == "wavelet") return benchWavelet(json, quick);
-    if (which == "stream") return benchStream(json, quick);
+    if (which == "stream") return benchStream(json, quick, memoryBudgetMb);
     if (which == "import") return benchImport(json, quick);
     if (which == "tool") return benchTool(json, quick);
     throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet, stream, import or tool)");

@@ -125,10 +125,10 @@ std::pair<double, double> sphereBytesPerSurfaceVoxel()
 
 } // namespace
 
-int benchStream(bool json, bool quick)
+int benchStream(bool json, bool quick, double memoryBudgetMb)
 {
     const int extent = quick ? 768 : 4096;
-    const uint64_t budget = (quick ? 6ull : 192ull) << 20;
+    const uint64_t budget = memoryBudgetMb > 0.0 ? uint64_t(memoryBudgetMb * double(1 << 20)) : (quick ? 6ull : 192ull) << 20;
     const fs::path dir = fs::temp_directory_path() / ("vdbclay-bench-stream-" + std::to_string(::getpid()));
     fs::create_directories(dir);
     const std::string store = (dir / "terrain.vdbclay").string();

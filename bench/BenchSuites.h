@@ -8,7 +8,7 @@ int benchMemory(bool json, bool quick);
 int benchIo(bool json, bool quick);
 int benchMesh(bool json, bool quick);
 int benchWavelet(bool json, bool quick);
-int benchStream(bool json, bool quick);
+int benchStream(bool json, bool quick, double memoryBudgetMb);
 int benchImport(bool json, bool quick);
 int benchTool(bool json, bool quick);
 

@@ -134,6 +134,11 @@ TriangleSoup readMeshWithAssimp(const std::string& path)
         for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
             const aiFace& face = mesh->mFaces[f];
             if (face.mNumIndices != 3) continue;
+            if (face.mIndices[0] >= mesh->mNumVertices || face.mIndices[1] >= mesh->mNumVertices ||
+                face.mIndices[2] >= mesh->mNumVertices) { // a damaged file's index
+                ++soup.droppedTriangles;
+                continue;
+            }
             const std::array<uint32_t, 3> t{base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]};
             const auto& a = soup.positions[t[0]];
             const auto& b = soup.positions[t[1]];

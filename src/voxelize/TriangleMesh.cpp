@@ -139,6 +139,12 @@ TriangleSoup receiveSoup(PipeReader& in)
     soup.droppedTriangles = in.value<uint64_t>();
     soup.colourMaterials = std::size_t(in.value<uint64_t>());
     soup.colourBinned = in.value<uint8_t>() != 0;
+    // The voxelizer indexes with these: a stream that does not add up is refused like a crash.
+    bool consistent = soup.triangleMaterials.size() == soup.triangles.size();
+    for (std::size_t t = 0; consistent && t < soup.triangles.size(); ++t)
+        consistent = soup.triangleMaterials[t] < soup.materials.size() &&
+                     std::all_of(soup.triangles[t].begin(), soup.triangles[t].end(), [&](uint32_t v) { return v < soup.positions.size(); });
+    if (!consistent) throw PipeReader::Ended{};
     return soup;
 }
 
