@@ -419,6 +419,14 @@ uint64_t StreamingScene::residentBytes() const
     return impl_->residentBytes;
 }
 
+uint64_t StreamingScene::residentActiveVoxels() const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    uint64_t total = 0;
+    for (const Volume& level : impl_->levelVolumes) total += level.stats().activeVoxels;
+    return total;
+}
+
 const SceneStore& StreamingScene::store() const { return impl_->scene; }
 
 Volume StreamingScene::residentLevel0() const

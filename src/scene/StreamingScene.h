@@ -77,6 +77,9 @@ public:
     static uint64_t committedEdits(const SceneStore& scene);
 
     uint64_t residentBytes() const;
+    /// Active voxels of the resident bricks summed over every level, each on its own lattice: the
+    /// surface (in voxel^2 of its level) that residentBytes() holds.
+    uint64_t residentActiveVoxels() const;
     const SceneStore& store() const;
     /// The resident level-0 bricks, for checks: a volume holding them (dirty content included).
     Volume residentLevel0() const;
