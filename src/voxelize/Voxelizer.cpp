@@ -400,6 +400,12 @@ BlockLeaves MeshVoxelizer::Impl::voxelizeBlock(const LeafAlignedBox& box) const
         for (int32_t ly = 0; ly < box.edge; ly += kLeafDim)
             for (int32_t lz = 0; lz < box.edge; lz += kLeafDim) {
                 const Coord origin(box.min[0] + lx, box.min[1] + ly, box.min[2] + lz);
+                // A leaf beyond the lattice (a block larger than a small mesh) is empty: no point of it
+                // is solid and no edge crosses, so it is not visited.
+                bool outside = false;
+                for (std::size_t a = 0; a < 3; ++a)
+                    outside = outside || origin[int(a)] + kLeafDim <= lattice.lo[a] || origin[int(a)] >= lattice.lo[a] + lattice.dim[a];
+                if (outside) continue;
                 HermiteLeafData d;
                 uint64_t leafSolid = 0, leafCrossings = 0;
                 for (int x = 0; x < kLeafDim; ++x)
