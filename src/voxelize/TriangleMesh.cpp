@@ -1,5 +1,6 @@
 #include "voxelize/TriangleMesh.h"
 
+#include "vdb_hermite/PrintableText.h"
 #include "voxelize/AssimpMeshReader.h"
 
 #include <fcntl.h>
@@ -62,7 +63,7 @@ private:
 /// Reads what the child writes, giving up at a deadline (a parser in an endless loop).
 class PipeReader {
 public:
-    PipeReader(int fd, Clock::time_point deadline, const std::string& path) : fd_(fd), deadline_(deadline), path_(path) {}
+    PipeReader(int fd, Clock::time_point deadline) : fd_(fd), deadline_(deadline) {}
     void bytes(void* data, std::size_t size)
     {
         char* p = static_cast<char*>(data);
@@ -71,7 +72,7 @@ public:
             if (left <= 0) throw Timeout{};
             pollfd waiting{fd_, POLLIN, 0};
             const int ready = ::poll(&waiting, 1, int(std::min<long long>(left, 1000)));
-            if (ready < 0 && errno != EINTR) throw MeshImportError("reading '" + path_ + "': " + std::strerror(errno));
+            if (ready < 0 && errno != EINTR) throw Ended{};
             if (ready <= 0) continue;
             const ssize_t n = ::read(fd_, p, size);
             if (n < 0 && errno == EINTR) continue;
@@ -105,7 +106,6 @@ public:
 private:
     int fd_;
     Clock::time_point deadline_;
-    const std::string& path_;
 };
 
 void sendSoup(PipeWriter& out, const TriangleSoup& soup)
@@ -148,8 +148,8 @@ TriangleSoup receiveSoup(PipeReader& in)
     return soup;
 }
 
-/// How long a reader may take: a minute, and a second for every MB over 60 (Assimp reads tens of MB a
-/// second), so only a parser that is stuck runs into it.
+/// How long a reader may take: a minute, plus a second per MB (Assimp reads tens of MB a second), so
+/// only a parser that is stuck runs into it.
 std::chrono::seconds readingTimeLimit(const std::string& path)
 {
     std::error_code ec;
@@ -193,13 +193,13 @@ TriangleSoup loadTriangleMesh(const std::string& path)
             sendSoup(out, soup);
         } catch (const std::exception& e) {
             out.value(Answer::Refused);
-            out.text(e.what());
+            out.text(printableText(e.what(), 400)); // short: the parent reads it whole before reaping
         }
         ::_exit(0); // no atexit handlers or static destructors: they belong to the parent
     }
     ::close(fds[1]);
     const std::chrono::seconds limit = readingTimeLimit(path);
-    PipeReader in(fds[0], Clock::now() + limit, path);
+    PipeReader in(fds[0], Clock::now() + limit);
     auto reap = [&](bool kill) {
         if (kill) ::kill(child, SIGKILL);
         int status = 0;
@@ -212,7 +212,7 @@ TriangleSoup loadTriangleMesh(const std::string& path)
         const Answer answer = in.value<Answer>();
         if (answer == Answer::Refused) {
             const std::string reason = in.text();
-            reap(false);
+            reap(true);
             throw MeshImportError(reason);
         }
         if (answer != Answer::Soup) throw PipeReader::Ended{};
@@ -224,7 +224,7 @@ TriangleSoup loadTriangleMesh(const std::string& path)
         throw MeshImportError("reading '" + path + "' took over " + std::to_string(limit.count()) +
                               " s and was stopped: the file is damaged or Assimp cannot parse it");
     } catch (const PipeReader::Ended&) {
-        const int status = reap(false);
+        const int status = reap(true); // a garbled stream may come from a child still writing: it must not block us
         throw MeshImportError("Assimp failed reading '" + path + "' (" +
                               (WIFSIGNALED(status) ? "signal " + std::to_string(WTERMSIG(status)) : "exit " + std::to_string(WEXITSTATUS(status))) +
                               "): the file is damaged or in a form it cannot read");
