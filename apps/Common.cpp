@@ -12,6 +12,7 @@
 #include <memory>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
@@ -88,8 +89,9 @@ const CLI::Validator& positiveNumber()
 {
     static const CLI::Validator check(
         [](const std::string& text) {
-            double value = 0.0;
-            const bool parsed = CLI::detail::lexical_cast(text, value);
+            char* end = nullptr;
+            const double value = std::strtod(text.c_str(), &end);
+            const bool parsed = !text.empty() && end == text.c_str() + text.size();
             return parsed && std::isfinite(value) && value > 0.0 ? std::string() : "must be a positive number, not " + text;
         },
         "POSITIVE");

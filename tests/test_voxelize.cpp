@@ -13,10 +13,14 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
 #include <cmath>
 #include <functional>
 #include <iterator>
 #include <set>
+#include <thread>
 #include <fstream>
 #include <random>
 
@@ -298,6 +302,52 @@ TEST_CASE("random triangle soups voxelize into valid volumes whose meshes are cl
         // (CMS pinched the surface there until it cut those corners straight).
         if (report.solidVoxels > 0) closedMesh(v);
     }
+}
+
+TEST_CASE("a mesh read in a child process comes back whole; its crash, hang or refusal is one line", "[voxelize]")
+{
+    TriangleSoup sent;
+    sent.positions = {{-1.5, 0.25, 1e-7}, {3.0, -2.0, 1e6}, {0.1, 0.2, 0.3}, {7.0, 8.0, -9.0}};
+    sent.triangles = {{0, 1, 2}, {1, 3, 2}};
+    sent.triangleMaterials = {1, 0};
+    sent.materials = {{"", {0.8f, 0.8f, 0.8f, 1.0f}}, {"colour-ff0000", {1.0f, 0.0f, 0.0f, 0.5f}}};
+    sent.droppedTriangles = 3;
+    sent.colourMaterials = 1;
+    sent.colourBinned = true;
+    const TriangleSoup got = readInChildProcess("made.obj", [&] { return sent; }, std::chrono::seconds(60));
+    CHECK(got.positions == sent.positions);
+    CHECK(got.triangles == sent.triangles);
+    CHECK(got.triangleMaterials == sent.triangleMaterials);
+    REQUIRE(got.materials.size() == 2);
+    CHECK(got.materials[1].name == "colour-ff0000");
+    CHECK(got.materials[1].color == sent.materials[1].color);
+    CHECK(got.droppedTriangles == 3);
+    CHECK(got.colourMaterials == 1);
+    CHECK(got.colourBinned);
+
+    auto failure = [](const std::function<TriangleSoup()>& read, std::chrono::seconds limit) {
+        try {
+            (void)readInChildProcess("bad.obj", read, limit);
+        } catch (const MeshImportError& e) {
+            return std::string(e.what());
+        }
+        return std::string("read");
+    };
+    const std::string refused = failure([]() -> TriangleSoup { throw MeshImportError("no\nsuch\x01mesh"); }, std::chrono::seconds(60));
+    CHECK(refused == "no?such?mesh");
+    const std::string crashed = failure([]() -> TriangleSoup {
+        std::raise(SIGSEGV);
+        std::_Exit(9); // a sanitizer's handler may turn the signal into an exit
+    }, std::chrono::seconds(60));
+    CHECK(crashed.find("reading 'bad.obj' failed") == 0);
+    const std::string stuck = failure([]() -> TriangleSoup {
+        for (;;) std::this_thread::sleep_for(std::chrono::seconds(1)); // a parser in an endless loop
+    }, std::chrono::seconds(1));
+    CHECK(stuck.find("took over 1 s and was stopped") != std::string::npos);
+    // A soup whose indices do not add up is refused like a crash (the voxelizer would read past the end).
+    TriangleSoup broken = sent;
+    broken.triangles[1][2] = 4;
+    CHECK(failure([&] { return broken; }, std::chrono::seconds(60)).find("failed") != std::string::npos);
 }
 
 TEST_CASE("bad meshes and options are refused with one line", "[voxelize]")

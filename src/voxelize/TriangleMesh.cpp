@@ -175,6 +175,11 @@ TriangleSoup loadTriangleMesh(const std::string& path)
     // Assimp runs in a child process: a crash or an endless loop on a damaged file (Debian's 5.2 has
     // both, on truncated PLY files) costs the child, and the user gets one line instead of losing the
     // session.
+    return readInChildProcess(path, [&] { return readMeshWithAssimp(path); }, readingTimeLimit(path));
+}
+
+TriangleSoup readInChildProcess(const std::string& path, const std::function<TriangleSoup()>& read, std::chrono::seconds limit)
+{
     int fds[2];
     if (::pipe2(fds, O_CLOEXEC) != 0) throw MeshImportError("cannot read '" + path + "': " + std::strerror(errno));
     const pid_t child = ::fork();
@@ -189,7 +194,7 @@ TriangleSoup loadTriangleMesh(const std::string& path)
         for (const int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGPIPE}) ::signal(sig, SIG_DFL);
         PipeWriter out(fds[1]);
         try {
-            const TriangleSoup soup = readMeshWithAssimp(path);
+            const TriangleSoup soup = read();
             sendSoup(out, soup);
         } catch (const std::exception& e) {
             out.value(Answer::Refused);
@@ -198,7 +203,6 @@ TriangleSoup loadTriangleMesh(const std::string& path)
         ::_exit(0); // no atexit handlers or static destructors: they belong to the parent
     }
     ::close(fds[1]);
-    const std::chrono::seconds limit = readingTimeLimit(path);
     PipeReader in(fds[0], Clock::now() + limit);
     auto reap = [&](bool kill) {
         if (kill) ::kill(child, SIGKILL);
@@ -222,12 +226,12 @@ TriangleSoup loadTriangleMesh(const std::string& path)
     } catch (const PipeReader::Timeout&) {
         reap(true);
         throw MeshImportError("reading '" + path + "' took over " + std::to_string(limit.count()) +
-                              " s and was stopped: the file is damaged or Assimp cannot parse it");
+                              " s and was stopped: the file is damaged or its reader cannot parse it");
     } catch (const PipeReader::Ended&) {
         const int status = reap(true); // a garbled stream may come from a child still writing: it must not block us
-        throw MeshImportError("Assimp failed reading '" + path + "' (" +
+        throw MeshImportError("reading '" + path + "' failed (" +
                               (WIFSIGNALED(status) ? "signal " + std::to_string(WTERMSIG(status)) : "exit " + std::to_string(WEXITSTATUS(status))) +
-                              "): the file is damaged or in a form it cannot read");
+                              "): the file is damaged or in a form its reader cannot read");
     }
 }
 

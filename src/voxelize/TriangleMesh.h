@@ -5,8 +5,10 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -43,5 +45,11 @@ bool isMeshPath(const std::string& path);
 /// Reads a mesh file (its whole scene, node transforms applied, polygons triangulated, points and lines
 /// dropped). Throws MeshImportError when Assimp cannot read it or it holds no triangle.
 TriangleSoup loadTriangleMesh(const std::string& path);
+
+/// loadTriangleMesh's isolation, open to tests: runs `read` in a child process and returns the soup it
+/// made, sent back through a pipe. A MeshImportError it throws comes back as one printable line; a
+/// crash, an early exit or no answer within `limit` (the child is then killed) becomes a
+/// MeshImportError naming `path`.
+TriangleSoup readInChildProcess(const std::string& path, const std::function<TriangleSoup()>& read, std::chrono::seconds limit);
 
 } // namespace vdbclay
