@@ -314,7 +314,7 @@ TEST_CASE("a mesh read in a child process comes back whole; its crash, hang or r
     sent.droppedTriangles = 3;
     sent.colourMaterials = 1;
     sent.colourBinned = true;
-    const TriangleSoup got = readInChildProcess("made.obj", [&] { return sent; }, std::chrono::seconds(60));
+    const TriangleSoup got = readInChildProcess("made.obj", [&] { return sent; }, MeshReadLimits{});
     CHECK(got.positions == sent.positions);
     CHECK(got.triangles == sent.triangles);
     CHECK(got.triangleMaterials == sent.triangleMaterials);
@@ -325,29 +325,37 @@ TEST_CASE("a mesh read in a child process comes back whole; its crash, hang or r
     CHECK(got.colourMaterials == 1);
     CHECK(got.colourBinned);
 
-    auto failure = [](const std::function<TriangleSoup()>& read, std::chrono::seconds limit) {
+    auto failure = [](const std::function<TriangleSoup()>& read, const MeshReadLimits& limits) {
         try {
-            (void)readInChildProcess("bad.obj", read, limit);
+            (void)readInChildProcess("bad.obj", read, limits);
         } catch (const MeshImportError& e) {
             return std::string(e.what());
         }
         return std::string("read");
     };
-    const std::string refused = failure([]() -> TriangleSoup { throw MeshImportError("no\nsuch\x01mesh"); }, std::chrono::seconds(60));
+    const std::string refused = failure([]() -> TriangleSoup { throw MeshImportError("no\nsuch\x01mesh"); }, MeshReadLimits{});
     CHECK(refused == "no?such?mesh");
     const std::string crashed = failure([]() -> TriangleSoup {
         std::raise(SIGSEGV);
         std::_Exit(9); // a sanitizer's handler may turn the signal into an exit
-    }, std::chrono::seconds(60));
+    }, MeshReadLimits{});
     CHECK(crashed.find("reading 'bad.obj' failed") == 0);
     const std::string stuck = failure([]() -> TriangleSoup {
         for (;;) std::this_thread::sleep_for(std::chrono::seconds(1)); // a parser in an endless loop
-    }, std::chrono::seconds(1));
+    }, MeshReadLimits{std::chrono::seconds(1)});
     CHECK(stuck.find("took over 1 s and was stopped") != std::string::npos);
+    if (meshReadMemoryIsCapped()) {
+        // A parser that believes a damaged count: the allocation fails in the child, not the machine.
+        const std::string greedy = failure([]() -> TriangleSoup {
+            std::vector<std::array<double, 3>> positions(uint64_t(1) << 28); // 6 GiB
+            return TriangleSoup{positions, {}, {}, {}};
+        }, MeshReadLimits{std::chrono::seconds(60), uint64_t(1) << 30});
+        CHECK(greedy == "reading 'bad.obj' needed more than the 1024 MiB it may take: the counts in the file are damaged, or the mesh is too large to import");
+    }
     // A soup whose indices do not add up is refused like a crash (the voxelizer would read past the end).
     TriangleSoup broken = sent;
     broken.triangles[1][2] = 4;
-    CHECK(failure([&] { return broken; }, std::chrono::seconds(60)).find("failed") != std::string::npos);
+    CHECK(failure([&] { return broken; }, MeshReadLimits{}).find("failed") != std::string::npos);
 }
 
 TEST_CASE("bad meshes and options are refused with one line", "[voxelize]")
@@ -381,16 +389,30 @@ TEST_CASE("bad meshes and options are refused with one line", "[voxelize]")
         const std::string bytes((std::istreambuf_iterator<char>(found)), std::istreambuf_iterator<char>());
         REQUIRE(bytes.size() > 2);
         writeText(dir.file("lying.off"), bytes.substr(2));
+        // Headers that state more elements than the file holds: Assimp would allocate for all of them
+        // (12 GB and a minute for these 100 bytes; found by fuzz_mesh_import).
+        writeText(dir.file("billion.off"), "OFF\n# a comment\n1000000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+        writeText(dir.file("claims.ply"), "ply\nformat binary_little_endian 1.0\nelement vertex 2000000000\nproperty float x\n"
+                                          "property float y\nproperty float z\nend_header\n" + std::string(100, '\0'));
     }
-    for (const char* f : {"junk.obj", "empty.obj", "lines.obj", "missing.obj", "cut.ply", "unended.ply", "lying.off"}) {
+    for (const char* f : {"junk.obj", "empty.obj", "lines.obj", "missing.obj", "cut.ply", "unended.ply", "lying.off", "billion.off", "claims.ply"}) {
         CAPTURE(f);
         try {
             (void)loadTriangleMesh(dir.file(f));
             FAIL("loaded");
         } catch (const MeshImportError& e) {
-            CHECK(std::string(e.what()).find('\n') == std::string::npos);
+            const std::string message = e.what();
+            CAPTURE(message);
+            CHECK(message.find('\n') == std::string::npos);
+            if (std::string(f) == "billion.off") CHECK(message.find("states 1000000000 vertices, at least 6000000000 bytes") != std::string::npos);
+            if (std::string(f) == "claims.ply") CHECK(message.find("states 2000000000 vertex elements, at least 24000000000 bytes, but only 100") != std::string::npos);
         }
     }
+    // The counts of a file that holds exactly what its header states, in the fewest bytes, pass.
+    writeText(dir.file("least.ply"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                                     "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2");
+    writeText(dir.file("least.off"), "OFF 3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2");
+    for (const char* f : {"least.ply", "least.off"}) CHECK(loadTriangleMesh(dir.file(f)).triangles.size() == 1);
     const TriangleSoup sphere = uvSphere(1.0, {0, 0, 0}, 8, 16);
     CHECK_THROWS_AS(voxelizeMesh(sphere, {}), std::invalid_argument);
     VoxelizeOptions tiny;

@@ -1,6 +1,7 @@
 #include "voxelize/AssimpMeshReader.h"
 
 #include "vdb_hermite/PrintableText.h"
+#include "voxelize/MeshHeaderCheck.h"
 
 #include <assimp/Importer.hpp>
 #include <assimp/material.h>
@@ -10,8 +11,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <map>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -78,31 +79,18 @@ void coloursToMaterials(TriangleSoup& soup, const std::vector<std::pair<std::siz
     soup.colourBinned = binned;
 }
 
-/// Assimp 5.2's PLY reader loops forever on a header without its end_header line (a truncated file,
-/// found by fuzz_mesh_import), so such a file is refused before Assimp sees it.
-void refuseUnendedPlyHeader(const std::string& path)
-{
-    std::ifstream in(path, std::ios::binary);
-    std::string line;
-    if (!std::getline(in, line) || line.rfind("ply", 0) != 0 || line.find_first_not_of(" \t\r", 3) != std::string::npos) return;
-    constexpr std::size_t kMaxHeaderBytes = std::size_t(1) << 20;
-    std::size_t read = line.size() + 1;
-    while (read < kMaxHeaderBytes && std::getline(in, line)) {
-        read += line.size() + 1;
-        if (line.rfind("end_header", 0) == 0) return;
-    }
-    throw MeshImportError("'" + path + "' is a PLY file whose header has no end_header line within its first MiB (truncated?)");
-}
-
 } // namespace
 
 TriangleSoup readMeshWithAssimp(const std::string& path)
 {
-    refuseUnendedPlyHeader(path);
+    refuseImplausibleMeshHeader(path);
     Assimp::Importer importer;
     // Points and lines are no surface. No normals are asked for: the voxelizer takes each triangle's own.
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
     const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_PreTransformVertices);
+    // Assimp turns every exception into an error string; running out of memory is told apart (the
+    // child's memory cap, loadTriangleMesh) so the user learns it was not a syntax error.
+    if (!scene && std::string(importer.GetErrorString()).find("bad_alloc") != std::string::npos) throw std::bad_alloc();
     if (!scene) throw MeshImportError("'" + path + "' cannot be read as a mesh: " + printableText(importer.GetErrorString(), 200));
     // Vertices shared by position save memory (an STL repeats each corner per triangle), but Assimp's
     // join ignores vertex colours: it would give a corner where two colours meet only one of them.

@@ -6,6 +6,7 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -13,8 +14,10 @@
 #include <cctype>
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <new>
 #include <type_traits>
 
 namespace vdbclay {
@@ -148,13 +151,25 @@ TriangleSoup receiveSoup(PipeReader& in)
     return soup;
 }
 
-/// How long a reader may take: a minute, plus a second per MB (Assimp reads tens of MB a second), so
-/// only a parser that is stuck runs into it.
-std::chrono::seconds readingTimeLimit(const std::string& path)
+/// Caps the child's address space at what it maps now (all it shares with the parent) plus `bytes`, so
+/// that an allocation past it fails with std::bad_alloc instead of swapping the machine to a halt.
+void capAddressSpace(uint64_t bytes)
 {
-    std::error_code ec;
-    const auto bytes = std::filesystem::file_size(path, ec);
-    return std::chrono::seconds(60 + (ec ? 0 : bytes >> 20));
+    if (!meshReadMemoryIsCapped()) return;
+    unsigned long long pages = 0;
+    if (FILE* statm = std::fopen("/proc/self/statm", "r")) {
+        if (std::fscanf(statm, "%llu", &pages) != 1) pages = 0;
+        std::fclose(statm);
+    }
+    if (pages == 0) return;
+    const rlim_t cap = rlim_t(pages) * rlim_t(::sysconf(_SC_PAGESIZE)) + rlim_t(bytes);
+    const struct rlimit limit{cap, cap};
+    ::setrlimit(RLIMIT_AS, &limit);
+}
+
+std::string mebibytes(uint64_t bytes)
+{
+    return std::to_string(bytes >> 20) + " MiB";
 }
 
 } // namespace
@@ -168,17 +183,46 @@ bool isMeshPath(const std::string& path)
     return false;
 }
 
+bool meshReadMemoryIsCapped()
+{
+#if defined(__SANITIZE_ADDRESS__)
+    return false;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+    return false;
+#endif
+#endif
+    return true;
+}
+
+MeshReadLimits meshReadLimits(const std::string& path)
+{
+    std::error_code ec;
+    const uint64_t bytes = std::filesystem::file_size(path, ec);
+    MeshReadLimits limits;
+    if (!ec) {
+        limits.time += std::chrono::seconds(bytes >> 20);
+        limits.memoryBytes = std::max(limits.memoryBytes, bytes * 64);
+    }
+    return limits;
+}
+
 TriangleSoup loadTriangleMesh(const std::string& path)
+{
+    return loadTriangleMesh(path, meshReadLimits(path));
+}
+
+TriangleSoup loadTriangleMesh(const std::string& path, const MeshReadLimits& limits)
 {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw MeshImportError("'" + path + "' does not exist or is not a file");
     // Assimp runs in a child process: a crash or an endless loop on a damaged file (Debian's 5.2 has
     // both, on truncated PLY files) costs the child, and the user gets one line instead of losing the
     // session.
-    return readInChildProcess(path, [&] { return readMeshWithAssimp(path); }, readingTimeLimit(path));
+    return readInChildProcess(path, [&] { return readMeshWithAssimp(path); }, limits);
 }
 
-TriangleSoup readInChildProcess(const std::string& path, const std::function<TriangleSoup()>& read, std::chrono::seconds limit)
+TriangleSoup readInChildProcess(const std::string& path, const std::function<TriangleSoup()>& read, const MeshReadLimits& limits)
 {
     int fds[2];
     if (::pipe2(fds, O_CLOEXEC) != 0) throw MeshImportError("cannot read '" + path + "': " + std::strerror(errno));
@@ -193,9 +237,14 @@ TriangleSoup readInChildProcess(const std::string& path, const std::function<Tri
         // must not run here as if the parent had crashed.
         for (const int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGPIPE}) ::signal(sig, SIG_DFL);
         PipeWriter out(fds[1]);
+        capAddressSpace(limits.memoryBytes);
         try {
             const TriangleSoup soup = read();
             sendSoup(out, soup);
+        } catch (const std::bad_alloc&) {
+            out.value(Answer::Refused);
+            out.text("reading '" + printableText(path, 200) + "' needed more than the " + mebibytes(limits.memoryBytes) +
+                     " it may take: the counts in the file are damaged, or the mesh is too large to import");
         } catch (const std::exception& e) {
             out.value(Answer::Refused);
             out.text(printableText(e.what(), 400)); // short: the parent reads it whole before reaping
@@ -203,7 +252,7 @@ TriangleSoup readInChildProcess(const std::string& path, const std::function<Tri
         ::_exit(0); // no atexit handlers or static destructors: they belong to the parent
     }
     ::close(fds[1]);
-    PipeReader in(fds[0], Clock::now() + limit);
+    PipeReader in(fds[0], Clock::now() + limits.time);
     auto reap = [&](bool kill) {
         if (kill) ::kill(child, SIGKILL);
         int status = 0;
@@ -225,7 +274,7 @@ TriangleSoup readInChildProcess(const std::string& path, const std::function<Tri
         return soup;
     } catch (const PipeReader::Timeout&) {
         reap(true);
-        throw MeshImportError("reading '" + path + "' took over " + std::to_string(limit.count()) +
+        throw MeshImportError("reading '" + path + "' took over " + std::to_string(limits.time.count()) +
                               " s and was stopped: the file is damaged or its reader cannot parse it");
     } catch (const PipeReader::Ended&) {
         const int status = reap(true); // a garbled stream may come from a child still writing: it must not block us

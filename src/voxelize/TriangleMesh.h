@@ -42,14 +42,32 @@ public:
 /// The extensions `vdbclay import` reads as meshes: obj ply stl off gltf glb fbx dae.
 bool isMeshPath(const std::string& path);
 
+/// What one reading of a mesh file may take before it is stopped: a parser stuck in a loop, or one
+/// that believes a damaged file's counts and allocates without end, costs this much and no more.
+struct MeshReadLimits {
+    std::chrono::seconds time{20};
+    /// Address space the reader may map beyond what the process maps already.
+    uint64_t memoryBytes = uint64_t(4) << 30;
+};
+
+/// Whether MeshReadLimits::memoryBytes is enforced: not in builds with AddressSanitizer, whose shadow
+/// memory alone maps terabytes.
+bool meshReadMemoryIsCapped();
+
+/// The limits for a file of this size: 20 s plus a second per MB (Assimp reads tens of MB a second),
+/// and 4 GiB or 64 bytes per byte of the file, whichever is more.
+MeshReadLimits meshReadLimits(const std::string& path);
+
 /// Reads a mesh file (its whole scene, node transforms applied, polygons triangulated, points and lines
-/// dropped). Throws MeshImportError when Assimp cannot read it or it holds no triangle.
-TriangleSoup loadTriangleMesh(const std::string& path);
+/// dropped). Throws MeshImportError when Assimp cannot read it, it holds no triangle, or reading it
+/// passes `limits`.
+TriangleSoup loadTriangleMesh(const std::string& path, const MeshReadLimits& limits);
+TriangleSoup loadTriangleMesh(const std::string& path); // with meshReadLimits(path)
 
 /// loadTriangleMesh's isolation, open to tests: runs `read` in a child process and returns the soup it
 /// made, sent back through a pipe. A MeshImportError it throws comes back as one printable line; a
-/// crash, an early exit or no answer within `limit` (the child is then killed) becomes a
-/// MeshImportError naming `path`.
-TriangleSoup readInChildProcess(const std::string& path, const std::function<TriangleSoup()>& read, std::chrono::seconds limit);
+/// crash, an early exit, running out of its memory or no answer within the time limit (the child is
+/// then killed) becomes a MeshImportError naming `path`.
+TriangleSoup readInChildProcess(const std::string& path, const std::function<TriangleSoup()>& read, const MeshReadLimits& limits);
 
 } // namespace vdbclay

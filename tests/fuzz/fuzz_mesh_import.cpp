@@ -5,6 +5,7 @@
 #include "voxelize/TriangleMesh.h"
 #include "voxelize/Voxelizer.h"
 
+#include <chrono>
 #include <cstdint>
 #include <cstdlib>
 #include <fstream>
@@ -38,7 +39,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
         out.write(reinterpret_cast<const char*>(data + 2), std::streamsize(size - 2));
     }
     try {
-        const vdbclay::TriangleSoup soup = vdbclay::loadTriangleMesh(path);
+        // A reading stopped at its time limit is a refusal like any other; it must stay well below
+        // libFuzzer's -timeout, which would report the input as a hang.
+        vdbclay::MeshReadLimits limits;
+        limits.time = std::chrono::seconds(5);
+        const vdbclay::TriangleSoup soup = vdbclay::loadTriangleMesh(path, limits);
         // Thousands of large triangles at once cost seconds under the sanitizers (hits grow with the
         // triangles times the rays each covers); the voxelizer's own fuzz (test_voxelize) takes soups.
         if (soup.triangles.size() <= 2000) {
