@@ -2,6 +2,7 @@
 // them, errors mapped to exit codes, and small output helpers. Light header: no OpenVDB trees here.
 #pragma once
 
+#include "vdb_hermite/FileExtension.h"
 #include "vdb_hermite/NumberText.h"
 
 #include <nlohmann/json.hpp>
@@ -59,8 +60,6 @@ nlohmann::json opReportJson(const ScriptOpReport& report);
 std::string formatSeconds(double seconds); // "812 ms", "3.42 s"
 std::string formatBytes(double bytes);     // "12.3 MiB"
 
-/// Lower-cased extension of a path including the dot (".obj"), or "" when it has none.
-std::string lowerExtension(const std::string& path);
 /// Throws UsageError unless `path` ends in .obj, .ply or .glb (any case).
 void requireMeshExtension(const std::string& path, const char* optionName);
 /// Throws UsageError unless `path` ends in .vdb or .vdbclay (the forms a scene is written in).

@@ -158,7 +158,7 @@ int runLodInspect(const LodOptions& o)
     } catch (const std::invalid_argument& e) {
         throw UsageError(e.what());
     }
-    if (!o.plot.empty() && lowerExtension(o.plot) != ".png") throw UsageError("--plot writes a PNG: the name must end in .png");
+    if (!o.plot.empty() && lowerCaseExtension(o.plot) != ".png") throw UsageError("--plot writes a PNG: the name must end in .png");
     StreamingOptions options;
     options.memoryBudgetBytes = uint64_t(o.memoryBudgetMB * 1048576.0);
     options.pixelTolerance = o.pixelError;

@@ -71,16 +71,9 @@ std::string formatBytes(double bytes)
     return buf;
 }
 
-std::string lowerExtension(const std::string& path)
-{
-    std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    return ext;
-}
-
 void requireSceneExtension(const std::string& path)
 {
-    const std::string ext = lowerExtension(path);
+    const std::string ext = lowerCaseExtension(path);
     if (ext != ".vdb" && ext != ".vdbclay")
         throw UsageError("'" + path + "': the output's extension picks its form; end it in .vdb (native volume) or .vdbclay (store)");
 }
@@ -100,7 +93,7 @@ const CLI::Validator& positiveNumber()
 
 void requireMeshExtension(const std::string& path, const char* optionName)
 {
-    const std::string ext = lowerExtension(path);
+    const std::string ext = lowerCaseExtension(path);
     if (ext != ".obj" && ext != ".ply" && ext != ".glb") {
         throw UsageError(std::string(optionName) + ": '" + path +
                          "' has an unknown mesh format; the file name must end in .obj, .ply or .glb");

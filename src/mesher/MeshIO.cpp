@@ -1,6 +1,7 @@
 #include "mesher/MeshIO.h"
 
 #include "vdb_hermite/AtomicFile.h"
+#include "vdb_hermite/FileExtension.h"
 
 #include <nlohmann/json.hpp>
 
@@ -216,8 +217,7 @@ void writeGlb(std::ostream& os, const Mesh& mesh, const MaterialTable& materials
 
 MeshFormat meshFormatOf(const std::string& path)
 {
-    std::string ext = fs::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    const std::string ext = lowerCaseExtension(path);
     if (ext == ".obj") return MeshFormat::Obj;
     if (ext == ".ply") return MeshFormat::Ply;
     if (ext == ".glb") return MeshFormat::Glb;

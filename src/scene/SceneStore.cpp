@@ -3,6 +3,7 @@
 #include "interop/StandardVdb.h"
 
 #include "vdb_hermite/AtomicFile.h"
+#include "vdb_hermite/FileExtension.h"
 #include "vdb_hermite/VolumeIO.h"
 #include "vdb_hermite/VolumeRegions.h"
 
@@ -50,9 +51,7 @@ double levelVoxelSize(double voxelSize, int level) { return voxelSize * double(1
 
 bool isStorePath(const std::string& path)
 {
-    std::string ext = fs::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    return ext == kStoreExtension;
+    return lowerCaseExtension(path) == kStoreExtension;
 }
 
 SceneStore::SceneStore(std::unique_ptr<BrickStore> store) : store_(std::move(store)) {}

@@ -1,5 +1,6 @@
 #include "sculpt/StrokeScript.h"
 
+#include "vdb_hermite/FileExtension.h"
 #include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/VolumeIO.h"
 
@@ -303,8 +304,7 @@ namespace {
 /// What to run when a script names a scene that is not a tool file yet.
 std::string toolFileHint(const std::string& file)
 {
-    std::string ext = std::filesystem::path(file).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    const std::string ext = lowerCaseExtension(file);
     bool foreign = false;
     try {
         foreign = ext == ".vdb" && classifyVdbFile(file) == VdbFileKind::Other;

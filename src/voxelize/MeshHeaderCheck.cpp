@@ -1,5 +1,6 @@
 #include "voxelize/MeshHeaderCheck.h"
 
+#include "vdb_hermite/FileExtension.h"
 #include "vdb_hermite/PrintableText.h"
 #include "voxelize/TriangleMesh.h"
 
@@ -139,7 +140,7 @@ void refuseImplausibleMeshHeader(const std::string& path)
     in.seekg(0);
     if (first.rfind("ply", 0) == 0 && first.find_first_not_of(" \t\r", 3) == std::string::npos) {
         checkPly(path, in, fileBytes);
-    } else if (lowerCase(std::filesystem::path(path).extension().string()) == ".off") {
+    } else if (lowerCaseExtension(path) == ".off") {
         checkOff(path, in, fileBytes);
     }
 }

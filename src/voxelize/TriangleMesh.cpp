@@ -1,5 +1,6 @@
 #include "voxelize/TriangleMesh.h"
 
+#include "vdb_hermite/FileExtension.h"
 #include "vdb_hermite/PrintableText.h"
 #include "voxelize/AssimpMeshReader.h"
 
@@ -176,8 +177,7 @@ std::string mebibytes(uint64_t bytes)
 
 bool isMeshPath(const std::string& path)
 {
-    std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    const std::string ext = lowerCaseExtension(path);
     for (const char* known : {".obj", ".ply", ".stl", ".off", ".gltf", ".glb", ".fbx", ".dae"})
         if (ext == known) return true;
     return false;
