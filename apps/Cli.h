@@ -67,6 +67,9 @@ void requireSceneExtension(const std::string& path);
 /// An option check that refuses zero, negative and non-finite numbers with a short message
 /// (CLI::PositiveNumber quotes the largest double as its limit).
 const CLI::Validator& positiveNumber();
+/// An option check for a scene read by a command: a mesh file is refused with the import command that
+/// brings it in.
+const CLI::Validator& sceneInput();
 
 /// A progress bar on stderr ("label [=====     ] 52%"), redrawn in place, when stderr is a terminal and
 /// `enabled`; otherwise a function that does nothing. Call with done == total to end the line.

@@ -13,8 +13,8 @@ namespace vdbclay::cli {
 CLI::App* addDiffCommand(CLI::App& parent, DiffOptions& o)
 {
     CLI::App* cmd = parent.add_subcommand("diff", "Compare two scenes (.vdb or .vdbclay): exit 0 same, 1 different, 2 trouble");
-    cmd->add_option("a", o.a, "First scene")->required()->type_name("A");
-    cmd->add_option("b", o.b, "Second scene")->required()->type_name("B");
+    cmd->add_option("a", o.a, "First scene")->required()->check(sceneInput())->type_name("A");
+    cmd->add_option("b", o.b, "Second scene")->required()->check(sceneInput())->type_name("B");
     cmd->add_option("--tolerance", o.tolerance,
                     "Accept surfaces within this many voxels of each other (two-sided Hausdorff distance), where "
                     "every voxel solid in both holds the same material")

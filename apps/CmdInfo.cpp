@@ -23,7 +23,7 @@ std::string coordText(const std::array<int32_t, 3>& c)
 CLI::App* addInfoCommand(CLI::App& parent, InfoOptions& o)
 {
     CLI::App* cmd = parent.add_subcommand("info", "Describe a volume file");
-    cmd->add_option("input", o.input, "Scene: a volume file (.vdb) or a store (.vdbclay)")->required()->type_name("IN");
+    cmd->add_option("input", o.input, "Scene: a volume file (.vdb) or a store (.vdbclay)")->required()->check(sceneInput())->type_name("IN");
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text");
     cmd->footer("bbox_min/bbox_max are index-space voxel coordinates of the solid and surface voxels\n"
                 "(both (0, 0, 0) for an empty volume); memory_bytes is the in-memory size of the tree.");

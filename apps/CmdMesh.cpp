@@ -22,6 +22,7 @@ CLI::App* addMeshCommand(CLI::App& parent, MeshCommandOptions& o)
     CLI::App* cmd = parent.add_subcommand("mesh", "Extract a triangle mesh from a volume (OBJ, PLY or glTF binary)");
     cmd->add_option("input", o.input, "Scene to mesh: a volume (.vdb) or a store (.vdbclay)")
         ->required()
+        ->check(sceneInput())
         ->type_name("IN.vdb|IN.vdbclay");
     cmd->add_option("-o,--output", o.output, "Mesh file to write; the extension picks the format (.obj, .ply or .glb)")
         ->required()

@@ -197,7 +197,7 @@ int runImport(const ImportOptions& o)
 CLI::App* addExportCommand(CLI::App& parent, ExportOptions& o)
 {
     CLI::App* cmd = parent.add_subcommand("export", "Write a whole scene (store or .vdb) as one native .vdb");
-    cmd->add_option("input", o.input, "Scene to export (.vdbclay store or .vdb)")->required()->type_name("IN");
+    cmd->add_option("input", o.input, "Scene to export (.vdbclay store or .vdb)")->required()->check(sceneInput())->type_name("IN");
     cmd->add_option("-o,--output", o.output, "Native volume file to write (.vdb); saving is atomic")
         ->required()
         ->type_name("OUT.vdb");
@@ -221,7 +221,7 @@ int runExport(const ExportOptions& o)
 CLI::App* addExportLevelSetCommand(CLI::App& parent, ExportLevelSetOptions& o)
 {
     CLI::App* cmd = parent.add_subcommand("export-levelset", "Write a scene as standard OpenVDB grids (a level set, materials, a fog)");
-    cmd->add_option("input", o.input, "Scene to export (.vdbclay store or .vdb)")->required()->type_name("SCENE");
+    cmd->add_option("input", o.input, "Scene to export (.vdbclay store or .vdb)")->required()->check(sceneInput())->type_name("SCENE");
     cmd->add_option("-o,--output", o.output, "Standard .vdb file to write (atomically)")->required()->type_name("OUT.vdb");
     cmd->add_option("--half-width", o.halfWidth, "Narrow band half width, in voxels")->capture_default_str()->check(CLI::Range(1.0, 64.0));
     cmd->add_flag("--fog", o.fog, "Also write a fog volume 'density' (FOG_VOLUME) that Blender's volume objects render");

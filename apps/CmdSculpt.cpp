@@ -19,6 +19,7 @@ CLI::App* addSculptCommand(CLI::App& parent, SculptOptions& o)
     CLI::App* cmd = parent.add_subcommand("sculpt", "Apply a JSON stroke script to a volume");
     cmd->add_option("input", o.input, "Scene to start from: a volume (.vdb) or a store (.vdbclay), which is edited in place")
         ->required()
+        ->check(sceneInput())
         ->type_name("IN.vdb|IN.vdbclay");
     cmd->add_option("script", o.script, "Stroke script (JSON, see docs/SCRIPTS.md)")->required()->type_name("SCRIPT.json");
     cmd->add_option("-o,--output", o.output,

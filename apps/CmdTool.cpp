@@ -48,7 +48,7 @@ ToolCommands addToolCommand(CLI::App& parent, ToolMakeOptions& o)
     tool->require_subcommand(1);
     ToolCommands cmds;
     cmds.make = tool->add_subcommand("make", "Save a scene, or the part of it in a box, as a tool for stroke scripts");
-    cmds.make->add_option("scene", o.scene, "Scene to take the tool from (.vdb or .vdbclay store)")->required()->type_name("SCENE");
+    cmds.make->add_option("scene", o.scene, "Scene to take the tool from (.vdb or .vdbclay store)")->required()->check(sceneInput())->type_name("SCENE");
     cmds.make->add_option("--bbox", o.bbox, "World box to keep: the voxels whose centres lie in it (cut faces stay sharp)")
         ->expected(6)
         ->type_name("X0 Y0 Z0 X1 Y1 Z1");

@@ -1,6 +1,7 @@
 #include "Cli.h"
 
 #include "sculpt/StrokeScript.h"
+#include "voxelize/TriangleMesh.h"
 
 #include <CLI/CLI.hpp>
 
@@ -8,7 +9,6 @@
 
 #include <algorithm>
 #include <cctype>
-#include <iostream>
 #include <memory>
 #include <cmath>
 #include <cstdio>
@@ -88,6 +88,18 @@ const CLI::Validator& positiveNumber()
             return parsed && std::isfinite(value) && value > 0.0 ? std::string() : "must be a positive number, not " + text;
         },
         "POSITIVE");
+    return check;
+}
+
+const CLI::Validator& sceneInput()
+{
+    static const CLI::Validator check(
+        [](const std::string& path) {
+            return isMeshPath(path) ? "'" + path + "' is a mesh, not a scene: bring it in first with 'vdbclay import " + path +
+                                          " -o SCENE.vdb --resolution N'"
+                                    : std::string();
+        },
+        "");
     return check;
 }
 

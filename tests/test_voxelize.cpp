@@ -545,4 +545,13 @@ TEST_CASE("cli: import voxelizes a mesh with its materials and says what it repa
     checkCleanFailure(tiny);
     CHECK(tiny.err.find("1e-09 is outside 0.0001 .. 1e+06") != std::string::npos);
     CHECK_FALSE(std::filesystem::exists(dir.path() / "x.vdb"));
+    // A mesh given where a scene is read is pointed at import, in every command that reads scenes.
+    for (const char* command : {"info cube.obj", "mesh cube.obj -o m.obj", "sculpt cube.obj s.json -o x.vdb", "export cube.obj -o x.vdb",
+                                "export-levelset cube.obj -o x.vdb", "diff c.vdb cube.obj", "tool make cube.obj -o t.vdb"}) {
+        CAPTURE(command);
+        const CommandResult mesh = runCli(dir, command);
+        checkCleanFailure(mesh);
+        CHECK(mesh.exitCode == 2);
+        CHECK(mesh.err.find("'cube.obj' is a mesh, not a scene: bring it in first with 'vdbclay import cube.obj") != std::string::npos);
+    }
 }
