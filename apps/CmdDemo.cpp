@@ -84,7 +84,7 @@ CLI::App* addDemoCommand(CLI::App& parent, DemoOptions& o)
         ->capture_default_str()
         ->type_name("DIR");
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text");
-    cmd->footer("Writes DIR/scene.vdb, DIR/scene.obj, DIR/scene.ply and DIR/script.json (the stroke script it ran;\n"
+    cmd->footer("Writes DIR/scene.vdb, DIR/scene.obj (with DIR/scene.mtl), DIR/scene.ply and DIR/script.json (the stroke script it ran;\n"
                 "replay it with 'vdbclay sculpt'); DIR/knob.vdb, a part of the sculpture made a tool, and DIR/tools.json,\n"
                 "the second script, which stamps and sweeps it; then the same scene as a store with two levels of detail\n"
                 "(DIR/scene.vdbclay) and the mesh of level 2 (DIR/scene-lod2.obj). No picture yet: the renderer is not built.");
@@ -168,7 +168,7 @@ int runDemo(const DemoOptions& o)
                    {"vertices", mesh.vertexCount()},
                    {"triangles", mesh.triangleCount()},
                    {"watertight", topology.watertight()},
-                   {"files", {{"volume", vdbPath}, {"obj", objPath}, {"ply", plyPath}, {"script", scriptPath},
+                   {"files", {{"volume", vdbPath}, {"obj", objPath}, {"mtl", (dir / "scene.mtl").string()}, {"ply", plyPath}, {"script", scriptPath},
                               {"tool", toolPath}, {"tool_script", toolScriptPath}, {"store", storePath}, {"lod2_obj", lodPath}}},
                    {"picture", nullptr},
                    {"seconds", seconds}});
@@ -191,7 +191,7 @@ int runDemo(const DemoOptions& o)
                               formatSeconds(meshSeconds) + ")"},
                  {"watertight", topology.watertight() ? "yes" : "no"},
                  {"volume", vdbPath},
-                 {"meshes", objPath + ", " + plyPath},
+                 {"meshes", objPath + " (materials in scene.mtl), " + plyPath},
                  {"scripts", scriptPath + ", then " + toolScriptPath + " with the tool " + toolPath},
                  {"store", storePath + " (2 levels of detail; level 2 meshed to " + lodPath + ")"},
                  {"total time", formatSeconds(seconds)}},

@@ -24,7 +24,7 @@ CLI::App* addMeshCommand(CLI::App& parent, MeshCommandOptions& o)
         ->required()
         ->check(sceneInput())
         ->type_name("IN.vdb|IN.vdbclay");
-    cmd->add_option("-o,--output", o.output, "Mesh file to write; the extension picks the format (.obj, .ply or .glb)")
+    cmd->add_option("-o,--output", o.output, "Mesh file to write; the extension picks the format (.obj with its .mtl beside it, .ply or .glb)")
         ->required()
         ->type_name("OUT.obj|OUT.ply|OUT.glb");
     cmd->add_option("--mesher", o.mesher, "cms (cubical marching squares, sharp features) or mc (marching cubes)")

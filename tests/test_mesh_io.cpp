@@ -212,18 +212,32 @@ TEST_CASE("OBJ and PLY export still work", "[meshio]")
     const Mesh mesh = twoMaterialMesh(materials.define(Material{"clay", {0.7f, 0.3f, 0.2f, 1.0f}, 0.5f}));
     writeMesh(mesh, materials, dir.file("m.obj"));
     writeMesh(mesh, materials, dir.file("m.ply"));
-    CHECK(dir.entries() == std::vector<std::string>{"m.obj", "m.ply"});
+    CHECK(dir.entries() == std::vector<std::string>{"m.mtl", "m.obj", "m.ply"});
+    // The OBJ names its materials file and each run of faces its material, which the file defines.
+    const std::vector<char> mtlBytes = readBytes(dir.file("m.mtl"));
+    const std::string mtl(mtlBytes.begin(), mtlBytes.end());
+    CHECK(mtl.find("newmtl clay\nKd 0.7 0.3 0.2\nd 1\n") != std::string::npos);
+    CHECK(mtl.find("newmtl default\n") != std::string::npos);
 
     std::istringstream obj(std::string(readBytes(dir.file("m.obj")).data(), readBytes(dir.file("m.obj")).size()));
     std::size_t v = 0, vn = 0, f = 0;
+    std::vector<std::string> libraries, uses;
     for (std::string line; std::getline(obj, line);) {
         if (line.rfind("v ", 0) == 0) ++v;
         else if (line.rfind("vn ", 0) == 0) ++vn;
-        else if (line.rfind("f ", 0) == 0) ++f;
+        else if (line.rfind("f ", 0) == 0) {
+            ++f;
+            CHECK_FALSE(uses.empty()); // every face follows a usemtl
+        }
+        else if (line.rfind("mtllib ", 0) == 0) libraries.push_back(line.substr(7));
+        else if (line.rfind("usemtl ", 0) == 0) uses.push_back(line.substr(7));
     }
     CHECK(v == 8);
     CHECK(vn == 8);
     CHECK(f == 8);
+    CHECK(libraries == std::vector<std::string>{"m.mtl"});
+    std::sort(uses.begin(), uses.end());
+    CHECK(uses == std::vector<std::string>{"clay", "default"});
 
     const std::vector<char> ply = readBytes(dir.file("m.ply"));
     const std::string text(ply.begin(), ply.end());

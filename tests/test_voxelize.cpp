@@ -518,6 +518,15 @@ TEST_CASE("cli: import voxelizes a mesh with its materials and says what it repa
     CHECK(out["mesh"]["materials"] == nlohmann::json::array({"default", "red", "blue"}));
     const nlohmann::json meshed = parseJsonOutput(runCli(dir, "mesh cube.vdbclay -o cube-out.obj --json"));
     CHECK(meshed["watertight"] == true);
+    // VDBClay's own OBJ comes back with its materials' names (from the .mtl beside it), not as the
+    // vertex colours it also carries.
+    const nlohmann::json back = parseJsonOutput(runCli(dir, "import cube-out.obj --voxel-size 0.5 -o back.vdb --json"));
+    std::set<std::string> names;
+    for (const auto& name : back["mesh"]["materials"]) names.insert(name.get<std::string>());
+    names.erase("default");
+    CHECK_FALSE(names.empty());
+    for (const std::string& name : names) CHECK((name == "red" || name == "blue"));
+    CHECK(back["mesh"]["colour_materials"] == 0);
     const CommandResult text = runCli(dir, "import cube.obj --resolution 16 --material clay -o c.vdb");
     CHECK(text.exitCode == 0);
     CHECK(text.out.find("repaired") != std::string::npos);

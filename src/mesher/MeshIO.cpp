@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <set>
 
 namespace vdbclay {
 
@@ -19,18 +20,71 @@ namespace {
 
 namespace fs = std::filesystem;
 
+std::array<float, 4> materialColor(const MaterialTable& materials, MaterialId id)
+{
+    return id != kEmptyMaterial && id <= materials.size() ? materials.at(id).color : std::array<float, 4>{0.8f, 0.8f, 0.8f, 1.0f};
+}
+
 std::array<uint8_t, 4> colorOf(const MaterialTable& materials, MaterialId id)
 {
-    std::array<float, 4> c{0.8f, 0.8f, 0.8f, 1.0f};
-    if (id != kEmptyMaterial && id <= materials.size()) c = materials.at(id).color;
+    const std::array<float, 4> c = materialColor(materials, id);
     std::array<uint8_t, 4> out{};
     for (int i = 0; i < 4; ++i) out[i] = uint8_t(std::lround(std::clamp(c[i], 0.0f, 1.0f) * 255.0f));
     return out;
 }
 
-void writeObj(std::ostream& os, const Mesh& mesh, const MaterialTable& materials)
+/// Triangle indices per material: each triangle's own material, or its first vertex's for meshes
+/// without per-triangle materials.
+std::map<MaterialId, std::vector<uint32_t>> trianglesByMaterial(const Mesh& mesh)
+{
+    std::map<MaterialId, std::vector<uint32_t>> groups;
+    const bool perTriangle = mesh.triangleMaterials.size() == mesh.triangles.size();
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const uint32_t v0 = mesh.triangles[t][0];
+        const MaterialId id = perTriangle ? mesh.triangleMaterials[t]
+                                          : (v0 < mesh.materials.size() ? mesh.materials[v0] : kEmptyMaterial);
+        groups[id].push_back(uint32_t(t));
+    }
+    return groups;
+}
+
+/// A material's name as an MTL statement takes it: one word (blanks become '_'), unique within the
+/// file (a clash after that gets its id appended), "default" for an id the table does not know.
+std::map<MaterialId, std::string> mtlNames(const std::map<MaterialId, std::vector<uint32_t>>& groups, const MaterialTable& materials)
+{
+    std::map<MaterialId, std::string> names;
+    std::set<std::string> taken;
+    for (const auto& group : groups) {
+        const MaterialId id = group.first;
+        std::string name = id != kEmptyMaterial && id <= materials.size() ? materials.at(id).name : "default";
+        for (char& c : name)
+            if (std::isspace(static_cast<unsigned char>(c))) c = '_';
+        if (name.empty() || !taken.insert(name).second) {
+            name += "_" + std::to_string(id);
+            taken.insert(name);
+        }
+        names[id] = name;
+    }
+    return names;
+}
+
+void writeMtl(std::ostream& os, const std::map<MaterialId, std::string>& names, const MaterialTable& materials)
+{
+    os << "# VDBClay materials\n";
+    char line[128];
+    for (const auto& [id, name] : names) {
+        const auto c = materialColor(materials, id);
+        std::snprintf(line, sizeof(line), "Kd %.4g %.4g %.4g\nd %.4g\n", c[0], c[1], c[2], c[3]);
+        os << "newmtl " << name << "\n" << line;
+    }
+}
+
+/// OBJ with per-vertex colours (the common "v x y z r g b" extension). With `mtlFile`, the faces come
+/// in runs per material, each after "usemtl NAME" of the materials `mtlFile` defines.
+void writeObj(std::ostream& os, const Mesh& mesh, const MaterialTable& materials, const std::string& mtlFile)
 {
     os << "# VDBClay mesh: " << mesh.vertexCount() << " vertices, " << mesh.triangleCount() << " triangles\n";
+    if (!mtlFile.empty()) os << "mtllib " << mtlFile << "\n";
     char line[160];
     for (std::size_t v = 0; v < mesh.vertexCount(); ++v) {
         const auto& p = mesh.positions[v];
@@ -43,10 +97,20 @@ void writeObj(std::ostream& os, const Mesh& mesh, const MaterialTable& materials
         std::snprintf(line, sizeof(line), "vn %.5g %.5g %.5g\n", n[0], n[1], n[2]);
         os << line;
     }
-    for (const auto& t : mesh.triangles) {
+    auto face = [&](const std::array<uint32_t, 3>& t) {
         std::snprintf(line, sizeof(line), "f %u//%u %u//%u %u//%u\n", t[0] + 1, t[0] + 1, t[1] + 1, t[1] + 1,
                       t[2] + 1, t[2] + 1);
         os << line;
+    };
+    if (mtlFile.empty()) {
+        for (const auto& t : mesh.triangles) face(t);
+        return;
+    }
+    const auto groups = trianglesByMaterial(mesh);
+    const auto names = mtlNames(groups, materials);
+    for (const auto& [id, triangles] : groups) {
+        os << "usemtl " << names.at(id) << "\n";
+        for (uint32_t t : triangles) face(mesh.triangles[t]);
     }
 }
 
@@ -83,14 +147,7 @@ void writeGlb(std::ostream& os, const Mesh& mesh, const MaterialTable& materials
     constexpr uint32_t kArrayBuffer = 34962, kElementArrayBuffer = 34963;
     constexpr uint32_t kFloat = 5126, kUnsignedInt = 5125;
 
-    std::map<MaterialId, std::vector<uint32_t>> groups; // material -> triangle indices
-    const bool perTriangle = mesh.triangleMaterials.size() == mesh.triangles.size();
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-        const uint32_t v0 = mesh.triangles[t][0];
-        const MaterialId id = perTriangle ? mesh.triangleMaterials[t]
-                                          : (v0 < mesh.materials.size() ? mesh.materials[v0] : kEmptyMaterial);
-        groups[id].push_back(uint32_t(t));
-    }
+    const std::map<MaterialId, std::vector<uint32_t>> groups = trianglesByMaterial(mesh);
     std::vector<char> bin;
     auto append = [&bin](const void* data, std::size_t bytes) {
         const char* c = static_cast<const char*>(data);
@@ -247,7 +304,7 @@ void writeMesh(const Mesh& mesh, const MaterialTable& materials, MeshFormat form
 {
     validateMesh(mesh);
     switch (format) {
-    case MeshFormat::Obj: writeObj(out, mesh, materials); break;
+    case MeshFormat::Obj: writeObj(out, mesh, materials, ""); break;
     case MeshFormat::Ply: writePly(out, mesh, materials); break;
     case MeshFormat::Glb: writeGlb(out, mesh, materials); break;
     }
@@ -262,7 +319,15 @@ void writeMesh(const Mesh& mesh, const MaterialTable& materials, const std::stri
         throw MeshIOError("cannot write '" + path + "': " + e.what());
     }
     try {
-        writeFileAtomically(path, [&](std::ostream& os) { writeMesh(mesh, materials, format, os); });
+        if (format == MeshFormat::Obj) {
+            // The materials file first: the OBJ never names one that is not there.
+            const fs::path mtl = fs::path(path).replace_extension(".mtl");
+            const auto names = mtlNames(trianglesByMaterial(mesh), materials);
+            writeFileAtomically(mtl.string(), [&](std::ostream& os) { writeMtl(os, names, materials); });
+            writeFileAtomically(path, [&](std::ostream& os) { writeObj(os, mesh, materials, mtl.filename().string()); });
+        } else {
+            writeFileAtomically(path, [&](std::ostream& os) { writeMesh(mesh, materials, format, os); });
+        }
     } catch (const FileWriteError& e) {
         throw MeshIOError(e.what());
     }

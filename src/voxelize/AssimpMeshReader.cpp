@@ -140,9 +140,12 @@ TriangleSoup readMeshWithAssimp(const std::string& path)
                 ++soup.droppedTriangles;
                 continue;
             }
-            if (mesh->HasVertexColors(0)) coloured.emplace_back(soup.triangles.size(), triangleColour(*mesh, face));
+            const uint32_t material = mesh->mMaterialIndex < soup.materials.size() ? mesh->mMaterialIndex : 0;
+            // A named material says more than colours painted over it (VDBClay's own OBJ has both).
+            if (mesh->HasVertexColors(0) && (material >= soup.materials.size() || soup.materials[material].name.empty()))
+                coloured.emplace_back(soup.triangles.size(), triangleColour(*mesh, face));
             soup.triangles.push_back(t);
-            soup.triangleMaterials.push_back(mesh->mMaterialIndex < soup.materials.size() ? mesh->mMaterialIndex : 0);
+            soup.triangleMaterials.push_back(material);
         }
     }
     if (soup.materials.empty()) soup.materials.push_back({});

@@ -26,8 +26,8 @@ struct TriangleSoup {
     std::vector<uint32_t> triangleMaterials; // index into materials, per triangle
     std::vector<MeshMaterial> materials;
     uint64_t droppedTriangles = 0; // of zero area, or with a corner that is not a finite number
-    /// Materials made from vertex colours ("colour-rrggbb"): a triangle with coloured corners takes the
-    /// colour two of them share, else its first corner's, over its mesh's material. Binned: the colours
+    /// Materials made from vertex colours ("colour-rrggbb"): a triangle with coloured corners and an
+    /// unnamed material takes the colour two of its corners share, else its first corner's. Binned: the colours
     /// were too many and were rounded to 4 levels per channel.
     std::size_t colourMaterials = 0;
     bool colourBinned = false;
