@@ -203,8 +203,8 @@ TEST_CASE("cli: demo writes a volume, meshes and the script it ran", "[cli]")
     TempDir dir;
     const json j = parseJsonOutput(runCli(dir, "demo --out demo-out --json"));
     CHECK(j["watertight"] == true);
-    for (const char* name : {"scene.vdb", "scene.obj", "scene.ply", "script.json", "knob.vdb", "tools.json", "scene.vdbclay",
-                             "scene-lod2.obj"}) {
+    for (const char* name : {"scene.vdb", "scene.obj", "scene.mtl", "scene.ply", "script.json", "knob.vdb", "tools.json", "scene.vdbclay",
+                             "scene-lod2.obj", "scene-lod2.mtl"}) {
         INFO(name);
         CHECK(std::filesystem::file_size(dir.path() / "demo-out" / name) > 0);
     }
