@@ -48,7 +48,47 @@ void execSql(const std::string& path, const std::string& sql)
     REQUIRE(rc == SQLITE_OK);
 }
 
+int64_t storeFormatVersion(const std::string& path)
+{
+    sqlite3* db = nullptr;
+    REQUIRE(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK);
+    sqlite3_stmt* stmt = nullptr;
+    REQUIRE(sqlite3_prepare_v2(db, "PRAGMA user_version", -1, &stmt, nullptr) == SQLITE_OK);
+    REQUIRE(sqlite3_step(stmt) == SQLITE_ROW);
+    const int64_t version = sqlite3_column_int64(stmt, 0);
+    sqlite3_finalize(stmt);
+    sqlite3_close(db);
+    return version;
+}
+
 } // namespace
+
+TEST_CASE("a store of format version 1 still loads, and opening it for writing marks it version 2", "[store]")
+{
+    TempDir dir;
+    const Volume v = multiBrickScene();
+    const std::string path = dir.file("old.vdbclay");
+    writeStoreFile(v, path);
+    CHECK(storeFormatVersion(path) == 2);
+    {
+        // What version 1 wrote: each brick as a .vdb stream of its box.
+        SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
+        StoreTransaction transaction(scene.bricks());
+        for (const IndexCoord& b : scene.brickCoords(0)) {
+            std::optional<BrickRecord> record = scene.bricks().get({0, b});
+            if (record->uniform) continue;
+            record->payload = encodeVolume(copyRegion(v, brickBox(b)));
+            scene.bricks().put({0, b}, *record);
+        }
+        transaction.commit();
+    }
+    execSql(path, "PRAGMA user_version = 1;");
+    CHECK(identical(loadScene(path), v));
+    CHECK(storeFormatVersion(path) == 1); // reading leaves it as it is
+    (void)SceneStore::open(path, StoreAccess::ReadWrite);
+    CHECK(storeFormatVersion(path) == 2);
+    CHECK(identical(loadScene(path), v));
+}
 
 TEST_CASE("a store round trip equals the native .vdb round trip bit-exactly", "[store]")
 {

@@ -30,6 +30,16 @@ struct BrickKey {
     friend bool operator==(const BrickKey& a, const BrickKey& b) { return a.level == b.level && a.brick == b.brick; }
 };
 
+/// For hashed containers of bricks (a view touches thousands each frame).
+struct BrickKeyHash {
+    std::size_t operator()(const BrickKey& k) const
+    {
+        uint64_t h = uint64_t(uint32_t(k.level)) * 0x9E3779B97F4A7C15ull;
+        for (const int32_t c : k.brick) h = (h ^ uint32_t(c)) * 0x100000001B3ull + (h >> 29);
+        return std::size_t(h ^ (h >> 32));
+    }
+};
+
 /// One stored brick: either uniform (one material throughout, no payload) or a payload, the bytes of
 /// a native .vdb holding the brick's part of the volume (encodeVolume: OpenVDB-serialized, Blosc).
 struct BrickRecord {

@@ -144,44 +144,48 @@ LevelSummary SceneStore::summary(int level) const
     return s;
 }
 
+DecodedRegion SceneStore::decodeBrick(int level, const IndexCoord& brick, const std::optional<BrickRecord>& record) const
+{
+    const LeafAlignedBox box = brickBox(brick);
+    if (!record) return DecodedRegion(box, kEmptyMaterial);
+    const std::string name = store_->path() + " brick " + std::to_string(level) + "/" + std::to_string(brick[0]) + "," +
+                             std::to_string(brick[1]) + "," + std::to_string(brick[2]);
+    if (record->uniform) {
+        if (*record->uniform > materials_.size()) throw StoreError("'" + name + "' is damaged: it uses an undefined material");
+        return DecodedRegion(box, *record->uniform);
+    }
+    try {
+        return decodeRegion(record->payload, box, levelVoxelSize(voxelSize_, level), materials_.size(), name);
+    } catch (const VolumeIOError& e) {
+        throw StoreError(e.what());
+    }
+}
+
+DecodedRegion SceneStore::readBrick(int level, const IndexCoord& brick, uint64_t* payloadBytes) const
+{
+    const std::optional<BrickRecord> record = store_->get({level, brick});
+    if (payloadBytes) *payloadBytes = record ? record->payload.size() : 0;
+    return decodeBrick(level, brick, record);
+}
+
 void SceneStore::loadBricks(int level, const std::vector<IndexCoord>& bricks, Volume& into, const Progress& progress,
                             std::vector<std::optional<BrickRecord>>* raw) const
 {
     if (raw) raw->clear();
-    const double voxelSize = levelVoxelSize(voxelSize_, level);
-    if (into.voxelSize() != voxelSize) throw std::invalid_argument("loadBricks: the volume has another voxel size");
+    if (into.voxelSize() != levelVoxelSize(voxelSize_, level))
+        throw std::invalid_argument("loadBricks: the volume has another voxel size");
     constexpr std::size_t kBatch = 64; // decoded in parallel, pasted in order
     for (std::size_t first = 0; first < bricks.size(); first += kBatch) {
         const std::size_t count = std::min(kBatch, bricks.size() - first);
         std::vector<std::optional<BrickRecord>> records(count);
         for (std::size_t i = 0; i < count; ++i) records[i] = store_->get({level, bricks[first + i]});
-        std::vector<std::optional<Volume>> parts(count);
+        std::vector<std::optional<DecodedRegion>> parts(count);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const auto& range) {
-            for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                if (!records[i] || records[i]->uniform) continue;
-                const IndexCoord& b = bricks[first + i];
-                const std::string name = store_->path() + " brick " + std::to_string(level) + "/" + std::to_string(b[0]) +
-                                         "," + std::to_string(b[1]) + "," + std::to_string(b[2]);
-                try {
-                    parts[i] = decodeVolume(records[i]->payload, name);
-                } catch (const VolumeIOError& e) {
-                    throw StoreError(e.what());
-                }
-                if (parts[i]->voxelSize() != voxelSize)
-                    throw StoreError("'" + name + "' is damaged: its voxel size does not match its level");
-            }
+            for (std::size_t i = range.begin(); i != range.end(); ++i)
+                if (records[i]) parts[i] = decodeBrick(level, bricks[first + i], records[i]);
         });
-        for (std::size_t i = 0; i < count; ++i) {
-            if (!records[i]) continue;
-            const LeafAlignedBox box = brickBox(bricks[first + i]);
-            if (records[i]->uniform) {
-                if (*records[i]->uniform > materials_.size())
-                    throw StoreError("'" + store_->path() + "' is damaged: a brick uses an undefined material");
-                fillRegion(into, box, *records[i]->uniform);
-            } else {
-                pasteRegion(into, *parts[i], box);
-            }
-        }
+        for (std::optional<DecodedRegion>& part : parts)
+            if (part) pasteRegion(into, std::move(*part));
         if (raw) std::move(records.begin(), records.end(), std::back_inserter(*raw));
         if (progress) progress(first + count, bricks.size());
     }
@@ -231,8 +235,9 @@ std::optional<BrickRecord> encodeBrick(const Volume& volume, const IndexCoord& b
         if (*uniform == kEmptyMaterial) return std::nullopt;
         return BrickRecord{uniform, {}, 0};
     }
-    const Volume part = copyRegion(volume, box);
-    return BrickRecord{std::nullopt, encodeVolume(part), uint32_t(part.stats().leafCount)};
+    uint32_t leaves = 0;
+    std::string payload = encodeRegion(volume, box, &leaves);
+    return BrickRecord{std::nullopt, std::move(payload), leaves};
 }
 
 StoredBricks putNewBricks(SceneStore& scene, int level, const std::vector<IndexCoord>& bricks,

@@ -6,6 +6,7 @@
 
 #include "scene/BrickStore.h"
 #include "vdb_hermite/Materials.h"
+#include "vdb_hermite/RegionCodec.h"
 #include "vdb_hermite/Volume.h"
 #include "vdb_hermite/VolumeRegions.h"
 
@@ -73,6 +74,9 @@ public:
     /// `records` (optional) receives what was stored for each brick (nullopt: nothing).
     void loadBricks(int level, const std::vector<IndexCoord>& bricks, Volume& into, const Progress& progress = {},
                     std::vector<std::optional<BrickRecord>>* records = nullptr) const;
+    /// One brick of a level, decoded outside any volume (safe on several threads at once): empty space
+    /// where nothing is stored. `payloadBytes` (optional) receives the size of the record read.
+    DecodedRegion readBrick(int level, const IndexCoord& brick, uint64_t* payloadBytes = nullptr) const;
     /// A whole level as one volume.
     Volume loadLevel(int level, const Progress& progress = {}) const;
     /// Stores the given bricks of `volume` (a level): a payload, a uniform record, or nothing for empty
@@ -83,6 +87,7 @@ public:
 
 private:
     SceneStore(std::unique_ptr<BrickStore> store);
+    DecodedRegion decodeBrick(int level, const IndexCoord& brick, const std::optional<BrickRecord>& record) const;
     void readMeta();
 
     std::unique_ptr<BrickStore> store_;

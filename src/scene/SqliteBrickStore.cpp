@@ -23,7 +23,8 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr int32_t kApplicationId = 0x56434C59; // "VCLY"
-constexpr int kStoreFormatVersion = 1;
+/// 2: brick payloads are RegionCodec records (1: .vdb streams of the brick, which 2 still reads).
+constexpr int kStoreFormatVersion = 2;
 
 /// Resets a statement when it goes out of scope: a statement left on a row holds a read transaction
 /// open, which pins the reader's snapshot and stops checkpoints from emptying the WAL.
@@ -86,6 +87,8 @@ public:
             if (access != StoreAccess::ReadOnly) {
                 exec("PRAGMA journal_mode=WAL");
                 exec("PRAGMA synchronous=FULL");
+                // Bricks written from now on are of this version's form, which older builds cannot read.
+                exec(("PRAGMA user_version=" + std::to_string(kStoreFormatVersion)).c_str());
             } else {
                 exec("PRAGMA query_only=1");
             }

@@ -8,7 +8,9 @@
 #include <chrono>
 #include <condition_variable>
 #include <deque>
-#include <map>
+#include <set>
+#include <unordered_map>
+#include <unordered_set>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -37,17 +39,18 @@ struct StreamingScene::Impl {
     SceneStore scene;
     int levels = 0;
     std::vector<std::set<IndexCoord>> present; // per level: stored bricks and the parents of present ones
-    std::map<BrickKey, uint64_t> estimates;
+    std::unordered_map<BrickKey, uint64_t, BrickKeyHash> estimates;
     // The resident bricks of each level share one tree, so the nodes above the leaves cost little per brick.
     std::vector<Volume> levelVolumes;
 
     mutable std::mutex mutex;
     std::condition_variable wake, idle;
-    std::map<BrickKey, Resident> resident;
+    std::unordered_map<BrickKey, Resident, BrickKeyHash> resident;
     std::deque<BrickKey> queue;
-    std::set<BrickKey> inFlight;
-    std::set<BrickKey> staleInFlight; // loads an autosave's LOD update overtook: discarded on arrival
-    std::set<BrickKey> wanted; // the current frame's accepted selection and fallbacks
+    using BrickSet = std::unordered_set<BrickKey, BrickKeyHash>;
+    BrickSet inFlight;
+    BrickSet staleInFlight; // loads an autosave's LOD update overtook: discarded on arrival
+    BrickSet wanted;        // the current frame's accepted selection and fallbacks
     uint64_t residentBytes = 0, inFlightBytes = 0;
     uint64_t frameNumber = 0;
     uint64_t bytesRead = 0, loads = 0, evictions = 0;
@@ -101,22 +104,10 @@ struct StreamingScene::Impl {
         return it == estimates.end() ? kEstimatedBytesPerBrick : it->second;
     }
 
-    /// Reads one brick from the store (no lock held).
-    std::pair<std::shared_ptr<Volume>, uint64_t> read(const BrickKey& key) const
-    {
-        auto volume = std::make_shared<Volume>(scene.voxelSize() * double(1 << key.level));
-        std::vector<std::optional<BrickRecord>> records;
-        scene.loadBricks(key.level, {key.brick}, *volume, {}, &records);
-        const uint64_t bytes = records.empty() || !records[0] ? 0 : records[0]->payload.size();
-        return {volume, bytes};
-    }
-
     /// Puts a loaded brick into its level's tree and accounts for it. Lock held.
-    void install(const BrickKey& key, const Volume& part, uint64_t bytesReadFromStore)
+    void install(const BrickKey& key, DecodedRegion&& brick, uint64_t bytes, uint64_t bytesReadFromStore)
     {
-        Volume& level = levelVolumes[std::size_t(key.level)];
-        pasteRegion(level, part, brickBox(key.brick));
-        const uint64_t bytes = regionMemoryBytes(level, brickBox(key.brick));
+        pasteRegion(levelVolumes[std::size_t(key.level)], std::move(brick));
         resident[key] = Resident{bytes, frameNumber, false};
         residentBytes += bytes;
         bytesRead += bytesReadFromStore;
@@ -159,20 +150,21 @@ struct StreamingScene::Impl {
             inFlight.insert(key);
             inFlightBytes += estimate;
             lock.unlock();
-            std::pair<std::shared_ptr<Volume>, uint64_t> loaded;
+            std::optional<DecodedRegion> loaded;
+            uint64_t payloadBytes = 0;
             try {
-                loaded = read(key);
+                loaded = scene.readBrick(key.level, key.brick, &payloadBytes);
             } catch (...) {
-                loaded.first.reset(); // a damaged brick shows as missing; sculpting it reports the error
+                loaded.reset(); // a damaged brick shows as missing; sculpting it reports the error
             }
             lock.lock();
             inFlight.erase(key);
             inFlightBytes -= estimate;
-            if (staleInFlight.erase(key)) loaded.first.reset(); // the next frame asks for it again
-            if (loaded.first && !resident.count(key)) {
-                const uint64_t bytes = regionMemoryBytes(*loaded.first, brickBox(key.brick));
+            if (staleInFlight.erase(key)) loaded.reset(); // the next frame asks for it again
+            if (loaded && !resident.count(key)) {
+                const uint64_t bytes = loaded->memoryBytes();
                 estimates[key] = bytes; // the next frames budget with what it really takes
-                if (wanted.count(key) && makeRoom(bytes, lock)) install(key, *loaded.first, loaded.second);
+                if (wanted.count(key) && makeRoom(bytes, lock)) install(key, std::move(*loaded), bytes, payloadBytes);
             }
             if (queue.empty() && inFlight.empty()) idle.notify_all();
         }
@@ -183,6 +175,7 @@ struct StreamingScene::Impl {
         std::vector<std::pair<BrickKey, Resident*>> dirty;
         for (auto& [key, r] : resident)
             if (r.dirty) dirty.push_back({key, &r});
+        std::sort(dirty.begin(), dirty.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
         Volume& fine = levelVolumes[0];
         fine.materials() = materials;
         if (dirty.empty() && committedEdits(scene) == edits) return 0;
@@ -260,17 +253,15 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     report.requested = selected.size();
     // What the view needs, coarse first: each selected brick's ancestors (shown while it loads), then
     // the selection itself, as far as the budget goes.
+    // A brick's chain of ancestors ends where it meets one already listed (whose own chain is listed);
+    // within a level, bricks keep the order of the first selected brick that needs them.
     std::vector<BrickKey> order;
-    std::set<BrickKey> seen;
-    for (int level = s.levels; level >= 0; --level)
-        for (const SelectedBrick& b : selected) {
-            if (b.key.level > level) continue;
-            IndexCoord c = b.key.brick;
-            for (int k = b.key.level; k < level; ++k) c = parentBrick(c);
-            const BrickKey key{level, c};
-            if (seen.insert(key).second) order.push_back(key);
-        }
-    std::set<BrickKey> accepted;
+    Impl::BrickSet seen;
+    for (const SelectedBrick& b : selected)
+        for (BrickKey key = b.key; key.level <= s.levels && seen.insert(key).second; key = {key.level + 1, parentBrick(key.brick)})
+            order.push_back(key);
+    std::stable_sort(order.begin(), order.end(), [](const BrickKey& a, const BrickKey& b) { return a.level > b.level; });
+    Impl::BrickSet accepted;
     uint64_t cost = 0;
     for (const BrickKey& key : order) {
         const auto it = s.resident.find(key);
@@ -354,12 +345,14 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script)
         const BrickKey key{0, b};
         if (s.resident.count(key)) continue;
         lock.unlock();
-        auto [volume, bytesRead] = s.read(key);
+        uint64_t payloadBytes = 0;
+        DecodedRegion brick = s.scene.readBrick(0, b, &payloadBytes);
         lock.lock();
         if (s.resident.count(key)) continue; // a loader got there first
-        if (!s.makeRoom(regionMemoryBytes(*volume, brickBox(b)), lock))
+        const uint64_t bytes = brick.memoryBytes();
+        if (!s.makeRoom(bytes, lock))
             throw std::runtime_error("the edit reaches more bricks than the memory budget holds");
-        s.install(key, *volume, bytesRead);
+        s.install(key, std::move(brick), bytes, payloadBytes);
         ++report.bricksPagedIn;
     }
     report.pageInSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -83,8 +83,13 @@ uint64_t regionMemoryBytes(const Volume& volume, const LeafAlignedBox& box)
     forEachBlock(box, [&](const Coord& o) {
         if (const HermiteLeaf* leaf = tree.probeConstLeaf(o)) bytes += leaf->memUsage();
     });
+    return bytes + nodeShareBytes(box);
+}
+
+uint64_t nodeShareBytes(const LeafAlignedBox& box)
+{
     const double lowerShare = double(box.edge) * box.edge * box.edge / (double(kLowerDim) * kLowerDim * kLowerDim);
-    return bytes + uint64_t(lowerShare * double(sizeof(HermiteLower)));
+    return uint64_t(lowerShare * double(sizeof(HermiteLower)));
 }
 
 std::optional<MaterialId> uniformMaterial(const Volume& volume, const LeafAlignedBox& box)

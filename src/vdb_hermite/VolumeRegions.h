@@ -33,6 +33,8 @@ void fillRegion(Volume& volume, const LeafAlignedBox& box, MaterialId material);
 /// Memory the box takes in its volume: its leaves (with their samples), and a share of the 128^3 nodes
 /// above them; the volume's upper nodes, shared by thousands of boxes, are not counted.
 uint64_t regionMemoryBytes(const Volume& volume, const LeafAlignedBox& box);
+/// The share of the 128^3 nodes above the box's leaves that regionMemoryBytes counts.
+uint64_t nodeShareBytes(const LeafAlignedBox& box);
 
 /// The material filling the whole box when it holds no leaf (0 = empty), or nullopt.
 std::optional<MaterialId> uniformMaterial(const Volume& volume, const LeafAlignedBox& box);

@@ -3,7 +3,6 @@
 
 #include "scene/SceneStore.h"
 #include "scene/StoreLod.h"
-#include "vdb_hermite/VolumeIO.h"
 #include "vdb_hermite/VolumeRegions.h"
 
 #include <map>
@@ -33,20 +32,12 @@ inline std::map<BrickKey, BrickRecord> pyramidRecords(const SceneStore& scene)
     return out;
 }
 
-/// Densities byte for byte; coarse bricks by content (a payload also holds the material table of the
-/// edit that wrote it, and an edit may redefine a material's colour).
+/// Densities and coarse bricks byte for byte (the same content always encodes to the same bytes).
 inline bool sameRecords(const std::map<BrickKey, BrickRecord>& a, const std::map<BrickKey, BrickRecord>& b)
 {
     if (a.size() != b.size()) return false;
-    for (auto i = a.begin(), j = b.begin(); i != a.end(); ++i, ++j) {
-        if (!(i->first == j->first)) return false;
-        if (i->first.level < 0 || i->second.uniform || j->second.uniform) {
-            if (!sameBrick(i->second, j->second)) return false;
-        } else if (compareRegion(decodeVolume(i->second.payload, "a"), decodeVolume(j->second.payload, "b"),
-                                 brickBox(i->first.brick)).any()) {
-            return false;
-        }
-    }
+    for (auto i = a.begin(), j = b.begin(); i != a.end(); ++i, ++j)
+        if (!(i->first == j->first) || !sameBrick(i->second, j->second)) return false;
     return true;
 }
 

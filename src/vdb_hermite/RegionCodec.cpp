@@ -1,0 +1,288 @@
+#include "vdb_hermite/RegionCodec.h"
+
+#include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/VolumeIO.h"
+
+#include <blosc.h>
+#include <openvdb/io/io.h>
+#include <zlib.h>
+
+#include <cstring>
+#include <functional>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <streambuf>
+#include <vector>
+
+namespace vdbclay {
+
+namespace {
+
+constexpr char kMagic[4] = {'V', 'C', 'L', 'R'};
+constexpr uint32_t kCodecVersion = 1;
+
+/// What precedes the compressed body. Written field by field: the layout has no padding to leak.
+struct Header {
+    uint32_t version = kCodecVersion;
+    int32_t min[3] = {0, 0, 0};
+    int32_t edge = 0;
+    double voxelSize = 0.0;
+    uint32_t leafCount = 0;
+    uint32_t rawBytes = 0; // the body once decompressed
+};
+constexpr std::size_t kHeaderBytes = sizeof(kMagic) + 4 + 12 + 4 + 8 + 4 + 4;
+constexpr std::size_t kTrailerBytes = 4; // CRC-32 of everything before it
+
+/// The slot table marks a block stored as a leaf with a material id no table can hold.
+constexpr MaterialId kLeafSlot = 0xffff;
+/// A leaf's serialization never exceeds this: its value mask and flag byte, its materials, its edge
+/// mask, a sample count and a sample per edge.
+constexpr std::size_t kMaxLeafBytes =
+    64 + 1 + kLeafVoxels * sizeof(MaterialValue) + kEdgeWords * 8 + 4 + 3 * kLeafVoxels * sizeof(PackedSample);
+
+std::size_t blocksPerSide(const LeafAlignedBox& box) { return std::size_t(box.edge / kLeafDim); }
+std::size_t blockCount(const LeafAlignedBox& box)
+{
+    const std::size_t n = blocksPerSide(box);
+    return n * n * n;
+}
+/// The origin of block `b` of the box (x-major, like voxel offsets in a leaf).
+Coord blockOrigin(const LeafAlignedBox& box, std::size_t b)
+{
+    const std::size_t n = blocksPerSide(box);
+    return Coord(box.min[0] + int32_t(b / (n * n)) * kLeafDim, box.min[1] + int32_t((b / n) % n) * kLeafDim,
+                 box.min[2] + int32_t(b % n) * kLeafDim);
+}
+
+uint32_t checksum(const char* data, std::size_t size)
+{
+    uLong crc = crc32(0L, Z_NULL, 0);
+    while (size > 0) {
+        const uInt chunk = uInt(std::min<std::size_t>(size, 1u << 30));
+        crc = crc32(crc, reinterpret_cast<const Bytef*>(data), chunk);
+        data += chunk;
+        size -= chunk;
+    }
+    return uint32_t(crc);
+}
+
+template<typename T>
+void put(std::string& out, const T& value)
+{
+    out.append(reinterpret_cast<const char*>(&value), sizeof(T));
+}
+template<typename T>
+T take(const char*& at)
+{
+    T value;
+    std::memcpy(&value, at, sizeof(T));
+    at += sizeof(T);
+    return value;
+}
+
+/// Reads a buffer in place (std::istringstream would copy it).
+struct BufferSource : std::streambuf {
+    BufferSource(char* data, std::size_t size) { setg(data, data, data + size); }
+    pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode) override
+    {
+        if (off != 0 || dir != std::ios_base::cur) return pos_type(off_type(-1));
+        return pos_type(gptr() - eback());
+    }
+};
+
+} // namespace
+
+struct DecodedRegion::Impl {
+    LeafAlignedBox box;
+    std::vector<MaterialId> tiles;                    // per block: its material where it has no leaf
+    std::vector<std::unique_ptr<HermiteLeaf>> leaves; // per block: its leaf, or null
+};
+
+namespace {
+
+/// The blocks of a region that came as a .vdb stream (stores of format version 1), taken out of its tree.
+void takeFromVolume(Volume&& part, DecodedRegion::Impl& out, std::size_t materialCount,
+                    const std::function<VolumeIOError(const std::string&)>& damaged)
+{
+    HermiteTree& tree = part.impl().grid->tree();
+    for (std::size_t b = 0; b < out.tiles.size(); ++b) {
+        const Coord o = blockOrigin(out.box, b);
+        if (tree.probeConstLeaf(o)) {
+            out.leaves[b].reset(tree.stealNode<HermiteLeaf>(o, MaterialValue{}, false));
+            const MaterialValue* values = out.leaves[b]->buffer().data();
+            for (Index n = 0; n < Index(kLeafVoxels); ++n)
+                if (values[n].id > materialCount) throw damaged("it uses an undefined material");
+        } else {
+            out.tiles[b] = tree.getValue(o).id;
+            if (out.tiles[b] > materialCount) throw damaged("it uses an undefined material");
+        }
+    }
+}
+
+} // namespace
+
+DecodedRegion::DecodedRegion(const LeafAlignedBox& box, MaterialId material) : impl_(std::make_unique<Impl>())
+{
+    impl_->box = box;
+    impl_->tiles.assign(blockCount(box), material);
+    impl_->leaves.resize(blockCount(box));
+}
+DecodedRegion::~DecodedRegion() = default;
+DecodedRegion::DecodedRegion(DecodedRegion&&) noexcept = default;
+DecodedRegion& DecodedRegion::operator=(DecodedRegion&&) noexcept = default;
+
+const LeafAlignedBox& DecodedRegion::box() const { return impl_->box; }
+
+uint64_t DecodedRegion::memoryBytes() const
+{
+    uint64_t bytes = nodeShareBytes(impl_->box);
+    for (const auto& leaf : impl_->leaves)
+        if (leaf) bytes += leaf->memUsage();
+    return bytes;
+}
+
+std::string encodeRegionBody(const Volume& volume, const LeafAlignedBox& box, uint32_t& leafCount)
+{
+    const HermiteTree& tree = volume.impl().grid->constTree();
+    const std::size_t blocks = blockCount(box);
+    std::vector<const HermiteLeaf*> leaves(blocks, nullptr);
+    std::string body;
+    body.reserve(blocks * sizeof(MaterialId));
+    leafCount = 0;
+    for (std::size_t b = 0; b < blocks; ++b) {
+        const Coord o = blockOrigin(box, b);
+        leaves[b] = tree.probeConstLeaf(o);
+        leafCount += leaves[b] != nullptr;
+        put(body, leaves[b] ? kLeafSlot : tree.getValue(o).id);
+    }
+    std::ostringstream leafBytes(std::ios::binary); // uncompressed: Blosc takes the whole body
+    openvdb::io::setDataCompression(leafBytes, openvdb::io::COMPRESS_NONE);
+    for (const HermiteLeaf* leaf : leaves)
+        if (leaf) leaf->writeBuffers(leafBytes);
+    return body + leafBytes.str();
+}
+
+std::string sealRegion(const std::string& body, const LeafAlignedBox& box, double voxelSize, uint32_t leafCount)
+{
+    std::string out;
+    out.append(kMagic, sizeof(kMagic));
+    put(out, kCodecVersion);
+    for (int a = 0; a < 3; ++a) put(out, box.min[a]);
+    put(out, box.edge);
+    put(out, voxelSize);
+    put(out, leafCount);
+    put(out, uint32_t(body.size()));
+    out.resize(kHeaderBytes + body.size() + BLOSC_MAX_OVERHEAD);
+    // Typesize 1: the ids' high bytes and the samples' fields line up badly with any larger one.
+    const int size = blosc_compress_ctx(5, BLOSC_SHUFFLE, 1, body.size(), body.data(), out.data() + kHeaderBytes,
+                                        out.size() - kHeaderBytes, "lz4", 0, 1);
+    if (size <= 0) throw VolumeIOError("could not compress a region of " + std::to_string(body.size()) + " bytes");
+    out.resize(kHeaderBytes + std::size_t(size));
+    put(out, checksum(out.data(), out.size()));
+    return out;
+}
+
+std::string encodeRegion(const Volume& volume, const LeafAlignedBox& box, uint32_t* leafCount)
+{
+    uint32_t count = 0;
+    const std::string body = encodeRegionBody(volume, box, count);
+    if (leafCount) *leafCount = count;
+    return sealRegion(body, box, volume.voxelSize(), count);
+}
+
+DecodedRegion decodeRegion(const std::string& bytes, const LeafAlignedBox& box, double voxelSize,
+                           std::size_t materialCount, const std::string& name)
+{
+    const auto damaged = [&](const std::string& why) { return VolumeIOError("'" + name + "' is damaged: " + why); };
+    DecodedRegion region(box, kEmptyMaterial);
+    DecodedRegion::Impl& out = region.impl();
+
+    constexpr char kVdbMagic[4] = {0x20, 0x42, 0x44, 0x56}; // OpenVDB's, as a little-endian int64
+    if (bytes.size() >= sizeof(kVdbMagic) && std::memcmp(bytes.data(), kVdbMagic, sizeof(kVdbMagic)) == 0) {
+        Volume part = decodeVolume(bytes, name);
+        if (part.voxelSize() != voxelSize) throw damaged("its voxel size does not match its level");
+        takeFromVolume(std::move(part), out, materialCount, damaged);
+        return region;
+    }
+
+    if (bytes.size() < kHeaderBytes + kTrailerBytes || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0)
+        throw damaged("it is not a VDBClay region");
+    const std::size_t sealed = bytes.size() - kTrailerBytes;
+    const char* at = bytes.data() + sealed;
+    if (take<uint32_t>(at) != checksum(bytes.data(), sealed)) throw damaged("its checksum does not match");
+    at = bytes.data() + sizeof(kMagic);
+    Header h;
+    h.version = take<uint32_t>(at);
+    if (h.version != kCodecVersion)
+        throw VolumeIOError("'" + name + "' has region format version " + std::to_string(h.version) +
+                            "; this build reads version " + std::to_string(kCodecVersion));
+    for (int a = 0; a < 3; ++a) h.min[a] = take<int32_t>(at);
+    h.edge = take<int32_t>(at);
+    h.voxelSize = take<double>(at);
+    h.leafCount = take<uint32_t>(at);
+    h.rawBytes = take<uint32_t>(at);
+    if (h.min[0] != box.min[0] || h.min[1] != box.min[1] || h.min[2] != box.min[2] || h.edge != box.edge)
+        throw damaged("it holds another region");
+    if (h.voxelSize != voxelSize) throw damaged("its voxel size does not match its level");
+    const std::size_t blocks = out.tiles.size();
+    if (h.leafCount > blocks) throw damaged("it claims " + std::to_string(h.leafCount) + " leaves");
+    const std::size_t slotBytes = blocks * sizeof(MaterialId);
+    if (h.rawBytes < slotBytes || h.rawBytes > slotBytes + h.leafCount * kMaxLeafBytes)
+        throw damaged("its size does not fit its leaves");
+
+    const char* compressed = bytes.data() + kHeaderBytes;
+    const std::size_t compressedBytes = sealed - kHeaderBytes;
+    std::size_t decoded = 0;
+    if (blosc_cbuffer_validate(compressed, compressedBytes, &decoded) != 0 || decoded != h.rawBytes)
+        throw damaged("its compressed data does not hold what its header says");
+    std::vector<char> raw(h.rawBytes);
+    if (blosc_decompress_ctx(compressed, raw.data(), raw.size(), 1) != int(h.rawBytes))
+        throw damaged("its compressed data does not decompress");
+
+    at = raw.data();
+    uint32_t leaves = 0;
+    for (std::size_t b = 0; b < blocks; ++b) {
+        const MaterialId id = take<MaterialId>(at);
+        if (id == kLeafSlot) ++leaves;
+        else if (id > materialCount) throw damaged("it uses an undefined material");
+        else out.tiles[b] = id;
+        if (id == kLeafSlot) out.leaves[b] = std::make_unique<HermiteLeaf>(blockOrigin(box, b));
+    }
+    if (leaves != h.leafCount) throw damaged("its block table does not match its leaf count");
+
+    BufferSource source(raw.data() + slotBytes, raw.size() - slotBytes);
+    std::istream in(&source);
+    openvdb::io::setCurrentVersion(in);
+    openvdb::io::setDataCompression(in, openvdb::io::COMPRESS_NONE);
+    try {
+        for (auto& leaf : out.leaves) {
+            if (!leaf) continue;
+            leaf->readBuffers(in);
+            const MaterialValue* values = leaf->buffer().data();
+            for (Index n = 0; n < Index(kLeafVoxels); ++n)
+                if (values[n].id > materialCount) throw damaged("it uses an undefined material");
+        }
+    } catch (const openvdb::Exception& e) {
+        throw damaged(e.what());
+    }
+    if (!in || in.tellg() != std::streamoff(raw.size() - slotBytes)) throw damaged("its leaves do not end where its header says");
+    return region;
+}
+
+void pasteRegion(Volume& volume, DecodedRegion&& region)
+{
+    DecodedRegion::Impl& r = region.impl();
+    HermiteTree& tree = volume.impl().grid->tree();
+    std::set<Coord> lowers;
+    for (std::size_t b = 0; b < r.tiles.size(); ++b) {
+        const Coord o = blockOrigin(r.box, b);
+        if (r.leaves[b]) tree.addLeaf(r.leaves[b].release());
+        else tree.addTile(1, o, MaterialValue{r.tiles[b]}, false);
+        lowers.insert(alignDown(o, kLowerDim));
+    }
+    pruneNodes(tree, lowers);
+    r.tiles.assign(r.tiles.size(), kEmptyMaterial);
+}
+
+} // namespace vdbclay

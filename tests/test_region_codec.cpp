@@ -1,0 +1,160 @@
+// The store's brick codec (RegionCodec.h): round trips against the volume the regions came from, the
+// .vdb streams stores of format version 1 hold, and damaged or crafted bytes, which must be read whole
+// or refused with one line.
+#include "scene/SceneStore.h"
+#include "support/HermiteProbe.h"
+#include "support/Sculpt.h"
+#include "vdb_hermite/RegionCodec.h"
+#include "vdb_hermite/VolumeIO.h"
+
+#include <catch2/catch.hpp>
+
+#include <cstring>
+#include <random>
+
+using namespace vdbclay;
+using namespace vdbclay::test;
+
+namespace {
+
+std::vector<LeafAlignedBox> bricksOf(const Volume& v)
+{
+    std::vector<LeafAlignedBox> out;
+    for (const IndexCoord& o : occupiedBoxes(v, kBrickEdge)) out.push_back({o, kBrickEdge});
+    return out;
+}
+
+/// Decodes every box's bytes into a new volume with v's voxel size and materials.
+Volume rebuild(const Volume& v, const std::vector<LeafAlignedBox>& boxes, const std::vector<std::string>& bytes)
+{
+    Volume out(v.voxelSize());
+    out.materials() = v.materials();
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+        DecodedRegion region = decodeRegion(bytes[i], boxes[i], v.voxelSize(), v.materials().size(), "region");
+        const uint64_t memory = region.memoryBytes();
+        pasteRegion(out, std::move(region));
+        CHECK(memory == regionMemoryBytes(out, boxes[i]));
+    }
+    return out;
+}
+
+void requireRefused(const std::function<void()>& decode, const std::string& needle)
+{
+    try {
+        decode();
+        FAIL("decoded bytes that should have been refused");
+    } catch (const VolumeIOError& e) {
+        const std::string what = e.what();
+        INFO(what);
+        CHECK(what.find('\n') == std::string::npos);
+        CHECK(what.find(needle) != std::string::npos);
+    }
+}
+
+/// The leaves a body's block table announces (what a well-formed header would say).
+uint32_t leafSlots(const std::string& body, std::size_t blocks)
+{
+    uint32_t n = 0;
+    for (std::size_t b = 0; b < blocks && 2 * b + 1 < body.size(); ++b) {
+        MaterialId id;
+        std::memcpy(&id, body.data() + 2 * b, sizeof(id));
+        n += id == 0xffff;
+    }
+    return n;
+}
+
+} // namespace
+
+TEST_CASE("a region decodes to exactly what was encoded, in the same bytes every time", "[store]")
+{
+    const Volume v = multiBrickScene();
+    const std::vector<LeafAlignedBox> boxes = bricksOf(v);
+    std::vector<std::string> bytes;
+    uint64_t leaves = 0;
+    for (const LeafAlignedBox& box : boxes) {
+        uint32_t count = 0;
+        bytes.push_back(encodeRegion(v, box, &count));
+        CHECK(encodeRegion(v, box) == bytes.back());
+        leaves += count;
+    }
+    CHECK(leaves == v.stats().leafCount);
+    const Volume rebuilt = rebuild(v, boxes, bytes);
+    CHECK(checkInvariants(rebuilt).empty());
+    CHECK(identical(rebuilt, v));
+}
+
+TEST_CASE("regions of stores of format version 1 (.vdb streams of a brick) decode to the same content", "[store]")
+{
+    const Volume v = multiBrickScene();
+    const std::vector<LeafAlignedBox> boxes = bricksOf(v);
+    std::vector<std::string> bytes;
+    for (const LeafAlignedBox& box : boxes) bytes.push_back(encodeVolume(copyRegion(v, box)));
+    CHECK(identical(rebuild(v, boxes, bytes), v));
+}
+
+TEST_CASE("a region for another box, voxel size or materials table, or damaged, is refused with one line", "[store]")
+{
+    const Volume v = multiBrickScene();
+    LeafAlignedBox box;
+    uint32_t leaves = 0;
+    std::string bytes;
+    for (const LeafAlignedBox& b : bricksOf(v)) {
+        uint32_t count = 0;
+        std::string encoded = encodeRegion(v, b, &count);
+        if (count > leaves) box = b, leaves = count, bytes = std::move(encoded);
+    }
+    REQUIRE(leaves > 8);
+    const double vs = v.voxelSize();
+    const std::size_t materials = v.materials().size();
+    auto decode = [&](const std::string& b, const LeafAlignedBox& where, double voxelSize, std::size_t count) {
+        return [=] { (void)decodeRegion(b, where, voxelSize, count, "brick"); };
+    };
+    LeafAlignedBox elsewhere = box;
+    elsewhere.min[1] += kBrickEdge;
+    requireRefused(decode(bytes, elsewhere, vs, materials), "another region");
+    requireRefused(decode(bytes, box, vs * 2.0, materials), "voxel size");
+    requireRefused(decode(bytes, box, vs, 0), "undefined material");
+    requireRefused(decode("", box, vs, materials), "not a VDBClay region");
+    requireRefused(decode("hello, this is text", box, vs, materials), "not a VDBClay region");
+    for (std::size_t cut = 0; cut < bytes.size(); cut += 1 + bytes.size() / 97)
+        requireRefused(decode(bytes.substr(0, cut), box, vs, materials), "'brick'");
+    std::mt19937 rng(17);
+    for (int trial = 0; trial < 200; ++trial) {
+        std::string damaged = bytes;
+        damaged[rng() % damaged.size()] ^= char(1 + rng() % 255);
+        requireRefused(decode(damaged, box, vs, materials), "'brick'");
+    }
+}
+
+TEST_CASE("crafted region bodies under a valid seal are read whole or refused with one line", "[store][fuzz]")
+{
+    const Volume v = multiBrickScene();
+    const std::vector<LeafAlignedBox> boxes = bricksOf(v);
+    std::mt19937 rng(23);
+    int decoded = 0, refused = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+        const LeafAlignedBox& box = boxes[rng() % boxes.size()];
+        uint32_t count = 0;
+        std::string body = encodeRegionBody(v, box, count);
+        switch (trial % 4) {
+        case 0: body.resize(rng() % (body.size() + 1)); break;
+        case 1: body += std::string(1 + rng() % 64, char(rng())); break;
+        default:
+            for (int i = 0, n = 1 + int(rng() % 8); i < n; ++i) body[rng() % body.size()] ^= char(1 + rng() % 255);
+        }
+        const std::size_t blocks = std::size_t(kBrickLeaves) * kBrickLeaves * kBrickLeaves;
+        const std::string sealed = sealRegion(body, box, v.voxelSize(), leafSlots(body, blocks));
+        try {
+            DecodedRegion region = decodeRegion(sealed, box, v.voxelSize(), v.materials().size(), "crafted");
+            Volume out(v.voxelSize());
+            out.materials() = v.materials();
+            pasteRegion(out, std::move(region));
+            ++decoded;
+        } catch (const VolumeIOError& e) {
+            CHECK(std::string(e.what()).find('\n') == std::string::npos);
+            ++refused;
+        }
+    }
+    CHECK(refused > 0);
+    CHECK(decoded > 0); // flips in materials and normals keep a body well-formed
+}
