@@ -12,13 +12,14 @@ seconds="${2:-60}"
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 artifacts="$build/fuzz-artifacts"
 mkdir -p "$artifacts"
-for target in vdb_reader standard_vdb script_parser mesh_writers mesh_import; do
+for target in vdb_reader standard_vdb script_parser mesh_writers mesh_import region_codec; do
     case "$target" in
         vdb_reader) corpus_name=vdb ;;
         standard_vdb) corpus_name=standard ;;
         script_parser) corpus_name=script ;;
         mesh_writers) corpus_name=mesh ;;
         mesh_import) corpus_name=import ;;
+        region_codec) corpus_name=region ;;
     esac
     work="$build/fuzz-corpus/$target"
     mkdir -p "$work"

@@ -40,8 +40,8 @@ struct BrickKeyHash {
     }
 };
 
-/// One stored brick: either uniform (one material throughout, no payload) or a payload, the bytes of
-/// a native .vdb holding the brick's part of the volume (encodeVolume: OpenVDB-serialized, Blosc).
+/// One stored brick: either uniform (one material throughout, no payload) or a payload, the brick's part
+/// of the volume as RegionCodec writes it (its leaves OpenVDB-serialized, Blosc-compressed).
 struct BrickRecord {
     std::optional<MaterialId> uniform;
     std::string payload;
