@@ -15,7 +15,7 @@ CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& o)
     cmd->add_option("name", o.which, "Which benchmark: " + names)->required()->type_name("NAME");
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of a table");
     cmd->add_flag("--quick", o.quick, "Small sizes (seconds, for CI); the default runs the full sizes");
-    cmd->add_option("--memory-budget", o.memoryBudgetMb, "stream: the memory budget (default 192, or 6 with --quick)")
+    cmd->add_option("--memory-budget", o.memoryBudgetMb, "stream: the memory budget (default 192, or 2 with --quick)")
         ->type_name("MB")
         ->check(positiveNumber());
     cmd->footer("csg     sphere creation, then median time of remove-sphere stamps on its surface\n"

@@ -252,9 +252,9 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     FrameReport report;
     report.requested = selected.size();
     // What the view needs, coarse first: each selected brick's ancestors (shown while it loads), then
-    // the selection itself, as far as the budget goes.
-    // A brick's chain of ancestors ends where it meets one already listed (whose own chain is listed);
-    // within a level, bricks keep the order of the first selected brick that needs them.
+    // the selection itself, as far as the budget goes. A brick's chain of ancestors ends where it meets
+    // one already listed (whose own chain is listed); within a level, bricks keep the order of the first
+    // selected brick that needs them.
     std::vector<BrickKey> order;
     Impl::BrickSet seen;
     for (const SelectedBrick& b : selected)

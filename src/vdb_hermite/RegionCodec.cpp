@@ -236,7 +236,10 @@ DecodedRegion decodeRegion(const std::string& bytes, const LeafAlignedBox& box, 
     std::size_t decoded = 0;
     if (blosc_cbuffer_validate(compressed, compressedBytes, &decoded) != 0 || decoded != h.rawBytes)
         throw damaged("its compressed data does not hold what its header says");
-    std::vector<char> raw(h.rawBytes);
+    // One buffer per thread, kept: a fresh one per brick would leave holes that the leaves decoded into
+    // them pin, so a streaming process would grow past its budget.
+    thread_local std::vector<char> raw;
+    raw.resize(h.rawBytes);
     if (blosc_decompress_ctx(compressed, raw.data(), raw.size(), 1) != int(h.rawBytes))
         throw damaged("its compressed data does not decompress");
 
