@@ -452,6 +452,72 @@ std::string colouredCubePly(const std::function<std::array<int, 3>(int face)>& c
 
 } // namespace
 
+TEST_CASE("each face's material covers the solid nearest it; touching parts keep their own", "[voxelize]")
+{
+    // A cube from 0 to 6 whose top (+y) faces are red and the rest blue, at voxel sizes on and off the
+    // lattice: a solid point takes the material of its nearest face (rays along every axis).
+    for (const double vs : {0.5, 0.37}) {
+        CAPTURE(vs);
+        TriangleSoup cube = box({3.0, 3.0, 3.0}, {3.0, 3.0, 3.0});
+        cube.materials = {{"blue", {0.0f, 0.0f, 1.0f, 1.0f}}, {"red", {1.0f, 0.0f, 0.0f, 1.0f}}};
+        for (std::size_t t = 0; t < cube.triangles.size(); ++t) {
+            bool top = true;
+            for (const uint32_t i : cube.triangles[t]) top = top && cube.positions[i][1] > 5.9;
+            cube.triangleMaterials[t] = top ? 1 : 0;
+        }
+        VoxelizeOptions o;
+        o.voxelSize = vs;
+        const Volume v = voxelizeMesh(cube, o);
+        const MaterialId red = *v.materials().find("red"), blue = *v.materials().find("blue");
+        int reds = 0, blues = 0;
+        const int n = int(std::ceil(6.0 / vs));
+        for (int x = 0; x <= n; ++x)
+            for (int y = 0; y <= n; ++y)
+                for (int z = 0; z <= n; ++z) {
+                    const MaterialId m = v.materialAt({x, y, z});
+                    if (m == kEmptyMaterial) continue;
+                    const double p[3] = {x * vs, y * vs, z * vs};
+                    const double top = 6.0 - p[1];
+                    const double others = std::min({p[0], 6.0 - p[0], p[1], p[2], 6.0 - p[2]});
+                    if (top < others - 1e-6) {
+                        CHECK(m == red);
+                        ++reds;
+                    } else if (others < top - 1e-6) {
+                        CHECK(m == blue);
+                        ++blues;
+                    }
+                }
+        CHECK(reds > 0);
+        CHECK(blues > reds);
+        closedMesh(v);
+    }
+    // Two boxes sharing the face x = 4, stone on the left and moss on the right: every solid point on
+    // the left of it is stone, on the right moss, whichever part's id is larger.
+    for (const bool mossFirst : {false, true}) {
+        TriangleSoup soup = box({2.0, 2.0, 2.0}, {2.0, 0.0, 0.0});
+        const TriangleSoup right = box({2.0, 2.0, 2.0}, {6.0, 0.0, 0.0});
+        const uint32_t base = uint32_t(soup.positions.size());
+        soup.positions.insert(soup.positions.end(), right.positions.begin(), right.positions.end());
+        for (const auto& t : right.triangles) soup.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+        soup.materials = {{"stone", {0.5f, 0.5f, 0.5f, 1.0f}}, {"moss", {0.2f, 0.6f, 0.2f, 1.0f}}};
+        soup.triangleMaterials.assign(soup.triangles.size(), mossFirst ? 1 : 0);
+        std::fill(soup.triangleMaterials.begin() + std::ptrdiff_t(soup.triangles.size() / 2), soup.triangleMaterials.end(), mossFirst ? 0 : 1);
+        VoxelizeOptions o;
+        o.voxelSize = 0.5;
+        const Volume v = voxelizeMesh(soup, o);
+        const MaterialId left = *v.materials().find(mossFirst ? "moss" : "stone");
+        const MaterialId rightId = *v.materials().find(mossFirst ? "stone" : "moss");
+        for (int x = -1; x <= 17; ++x)
+            for (int y = -5; y <= 5; ++y)
+                for (int z = -5; z <= 5; ++z) {
+                    const MaterialId m = v.materialAt({x, y, z});
+                    if (m == kEmptyMaterial || x == 8) continue;
+                    CHECK(m == (x < 8 ? left : rightId));
+                }
+        CHECK(checkInvariants(v).empty());
+    }
+}
+
 TEST_CASE("vertex colours become materials: few exactly, many binned", "[voxelize]")
 {
     TempDir dir;

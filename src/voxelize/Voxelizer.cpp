@@ -10,6 +10,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <iterator>
 #include <memory>
@@ -161,12 +162,13 @@ RayHits groupByRay(std::vector<Hit> hits, std::size_t rays, int axis, uint64_t& 
 
 /// The votes of the lattice points of one box (lattice indices lo .. lo + dim - 1, which may reach past
 /// the lattice: no ray runs there, so those points are empty): a bit per axis whose ray has the point
-/// inside, and the material of the hit that ray entered at.
+/// inside, and the material of the nearest face along the rays that have it inside (with how far it is).
 struct WindowVotes {
     std::array<int32_t, 3> lo{};
     int32_t dim = 0;
     std::vector<uint8_t> votes;
-    std::vector<uint32_t> material;
+    std::vector<uint32_t> material; // mesh material + 1; 0: no ray has the point inside
+    std::vector<float> faceDistance;
 
     std::size_t index(int x, int y, int z) const
     {
@@ -180,14 +182,38 @@ struct WindowVotes {
     }
 };
 
+/// Hits closer than this along a ray (lattice units) lie at one spot: faces of touching parts.
+constexpr double kSameSpot = 1e-9;
+
+/// Of the hits at the spot of `*hit` (the nearest behind a point when `ahead` is false, the nearest
+/// ahead of it otherwise), the face that bounds the point's own part: one the ray enters that part
+/// through, or leaves it through; any of them when the winding says neither.
+const Hit* boundingFace(const Hit* hit, const Hit* first, const Hit* end, int axis, bool ahead)
+{
+    const double spot = hit->at;
+    if (ahead) {
+        for (const Hit* h = hit; h != end && h->at - spot < kSameSpot; ++h)
+            if (h->normal[std::size_t(axis)] > 0.0f) return h;
+    } else {
+        for (const Hit* h = hit;; --h) {
+            if (h->normal[std::size_t(axis)] < 0.0f) return h;
+            if (h == first || spot - h[-1].at >= kSameSpot) break;
+        }
+    }
+    return hit;
+}
+
 /// Fills the votes of a cube of lattice points from the rays through it. A ray's parity where the cube
 /// starts is the number of its hits before: the same answer as walking the ray from the lattice's start.
-/// Returns false when no point of the cube is inside along any ray (then it holds nothing).
+/// A point inside takes the material of the nearest face along its rays, so each face's material shows
+/// on the surface it covers whichever way a ray crosses the solid. Returns false when no point of the
+/// cube is inside along any ray (then it holds nothing).
 bool fillVotes(const Lattice& lattice, const std::array<RayHits, 3>& rays, WindowVotes& window)
 {
     const std::size_t points = std::size_t(window.dim) * std::size_t(window.dim) * std::size_t(window.dim);
     window.votes.assign(points, 0);
     window.material.assign(points, 0);
+    window.faceDistance.assign(points, std::numeric_limits<float>::infinity());
     bool any = false;
     for (int axis = 0; axis < 3; ++axis) {
         const int u = (axis + 1) % 3, v = (axis + 2) % 3;
@@ -203,19 +229,27 @@ bool fillVotes(const Lattice& lattice, const std::array<RayHits, 3>& rays, Windo
                 if (first == end) continue;
                 const Hit* h = std::partition_point(first, end, [&](const Hit& hit) { return hit.at < double(w0) + offset; });
                 bool inside = ((h - first) & 1) != 0;
-                uint32_t entering = h != first ? h[-1].material : 0;
                 for (int w = w0; w < w1; ++w) {
-                    for (; h != end && h->at < double(w) + offset; ++h) {
-                        inside = !inside;
-                        entering = h->material;
-                    }
+                    const double point = double(w) + offset;
+                    for (; h != end && h->at < point; ++h) inside = !inside;
                     if (!inside) continue;
                     int c[3];
                     c[axis] = w, c[u] = iu, c[v] = iv;
                     const std::size_t at = window.index(c[0], c[1], c[2]);
                     window.votes[at] |= uint8_t(1u << axis);
-                    if (axis == 0 || window.material[at] == 0) window.material[at] = entering + 1;
                     any = true;
+                    // Inside, a hit lies behind the point (the parity is odd); one ahead is missing only
+                    // where a hole leaves the ray open.
+                    const Hit* face = boundingFace(h - 1, first, end, axis, false);
+                    float distance = float(point - face->at);
+                    if (h != end && float(h->at - point) < distance) {
+                        face = boundingFace(h, first, end, axis, true);
+                        distance = float(face->at - point);
+                    }
+                    if (distance < window.faceDistance[at]) {
+                        window.faceDistance[at] = distance;
+                        window.material[at] = face->material + 1;
+                    }
                 }
             }
     }
