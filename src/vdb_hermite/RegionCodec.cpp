@@ -22,7 +22,7 @@ namespace {
 constexpr char kMagic[4] = {'V', 'C', 'L', 'R'};
 constexpr uint32_t kCodecVersion = 1;
 
-/// What precedes the compressed body. Written field by field: the layout has no padding to leak.
+/// What precedes the compressed body, read field by field (on disk the fields are packed, in this order).
 struct Header {
     uint32_t version = kCodecVersion;
     int32_t min[3] = {0, 0, 0};
