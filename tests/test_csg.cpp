@@ -7,6 +7,7 @@
 #include "support/HermiteProbe.h"
 #include "support/Sculpt.h"
 #include "support/TestUtil.h"
+#include "vdb_hermite/HermiteGrid.h"
 
 #include <catch2/catch.hpp>
 #include <tbb/global_control.h>
@@ -14,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <tuple>
 
 using namespace vdbclay;
@@ -78,6 +80,35 @@ int countSolidityMismatches(const Volume& v, const SdfField& field, const Coord3
 const Vec3d kC(0.21, -0.13, 0.17); // an off-grid centre
 
 } // namespace
+
+TEST_CASE("forEachTile sees exactly the tiles OpenVDB's iterator sees, at every level", "[csg]")
+{
+    // CSG folds whole 8^3 and 128^3 blocks of a large box into tiles; a 4096^3 root tile is set directly
+    // (a brush that large is refused), far from the rest.
+    Volume v(1.0);
+    const MaterialId red = defineMaterial(v, "red", 0.5f);
+    apply(v, CsgMode::Add, box(Vec3d(300.0, 300.0, 300.0)), at(Vec3d(0.0, 0.0, 0.0)));
+    apply(v, CsgMode::Paint, sphere(90.0), at(Vec3d(-40.0, 100.0, 300.0)), red);
+    v.impl().grid->tree().addTile(3, Coord(-4 * 4096, 0, 0), MaterialValue{red}, false);
+    using Tile = std::tuple<Coord, Coord, MaterialId>;
+    std::vector<Tile> walked, iterated;
+    const HermiteTree& tree = v.impl().grid->constTree();
+    forEachTile(tree, [&](const CoordBBox& b, MaterialValue m) { walked.emplace_back(b.min(), b.max(), m.id); });
+    auto it = tree.cbeginValueAll();
+    it.setMaxDepth(HermiteTree::ValueAllCIter::LEAF_DEPTH - 1);
+    for (; it; ++it) {
+        CoordBBox b;
+        it.getBoundingBox(b);
+        iterated.emplace_back(b.min(), b.max(), (*it).id);
+    }
+    std::sort(walked.begin(), walked.end());
+    std::sort(iterated.begin(), iterated.end());
+    CHECK(walked == iterated);
+    std::set<int> sizes;
+    for (const Tile& t : walked)
+        if (std::get<2>(t) != kEmptyMaterial) sizes.insert(std::get<1>(t).x() - std::get<0>(t).x() + 1);
+    CHECK(sizes == std::set<int>{8, 128, 4096});
+}
 
 TEST_CASE("sphere minus a box that cuts off a cap", "[csg]")
 {

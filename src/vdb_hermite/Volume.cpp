@@ -55,6 +55,7 @@ VolumeStats Volume::stats() const
     CoordBBox bbox;
     for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
         s.samples += leaf->sampleCount();
+        if (!bbox.empty() && bbox.isInside(leaf->getNodeBoundingBox())) continue; // nothing in it can grow the box
         const MaterialValue* values = leaf->buffer().data();
         for (Index n = 0; n < Index(kLeafVoxels); ++n) {
             if (values[n].solid() || leaf->isValueOn(n)) bbox.expand(leaf->offsetToGlobalCoord(n));
