@@ -10,9 +10,9 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
 #include <iterator>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 
