@@ -88,7 +88,8 @@ public:
                 exec("PRAGMA journal_mode=WAL");
                 exec("PRAGMA synchronous=FULL");
                 // Bricks written from now on are of this version's form, which older builds cannot read.
-                exec(("PRAGMA user_version=" + std::to_string(kStoreFormatVersion)).c_str());
+                if (pragmaInt("PRAGMA user_version") < kStoreFormatVersion)
+                    exec(("PRAGMA user_version=" + std::to_string(kStoreFormatVersion)).c_str());
             } else {
                 exec("PRAGMA query_only=1");
             }

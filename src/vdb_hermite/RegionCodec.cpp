@@ -22,15 +22,8 @@ namespace {
 constexpr char kMagic[4] = {'V', 'C', 'L', 'R'};
 constexpr uint32_t kCodecVersion = 1;
 
-/// What precedes the compressed body, read field by field (on disk the fields are packed, in this order).
-struct Header {
-    uint32_t version = kCodecVersion;
-    int32_t min[3] = {0, 0, 0};
-    int32_t edge = 0;
-    double voxelSize = 0.0;
-    uint32_t leafCount = 0;
-    uint32_t rawBytes = 0; // the body once decompressed
-};
+/// The header: magic, codec version, box min (3 x int32), box edge, voxel size (double), leaf count and
+/// body bytes once decompressed (uint32 each), packed in this order.
 constexpr std::size_t kHeaderBytes = sizeof(kMagic) + 4 + 12 + 4 + 8 + 4 + 4;
 constexpr std::size_t kTrailerBytes = 4; // CRC-32 of everything before it
 
@@ -101,18 +94,24 @@ struct DecodedRegion::Impl {
 
 namespace {
 
+using Damaged = std::function<VolumeIOError(const std::string&)>;
+
+void requireDefinedMaterials(const HermiteLeaf& leaf, std::size_t materialCount, const Damaged& damaged)
+{
+    const MaterialValue* values = leaf.buffer().data();
+    for (Index n = 0; n < Index(kLeafVoxels); ++n)
+        if (values[n].id > materialCount) throw damaged("it uses an undefined material");
+}
+
 /// The blocks of a region that came as a .vdb stream (stores of format version 1), taken out of its tree.
-void takeFromVolume(Volume&& part, DecodedRegion::Impl& out, std::size_t materialCount,
-                    const std::function<VolumeIOError(const std::string&)>& damaged)
+void takeFromVolume(Volume&& part, DecodedRegion::Impl& out, std::size_t materialCount, const Damaged& damaged)
 {
     HermiteTree& tree = part.impl().grid->tree();
     for (std::size_t b = 0; b < out.tiles.size(); ++b) {
         const Coord o = blockOrigin(out.box, b);
         if (tree.probeConstLeaf(o)) {
             out.leaves[b].reset(tree.stealNode<HermiteLeaf>(o, MaterialValue{}, false));
-            const MaterialValue* values = out.leaves[b]->buffer().data();
-            for (Index n = 0; n < Index(kLeafVoxels); ++n)
-                if (values[n].id > materialCount) throw damaged("it uses an undefined material");
+            requireDefinedMaterials(*out.leaves[b], materialCount, damaged);
         } else {
             out.tiles[b] = tree.getValue(o).id;
             if (out.tiles[b] > materialCount) throw damaged("it uses an undefined material");
@@ -132,8 +131,6 @@ DecodedRegion::~DecodedRegion() = default;
 DecodedRegion::DecodedRegion(DecodedRegion&&) noexcept = default;
 DecodedRegion& DecodedRegion::operator=(DecodedRegion&&) noexcept = default;
 
-const LeafAlignedBox& DecodedRegion::box() const { return impl_->box; }
-
 uint64_t DecodedRegion::memoryBytes() const
 {
     uint64_t bytes = nodeShareBytes(impl_->box);
@@ -142,18 +139,16 @@ uint64_t DecodedRegion::memoryBytes() const
     return bytes;
 }
 
-std::string encodeRegionBody(const Volume& volume, const LeafAlignedBox& box, uint32_t& leafCount)
+std::string encodeRegionBody(const Volume& volume, const LeafAlignedBox& box)
 {
     const HermiteTree& tree = volume.impl().grid->constTree();
     const std::size_t blocks = blockCount(box);
     std::vector<const HermiteLeaf*> leaves(blocks, nullptr);
     std::string body;
     body.reserve(blocks * sizeof(MaterialId));
-    leafCount = 0;
     for (std::size_t b = 0; b < blocks; ++b) {
         const Coord o = blockOrigin(box, b);
         leaves[b] = tree.probeConstLeaf(o);
-        leafCount += leaves[b] != nullptr;
         put(body, leaves[b] ? kLeafSlot : tree.getValue(o).id);
     }
     std::ostringstream leafBytes(std::ios::binary); // uncompressed: Blosc takes the whole body
@@ -163,15 +158,21 @@ std::string encodeRegionBody(const Volume& volume, const LeafAlignedBox& box, ui
     return body + leafBytes.str();
 }
 
-std::string sealRegion(const std::string& body, const LeafAlignedBox& box, double voxelSize, uint32_t leafCount)
+std::string sealRegion(const std::string& body, const LeafAlignedBox& box, double voxelSize, uint32_t* leafCount)
 {
+    uint32_t leaves = 0; // the block table's leaf slots (as many of the table as the body holds)
+    for (std::size_t b = 0; b < blockCount(box) && (b + 1) * sizeof(MaterialId) <= body.size(); ++b) {
+        const char* at = body.data() + b * sizeof(MaterialId);
+        leaves += take<MaterialId>(at) == kLeafSlot;
+    }
+    if (leafCount) *leafCount = leaves;
     std::string out;
     out.append(kMagic, sizeof(kMagic));
     put(out, kCodecVersion);
     for (int a = 0; a < 3; ++a) put(out, box.min[a]);
     put(out, box.edge);
     put(out, voxelSize);
-    put(out, leafCount);
+    put(out, leaves);
     put(out, uint32_t(body.size()));
     out.resize(kHeaderBytes + body.size() + BLOSC_MAX_OVERHEAD);
     // Typesize 1: the ids' high bytes and the samples' fields line up badly with any larger one.
@@ -185,16 +186,13 @@ std::string sealRegion(const std::string& body, const LeafAlignedBox& box, doubl
 
 std::string encodeRegion(const Volume& volume, const LeafAlignedBox& box, uint32_t* leafCount)
 {
-    uint32_t count = 0;
-    const std::string body = encodeRegionBody(volume, box, count);
-    if (leafCount) *leafCount = count;
-    return sealRegion(body, box, volume.voxelSize(), count);
+    return sealRegion(encodeRegionBody(volume, box), box, volume.voxelSize(), leafCount);
 }
 
 DecodedRegion decodeRegion(const std::string& bytes, const LeafAlignedBox& box, double voxelSize,
                            std::size_t materialCount, const std::string& name)
 {
-    const auto damaged = [&](const std::string& why) { return VolumeIOError("'" + name + "' is damaged: " + why); };
+    const Damaged damaged = [&](const std::string& why) { return VolumeIOError("'" + name + "' is damaged: " + why); };
     DecodedRegion region(box, kEmptyMaterial);
     DecodedRegion::Impl& out = region.impl();
 
@@ -212,47 +210,49 @@ DecodedRegion decodeRegion(const std::string& bytes, const LeafAlignedBox& box, 
     const char* at = bytes.data() + sealed;
     if (take<uint32_t>(at) != checksum(bytes.data(), sealed)) throw damaged("its checksum does not match");
     at = bytes.data() + sizeof(kMagic);
-    Header h;
-    h.version = take<uint32_t>(at);
-    if (h.version != kCodecVersion)
-        throw VolumeIOError("'" + name + "' has region format version " + std::to_string(h.version) +
+    const uint32_t version = take<uint32_t>(at);
+    if (version != kCodecVersion)
+        throw VolumeIOError("'" + name + "' has region format version " + std::to_string(version) +
                             "; this build reads version " + std::to_string(kCodecVersion));
-    for (int a = 0; a < 3; ++a) h.min[a] = take<int32_t>(at);
-    h.edge = take<int32_t>(at);
-    h.voxelSize = take<double>(at);
-    h.leafCount = take<uint32_t>(at);
-    h.rawBytes = take<uint32_t>(at);
-    if (h.min[0] != box.min[0] || h.min[1] != box.min[1] || h.min[2] != box.min[2] || h.edge != box.edge)
-        throw damaged("it holds another region");
-    if (h.voxelSize != voxelSize) throw damaged("its voxel size does not match its level");
+    bool sameBox = true;
+    for (int a = 0; a < 3; ++a) sameBox = take<int32_t>(at) == box.min[a] && sameBox;
+    sameBox = take<int32_t>(at) == box.edge && sameBox;
+    if (!sameBox) throw damaged("it holds another region");
+    if (take<double>(at) != voxelSize) throw damaged("its voxel size does not match its level");
+    const uint32_t leafCount = take<uint32_t>(at);
+    const uint32_t rawBytes = take<uint32_t>(at);
     const std::size_t blocks = out.tiles.size();
-    if (h.leafCount > blocks) throw damaged("it claims " + std::to_string(h.leafCount) + " leaves");
+    if (leafCount > blocks) throw damaged("it claims " + std::to_string(leafCount) + " leaves");
     const std::size_t slotBytes = blocks * sizeof(MaterialId);
-    if (h.rawBytes < slotBytes || h.rawBytes > slotBytes + h.leafCount * kMaxLeafBytes)
+    if (rawBytes < slotBytes || rawBytes > slotBytes + leafCount * kMaxLeafBytes)
         throw damaged("its size does not fit its leaves");
 
     const char* compressed = bytes.data() + kHeaderBytes;
     const std::size_t compressedBytes = sealed - kHeaderBytes;
     std::size_t decoded = 0;
-    if (blosc_cbuffer_validate(compressed, compressedBytes, &decoded) != 0 || decoded != h.rawBytes)
+    if (blosc_cbuffer_validate(compressed, compressedBytes, &decoded) != 0 || decoded != rawBytes)
         throw damaged("its compressed data does not hold what its header says");
     // One buffer per thread, kept: a fresh one per brick would leave holes that the leaves decoded into
     // them pin, so a streaming process would grow past its budget.
     thread_local std::vector<char> raw;
-    raw.resize(h.rawBytes);
-    if (blosc_decompress_ctx(compressed, raw.data(), raw.size(), 1) != int(h.rawBytes))
+    raw.resize(rawBytes);
+    if (blosc_decompress_ctx(compressed, raw.data(), raw.size(), 1) != int(rawBytes))
         throw damaged("its compressed data does not decompress");
 
     at = raw.data();
     uint32_t leaves = 0;
     for (std::size_t b = 0; b < blocks; ++b) {
         const MaterialId id = take<MaterialId>(at);
-        if (id == kLeafSlot) ++leaves;
-        else if (id > materialCount) throw damaged("it uses an undefined material");
-        else out.tiles[b] = id;
-        if (id == kLeafSlot) out.leaves[b] = std::make_unique<HermiteLeaf>(blockOrigin(box, b));
+        if (id == kLeafSlot) {
+            out.leaves[b] = std::make_unique<HermiteLeaf>(blockOrigin(box, b));
+            ++leaves;
+        } else if (id > materialCount) {
+            throw damaged("it uses an undefined material");
+        } else {
+            out.tiles[b] = id;
+        }
     }
-    if (leaves != h.leafCount) throw damaged("its block table does not match its leaf count");
+    if (leaves != leafCount) throw damaged("its block table does not match its leaf count");
 
     BufferSource source(raw.data() + slotBytes, raw.size() - slotBytes);
     std::istream in(&source);
@@ -262,9 +262,7 @@ DecodedRegion decodeRegion(const std::string& bytes, const LeafAlignedBox& box, 
         for (auto& leaf : out.leaves) {
             if (!leaf) continue;
             leaf->readBuffers(in);
-            const MaterialValue* values = leaf->buffer().data();
-            for (Index n = 0; n < Index(kLeafVoxels); ++n)
-                if (values[n].id > materialCount) throw damaged("it uses an undefined material");
+            requireDefinedMaterials(*leaf, materialCount, damaged);
         }
     } catch (const openvdb::Exception& e) {
         throw damaged(e.what());

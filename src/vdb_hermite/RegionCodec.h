@@ -23,7 +23,6 @@ public:
     DecodedRegion(DecodedRegion&&) noexcept;
     DecodedRegion& operator=(DecodedRegion&&) noexcept;
 
-    const LeafAlignedBox& box() const;
     /// What the box takes in a volume once pasted, counted as regionMemoryBytes() counts it.
     uint64_t memoryBytes() const;
 
@@ -39,9 +38,9 @@ std::string encodeRegion(const Volume& volume, const LeafAlignedBox& box, uint32
 
 /// The two steps of encodeRegion, apart for tests and fuzzers that craft bodies: the body (a material
 /// id per block, 0xffff for a block stored as a leaf, then the leaves' serialization in block order),
-/// and the header, compression and checksum around it.
-std::string encodeRegionBody(const Volume& volume, const LeafAlignedBox& box, uint32_t& leafCount);
-std::string sealRegion(const std::string& body, const LeafAlignedBox& box, double voxelSize, uint32_t leafCount);
+/// and the header (its leaf count taken from the body's block table), compression and checksum around it.
+std::string encodeRegionBody(const Volume& volume, const LeafAlignedBox& box);
+std::string sealRegion(const std::string& body, const LeafAlignedBox& box, double voxelSize, uint32_t* leafCount = nullptr);
 
 /// Reads what encodeRegion wrote for `box` of a volume of `voxelSize` whose materials table holds
 /// `materialCount` materials; also a .vdb stream of the box (encodeVolume), the form stores of format
