@@ -518,6 +518,28 @@ TEST_CASE("brushes that do not reach the solid change nothing", "[csg]")
     CHECK(identical(a, b));
 }
 
+TEST_CASE("adding or painting a solid's own material inside it computes no block; another material does", "[csg][add]")
+{
+    Volume a(1.0);
+    const MaterialId red = defineMaterial(a, "red", 0.5f);
+    apply(a, CsgMode::Add, box({40.0, 40.0, 40.0}), at({0.3, -0.2, 0.1}));
+    const Vec3d inside(5.5, -3.25, 2.0);
+    for (const CsgMode mode : {CsgMode::Add, CsgMode::Paint}) {
+        INFO(csgModeName(mode));
+        Volume b = a.clone();
+        // The sphere lies inside the box, across tiles only: nothing there can change.
+        const EditStats same = apply(b, mode, sphere(20.0), at(inside), 1);
+        CHECK(same.blocksComputed == 0);
+        CHECK(same.tilesWritten == 0);
+        CHECK(identical(a, b));
+        const EditStats other = apply(b, mode, sphere(20.0), at(inside), red);
+        CHECK(other.blocksComputed > 0);
+        CHECK(b.materialAt({5, -3, 2}) == red);
+        CHECK(b.materialAt({5, -3, 23}) == 1);
+        CHECK(checkInvariants(b) == "");
+    }
+}
+
 TEST_CASE("paint changes materials and keeps every surface crossing bit-exact", "[csg][paint]")
 {
     Volume v(1.0);

@@ -329,13 +329,21 @@ double Brush::distanceAtOrigin(const Vec3d& relative) const
     return d;
 }
 
-void Brush::distances(const Vec3d* points, double* out, std::size_t count) const
+void SdfField::distances(const LatticePatch& patch, double* out) const
 {
-    if (singleSphere_) {
-        for (std::size_t i = 0; i < count; ++i) out[i] = sphereDistance(parts_.front(), points[i] - translation_);
-        return;
-    }
-    for (std::size_t i = 0; i < count; ++i) out[i] = distanceAtOrigin(points[i] - translation_);
+    for (int32_t i = 0; i < patch.count; ++i)
+        for (int32_t j = 0; j < patch.count; ++j)
+            for (int32_t k = 0; k < patch.count; ++k) *out++ = distance(patch.point(i, j, k));
+}
+
+void Brush::distances(const LatticePatch& patch, double* out) const
+{
+    for (int32_t i = 0; i < patch.count; ++i)
+        for (int32_t j = 0; j < patch.count; ++j)
+            for (int32_t k = 0; k < patch.count; ++k) {
+                const Vec3d local = patch.point(i, j, k) - translation_;
+                *out++ = singleSphere_ ? sphereDistance(parts_.front(), local) : distanceAtOrigin(local);
+            }
 }
 
 double SdfField::surfaceAreaBound() const
@@ -361,7 +369,7 @@ Vec3d SdfField::gradient(const Vec3d& p, double h) const
 {
     const Vec3d points[4] = {p + Vec3d(h, -h, -h), p + Vec3d(-h, -h, h), p + Vec3d(-h, h, -h), p + Vec3d(h, h, h)};
     double d[4];
-    distances(points, d, 4);
+    for (int i = 0; i < 4; ++i) d[i] = distance(points[i]);
     const Vec3d g(d[0] - d[1] - d[2] + d[3], -d[0] - d[1] + d[2] + d[3], -d[0] + d[1] - d[2] + d[3]);
     const double len = g.length();
     return len > 0.0 && std::isfinite(len) ? g / len : Vec3d(0.0);

@@ -7,6 +7,8 @@
 #include <openvdb/math/Mat3.h>
 #include <openvdb/math/Vec3.h>
 
+#include <array>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -74,16 +76,29 @@ struct EdgeCrossing {
     Vec3d normal{0.0, 0.0, 1.0};
 };
 
+/// A cube of lattice points: (first + stride * (i, j, k)) * voxelSize for i, j, k in [0, count), i slowest
+/// and k fastest. The block kernel asks for distances a patch at a time, so that a sampled field can step
+/// through its own lattice instead of transforming every point.
+struct LatticePatch {
+    std::array<int32_t, 3> first{};
+    int32_t stride = 1;
+    int32_t count = 1;
+    double voxelSize = 1.0;
+
+    std::size_t size() const { return std::size_t(count) * std::size_t(count) * std::size_t(count); }
+    Vec3d point(int32_t i, int32_t j, int32_t k) const
+    {
+        return Vec3d(first[0] + stride * i, first[1] + stride * j, first[2] + stride * k) * voxelSize;
+    }
+};
+
 /// Anything the CSG kernel can carve with.
 class SdfField {
 public:
     virtual ~SdfField() = default;
     virtual double distance(const Vec3d& world) const = 0;
-    /// Distances at many points with one virtual call; brushes evaluate them in a tight loop.
-    virtual void distances(const Vec3d* points, double* out, std::size_t count) const
-    {
-        for (std::size_t i = 0; i < count; ++i) out[i] = distance(points[i]);
-    }
+    /// Distances at a patch's points (patch.size() of them, in its order) with one virtual call.
+    virtual void distances(const LatticePatch& patch, double* out) const;
     /// Unit gradient of the distance (pointing out of the brush), or zero where it is undefined.
     /// The default is a second-order tetrahedral finite difference with the given step.
     virtual Vec3d gradient(const Vec3d& world, double step) const;
@@ -140,7 +155,7 @@ public:
     Brush(std::vector<BrushPart> parts, double smoothness, const Placement& placement);
 
     double distance(const Vec3d& world) const override { return distanceAtOrigin(world - translation_); }
-    void distances(const Vec3d* points, double* out, std::size_t count) const override;
+    void distances(const LatticePatch& patch, double* out) const override;
     Vec3d gradient(const Vec3d& world, double step) const override;
     WorldBounds bounds() const override;
     double innerRadius() const override;

@@ -87,10 +87,10 @@ struct EditContext {
     Vec3d world(const Coord& c) const { return Vec3d(c.x(), c.y(), c.z()) * voxelSize; }
     /// The brush distance shifted so that "inside" is "below zero" for points on the surface too.
     double distance(const Vec3d& p) const { return field.distance(p) - onSurface; }
-    void distances(const Vec3d* points, double* out, std::size_t count) const
+    void distances(const LatticePatch& patch, double* out) const
     {
-        field.distances(points, out, count);
-        for (std::size_t i = 0; i < count; ++i) out[i] -= onSurface;
+        field.distances(patch, out);
+        for (std::size_t i = 0; i < patch.size(); ++i) out[i] -= onSurface;
     }
 };
 
@@ -323,11 +323,9 @@ BlockResult computeBlockFor(const EditContext& ctx, const BlockTask& task, Const
         const int di = n / 9 - 1, dj = (n / 3) % 3 - 1, dk = n % 3 - 1;
         offsetLength[n] = vs * ctx.lipschitz * std::sqrt(double(di * di + dj * dj + dk * dk));
     }
-    Vec3d points[27];
     double values[27];
-    for (int n = 0; n < 27; ++n) points[n] = ctx.world(o.offsetBy(n / 9 * 3 + 1, (n / 3) % 3 * 3 + 1, n % 3 * 3 + 1));
     double cubeCentre[27];
-    ctx.distances(points, cubeCentre, 27);
+    ctx.distances(LatticePatch{{o.x() + 1, o.y() + 1, o.z() + 1}, 3, 3, vs}, cubeCentre);
     for (int c = 0; c < 27; ++c) {
         const int ci = c / 9 * 3, cj = (c / 3) % 3 * 3, ck = c % 3 * 3;
         const double dc = cubeCentre[c];
@@ -335,8 +333,7 @@ BlockResult computeBlockFor(const EditContext& ctx, const BlockTask& task, Const
         if (settled) {
             for (int n = 0; n < 27; ++n) values[n] = dc > 0.0 ? dc - offsetLength[n] : dc + offsetLength[n];
         } else {
-            for (int n = 0; n < 27; ++n) points[n] = ctx.world(o.offsetBy(ci + n / 9, cj + (n / 3) % 3, ck + n % 3));
-            ctx.distances(points, values, 27);
+            ctx.distances(LatticePatch{{o.x() + ci, o.y() + cj, o.z() + ck}, 1, 3, vs}, values);
         }
         const int cubeBase = footIndex(ci, cj, ck);
         for (int n = 0; n < 27; ++n) {
@@ -419,10 +416,14 @@ public:
     std::vector<TileEdit> edits;
 
 private:
-    /// Empty space stays empty under every op but add.
+    /// Regions without children that no op can change: empty space under every op but add, and a solid
+    /// tile of the op's own material under add and paint. A tile holds no crossings, so the first layer of
+    /// its +x/+y/+z neighbours holds its material too, and keeps it.
     bool untouched(bool hasChildren, MaterialValue tile) const
     {
-        return !hasChildren && !tile.solid() && ctx_.mode != CsgMode::Add;
+        if (hasChildren) return false;
+        if (!tile.solid()) return ctx_.mode != CsgMode::Add;
+        return (ctx_.mode == CsgMode::Add || ctx_.mode == CsgMode::Paint) && tile == ctx_.material;
     }
 
     /// Settles a region the brush misses or covers entirely, with a tile edit where its content

@@ -370,33 +370,95 @@ Vec3d PlacedTool::toLattice(const Vec3d& world, const Vec3d& origin) const
     return q;
 }
 
-double PlacedTool::sample(const Vec3d& q) const
+namespace {
+
+/// A field's values at the corners of the lattice cell that holds `rel` (a position relative to the
+/// fields' origin, inside their box), and where `rel` lies in that cell.
+struct Cell {
+    double corner[2][2][2]; // [x][y][z]
+    double w[3];
+};
+
+Cell cellAt(const ToolField& field, const std::array<int32_t, 3>& dims, const Vec3d& rel)
+{
+    Cell cell;
+    int i0[3];
+    for (int a = 0; a < 3; ++a) {
+        // rel may fall a rounding error below 0 or above the last point: truncation and the cap keep the
+        // cell inside the box.
+        i0[a] = std::clamp(int(rel[a]), 0, dims[std::size_t(a)] - 2);
+        cell.w[a] = rel[a] - i0[a];
+    }
+    const std::size_t sy = std::size_t(dims[2]), sx = std::size_t(dims[1]) * sy;
+    const float* d = field.distance.data() + std::size_t(i0[0]) * sx + std::size_t(i0[1]) * sy + std::size_t(i0[2]);
+    for (int x = 0; x < 2; ++x)
+        for (int y = 0; y < 2; ++y)
+            for (int z = 0; z < 2; ++z) cell.corner[x][y][z] = d[std::size_t(x) * sx + std::size_t(y) * sy + std::size_t(z)];
+    return cell;
+}
+
+/// Exact at both ends (without a branch), so that lattice points read their stored values.
+inline double lerp(double a, double b, double t) { return a * (1.0 - t) + b * t; }
+
+/// The trilinear interpolant at `rel`, as in cellAt, without gathering the cell.
+inline double interpolate(const ToolField& field, const std::array<int32_t, 3>& dims, const Vec3d& rel)
+{
+    const int x = std::clamp(int(rel[0]), 0, dims[0] - 2), y = std::clamp(int(rel[1]), 0, dims[1] - 2),
+              z = std::clamp(int(rel[2]), 0, dims[2] - 2);
+    const double wx = rel[0] - x, wy = rel[1] - y, wz = rel[2] - z;
+    const std::size_t sy = std::size_t(dims[2]), sx = std::size_t(dims[1]) * sy;
+    const float* d = field.distance.data() + std::size_t(x) * sx + std::size_t(y) * sy + std::size_t(z);
+    const double c00 = lerp(d[0], d[1], wz), c01 = lerp(d[sy], d[sy + 1], wz);
+    const double c10 = lerp(d[sx], d[sx + 1], wz), c11 = lerp(d[sx + sy], d[sx + sy + 1], wz);
+    return lerp(lerp(c00, c01, wy), lerp(c10, c11, wy), wx);
+}
+
+/// The interpolant's gradient inside the cell, in tool voxels.
+Vec3d interpolantGradient(const Cell& c)
+{
+    Vec3d g;
+    for (int a = 0; a < 3; ++a) {
+        const int b = (a + 1) % 3, e = (a + 2) % 3; // the two other axes
+        double sum = 0.0;
+        for (int u = 0; u < 2; ++u)
+            for (int v = 0; v < 2; ++v) {
+                int hi[3], lo[3];
+                hi[a] = 1, lo[a] = 0;
+                hi[b] = lo[b] = u;
+                hi[e] = lo[e] = v;
+                const double weight = (u ? c.w[b] : 1.0 - c.w[b]) * (v ? c.w[e] : 1.0 - c.w[e]);
+                sum += weight * (c.corner[hi[0]][hi[1]][hi[2]] - c.corner[lo[0]][lo[1]][lo[2]]);
+            }
+        g[a] = sum;
+    }
+    return g;
+}
+
+} // namespace
+
+bool PlacedTool::insideFields(const Vec3d& rel) const
+{
+    const auto& n = tool_->dims();
+    for (int a = 0; a < 3; ++a)
+        if (!(rel[a] >= 0.0 && rel[a] <= double(n[std::size_t(a)] - 1))) return false;
+    return true;
+}
+
+Vec3d PlacedTool::relative(const Vec3d& q) const
 {
     const auto& o = tool_->origin();
+    return Vec3d(q[0] - o[0], q[1] - o[1], q[2] - o[2]);
+}
+
+double PlacedTool::sample(const Vec3d& q) const { return sampleRelative(relative(q)); }
+
+double PlacedTool::sampleRelative(const Vec3d& rel) const
+{
+    if (insideFields(rel)) return interpolate(*field_, tool_->dims(), rel);
     const auto& n = tool_->dims();
-    Vec3d rel, clamped;
-    bool inside = true;
-    for (int a = 0; a < 3; ++a) {
-        rel[a] = q[a] - o[std::size_t(a)];
-        clamped[a] = std::clamp(rel[a], 0.0, double(n[std::size_t(a)] - 1));
-        inside = inside && clamped[a] == rel[a];
-    }
-    if (!inside) return field_->outerValue + (rel - clamped).length();
-    int i0[3];
-    double w[3];
-    for (int a = 0; a < 3; ++a) {
-        i0[a] = std::min(int(rel[a]), n[std::size_t(a)] - 2);
-        w[a] = rel[a] - i0[a];
-    }
-    const float* d = field_->distance.data();
-    const std::size_t sy = std::size_t(n[2]), sx = std::size_t(n[1]) * sy;
-    const std::size_t base = std::size_t(i0[0]) * sx + std::size_t(i0[1]) * sy + std::size_t(i0[2]);
-    auto lerp = [](double a, double b, double t) { return t == 0.0 ? a : t == 1.0 ? b : a + (b - a) * t; };
-    const double c00 = lerp(d[base], d[base + 1], w[2]);
-    const double c01 = lerp(d[base + sy], d[base + sy + 1], w[2]);
-    const double c10 = lerp(d[base + sx], d[base + sx + 1], w[2]);
-    const double c11 = lerp(d[base + sx + sy], d[base + sx + sy + 1], w[2]);
-    return lerp(lerp(c00, c01, w[1]), lerp(c10, c11, w[1]), w[0]);
+    Vec3d clamped;
+    for (int a = 0; a < 3; ++a) clamped[a] = std::clamp(rel[a], 0.0, double(n[std::size_t(a)] - 1));
+    return field_->outerValue + (rel - clamped).length();
 }
 
 double PlacedTool::distanceAt(const Vec3d& world, const Vec3d& origin) const
@@ -404,22 +466,38 @@ double PlacedTool::distanceAt(const Vec3d& world, const Vec3d& origin) const
     return sample(toLattice(world, origin)) * toWorldDistance_;
 }
 
-void PlacedTool::distances(const Vec3d* points, double* out, std::size_t count) const
+void PlacedTool::distances(const LatticePatch& patch, double* out) const
 {
-    for (std::size_t i = 0; i < count; ++i) out[i] = sample(toLattice(points[i], placement_.translation)) * toWorldDistance_;
+    // Off the lattice (where toLattice snaps), the patch's points map to positions in the tool that step
+    // by three fixed vectors.
+    if (onLattice_) return SdfField::distances(patch, out);
+    const Vec3d first = relative(toLattice(patch.point(0, 0, 0), placement_.translation));
+    const double spacing = double(patch.stride) * patch.voxelSize;
+    const Vec3d step[3] = {worldToLattice_.col(0) * spacing, worldToLattice_.col(1) * spacing, worldToLattice_.col(2) * spacing};
+    for (int32_t i = 0; i < patch.count; ++i)
+        for (int32_t j = 0; j < patch.count; ++j) {
+            const Vec3d row = first + step[0] * double(i) + step[1] * double(j);
+            for (int32_t k = 0; k < patch.count; ++k) *out++ = sampleRelative(row + step[2] * double(k)) * toWorldDistance_;
+        }
 }
 
 Vec3d PlacedTool::gradient(const Vec3d& world, double step) const
 {
-    // The interpolant's gradient on the lattice (one-sided on cell faces), by the chain rule in world space.
+    // The interpolant's gradient on the lattice (that of the cell holding the point, on a cell face), by
+    // the chain rule in world space; outside the box, a finite difference of the continuation.
     const Vec3d q = toLattice(world, placement_.translation);
-    const double h = 1e-4; // tool voxels: inside one cell for all but points within h of a face
+    const Vec3d rel = relative(q);
     Vec3d g;
-    for (int a = 0; a < 3; ++a) {
-        Vec3d lo = q, hi = q;
-        lo[a] -= h;
-        hi[a] += h;
-        g[a] = (sample(hi) - sample(lo)) / (2.0 * h);
+    if (insideFields(rel)) {
+        g = interpolantGradient(cellAt(*field_, tool_->dims(), rel));
+    } else {
+        const double h = 1e-4;
+        for (int a = 0; a < 3; ++a) {
+            Vec3d lo = q, hi = q;
+            lo[a] -= h;
+            hi[a] += h;
+            g[a] = (sample(hi) - sample(lo)) / (2.0 * h);
+        }
     }
     const Vec3d worldGradient = worldToLattice_.transpose() * g;
     const double len = worldGradient.length();

@@ -90,7 +90,7 @@ public:
     PlacedTool(std::shared_ptr<const GridTool> tool, const Placement& placement, MaterialId region = kEmptyMaterial);
 
     double distance(const Vec3d& world) const override { return distanceAt(world, placement_.translation); }
-    void distances(const Vec3d* points, double* out, std::size_t count) const override;
+    void distances(const LatticePatch& patch, double* out) const override;
     double distanceAt(const Vec3d& world, const Vec3d& origin) const override;
     /// The gradient of the interpolant, carried back to world space.
     Vec3d gradient(const Vec3d& world, double step) const override;
@@ -110,8 +110,13 @@ public:
 private:
     /// The tool-lattice position of a world point with the origin at `origin`.
     Vec3d toLattice(const Vec3d& world, const Vec3d& origin) const;
-    /// The field at a tool-lattice position, in tool voxels.
+    /// A tool-lattice position relative to the fields' first point, and whether such a position lies in
+    /// their box.
+    Vec3d relative(const Vec3d& q) const;
+    bool insideFields(const Vec3d& rel) const;
+    /// The field at a tool-lattice position, or at a relative one, in tool voxels.
     double sample(const Vec3d& q) const;
+    double sampleRelative(const Vec3d& rel) const;
 
     std::shared_ptr<const GridTool> tool_;
     const ToolField* field_;
