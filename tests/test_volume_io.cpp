@@ -3,6 +3,7 @@
 #include "support/Sculpt.h"
 #include "support/TestUtil.h"
 #include "vdb_hermite/AtomicFile.h"
+#include "vdb_hermite/HermiteGrid.h"
 #include "vdb_hermite/VolumeIO.h"
 
 #include <catch2/catch.hpp>
@@ -62,6 +63,36 @@ void requireRejected(const std::string& path)
 }
 
 } // namespace
+
+TEST_CASE("a leaf's active voxels are those with a crossing edge, and each edge finds its own sample", "[io]")
+{
+    std::mt19937_64 rng(1203);
+    for (const double density : {0.0, 0.002, 0.05, 0.3, 0.9, 1.0}) {
+        for (int round = 0; round < 20; ++round) {
+            HermiteLeafData data;
+            std::bernoulli_distribution crosses(density);
+            for (int bit = 0; bit < kEdgeBits; ++bit) {
+                if (!crosses(rng)) continue;
+                data.edgeBits[std::size_t(bit >> 6)] |= uint64_t(1) << (bit & 63);
+                data.samples.push_back(PackedSample{uint16_t(bit), uint16_t(bit * 7), uint16_t(round)});
+            }
+            HermiteLeaf leaf;
+            leaf.assign(HermiteLeafData(data));
+            for (Index n = 0; n < Index(kLeafVoxels); ++n) {
+                bool anyEdge = false;
+                for (int axis = 0; axis < 3; ++axis) {
+                    const int bit = HermiteLeaf::edgeBit(n, axis);
+                    const bool set = (data.edgeBits[std::size_t(bit >> 6)] >> (bit & 63)) & 1u;
+                    anyEdge = anyEdge || set;
+                    const PackedSample* sample = leaf.sample(n, axis);
+                    REQUIRE((sample != nullptr) == set);
+                    if (sample) REQUIRE(sample->offset == uint16_t(bit));
+                }
+                REQUIRE(leaf.isValueOn(n) == anyEdge);
+            }
+        }
+    }
+}
 
 TEST_CASE("a sculpted volume survives save and load bit-exactly", "[io]")
 {

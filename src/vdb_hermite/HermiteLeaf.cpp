@@ -3,6 +3,7 @@
 #include <openvdb/io/io.h>
 
 #include <algorithm>
+#include <array>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -20,6 +21,24 @@ void requireSamplesMatchMask(const HermiteLeafData& data, const char* caller)
         throw std::invalid_argument(std::string(caller) + ": sample count does not match the edge mask");
 }
 
+/// For 12 edge bits (the three edges of four voxels), which of the four voxels has a crossing edge.
+constexpr std::array<uint8_t, 4096> kVoxelsOfEdgeBits = [] {
+    std::array<uint8_t, 4096> out{};
+    for (unsigned bits = 0; bits < 4096; ++bits)
+        for (unsigned v = 0; v < 4; ++v)
+            if ((bits >> (3 * v)) & 7u) out[bits] = uint8_t(out[bits] | (1u << v));
+    return out;
+}();
+
+/// Twelve bits of a 192-bit group (three words) from bit `at`.
+inline unsigned twelveBits(const uint64_t* group, unsigned at)
+{
+    const unsigned word = at >> 6, shift = at & 63;
+    uint64_t bits = group[word] >> shift;
+    if (shift > 52) bits |= group[word + 1] << (64 - shift);
+    return unsigned(bits & 0xfffu);
+}
+
 } // namespace
 
 void HermiteLeaf::rebuildPrefixAndMask()
@@ -27,14 +46,16 @@ void HermiteLeaf::rebuildPrefixAndMask()
     uint16_t running = 0;
     for (int w = 0; w < kEdgeWords; ++w) {
         prefix_[w] = running;
-        running = uint16_t(running + __builtin_popcountll(edgeBits_[w]));
+        running = uint16_t(running + bitCount(edgeBits_[w]));
     }
+    // A voxel is active when one of its three edges crosses: the 192 edge bits of 64 voxels give one
+    // word of the mask, four voxels per table lookup.
     auto& mask = this->getValueMask();
-    mask.setOff();
-    for (int w = 0; w < kEdgeWords; ++w) {
-        for (uint64_t bits = edgeBits_[w]; bits; bits &= bits - 1) {
-            mask.setOn(Index((w * 64 + __builtin_ctzll(bits)) / 3));
-        }
+    for (Index m = 0; m < Index(kLeafVoxels / 64); ++m) {
+        const uint64_t* group = &edgeBits_[3 * m];
+        uint64_t voxels = 0;
+        for (unsigned quad = 0; quad < 16; ++quad) voxels |= uint64_t(kVoxelsOfEdgeBits[twelveBits(group, 12 * quad)]) << (4 * quad);
+        mask.template getWord<uint64_t>(m) = voxels;
     }
 }
 
