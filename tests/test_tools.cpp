@@ -435,6 +435,10 @@ TEST_CASE("vdbclay tool make cuts a box of a scene into a tool that scripts stam
     CHECK(empty.exitCode == 1);
     CHECK_THAT(empty.err, Catch::Contains("no solid voxel"));
     CHECK_FALSE(std::filesystem::exists(dir.file("empty.vdb")));
+    // A box far larger than the scene (one the brush limits would refuse as a cut) takes all of it.
+    REQUIRE(runCli(dir, "tool make scene.vdb --bbox -1e300 -1e300 -1e300 1e300 1e300 1e300 -o all.vdb").exitCode == 0);
+    REQUIRE(runCli(dir, "tool make scene.vdb -o whole.vdb").exitCode == 0);
+    CHECK(identical(loadVolume(dir.file("all.vdb")), loadVolume(dir.file("whole.vdb"))));
     CHECK(runCli(dir, "tool make missing.vdb -o t.vdb").exitCode == 1);
     CHECK(runCli(dir, "tool --help").exitCode == 0);
 }

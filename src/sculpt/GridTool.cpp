@@ -168,22 +168,30 @@ ToolField regionField(const Box& box, const std::vector<MaterialId>& materials, 
 
 } // namespace
 
-Volume toolFromScene(Volume scene, const std::optional<WorldBounds>& box)
+Volume toolFromScene(Volume scene, const std::optional<WorldBounds>& requested)
 {
-    if (box) {
+    if (requested) {
         for (int a = 0; a < 3; ++a)
-            if (!(box->max[a] > box->min[a]) || !std::isfinite(box->min[a]) || !std::isfinite(box->max[a]))
+            if (!(requested->max[a] > requested->min[a]) || !std::isfinite(requested->min[a]) || !std::isfinite(requested->max[a]))
                 throw std::invalid_argument("the box must have finite corners with x0 < x1, y0 < y1 and z0 < z1");
+        // The part of the box that can hold solid voxels: a box far larger than the scene means all of it.
+        const VolumeStats stats = scene.stats();
+        WorldBounds box = *requested;
+        for (int a = 0; a < 3; ++a) {
+            box.min[a] = std::max(box.min[a], (stats.bboxMin[std::size_t(a)] - 1.5) * scene.voxelSize());
+            box.max[a] = std::min(box.max[a], (stats.bboxMax[std::size_t(a)] + 1.5) * scene.voxelSize());
+            if (stats.empty || !(box.max[a] > box.min[a])) throw std::invalid_argument("the box holds no solid voxel of the scene");
+        }
         Primitive cut;
         cut.shape = Shape::Box;
-        cut.size = (box->max - box->min) * 0.5;
+        cut.size = (box.max - box.min) * 0.5;
         Placement at;
-        at.translation = (box->max + box->min) * 0.5;
+        at.translation = (box.max + box.min) * 0.5;
         CsgOp intersect;
         intersect.mode = CsgMode::Intersect;
         applyCsg(scene, Brush(cut, at), intersect);
     }
-    if (scene.stats().empty) throw std::invalid_argument(box ? "the box holds no solid voxel of the scene" : "the scene holds no solid voxel");
+    if (scene.stats().empty) throw std::invalid_argument(requested ? "the box holds no solid voxel of the scene" : "the scene holds no solid voxel");
     return scene;
 }
 
