@@ -67,6 +67,11 @@ void requireSceneExtension(const std::string& path);
 /// An option check that refuses zero, negative and non-finite numbers with a short message
 /// (CLI::PositiveNumber quotes the largest double as its limit).
 const CLI::Validator& positiveNumber();
+/// The same for zero and positive numbers (CLI::NonNegativeNumber lets NaN through).
+const CLI::Validator& nonNegativeNumber();
+/// An option check for a whole number from 0 to 2^64 - 1 typed in decimal (a seed, an index): a larger
+/// one would saturate and a negative one wrap around, silently.
+const CLI::Validator& unsignedInteger();
 /// An option check for a scene read by a command: a mesh file is refused with the import command that
 /// brings it in.
 const CLI::Validator& sceneInput();

@@ -19,7 +19,7 @@ CLI::App* addDiffCommand(CLI::App& parent, DiffOptions& o)
                     "Accept surfaces within this many voxels of each other (two-sided Hausdorff distance), where "
                     "every voxel solid in both holds the same material")
         ->type_name("VOXELS")
-        ->check(CLI::NonNegativeNumber);
+        ->check(nonNegativeNumber());
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout: the differing bricks, the volume and the surface "
                                     "distance of the difference");
     return cmd;

@@ -16,8 +16,8 @@ CLI::App* addSelftestCommand(CLI::App& parent, SelftestOptions& o)
 {
     CLI::App* cmd = parent.add_subcommand("selftest", "Check random scenes: lattice, meshes, volume, re-meshing, threads");
     cmd->add_option("--scenes", o.scenes, "Number of random scenes")->check(CLI::Range(1, 100000000));
-    cmd->add_option("--seed", o.seed, "Seed of the scene sequence (scene i of seed s is always the same)");
-    cmd->add_option("--first", o.first, "Index of the first scene")->check(CLI::NonNegativeNumber);
+    cmd->add_option("--seed", o.seed, "Seed of the scene sequence (scene i of seed s is always the same)")->check(unsignedInteger());
+    cmd->add_option("--first", o.first, "Index of the first scene")->check(unsignedInteger());
     cmd->add_option("--save-failure", o.failurePath,
                     "Write the first failing scene's stroke script here (replay it with 'vdbclay sculpt')")
         ->type_name("SCRIPT.json");

@@ -17,6 +17,7 @@ CLI::App* addSynthCommand(CLI::App& parent, SynthCommandOptions& o)
     cmd->add_option("--extent", o.extent, "Voxels along the scene's longest side")->capture_default_str()->type_name("N");
     cmd->add_option("--seed", o.seed, "Seed: the same seed gives the same scene, whatever the thread count")
         ->capture_default_str()
+        ->check(unsignedInteger())
         ->type_name("S");
     cmd->add_option("--voxel-size", o.voxelSize, "World size of a voxel")->capture_default_str()->type_name("V");
     cmd->add_option("-o,--output", o.output, "Store to write (.vdbclay); replaced only once complete")

@@ -91,6 +91,33 @@ const CLI::Validator& positiveNumber()
     return check;
 }
 
+const CLI::Validator& nonNegativeNumber()
+{
+    static const CLI::Validator check(
+        [](const std::string& text) {
+            char* end = nullptr;
+            const double value = std::strtod(text.c_str(), &end);
+            const bool parsed = !text.empty() && end == text.c_str() + text.size();
+            return parsed && std::isfinite(value) && value >= 0.0 ? std::string() : "must be zero or a positive number, not " + text;
+        },
+        "NON-NEGATIVE");
+    return check;
+}
+
+const CLI::Validator& unsignedInteger()
+{
+    static const CLI::Validator check(
+        [](const std::string& text) {
+            const bool digits = !text.empty() && text.size() <= 20 &&
+                                std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+            // 20 digits may still exceed 2^64 - 1: compare as text, both padded to 20 digits.
+            const bool fits = digits && (text.size() < 20 || text <= "18446744073709551615");
+            return fits ? std::string() : "must be a whole number from 0 to 18446744073709551615, not " + text;
+        },
+        "UINT");
+    return check;
+}
+
 const CLI::Validator& sceneInput()
 {
     static const CLI::Validator check(

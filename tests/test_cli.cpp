@@ -270,6 +270,24 @@ TEST_CASE("cli: bad input fails cleanly with a message", "[cli]")
         checkCleanFailure(runCli(dir, "bench nothing --quick"));
         CHECK_FALSE(std::filesystem::exists(dir.path() / "v.vdb"));
     }
+    SECTION("seeds and tolerances that would overflow, wrap or compare as NaN")
+    {
+        for (const char* seed : {"18446744073709551616", "99999999999999999999", "-5", "1.5", "x"}) {
+            INFO(seed);
+            const CommandResult r = runCli(dir, std::string("synth terrain --extent 16 --seed ") + seed + " -o t.vdbclay");
+            checkCleanFailure(r);
+            CHECK(r.exitCode == 2);
+        }
+        CHECK_FALSE(std::filesystem::exists(dir.path() / "t.vdbclay"));
+        REQUIRE(runCli(dir, "synth terrain --extent 16 --seed 18446744073709551615 -o t.vdbclay").exitCode == 0);
+        for (const char* tolerance : {"nan", "-1", "inf"}) {
+            INFO(tolerance);
+            const CommandResult r = runCli(dir, std::string("diff t.vdbclay t.vdbclay --tolerance ") + tolerance);
+            checkCleanFailure(r);
+            CHECK(r.exitCode == 2);
+        }
+        CHECK(runCli(dir, "diff t.vdbclay t.vdbclay --tolerance 0").exitCode == 0);
+    }
 }
 
 TEST_CASE("cli: import, lod, mesh --lod, sculpt, export and diff on a store", "[cli][store]")
