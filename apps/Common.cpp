@@ -114,7 +114,7 @@ const CLI::Validator& unsignedInteger()
             const bool fits = digits && (text.size() < 20 || text <= "18446744073709551615");
             return fits ? std::string() : "must be a whole number from 0 to 18446744073709551615, not " + text;
         },
-        "UINT");
+        ""); // the option's own type name (UINT) says it
     return check;
 }
 
