@@ -380,14 +380,17 @@ Vec3d PlacedTool::toLattice(const Vec3d& world, const Vec3d& origin) const
 
 namespace {
 
-/// A field's values at the corners of the lattice cell that holds `rel` (a position relative to the
-/// fields' origin, inside their box), and where `rel` lies in that cell.
+/// The lattice cell of a field that holds `rel` (a position relative to the fields' origin, inside their
+/// box): its first corner's value, the strides to the others, and where `rel` lies in it.
 struct Cell {
-    double corner[2][2][2]; // [x][y][z]
+    const float* first;
+    std::size_t sx, sy;
     double w[3];
+
+    double corner(int x, int y, int z) const { return first[std::size_t(x) * sx + std::size_t(y) * sy + std::size_t(z)]; }
 };
 
-Cell cellAt(const ToolField& field, const std::array<int32_t, 3>& dims, const Vec3d& rel)
+inline Cell cellAt(const ToolField& field, const std::array<int32_t, 3>& dims, const Vec3d& rel)
 {
     Cell cell;
     int i0[3];
@@ -397,28 +400,19 @@ Cell cellAt(const ToolField& field, const std::array<int32_t, 3>& dims, const Ve
         i0[a] = std::clamp(int(rel[a]), 0, dims[std::size_t(a)] - 2);
         cell.w[a] = rel[a] - i0[a];
     }
-    const std::size_t sy = std::size_t(dims[2]), sx = std::size_t(dims[1]) * sy;
-    const float* d = field.distance.data() + std::size_t(i0[0]) * sx + std::size_t(i0[1]) * sy + std::size_t(i0[2]);
-    for (int x = 0; x < 2; ++x)
-        for (int y = 0; y < 2; ++y)
-            for (int z = 0; z < 2; ++z) cell.corner[x][y][z] = d[std::size_t(x) * sx + std::size_t(y) * sy + std::size_t(z)];
+    cell.sy = std::size_t(dims[2]);
+    cell.sx = std::size_t(dims[1]) * cell.sy;
+    cell.first = field.distance.data() + std::size_t(i0[0]) * cell.sx + std::size_t(i0[1]) * cell.sy + std::size_t(i0[2]);
     return cell;
 }
 
 /// Exact at both ends (without a branch), so that lattice points read their stored values.
 inline double lerp(double a, double b, double t) { return a * (1.0 - t) + b * t; }
 
-/// The trilinear interpolant at `rel`, as in cellAt, without gathering the cell.
-inline double interpolate(const ToolField& field, const std::array<int32_t, 3>& dims, const Vec3d& rel)
+inline double interpolate(const Cell& c)
 {
-    const int x = std::clamp(int(rel[0]), 0, dims[0] - 2), y = std::clamp(int(rel[1]), 0, dims[1] - 2),
-              z = std::clamp(int(rel[2]), 0, dims[2] - 2);
-    const double wx = rel[0] - x, wy = rel[1] - y, wz = rel[2] - z;
-    const std::size_t sy = std::size_t(dims[2]), sx = std::size_t(dims[1]) * sy;
-    const float* d = field.distance.data() + std::size_t(x) * sx + std::size_t(y) * sy + std::size_t(z);
-    const double c00 = lerp(d[0], d[1], wz), c01 = lerp(d[sy], d[sy + 1], wz);
-    const double c10 = lerp(d[sx], d[sx + 1], wz), c11 = lerp(d[sx + sy], d[sx + sy + 1], wz);
-    return lerp(lerp(c00, c01, wy), lerp(c10, c11, wy), wx);
+    const auto alongZ = [&](int x, int y) { return lerp(c.corner(x, y, 0), c.corner(x, y, 1), c.w[2]); };
+    return lerp(lerp(alongZ(0, 0), alongZ(0, 1), c.w[1]), lerp(alongZ(1, 0), alongZ(1, 1), c.w[1]), c.w[0]);
 }
 
 /// The interpolant's gradient inside the cell, in tool voxels.
@@ -435,7 +429,7 @@ Vec3d interpolantGradient(const Cell& c)
                 hi[b] = lo[b] = u;
                 hi[e] = lo[e] = v;
                 const double weight = (u ? c.w[b] : 1.0 - c.w[b]) * (v ? c.w[e] : 1.0 - c.w[e]);
-                sum += weight * (c.corner[hi[0]][hi[1]][hi[2]] - c.corner[lo[0]][lo[1]][lo[2]]);
+                sum += weight * (c.corner(hi[0], hi[1], hi[2]) - c.corner(lo[0], lo[1], lo[2]));
             }
         g[a] = sum;
     }
@@ -462,7 +456,7 @@ double PlacedTool::sample(const Vec3d& q) const { return sampleRelative(relative
 
 double PlacedTool::sampleRelative(const Vec3d& rel) const
 {
-    if (insideFields(rel)) return interpolate(*field_, tool_->dims(), rel);
+    if (insideFields(rel)) return interpolate(cellAt(*field_, tool_->dims(), rel));
     const auto& n = tool_->dims();
     Vec3d clamped;
     for (int a = 0; a < 3; ++a) clamped[a] = std::clamp(rel[a], 0.0, double(n[std::size_t(a)] - 1));
