@@ -16,7 +16,7 @@ namespace {
 void requireSamplesMatchMask(const HermiteLeafData& data, const char* caller)
 {
     std::size_t expected = 0;
-    for (uint64_t w : data.edgeBits) expected += std::size_t(__builtin_popcountll(w));
+    for (uint64_t w : data.edgeBits) expected += std::size_t(HermiteLeaf::bitCount(w));
     if (expected != data.samples.size())
         throw std::invalid_argument(std::string(caller) + ": sample count does not match the edge mask");
 }
@@ -138,7 +138,7 @@ void HermiteLeaf::readBuffers(std::istream& is, bool fromHalf)
     is.read(reinterpret_cast<char*>(&count), sizeof(count));
     if (!is) throw openvdb::IoError("truncated Hermite leaf");
     std::size_t expected = 0;
-    for (uint64_t w : edgeBits_) expected += std::size_t(__builtin_popcountll(w));
+    for (uint64_t w : edgeBits_) expected += std::size_t(bitCount(w));
     if (count != expected) throw openvdb::IoError("corrupt Hermite leaf: sample count does not match edge mask");
     samples_.assign(count, PackedSample{});
     if (count > 0) {
