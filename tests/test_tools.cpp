@@ -257,6 +257,37 @@ TEST_CASE("a rotated or scaled tool never leaves holes", "[tool]")
     }
 }
 
+TEST_CASE("a placed tool's lattice patches hold the distances it gives point by point", "[tool]")
+{
+    // The kernel reads a block's distances as patches, which a placed tool walks incrementally; the
+    // crossing search and the one-side tests read single points. Both must describe one field.
+    const auto tool = std::make_shared<const GridTool>(twoMaterialSculpture());
+    std::mt19937 rng(77);
+    std::uniform_int_distribution<int32_t> corner(-30, 24);
+    std::uniform_real_distribution<double> angle(-180.0, 180.0), scale(0.6, 1.7), shift(-2.0, 2.0);
+    const Vec3d quarterTurn(90.0, 0.0, -90.0);
+    for (int round = 0; round < 40; ++round) {
+        const bool onLattice = round % 4 == 0;
+        const Placement placement = onLattice ? at(Vec3d(1.0, -2.0, 0.0), quarterTurn)
+                                              : at(Vec3d(shift(rng), shift(rng), shift(rng)), Vec3d(angle(rng), angle(rng), angle(rng)),
+                                                   Vec3d(scale(rng), scale(rng), scale(rng)));
+        const PlacedTool placed(tool, placement, MaterialId(round % 3));
+        for (int n = 0; n < 20; ++n) {
+            const LatticePatch patch{{corner(rng), corner(rng), corner(rng)}, n % 2 ? 3 : 1, n % 3 ? 3 : 5, 0.5};
+            std::vector<double> batch(patch.size());
+            placed.distances(patch, batch.data());
+            std::size_t index = 0;
+            for (int32_t i = 0; i < patch.count; ++i)
+                for (int32_t j = 0; j < patch.count; ++j)
+                    for (int32_t k = 0; k < patch.count; ++k) {
+                        const double single = placed.distance(patch.point(i, j, k));
+                        INFO("round " << round << ", point " << index);
+                        REQUIRE(batch[index++] == Approx(single).margin(1e-9));
+                    }
+        }
+    }
+}
+
 TEST_CASE("a tool's field changes no faster than its Lipschitz bound", "[tool]")
 {
     // The CSG kernel settles whole blocks from one distance and the bound; a field steeper than it
