@@ -1,6 +1,7 @@
 #include "vdb_hermite/RegionCodec.h"
 
 #include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/RegionBlocks.h"
 #include "vdb_hermite/VolumeIO.h"
 
 #include <blosc.h>
@@ -9,7 +10,6 @@
 
 #include <cstring>
 #include <functional>
-#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <streambuf>
@@ -34,19 +34,8 @@ constexpr MaterialId kLeafSlot = 0xffff;
 constexpr std::size_t kMaxLeafBytes =
     64 + 1 + kLeafVoxels * sizeof(MaterialValue) + kEdgeWords * 8 + 4 + 3 * kLeafVoxels * sizeof(PackedSample);
 
-std::size_t blocksPerSide(const LeafAlignedBox& box) { return std::size_t(box.edge / kLeafDim); }
-std::size_t blockCount(const LeafAlignedBox& box)
-{
-    const std::size_t n = blocksPerSide(box);
-    return n * n * n;
-}
-/// The origin of block `b` of the box (x-major, like voxel offsets in a leaf).
-Coord blockOrigin(const LeafAlignedBox& box, std::size_t b)
-{
-    const std::size_t n = blocksPerSide(box);
-    return Coord(box.min[0] + int32_t(b / (n * n)) * kLeafDim, box.min[1] + int32_t((b / n) % n) * kLeafDim,
-                 box.min[2] + int32_t(b % n) * kLeafDim);
-}
+using region_blocks::blockCount;
+using region_blocks::blockOrigin;
 
 uint32_t checksum(const char* data, std::size_t size)
 {
@@ -275,15 +264,9 @@ DecodedRegion decodeRegion(const std::string& bytes, const LeafAlignedBox& box, 
 void pasteRegion(Volume& volume, DecodedRegion&& region)
 {
     DecodedRegion::Impl& r = region.impl();
-    HermiteTree& tree = volume.impl().grid->tree();
-    std::set<Coord> lowers;
-    for (std::size_t b = 0; b < r.tiles.size(); ++b) {
-        const Coord o = blockOrigin(r.box, b);
-        if (r.leaves[b]) tree.addLeaf(r.leaves[b].release());
-        else tree.addTile(1, o, MaterialValue{r.tiles[b]}, false);
-        lowers.insert(alignDown(o, kLowerDim));
-    }
-    pruneNodes(tree, lowers);
+    region_blocks::replaceBlocks(volume.impl().grid->tree(), r.box, [&](std::size_t b, const Coord&) {
+        return std::pair(r.leaves[b].release(), MaterialValue{r.tiles[b]});
+    });
     r.tiles.assign(r.tiles.size(), kEmptyMaterial);
 }
 

@@ -1,6 +1,7 @@
 #include "vdb_hermite/VolumeRegions.h"
 
 #include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/RegionBlocks.h"
 
 #include <algorithm>
 #include <set>
@@ -18,12 +19,11 @@ void checkBox(const LeafAlignedBox& box)
         throw std::invalid_argument("a region must lie on leaf bounds (multiples of " + std::to_string(kLeafDim) + ")");
 }
 
+/// Calls fn(origin) for every leaf-sized block of the box.
 template<typename Fn>
 void forEachBlock(const LeafAlignedBox& box, Fn&& fn)
 {
-    for (int32_t x = 0; x < box.edge; x += kLeafDim)
-        for (int32_t y = 0; y < box.edge; y += kLeafDim)
-            for (int32_t z = 0; z < box.edge; z += kLeafDim) fn(Coord(box.min[0] + x, box.min[1] + y, box.min[2] + z));
+    region_blocks::forEachBlock(box, [&](std::size_t, const Coord& o) { fn(o); });
 }
 
 int32_t floorTo(int32_t v, int32_t edge) { return v >= 0 ? v / edge * edge : -((-v + edge - 1) / edge) * edge; }
@@ -53,26 +53,18 @@ void pasteRegion(Volume& volume, const Volume& part, const LeafAlignedBox& box)
     checkBox(box);
     if (part.voxelSize() != volume.voxelSize()) throw std::invalid_argument("a pasted region needs the same voxel size");
     const HermiteTree& src = part.impl().grid->constTree();
-    HermiteTree& dst = volume.impl().grid->tree();
-    std::set<Coord> lowers;
-    forEachBlock(box, [&](const Coord& o) {
-        if (const HermiteLeaf* leaf = src.probeConstLeaf(o)) dst.addLeaf(new HermiteLeaf(*leaf));
-        else dst.addTile(1, o, src.getValue(o), false);
-        lowers.insert(alignDown(o, kLowerDim));
+    region_blocks::replaceBlocks(volume.impl().grid->tree(), box, [&](std::size_t, const Coord& o) {
+        const HermiteLeaf* leaf = src.probeConstLeaf(o);
+        return std::pair(leaf ? new HermiteLeaf(*leaf) : nullptr, leaf ? MaterialValue{} : src.getValue(o));
     });
-    pruneNodes(dst, lowers);
 }
 
 void fillRegion(Volume& volume, const LeafAlignedBox& box, MaterialId material)
 {
     checkBox(box);
-    HermiteTree& dst = volume.impl().grid->tree();
-    std::set<Coord> lowers;
-    forEachBlock(box, [&](const Coord& o) {
-        dst.addTile(1, o, MaterialValue{material}, false);
-        lowers.insert(alignDown(o, kLowerDim));
+    region_blocks::replaceBlocks(volume.impl().grid->tree(), box, [&](std::size_t, const Coord&) {
+        return std::pair<HermiteLeaf*, MaterialValue>(nullptr, MaterialValue{material});
     });
-    pruneNodes(dst, lowers);
 }
 
 uint64_t regionMemoryBytes(const Volume& volume, const LeafAlignedBox& box)
