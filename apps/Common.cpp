@@ -78,29 +78,33 @@ void requireSceneExtension(const std::string& path)
         throw UsageError("'" + path + "': the output's extension picks its form; end it in .vdb (native volume) or .vdbclay (store)");
 }
 
-const CLI::Validator& positiveNumber()
+namespace {
+
+/// A check that the option's text is one finite number that `accept` takes, else "must be `wanted`".
+CLI::Validator finiteNumber(bool (*accept)(double), const std::string& wanted, const std::string& name)
 {
-    static const CLI::Validator check(
-        [](const std::string& text) {
+    return CLI::Validator(
+        [accept, wanted](const std::string& text) {
             char* end = nullptr;
             const double value = std::strtod(text.c_str(), &end);
             const bool parsed = !text.empty() && end == text.c_str() + text.size();
-            return parsed && std::isfinite(value) && value > 0.0 ? std::string() : "must be a positive number, not " + text;
+            return parsed && std::isfinite(value) && accept(value) ? std::string() : "must be " + wanted + ", not " + text;
         },
-        "POSITIVE");
+        name);
+}
+
+} // namespace
+
+const CLI::Validator& positiveNumber()
+{
+    static const CLI::Validator check = finiteNumber([](double v) { return v > 0.0; }, "a positive number", "POSITIVE");
     return check;
 }
 
 const CLI::Validator& nonNegativeNumber()
 {
-    static const CLI::Validator check(
-        [](const std::string& text) {
-            char* end = nullptr;
-            const double value = std::strtod(text.c_str(), &end);
-            const bool parsed = !text.empty() && end == text.c_str() + text.size();
-            return parsed && std::isfinite(value) && value >= 0.0 ? std::string() : "must be zero or a positive number, not " + text;
-        },
-        "NON-NEGATIVE");
+    static const CLI::Validator check =
+        finiteNumber([](double v) { return v >= 0.0; }, "zero or a positive number", "NON-NEGATIVE");
     return check;
 }
 
