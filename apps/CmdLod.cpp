@@ -6,6 +6,7 @@
 #include "scene/SceneStore.h"
 #include "scene/StoreLod.h"
 #include "scene/StreamingScene.h"
+#include "vdb_hermite/AtomicFile.h"
 #include "wavelet/LodPyramid.h"
 
 #include <CLI/CLI.hpp>
@@ -168,7 +169,10 @@ int runLodInspect(const LodOptions& o)
     } catch (const std::invalid_argument& e) {
         throw UsageError(e.what());
     }
-    const FlightInspection inspection = inspectFlight(*scene, flight);
+    // The outputs are checked before the flight, which replays in real time.
+    if (!o.csv.empty()) requireReplaceable(o.csv);
+    if (!o.plot.empty()) requireReplaceable(o.plot);
+    const FlightInspection inspection = inspectFlight(*scene, flight, 2.0, terminalProgress("replaying the flight", !o.json));
     if (!o.csv.empty()) writeFlightCsv(inspection, o.csv);
     if (!o.plot.empty()) writeFlightPlot(inspection, options.memoryBudgetBytes, o.plot);
     const FlightSummary& s = inspection.summary;

@@ -375,6 +375,20 @@ TEST_CASE("cli: synth and lod inspect with a camera path, CSV and plot", "[cli][
     checkCleanFailure(runCli(dir, "synth volcano --extent 64 -o v.vdbclay"));
     checkCleanFailure(runCli(dir, "synth terrain --extent 3 -o v.vdbclay"));
     checkCleanFailure(runCli(dir, "synth terrain --extent 64 -o v.vdb"));
+    // A flight longer than an hour (it replays in real time) is refused, and so are unusable outputs:
+    // PLplot ended the process when it could not open its file.
+    writeText(dir.file("long.json"), R"({"frames": [{"position": [0, 40, 0], "target": [9, 0, 9]},
+                                                    {"position": [1, 40, 0], "target": [9, 0, 9], "t": 1e6}]})");
+    const CommandResult tooLong = runCli(dir, "lod inspect c.vdbclay --camera-path long.json --memory-budget 64");
+    checkCleanFailure(tooLong);
+    CHECK(tooLong.exitCode == 2);
+    for (const char* output : {"--plot missing/f.png", "--csv missing/f.csv", "--csv ."}) {
+        INFO(output);
+        const CommandResult r = runCli(dir, std::string("lod inspect c.vdbclay --camera-path path.json --memory-budget 64 ") + output);
+        checkCleanFailure(r);
+        CHECK(r.exitCode == 1);
+        CHECK(r.err.find("PLPLOT") == std::string::npos);
+    }
 }
 
 TEST_CASE("cli: an in-place sculpt killed at random moments leaves the old or the new file, and no temporary file after the next save", "[cli][saves]")

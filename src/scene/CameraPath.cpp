@@ -74,6 +74,9 @@ std::vector<CameraFrame> parseCameraPath(const std::string& text)
         frame.viewer.target = vec3(f["target"], where + ".target");
         frame.time = f.contains("t") ? number(f["t"], where + ".t") : double(i) / kDefaultFrameRate;
         if (frame.time < 0.0 || frame.time <= previous) fail(where + ".t", "times must start at 0 or later and increase");
+        if (!(frame.time <= kMaxFlightSeconds))
+            fail(where + ".t", "a flight replays in real time: times must stay within " + std::to_string(int(kMaxFlightSeconds)) +
+                                   " s (one hour)");
         previous = frame.time;
         try {
             validateViewer(frame.viewer);

@@ -16,6 +16,8 @@ struct CameraFrame {
 };
 
 constexpr double kDefaultFrameRate = 90.0;
+/// The latest time a frame may have: a flight replays in real time.
+constexpr double kMaxFlightSeconds = 3600.0;
 
 /// Throws std::invalid_argument naming the offending place ("frames[3].target: ...").
 std::vector<CameraFrame> parseCameraPath(const std::string& jsonText);

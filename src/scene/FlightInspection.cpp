@@ -5,6 +5,8 @@
 #include <plplot.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -24,7 +26,8 @@ double since(Clock::time_point start) { return std::chrono::duration<double>(Clo
 
 } // namespace
 
-FlightInspection inspectFlight(StreamingScene& scene, const std::vector<CameraFrame>& flight, double settleSeconds)
+FlightInspection inspectFlight(StreamingScene& scene, const std::vector<CameraFrame>& flight, double settleSeconds,
+                               const std::function<void(uint64_t, uint64_t)>& progress)
 {
     FlightInspection out;
     if (flight.empty()) return out;
@@ -47,10 +50,11 @@ FlightInspection inspectFlight(StreamingScene& scene, const std::vector<CameraFr
         out.frames.push_back(f);
         return f.report.complete;
     };
-    for (const CameraFrame& frame : flight) {
-        const double wait = frame.time - since(start);
+    for (std::size_t i = 0; i < flight.size(); ++i) {
+        const double wait = flight[i].time - since(start);
         if (wait > 0.0) std::this_thread::sleep_for(std::chrono::duration<double>(wait));
-        record(frame.viewer, false);
+        record(flight[i].viewer, false);
+        if (progress) progress(i + 1, flight.size());
     }
     const double end = since(start) + settleSeconds;
     while (!out.frames.back().report.settled && since(start) < end) {
@@ -107,8 +111,11 @@ void writeFlightPlot(const FlightInspection& inspection, uint64_t budgetBytes, c
     }
     const auto maxOf = [](const std::vector<PLFLT>& v) { return std::max(1e-9, *std::max_element(v.begin(), v.end())); };
     const PLFLT tMax = std::max(t.back(), 1e-3);
-    // PLplot writes to a file name: a temporary beside the target, copied into the atomic save.
+    // PLplot writes to a file name: a temporary beside the target, copied into the atomic save. PLplot
+    // exits the process when it cannot open that file, so it is created here first.
+    requireReplaceable(path);
     const std::string temp = path + ".plplot-" + std::to_string(::getpid());
+    if (!std::ofstream(temp, std::ios::binary)) throw FileWriteError("cannot write '" + temp + "': " + std::strerror(errno));
     plsdev("pngcairo");
     plsfnam(temp.c_str());
     plsetopt("geometry", "1200x1000");

@@ -5,6 +5,8 @@
 #include "scene/CameraPath.h"
 #include "scene/StreamingScene.h"
 
+#include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -36,8 +38,10 @@ struct FlightInspection {
 };
 
 /// Replays the flight in real time (frames at their "t"); after the last frame, keeps asking for its
-/// view at 90 Hz for up to `settleSeconds` until it is complete.
-FlightInspection inspectFlight(StreamingScene& scene, const std::vector<CameraFrame>& flight, double settleSeconds = 2.0);
+/// view at 90 Hz for up to `settleSeconds` until it is complete. `progress` (optional) hears of each
+/// frame replayed, out of the flight's frames.
+FlightInspection inspectFlight(StreamingScene& scene, const std::vector<CameraFrame>& flight, double settleSeconds = 2.0,
+                               const std::function<void(uint64_t done, uint64_t total)>& progress = {});
 
 /// Writes the frames as CSV (one row per frame) and as a PNG plot (PLplot): resident bytes against the
 /// budget, bytes read, loads and evictions, and screen-space error over the flight.

@@ -120,25 +120,32 @@ private:
 
 void syncFileToDisk(const std::string& path) { syncPath(path, false); }
 
-void writeFileAtomically(const std::string& path, const std::function<void(std::ostream&)>& write,
-                         const std::function<void(const std::string&, uint64_t)>& finish)
+void requireReplaceable(const std::string& path)
 {
     if (fs::path(path).filename().empty()) throw FileWriteError("'" + path + "' is not a file name");
     const fs::path target = followLinks(path);
     const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
     std::error_code ec;
     if (!fs::is_directory(dir, ec)) throw FileWriteError("directory '" + dir.string() + "' does not exist");
-
-    // What is replaced must be a regular file we may write; its mode and owner carry over.
+    // What is replaced must be a regular file we may write.
     struct stat existing {};
+    if (::stat(target.c_str(), &existing) != 0) return;
+    if (S_ISDIR(existing.st_mode)) throw FileWriteError("'" + path + "' is a directory");
+    if (!S_ISREG(existing.st_mode))
+        throw FileWriteError("'" + path + "' is not a regular file (a device, FIFO or socket); refusing to replace it");
+    if ((existing.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0 || ::access(target.c_str(), W_OK) != 0)
+        throw FileWriteError("'" + path + "' is read-only; refusing to replace it");
+}
+
+void writeFileAtomically(const std::string& path, const std::function<void(std::ostream&)>& write,
+                         const std::function<void(const std::string&, uint64_t)>& finish)
+{
+    requireReplaceable(path);
+    const fs::path target = followLinks(path);
+    const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+    std::error_code ec;
+    struct stat existing {}; // the replaced file's mode and owner carry over
     const bool replacing = ::stat(target.c_str(), &existing) == 0;
-    if (replacing) {
-        if (S_ISDIR(existing.st_mode)) throw FileWriteError("'" + path + "' is a directory");
-        if (!S_ISREG(existing.st_mode))
-            throw FileWriteError("'" + path + "' is not a regular file (a device, FIFO or socket); refusing to replace it");
-        if ((existing.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0 || ::access(target.c_str(), W_OK) != 0)
-            throw FileWriteError("'" + path + "' is read-only; refusing to replace it");
-    }
     removeStaleTemporaries(dir, target);
 
     std::random_device entropy;

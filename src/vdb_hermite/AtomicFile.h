@@ -18,6 +18,11 @@ public:
 /// Flushes a written file to disk (fsync); throws FileWriteError when it cannot.
 void syncFileToDisk(const std::string& path);
 
+/// The checks writeFileAtomically makes before it writes: a file name in a directory that exists and,
+/// where a file is replaced, a regular file that may be written. Throws FileWriteError. Commands call
+/// it to refuse an unusable output before long work.
+void requireReplaceable(const std::string& path);
+
 /// Replaces `path` so that a crash leaves either its old content or the complete new one: `write`
 /// fills a temporary file beside it, `finish` (optional) may then append to that file by path, and
 /// the file is flushed to disk, renamed over `path`, and the directory flushed. The temporary file is
