@@ -55,7 +55,7 @@ int storeInfo(const InfoOptions& o)
                    {"materials", materials},
                    {"levels", levels},
                    {"lod_stale", scene.lodStale()},
-                   {"format_version", 1}});
+                   {"format_version", scene.bricks().formatVersion()}});
         return kExitOk;
     }
     std::string names;

@@ -298,6 +298,7 @@ TEST_CASE("cli: import, lod, mesh --lod, sculpt, export and diff on a store", "[
     CHECK(imported["form"] == "store");
     const json info = parseJsonOutput(runCli(dir, "info s.vdbclay --json"));
     CHECK(info["form"] == "store");
+    CHECK(info["format_version"] == 2);
     CHECK(info["leaf_count"].get<uint64_t>() == loadVolume(dir.file("s.vdb")).stats().leafCount);
 
     const json built = parseJsonOutput(runCli(dir, "lod build s.vdbclay --levels 2 --json"));

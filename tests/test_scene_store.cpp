@@ -85,7 +85,8 @@ TEST_CASE("a store of format version 1 still loads, and opening it for writing m
     execSql(path, "PRAGMA user_version = 1;");
     CHECK(identical(loadScene(path), v));
     CHECK(storeFormatVersion(path) == 1); // reading leaves it as it is
-    (void)SceneStore::open(path, StoreAccess::ReadWrite);
+    CHECK(SceneStore::open(path, StoreAccess::ReadOnly).bricks().formatVersion() == 1);
+    CHECK(SceneStore::open(path, StoreAccess::ReadWrite).bricks().formatVersion() == 2);
     CHECK(storeFormatVersion(path) == 2);
     CHECK(identical(loadScene(path), v));
 }

@@ -88,6 +88,8 @@ public:
     virtual void rollback() = 0;
 
     virtual const std::string& path() const = 0;
+    /// The store's format version (1: bricks as .vdb streams; 2: as region records, RegionCodec.h).
+    virtual int formatVersion() const = 0;
 };
 
 /// One transaction: begun on construction, rolled back on destruction unless committed.

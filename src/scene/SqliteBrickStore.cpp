@@ -205,6 +205,11 @@ public:
     }
 
     const std::string& path() const override { return path_; }
+    int formatVersion() const override
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return int(pragmaInt("PRAGMA user_version"));
+    }
 
 private:
     void lockForWriting(bool create)
