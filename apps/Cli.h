@@ -69,6 +69,8 @@ void requireSceneExtension(const std::string& path);
 const CLI::Validator& positiveNumber();
 /// The same for zero and positive numbers (CLI::NonNegativeNumber lets NaN through).
 const CLI::Validator& nonNegativeNumber();
+/// The same for any finite number (an iso value).
+const CLI::Validator& finiteNumber();
 /// An option check for a whole number from 0 to 2^64 - 1 typed in decimal (a seed, an index): a larger
 /// one would saturate and a negative one wrap around, silently.
 const CLI::Validator& unsignedInteger();

@@ -125,7 +125,8 @@ CLI::App* addImportCommand(CLI::App& parent, ImportOptions& o)
     cmd->add_option("--grid", o.grid, "Grid of a standard .vdb to import (default: the first level set, else fog volume)")
         ->type_name("NAME");
     cmd->add_option("--iso", o.iso, "Iso value: a fog volume is solid where its density exceeds it (required for fog)")
-        ->type_name("VALUE");
+        ->type_name("VALUE")
+        ->check(finiteNumber());
     cmd->add_option("--voxel-size", o.voxelSize, "Voxel size of a voxelized mesh, or to resample a standard grid to (default: its own)")
         ->type_name("V")
         ->check(positiveNumber());

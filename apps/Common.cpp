@@ -81,7 +81,7 @@ void requireSceneExtension(const std::string& path)
 namespace {
 
 /// A check that the option's text is one finite number that `accept` takes, else "must be `wanted`".
-CLI::Validator finiteNumber(bool (*accept)(double), const std::string& wanted, const std::string& name)
+CLI::Validator numberCheck(bool (*accept)(double), const std::string& wanted, const std::string& name)
 {
     return CLI::Validator(
         [accept, wanted](const std::string& text) {
@@ -97,14 +97,20 @@ CLI::Validator finiteNumber(bool (*accept)(double), const std::string& wanted, c
 
 const CLI::Validator& positiveNumber()
 {
-    static const CLI::Validator check = finiteNumber([](double v) { return v > 0.0; }, "a positive number", "POSITIVE");
+    static const CLI::Validator check = numberCheck([](double v) { return v > 0.0; }, "a positive number", "POSITIVE");
     return check;
 }
 
 const CLI::Validator& nonNegativeNumber()
 {
     static const CLI::Validator check =
-        finiteNumber([](double v) { return v >= 0.0; }, "zero or a positive number", "NON-NEGATIVE");
+        numberCheck([](double v) { return v >= 0.0; }, "zero or a positive number", "NON-NEGATIVE");
+    return check;
+}
+
+const CLI::Validator& finiteNumber()
+{
+    static const CLI::Validator check = numberCheck([](double) { return true; }, "a finite number", "");
     return check;
 }
 

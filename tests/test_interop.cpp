@@ -342,6 +342,12 @@ TEST_CASE("cli: info describes a standard .vdb, import brings it in, other comma
     CHECK(meshed["watertight"] == true);
 
     checkCleanFailure(runCli(dir, "import houdini.vdb --grid density -o x.vdb")); // fog without --iso
+    for (const char* iso : {"nan", "inf", "-inf"}) { // every comparison with NaN is false: nothing was solid
+        INFO(iso);
+        const CommandResult r = runCli(dir, std::string("import houdini.vdb --grid density --iso ") + iso + " -o x.vdb");
+        checkCleanFailure(r);
+        CHECK(r.exitCode == 2);
+    }
     checkCleanFailure(runCli(dir, "import houdini.vdb --grid ids -o x.vdb"));
     checkCleanFailure(runCli(dir, "import houdini.vdb --grid nothing -o x.vdb"));
     checkCleanFailure(runCli(dir, "import s.vdbclay --iso 2 -o x.vdb")); // options for standard files only
