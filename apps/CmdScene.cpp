@@ -77,6 +77,7 @@ int importMesh(const ImportOptions& o, std::chrono::steady_clock::time_point sta
                 return SceneCounts(stored.leaves, stored.activeVoxels);
             }
             const Volume volume = voxelizeMesh(mesh, options, &report);
+            if (report.solidVoxels == 0) throw std::invalid_argument(noSolidMessage(report.voxelSize));
             saveVolume(volume, o.output);
             materials = volume.materials().names();
             return SceneCounts(volume);

@@ -603,6 +603,14 @@ TEST_CASE("cli: import voxelizes a mesh with its materials and says what it repa
     checkCleanFailure(runCli(dir, "import cube.obj --iso 1 --resolution 4 -o x.vdb"));
     writeText(dir.file("junk.stl"), "solid junk\n garbage\n");
     checkCleanFailure(runCli(dir, "import junk.stl --resolution 8 -o x.vdb"));
+    // A lone triangle encloses nothing: refused in both forms, and no empty scene is left behind.
+    writeText(dir.file("flat.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    for (const char* output : {"flat.vdb", "flat.vdbclay"}) {
+        const CommandResult flat = runCli(dir, std::string("import flat.obj --resolution 16 -o ") + output);
+        checkCleanFailure(flat);
+        CHECK(flat.err.find("encloses no solid") != std::string::npos);
+        CHECK_FALSE(std::filesystem::exists(dir.path() / output));
+    }
     // Errors say what is wrong in the user's terms: a missing file before missing options, an output
     // whose extension picks no form, a voxel size of zero without quoting the largest double.
     const CommandResult missing = runCli(dir, "import nothere.obj -o x.vdb");

@@ -3,6 +3,7 @@
 #include <tbb/combinable.h>
 
 #include <functional>
+#include <stdexcept>
 #include <vector>
 
 namespace vdbclay {
@@ -30,6 +31,8 @@ StoreVoxelizeReport voxelizeMeshToStore(const TriangleSoup& mesh, const Voxelize
                 return encodeBrick(brick, bricks[i]);
             },
             progress);
+        // A store of nothing replaces no file: the caller hears why instead.
+        if (stored.bricks == 0) throw std::invalid_argument(noSolidMessage(voxelizer.voxelSize()));
         report.bricks = stored.bricks;
         report.leaves = stored.leaves;
     });

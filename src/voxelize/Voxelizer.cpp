@@ -507,6 +507,12 @@ Volume MeshVoxelizer::voxelizeBlock(const LeafAlignedBox& box, VoxelizeReport& c
     return volume;
 }
 
+std::string noSolidMessage(double voxelSize)
+{
+    return "the mesh encloses no solid voxel at voxel size " + formatNumber(voxelSize) +
+           " (an open or flat surface, or parts thinner than a voxel): nothing to import";
+}
+
 Volume voxelizeMesh(const TriangleSoup& mesh, const VoxelizeOptions& options, VoxelizeReport* report)
 {
     const MeshVoxelizer voxelizer(mesh, options);

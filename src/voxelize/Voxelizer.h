@@ -76,4 +76,7 @@ private:
 /// Voxelizes a triangle soup into one volume. Throws as MeshVoxelizer's constructor.
 Volume voxelizeMesh(const TriangleSoup& mesh, const VoxelizeOptions& options, VoxelizeReport* report = nullptr);
 
+/// Why a mesh that encloses no solid voxel at this voxel size has nothing to import.
+std::string noSolidMessage(double voxelSize);
+
 } // namespace vdbclay
