@@ -136,6 +136,7 @@ CLI::App* addImportCommand(CLI::App& parent, ImportOptions& o)
         ->check(CLI::Range(1, 16384));
     cmd->add_option("--material", o.material, "Material of what a standard grid or a mesh brings in (a mesh: default its own materials)")
         ->capture_default_str()
+        ->check(CLI::Validator([](const std::string& name) { return name.empty() ? std::string("needs a name") : std::string(); }, ""))
         ->each([&o](const std::string&) { o.materialGiven = true; });
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text");
     cmd->footer("A store keeps the scene in bricks of 64^3 voxels, so that 'sculpt', 'mesh' and 'lod' read only what\n"

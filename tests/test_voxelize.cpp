@@ -601,6 +601,9 @@ TEST_CASE("cli: import voxelizes a mesh with its materials and says what it repa
     checkCleanFailure(runCli(dir, "import cube.obj --resolution 0 -o x.vdb"));
     checkCleanFailure(runCli(dir, "import cube.obj --voxel-size 1 --resolution 4 -o x.vdb"));
     checkCleanFailure(runCli(dir, "import cube.obj --iso 1 --resolution 4 -o x.vdb"));
+    const CommandResult unnamed = runCli(dir, "import cube.obj --resolution 4 --material '' -o x.vdb");
+    checkCleanFailure(unnamed);
+    CHECK(unnamed.exitCode == 2);
     writeText(dir.file("junk.stl"), "solid junk\n garbage\n");
     checkCleanFailure(runCli(dir, "import junk.stl --resolution 8 -o x.vdb"));
     // A lone triangle encloses nothing: refused in both forms, and no empty scene is left behind.
