@@ -82,7 +82,7 @@ const CLI::Validator& sceneInput();
 /// `enabled`; otherwise a function that does nothing. Call with done == total to end the line.
 std::function<void(uint64_t done, uint64_t total)> terminalProgress(const std::string& label, bool enabled);
 
-/// Adds "--threads N" (worker threads for TBB; 0 or absent: all cores) to a subcommand.
+/// Adds "--threads N" (worker threads for TBB, 1 to 4096; absent: all cores) to a subcommand.
 void addThreadsOption(CLI::App& command, int& threads);
 
 // --- subcommands -------------------------------------------------------------------------------
