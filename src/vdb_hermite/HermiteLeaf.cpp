@@ -55,7 +55,7 @@ void HermiteLeaf::rebuildPrefixAndMask()
         const uint64_t* group = &edgeBits_[3 * m];
         uint64_t voxels = 0;
         for (unsigned quad = 0; quad < 16; ++quad) voxels |= uint64_t(kVoxelsOfEdgeBits[twelveBits(group, 12 * quad)]) << (4 * quad);
-        mask.template getWord<uint64_t>(m) = voxels;
+        mask.getWord<uint64_t>(m) = voxels;
     }
 }
 
