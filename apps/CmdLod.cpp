@@ -195,7 +195,8 @@ int runLodInspect(const LodOptions& o)
                      {"first_coarse_complete_s", optionalSeconds(s.firstCoarseComplete)},
                      {"first_complete_s", optionalSeconds(s.firstComplete)},
                      {"first_settled_s", optionalSeconds(s.firstSettled)},
-                     {"budget_limited", s.budgetLimited}}}});
+                     {"budget_limited", s.budgetLimited},
+                     {"damaged_bricks", s.damagedBricks}}}});
         return kExitOk;
     }
     const auto when = [](const std::optional<double>& t) { return t ? formatSeconds(*t) : std::string("never"); };
@@ -207,7 +208,10 @@ int runLodInspect(const LodOptions& o)
                  {"coarse view", "first complete at " + when(s.firstCoarseComplete)},
                  {"refined view", "first complete at " + when(s.firstComplete) + "; refined as far as the budget allows at " +
                                       when(s.firstSettled)},
-                 {"budget", s.budgetLimited ? "too small for the view at some frames: it refined less there" : "enough"}},
+                 {"budget", s.budgetLimited ? "too small for the view at some frames: it refined less there" : "enough"},
+                 {"damaged", s.damagedBricks == 0 ? std::string("none")
+                                                  : std::to_string(s.damagedBricks) +
+                                                        " bricks could not be read (shown by coarser levels); 'vdbclay export' names the first"}},
                 0);
     return kExitOk;
 }

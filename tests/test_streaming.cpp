@@ -159,6 +159,44 @@ TEST_CASE("streaming holds the memory budget over a flight, and a large budget r
         CHECK_FALSE(compareRegion(resident, stored, {b, kBrickEdge}).any());
 }
 
+TEST_CASE("a damaged brick is reported, shown by its ancestors and not read again every frame", "[streaming]")
+{
+    TempDir dir;
+    const std::string path = makeTerrain(dir);
+    const Viewer view = lookingAt({128, 40, 128}, {129, 30, 128});
+    StreamingOptions options;
+    options.memoryBudgetBytes = 256ull << 20;
+    IndexCoord broken{};
+    {
+        // Which level-0 brick the view loads, then one byte of its payload flipped (its checksum fails).
+        StreamingScene probe(path, options);
+        probe.frame(view);
+        probe.waitForLoads();
+        REQUIRE(probe.frame(view).complete);
+        SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
+        const Volume resident = probe.residentLevel0();
+        const std::vector<IndexCoord> loaded = occupiedBoxes(resident, kBrickEdge);
+        REQUIRE_FALSE(loaded.empty());
+        broken = {loaded.front()[0] / kBrickEdge, loaded.front()[1] / kBrickEdge, loaded.front()[2] / kBrickEdge};
+        std::optional<BrickRecord> record = scene.bricks().get({0, broken});
+        REQUIRE((record && !record->uniform));
+        record->payload[record->payload.size() / 2] ^= 0x5a;
+        StoreTransaction transaction(scene.bricks());
+        scene.bricks().put({0, broken}, *record);
+        transaction.commit();
+    }
+    StreamingScene scene(path, options);
+    for (int frame = 0; frame < 10; ++frame) {
+        scene.frame(view);
+        scene.waitForLoads();
+    }
+    const FrameReport report = scene.frame(view);
+    CHECK(report.damagedBricks == 1);
+    CHECK(report.coarseComplete); // its ancestors stand in for it
+    CHECK_FALSE(report.complete);
+    CHECK(report.pending == 0);   // not queued again: it would be read and fail every frame
+}
+
 TEST_CASE("a budget smaller than one brick is a clear error", "[streaming]")
 {
     TempDir dir;

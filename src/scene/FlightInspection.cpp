@@ -44,6 +44,7 @@ FlightInspection inspectFlight(StreamingScene& scene, const std::vector<CameraFr
         s.evictions += f.report.evictions;
         s.maxScreenError = std::max(s.maxScreenError, f.report.screenError);
         s.budgetLimited = s.budgetLimited || f.report.budgetLimited;
+        s.damagedBricks = std::max(s.damagedBricks, f.report.damagedBricks);
         if (f.report.coarseComplete && !s.firstCoarseComplete) s.firstCoarseComplete = f.time;
         if (f.report.complete && !s.firstComplete) s.firstComplete = f.time;
         if (f.report.settled && !s.firstSettled) s.firstSettled = f.time;

@@ -30,6 +30,7 @@ struct FlightSummary {
     std::optional<double> firstComplete;       // seconds: first frame fully refined
     std::optional<double> firstSettled;        // seconds: first frame refined as far as the budget allows
     bool budgetLimited = false;
+    uint64_t damagedBricks = 0; // bricks the store could not give (the view shows their ancestors)
 };
 
 struct FlightInspection {

@@ -50,6 +50,7 @@ struct StreamingScene::Impl {
     using BrickSet = std::unordered_set<BrickKey, BrickKeyHash>;
     BrickSet inFlight;
     BrickSet staleInFlight; // loads an autosave's LOD update overtook: discarded on arrival
+    BrickSet damaged;       // bricks the store could not give: shown by their ancestors, not loaded again
     BrickSet wanted;        // the current frame's accepted selection and fallbacks
     uint64_t residentBytes = 0, inFlightBytes = 0;
     uint64_t frameNumber = 0;
@@ -152,15 +153,17 @@ struct StreamingScene::Impl {
             lock.unlock();
             std::optional<DecodedRegion> loaded;
             uint64_t payloadBytes = 0;
+            bool unreadable = false;
             try {
                 loaded = scene.readBrick(key.level, key.brick, &payloadBytes);
             } catch (...) {
-                loaded.reset(); // a damaged brick shows as missing; sculpting it reports the error
+                unreadable = true; // a damaged brick shows as missing; sculpting it reports the error
             }
             lock.lock();
             inFlight.erase(key);
             inFlightBytes -= estimate;
             if (staleInFlight.erase(key)) loaded.reset(); // the next frame asks for it again
+            else if (unreadable) damaged.insert(key);      // and is not asked for again
             if (loaded && !resident.count(key)) {
                 const uint64_t bytes = loaded->memoryBytes();
                 estimates[key] = bytes; // the next frames budget with what it really takes
@@ -214,6 +217,7 @@ struct StreamingScene::Impl {
                 present[std::size_t(key.level)].insert(b);
                 estimates.erase(key);
                 if (inFlight.count(key)) staleInFlight.insert(key);
+                damaged.erase(key);
                 const auto it = resident.find(key);
                 if (it == resident.end()) continue;
                 residentBytes -= it->second.bytes;
@@ -282,7 +286,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     s.makeRoom(0, lock);
     s.queue.clear();
     for (const BrickKey& key : order)
-        if (accepted.count(key) && !s.resident.count(key) && !s.inFlight.count(key)) s.queue.push_back(key);
+        if (accepted.count(key) && !s.resident.count(key) && !s.inFlight.count(key) && !s.damaged.count(key)) s.queue.push_back(key);
     s.wake.notify_all();
 
     // What the view shows now: each selected brick at its own level if resident, else its finest
@@ -316,6 +320,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     report.loads = std::exchange(s.loads, 0);
     report.evictions = std::exchange(s.evictions, 0);
     report.pending = s.queue.size() + s.inFlight.size();
+    report.damagedBricks = s.damaged.size();
     return report;
 }
 

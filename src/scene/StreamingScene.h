@@ -39,6 +39,7 @@ struct FrameReport {
     bool budgetLimited = false;  // the selection was cut to fit the budget: the view refines less
     bool settled = false;        // every brick the budget admitted is resident: refined as far as it goes
     uint64_t pending = 0;        // loads still queued or running
+    uint64_t damagedBricks = 0;  // bricks the store could not give (damaged records), so far
 };
 
 class StreamingScene {
