@@ -7,6 +7,7 @@
 #include <fcntl.h>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <random>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -116,36 +117,47 @@ private:
     bool armed_ = false;
 };
 
+
+/// Where a save of `path` lands (links followed) and, when it replaces a file, that file's status.
+struct SaveTarget {
+    fs::path target, dir;
+    std::optional<struct stat> existing;
+};
+
+/// requireReplaceable's checks, keeping what they found for the save.
+SaveTarget checkSaveTarget(const std::string& path)
+{
+    if (fs::path(path).filename().empty()) throw FileWriteError("'" + path + "' is not a file name");
+    SaveTarget t;
+    t.target = followLinks(path);
+    t.dir = t.target.has_parent_path() ? t.target.parent_path() : fs::path(".");
+    std::error_code ec;
+    if (!fs::is_directory(t.dir, ec)) throw FileWriteError("directory '" + t.dir.string() + "' does not exist");
+    // What is replaced must be a regular file we may write.
+    struct stat existing {};
+    if (::stat(t.target.c_str(), &existing) != 0) return t;
+    if (S_ISDIR(existing.st_mode)) throw FileWriteError("'" + path + "' is a directory");
+    if (!S_ISREG(existing.st_mode))
+        throw FileWriteError("'" + path + "' is not a regular file (a device, FIFO or socket); refusing to replace it");
+    if ((existing.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0 || ::access(t.target.c_str(), W_OK) != 0)
+        throw FileWriteError("'" + path + "' is read-only; refusing to replace it");
+    t.existing = existing;
+    return t;
+}
+
 } // namespace
 
 void syncFileToDisk(const std::string& path) { syncPath(path, false); }
 
-void requireReplaceable(const std::string& path)
-{
-    if (fs::path(path).filename().empty()) throw FileWriteError("'" + path + "' is not a file name");
-    const fs::path target = followLinks(path);
-    const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-    std::error_code ec;
-    if (!fs::is_directory(dir, ec)) throw FileWriteError("directory '" + dir.string() + "' does not exist");
-    // What is replaced must be a regular file we may write.
-    struct stat existing {};
-    if (::stat(target.c_str(), &existing) != 0) return;
-    if (S_ISDIR(existing.st_mode)) throw FileWriteError("'" + path + "' is a directory");
-    if (!S_ISREG(existing.st_mode))
-        throw FileWriteError("'" + path + "' is not a regular file (a device, FIFO or socket); refusing to replace it");
-    if ((existing.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0 || ::access(target.c_str(), W_OK) != 0)
-        throw FileWriteError("'" + path + "' is read-only; refusing to replace it");
-}
+void requireReplaceable(const std::string& path) { (void)checkSaveTarget(path); }
 
 void writeFileAtomically(const std::string& path, const std::function<void(std::ostream&)>& write,
                          const std::function<void(const std::string&, uint64_t)>& finish)
 {
-    requireReplaceable(path);
-    const fs::path target = followLinks(path);
-    const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+    const SaveTarget checked = checkSaveTarget(path);
+    const fs::path& target = checked.target;
+    const fs::path& dir = checked.dir;
     std::error_code ec;
-    struct stat existing {}; // the replaced file's mode and owner carry over
-    const bool replacing = ::stat(target.c_str(), &existing) == 0;
     removeStaleTemporaries(dir, target);
 
     std::random_device entropy;
@@ -155,11 +167,12 @@ void writeFileAtomically(const std::string& path, const std::function<void(std::
     if (fd < 0) throw FileWriteError("cannot create '" + temp + "': " + std::strerror(errno));
     TempFileGuard guard(temp);
     try {
-        if (replacing) {
-            // Owner first: changing it can clear set-id bits, which the mode then restores.
-            if (::fchown(fd, existing.st_uid, existing.st_gid) != 0 && errno != EPERM)
+        if (checked.existing) {
+            // The replaced file's owner and mode carry over. Owner first: changing it can clear set-id
+            // bits, which the mode then restores.
+            if (::fchown(fd, checked.existing->st_uid, checked.existing->st_gid) != 0 && errno != EPERM)
                 throw FileWriteError("cannot give '" + temp + "' the owner of '" + path + "': " + std::strerror(errno));
-            if (::fchmod(fd, existing.st_mode & 07777) != 0)
+            if (::fchmod(fd, checked.existing->st_mode & 07777) != 0)
                 throw FileWriteError("cannot give '" + temp + "' the mode of '" + path + "': " + std::strerror(errno));
         }
         ::close(fd);
