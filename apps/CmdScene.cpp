@@ -6,6 +6,7 @@
 #include "interop/LevelSetImport.h"
 #include "scene/SceneStore.h"
 #include "voxelize/VoxelizeToStore.h"
+#include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/VolumeIO.h"
 
 #include <CLI/CLI.hpp>
@@ -173,6 +174,11 @@ int runImport(const ImportOptions& o)
         }
     }()
                              : loadScene(o.input, terminalProgress("reading bricks", !o.json));
+    if (standard && volume.stats().empty)
+        throw UsageError("grid '" + printableText(report.grid, 64) + "' of '" + o.input + "' holds no solid voxel read as a " +
+                         (report.fog ? "fog volume (solid where the density exceeds " + formatNumber(o.iso.value_or(0.0)) + ")"
+                                     : "level set (solid below " + formatNumber(o.iso.value_or(0.0)) + ")") +
+                         ": nothing to import");
     writeScene(volume, o.output, !o.json);
     const double seconds = secondsSince(start);
     if (o.json) {

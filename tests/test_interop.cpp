@@ -22,6 +22,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <random>
 
 using namespace vdbclay;
@@ -244,6 +245,27 @@ TEST_CASE("a grid of no class is a density when its background is below the iso 
     CHECK_THROWS_WITH(importLevelSet(sphere, o), Catch::Contains("solid everywhere outside"));
 }
 
+TEST_CASE("a grid holding NaN or infinity is refused as damaged, with where", "[interop]")
+{
+    TempDir dir;
+    for (const float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+        openvdb::FloatGrid::Ptr sphere = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(6.0f, openvdb::Vec3f(0.0f), 1.0f);
+        sphere->setName("surface");
+        sphere->tree().setValueOn(openvdb::Coord(6, 0, 0), bad); // on the surface, beside solid and empty points
+        openvdb::io::File file(dir.file("bad.vdb"));
+        file.write({sphere});
+        file.close();
+        CHECK_THROWS_WITH(importLevelSet(dir.file("bad.vdb"), {}),
+                          Catch::Contains("1 value that is not a finite number") && Catch::Contains("(6, 0, 0)"));
+        // The same grid without it imports.
+        sphere->tree().setValueOn(openvdb::Coord(6, 0, 0), 0.0f);
+        openvdb::io::File good(dir.file("good.vdb"));
+        good.write({sphere});
+        good.close();
+        CHECK(checkInvariants(importLevelSet(dir.file("good.vdb"), {})).empty());
+    }
+}
+
 TEST_CASE("a rotated, non-uniform or offset grid is resampled onto the lattice, and says so", "[interop]")
 {
     TempDir dir;
@@ -342,6 +364,11 @@ TEST_CASE("cli: info describes a standard .vdb, import brings it in, other comma
     CHECK(meshed["watertight"] == true);
 
     checkCleanFailure(runCli(dir, "import houdini.vdb --grid density -o x.vdb")); // fog without --iso
+    // A reading with no solid voxel (the density never exceeds 2) would write an empty scene: refused.
+    const CommandResult empty = runCli(dir, "import houdini.vdb --grid density --iso 2 -o x.vdb");
+    checkCleanFailure(empty);
+    CHECK(empty.exitCode == 2);
+    CHECK_THAT(empty.err, Catch::Contains("holds no solid voxel"));
     for (const char* iso : {"nan", "inf", "-inf"}) { // every comparison with NaN is false: nothing was solid
         INFO(iso);
         const CommandResult r = runCli(dir, std::string("import houdini.vdb --grid density --iso ") + iso + " -o x.vdb");

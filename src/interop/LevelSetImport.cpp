@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <set>
 #include <stdexcept>
 
@@ -144,6 +145,36 @@ std::vector<Coord> candidateLeaves(const SignedField& f)
     return {out.begin(), out.end()};
 }
 
+/// NaN or infinity has no side of the surface: a crossing beside one would have no offset. Such a grid is
+/// damaged (no OpenVDB tool writes one), so it is refused with where the first such value lies.
+void requireFiniteValues(const FloatGrid& grid, const std::string& name, const std::string& path)
+{
+    uint64_t count = 0;
+    std::optional<Coord> first;
+    auto note = [&](const Coord& at) {
+        if (!first) first = at;
+        ++count;
+    };
+    if (!std::isfinite(grid.background()))
+        throw VolumeIOError("'" + path + "': grid '" + printableText(name, 64) + "' has a background of " +
+                            formatNumber(grid.background()) + ", not a finite number: the grid is damaged");
+    for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf) {
+        const float* values = leaf->buffer().data();
+        for (Index n = 0; n < openvdb::FloatTree::LeafNodeType::SIZE; ++n)
+            if (!std::isfinite(values[n])) note(leaf->offsetToGlobalCoord(n));
+    }
+    auto tiles = grid.tree().cbeginValueAll();
+    tiles.setMaxDepth(openvdb::FloatTree::ValueAllCIter::LEAF_DEPTH - 1);
+    for (; tiles; ++tiles)
+        if (!std::isfinite(*tiles)) note(tiles.getCoord());
+    if (count == 0) return;
+    throw VolumeIOError("'" + path + "': grid '" + printableText(name, 64) + "' holds " + std::to_string(count) +
+                        (count == 1 ? " value that is not a finite number" : " values that are not finite numbers") +
+                        " (NaN or infinity), the first at index (" +
+                        std::to_string(first->x()) + ", " + std::to_string(first->y()) + ", " + std::to_string(first->z()) +
+                        "): the grid is damaged");
+}
+
 /// A grid without a class (many tools leave it unset) is a density when its background lies below the
 /// iso value: read as a level set, everything outside its active voxels would be solid.
 bool readAsFog(const StandardGridInfo& grid, float background, const std::optional<double>& iso)
@@ -213,6 +244,7 @@ Volume importLevelSet(const std::string& path, const LevelSetImportOptions& opti
         grid->setTransform(d->transform().copy());
         grid->setGridClass(d->getGridClass());
     }
+    requireFiniteValues(*grid, chosen.header.name, path);
     const bool fog = readAsFog(chosen, grid->background(), options.iso);
     const float iso = float(options.iso.value_or(0.0));
     if (fog ? grid->background() > iso : grid->background() < iso)
