@@ -87,6 +87,10 @@ public:
     virtual void commit() = 0;
     virtual void rollback() = 0;
 
+    /// Another connection to the same store, for reads on one other thread: its reads run beside this
+    /// connection's (which serializes its callers), and it sees what this one commits. It only reads.
+    virtual std::unique_ptr<BrickStore> openReader() const = 0;
+
     virtual const std::string& path() const = 0;
     /// The store's format version (1: bricks as .vdb streams; 2: as region records, RegionCodec.h).
     virtual int formatVersion() const = 0;

@@ -163,7 +163,12 @@ DecodedRegion SceneStore::decodeBrick(int level, const IndexCoord& brick, const 
 
 DecodedRegion SceneStore::readBrick(int level, const IndexCoord& brick, uint64_t* payloadBytes) const
 {
-    const std::optional<BrickRecord> record = store_->get({level, brick});
+    return readBrick(level, brick, *store_, payloadBytes);
+}
+
+DecodedRegion SceneStore::readBrick(int level, const IndexCoord& brick, const BrickStore& from, uint64_t* payloadBytes) const
+{
+    const std::optional<BrickRecord> record = from.get({level, brick});
     if (payloadBytes) *payloadBytes = record ? record->payload.size() : 0;
     return decodeBrick(level, brick, record);
 }

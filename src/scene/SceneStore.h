@@ -77,6 +77,9 @@ public:
     /// One brick of a level, decoded outside any volume (safe on several threads at once): empty space
     /// where nothing is stored. `payloadBytes` (optional) receives the size of the record read.
     DecodedRegion readBrick(int level, const IndexCoord& brick, uint64_t* payloadBytes = nullptr) const;
+    /// The same, read through `from`, a reader of this store (bricks().openReader()): a thread of its
+    /// own reads beside the others instead of waiting for this store's connection.
+    DecodedRegion readBrick(int level, const IndexCoord& brick, const BrickStore& from, uint64_t* payloadBytes = nullptr) const;
     /// A whole level as one volume.
     Volume loadLevel(int level, const Progress& progress = {}) const;
     /// Stores the given bricks of `volume` (a level): a payload, a uniform record, or nothing for empty

@@ -56,12 +56,15 @@ private:
 
 class SqliteBrickStore final : public BrickStore {
 public:
-    SqliteBrickStore(const std::string& path, StoreAccess access) : path_(path)
+    /// `sibling`: a reader of a store this process has open already, which needs no checks of the file
+    /// (they open and close a descriptor of it, and closing any descriptor of a file drops the fcntl
+    /// locks the process's other connections hold on it).
+    SqliteBrickStore(const std::string& path, StoreAccess access, bool sibling = false) : path_(path)
     {
         std::error_code ec;
-        const bool exists = fs::exists(path, ec);
+        const bool exists = sibling || fs::exists(path, ec);
         if (access == StoreAccess::Create && exists) throw StoreError("'" + path + "' already exists");
-        if (access != StoreAccess::Create) {
+        if (access != StoreAccess::Create && !sibling) {
             if (!exists) throw StoreError("'" + path + "' does not exist");
             if (!fs::is_regular_file(path, ec)) throw StoreError("'" + path + "' is not a regular file");
             if (!looksLikeSqliteFile(path))
@@ -202,6 +205,11 @@ public:
         std::lock_guard<std::mutex> lock(mutex_);
         exec("ROLLBACK");
         inTransaction_ = false;
+    }
+
+    std::unique_ptr<BrickStore> openReader() const override
+    {
+        return std::make_unique<SqliteBrickStore>(path_, StoreAccess::ReadOnly, true);
     }
 
     const std::string& path() const override { return path_; }

@@ -59,6 +59,7 @@ struct StreamingScene::Impl {
     uint64_t lodBricksWritten = 0;
     MaterialTable materials; // the scene's, with what edits defined since the last autosave
     bool stopping = false;
+    std::vector<std::unique_ptr<BrickStore>> readers; // one per worker
     std::vector<std::thread> workers;
 
     Impl(const std::string& path, const StreamingOptions& o) : options(o), scene(SceneStore::open(path, o.access))
@@ -86,7 +87,9 @@ struct StreamingScene::Impl {
             levelVolumes.emplace_back(scene.voxelSize() * double(1 << k));
             levelVolumes.back().materials() = materials;
         }
-        for (int i = 0; i < std::max(1, options.loaderThreads); ++i) workers.emplace_back([this] { work(); });
+        // Each loader reads through a connection of its own: one shared connection serializes the reads.
+        for (int i = 0; i < std::max(1, options.loaderThreads); ++i) readers.push_back(scene.bricks().openReader());
+        for (std::size_t i = 0; i < readers.size(); ++i) workers.emplace_back([this, i] { work(*readers[i]); });
     }
 
     ~Impl()
@@ -139,7 +142,7 @@ struct StreamingScene::Impl {
         return true;
     }
 
-    void work()
+    void work(const BrickStore& reader)
     {
         std::unique_lock<std::mutex> lock(mutex);
         while (true) {
@@ -155,7 +158,7 @@ struct StreamingScene::Impl {
             uint64_t payloadBytes = 0;
             bool unreadable = false;
             try {
-                loaded = scene.readBrick(key.level, key.brick, &payloadBytes);
+                loaded = scene.readBrick(key.level, key.brick, reader, &payloadBytes);
             } catch (...) {
                 unreadable = true; // a damaged brick shows as missing; sculpting it reports the error
             }
@@ -258,16 +261,34 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     // What the view needs, coarse first: each selected brick's ancestors (shown while it loads), then
     // the selection itself, as far as the budget goes. A brick's chain of ancestors ends where it meets
     // one already listed (whose own chain is listed); within a level, bricks keep the order of the first
-    // selected brick that needs them.
-    std::vector<BrickKey> order;
-    Impl::BrickSet seen;
-    for (const SelectedBrick& b : selected)
-        for (BrickKey key = b.key; key.level <= s.levels && seen.insert(key).second; key = {key.level + 1, parentBrick(key.brick)})
-            order.push_back(key);
-    std::stable_sort(order.begin(), order.end(), [](const BrickKey& a, const BrickKey& b) { return a.level > b.level; });
-    Impl::BrickSet accepted;
+    // selected brick that needs them. Each needed brick is looked up once per pass: at 90 Hz this runs
+    // under the loaders' lock for a few thousand bricks.
+    constexpr uint32_t kNone = ~uint32_t(0);
+    std::vector<BrickKey> needed;
+    std::vector<uint32_t> parentOf;                          // index in `needed` of the parent, or kNone
+    std::vector<uint32_t> selectedAt(selected.size(), kNone); // index in `needed` of each selected brick
+    {
+        std::unordered_map<BrickKey, uint32_t, BrickKeyHash> indexOf;
+        indexOf.reserve(2 * selected.size());
+        for (std::size_t i = 0; i < selected.size(); ++i) {
+            uint32_t child = kNone;
+            for (BrickKey key = selected[i].key; key.level <= s.levels; key = {key.level + 1, parentBrick(key.brick)}) {
+                const auto [it, inserted] = indexOf.try_emplace(key, uint32_t(needed.size()));
+                (child == kNone ? selectedAt[i] : parentOf[child]) = it->second;
+                if (!inserted) break;
+                needed.push_back(key);
+                parentOf.push_back(kNone);
+                child = it->second;
+            }
+        }
+    }
+    std::vector<uint32_t> order(needed.size());
+    for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return needed[a].level > needed[b].level; });
+    std::size_t accepted = 0;
     uint64_t cost = 0;
-    for (const BrickKey& key : order) {
+    for (; accepted < order.size(); ++accepted) {
+        const BrickKey& key = needed[order[accepted]];
         const auto it = s.resident.find(key);
         const uint64_t bytes = it != s.resident.end() ? it->second.bytes : s.estimateOf(key);
         if (cost + bytes > s.options.memoryBudgetBytes) {
@@ -275,44 +296,44 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
             break;
         }
         cost += bytes;
-        accepted.insert(key);
-    }
-    s.wanted = accepted;
-    for (const SelectedBrick& b : selected) report.hits += s.resident.count(b.key);
-    for (const BrickKey& key : accepted) {
-        const auto it = s.resident.find(key);
         if (it != s.resident.end()) it->second.lastUsed = s.frameNumber;
     }
+    s.wanted.clear();
+    for (std::size_t i = 0; i < accepted; ++i) s.wanted.insert(needed[order[i]]);
     s.makeRoom(0, lock);
+    // Looked up after makeRoom: an autosave it ran may have dropped rewritten coarse bricks.
+    std::vector<char> isResident(needed.size());
+    for (std::size_t i = 0; i < needed.size(); ++i) isResident[i] = s.resident.count(needed[i]) > 0;
     s.queue.clear();
-    for (const BrickKey& key : order)
-        if (accepted.count(key) && !s.resident.count(key) && !s.inFlight.count(key) && !s.damaged.count(key)) s.queue.push_back(key);
+    for (std::size_t i = 0; i < accepted; ++i) {
+        const BrickKey& key = needed[order[i]];
+        if (!isResident[order[i]] && !s.inFlight.count(key) && !s.damaged.count(key)) s.queue.push_back(key);
+    }
     s.wake.notify_all();
 
     // What the view shows now: each selected brick at its own level if resident, else its finest
     // resident ancestor.
     report.coarseComplete = true;
     report.complete = true;
-    for (const SelectedBrick& b : selected) {
+    for (std::size_t i = 0; i < selected.size(); ++i) {
+        const SelectedBrick& b = selected[i];
         report.targetError = std::max(report.targetError, b.screenError);
-        IndexCoord c = b.key.brick;
         int shown = -1;
-        for (int k = b.key.level; k <= s.levels; ++k) {
-            if (s.resident.count({k, c})) {
-                shown = k;
+        for (uint32_t n = selectedAt[i]; n != kNone; n = parentOf[n])
+            if (isResident[n]) {
+                shown = needed[n].level;
                 break;
             }
-            c = parentBrick(c);
-        }
         if (shown < 0) {
             report.coarseComplete = false;
             report.complete = false;
             continue;
         }
-        if (shown != b.key.level) report.complete = false;
+        if (shown == b.key.level) ++report.hits;
+        else report.complete = false;
         report.screenError = std::max(report.screenError, b.screenError * double(1 << (shown - b.key.level)));
     }
-    report.settled = std::all_of(accepted.begin(), accepted.end(), [&](const BrickKey& key) { return s.resident.count(key) > 0; });
+    report.settled = std::all_of(order.begin(), order.begin() + std::ptrdiff_t(accepted), [&](uint32_t n) { return isResident[n] != 0; });
     report.residentPerLevel.assign(std::size_t(s.levels) + 1, 0);
     for (const auto& [key, r] : s.resident) ++report.residentPerLevel[std::size_t(key.level)];
     report.residentBytes = s.residentBytes;
