@@ -249,3 +249,37 @@ TEST_CASE("a store open for writing refuses a second writer and lets readers rea
     const SceneStore reader = SceneStore::open(path, StoreAccess::ReadOnly);
     CHECK(reader.summary(0).bricks == writer.summary(0).bricks);
 }
+
+TEST_CASE("a reader connection reads beside the writer and sees only what it commits", "[store]")
+{
+    TempDir dir;
+    const std::string path = dir.file("s.vdbclay");
+    writeStoreFile(multiBrickScene(), path);
+    SceneStore writer = SceneStore::open(path, StoreAccess::ReadWrite);
+    const std::vector<IndexCoord> bricks = writer.brickCoords(0);
+    REQUIRE(bricks.size() > 1);
+    const std::unique_ptr<BrickStore> reader = writer.bricks().openReader();
+    const BrickKey key{0, bricks[0]};
+    const std::optional<BrickRecord> before = writer.bricks().get(key);
+    REQUIRE(before);
+    CHECK(sameBrick(reader->get(key), before));
+    // Through the reader, a brick decodes exactly as through the writer's own connection.
+    uint64_t viaReader = 0, viaWriter = 0;
+    Volume a(writer.voxelSize()), b(writer.voxelSize());
+    pasteRegion(a, writer.readBrick(0, bricks[1], *reader, &viaReader));
+    pasteRegion(b, writer.readBrick(0, bricks[1], &viaWriter));
+    CHECK(viaReader == viaWriter);
+    CHECK(identical(a, b));
+
+    BrickRecord changed = *before;
+    changed.uniform = MaterialId(1);
+    changed.payload.clear();
+    {
+        StoreTransaction transaction(writer.bricks());
+        writer.bricks().put(key, changed);
+        CHECK(sameBrick(reader->get(key), before)); // not committed yet: the reader's snapshot is the old one
+        transaction.commit();
+    }
+    CHECK(sameBrick(reader->get(key), changed));
+    CHECK_THROWS_AS(reader->put(key, *before), StoreError); // it only reads
+}
