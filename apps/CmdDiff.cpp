@@ -53,12 +53,19 @@ int runDiff(const DiffOptions& o)
                            {"surface_distance", std::isfinite(diff.surfaceDistance) ? nlohmann::json(diff.surfaceDistance) : nlohmann::json()},
                            {"surface_distance_voxels", std::isfinite(distanceVoxels) ? nlohmann::json(distanceVoxels) : nlohmann::json()}};
         if (o.tolerance) out["tolerance_voxels"] = *o.tolerance;
+        if (diff.voxelSizesDiffer) out["voxel_sizes"] = {diff.voxelSize, diff.otherVoxelSize};
         printJson(out);
     } else if (same) {
         printFields({{"identical", o.a + " = " + o.b}}, 0);
     } else {
         std::vector<std::pair<std::string, std::string>> rows{{accepted ? "within tolerance" : "differ", o.a + " vs " + o.b}};
-        if (diff.voxelSizesDiffer) rows.push_back({"voxel size", "differs"});
+        if (diff.voxelSizesDiffer) {
+            // Other lattices: neither voxels nor bricks correspond, so there is nothing more to count.
+            rows.push_back({"voxel size", formatNumber(diff.voxelSize) + " vs " + formatNumber(diff.otherVoxelSize) +
+                                              " (other lattices: voxels and surfaces are not compared)"});
+            printFields(rows, 0);
+            return kExitFailure;
+        }
         if (diff.materialTablesDiffer) rows.push_back({"materials", "the tables differ"});
         rows.push_back({"bricks", std::to_string(diff.differingBricks.size()) + " differ"});
         rows.push_back({"voxels", std::to_string(diff.occupancyDifferences) + " solid/empty, " +

@@ -154,6 +154,10 @@ int runImport(const ImportOptions& o)
 {
     const auto start = std::chrono::steady_clock::now();
     requireSceneExtension(o.output);
+    std::error_code ec;
+    if (std::filesystem::equivalent(o.input, o.output, ec)) // replacing a store by its own level 0 drops its levels of detail
+        throw UsageError("'" + o.output + "' is the input itself: import writes another file (a store's levels of detail "
+                         "are refreshed by 'vdbclay lod build')");
     if (isMeshPath(o.input)) return importMesh(o, start);
     if (o.resolution)
         throw UsageError("--resolution is for meshes (obj ply stl off gltf glb fbx dae); '" + o.input + "' is not one");

@@ -329,6 +329,19 @@ TEST_CASE("cli: import, lod, mesh --lod, sculpt, export and diff on a store", "[
     CHECK(differ.exitCode == 1);
     CHECK(json::parse(differ.out)["differing_bricks"].size() > 0);
     CHECK(runCli(dir, "diff s.vdbclay missing.vdb").exitCode == 2);
+    const CommandResult self = runCli(dir, "import s.vdbclay -o ./s.vdbclay");
+    checkCleanFailure(self);
+    CHECK(self.exitCode == 2);
+    CHECK(parseJsonOutput(runCli(dir, "lod info s.vdbclay --json"))["levels"].size() > 1); // kept
+    // Other voxel sizes: other lattices, so nothing is counted, and no distance is claimed.
+    REQUIRE(runCli(dir, "new half.vdb --shape sphere --size 4 --voxel-size 0.5").exitCode == 0);
+    const CommandResult lattices = runCli(dir, "diff s.vdbclay half.vdb --json --tolerance 100");
+    CHECK(lattices.exitCode == 1);
+    const json latticesJson = json::parse(lattices.out);
+    CHECK(latticesJson["voxel_sizes_differ"] == true);
+    CHECK(latticesJson["surface_distance"].is_null());
+    CHECK(latticesJson["voxel_sizes"][1] == 0.5);
+    CHECK_THAT(runCli(dir, "diff s.vdbclay half.vdb").out, Catch::Contains("0.5 (other lattices"));
     const json lodAfter = parseJsonOutput(runCli(dir, "lod info s.vdbclay --json"));
     CHECK(lodAfter["stale"] == false); // the sculpt kept the levels current
     CHECK(sculpted["lod_bricks_written"].get<uint64_t>() > 0);

@@ -11,6 +11,8 @@
 #include "vdb_hermite/VolumeIO.h"
 
 #include <catch2/catch.hpp>
+
+#include <cmath>
 #include <tbb/global_control.h>
 
 using namespace vdbclay;
@@ -97,5 +99,9 @@ TEST_CASE("diff finds a one-voxel change, accepts a re-save, and measures the su
 
     Volume other(0.5);
     saveVolume(other, dir.file("other.vdb"));
-    CHECK(diffScenes(store, dir.file("other.vdb")).voxelSizesDiffer);
+    const SceneDiff lattices = diffScenes(store, dir.file("other.vdb"));
+    CHECK(lattices.voxelSizesDiffer);
+    CHECK(lattices.otherVoxelSize == 0.5);
+    CHECK(std::isnan(lattices.surfaceDistance)); // not measured, not zero
+    CHECK_FALSE(lattices.withinTolerance(1e9));
 }

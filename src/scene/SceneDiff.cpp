@@ -71,8 +71,10 @@ SceneDiff diffScenes(const std::string& pathA, const std::string& pathB, bool me
     const SceneSource a(pathA), b(pathB);
     SceneDiff diff;
     diff.voxelSize = a.voxelSize();
-    if (a.voxelSize() != b.voxelSize()) {
+    diff.otherVoxelSize = b.voxelSize();
+    if (a.voxelSize() != b.voxelSize()) { // other lattices: no voxel or brick of one is one of the other
         diff.voxelSizesDiffer = true;
+        diff.surfaceDistance = std::numeric_limits<double>::quiet_NaN();
         return diff;
     }
     diff.materialTablesDiffer = !(a.materials() == b.materials());

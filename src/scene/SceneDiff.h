@@ -19,7 +19,9 @@ struct SceneDiff {
     uint64_t sampleDifferences = 0;           // edges whose Hermite samples differ (same materials)
     double differenceVolume = 0.0;            // occupancy differences times the voxel volume, world units^3
     double surfaceDistance = 0.0;             // two-sided Hausdorff distance between the surfaces there, world
-    double voxelSize = 1.0;
+                                              // units; NaN where not measured (other voxel sizes)
+    double voxelSize = 1.0;                   // a's
+    double otherVoxelSize = 1.0;              // b's: where it differs, nothing else is compared
 
     bool identical() const { return !voxelSizesDiffer && !materialTablesDiffer && differingBricks.empty(); }
     /// Identical, or the same materials and voxel size with surfaces within `toleranceVoxels` of each other
