@@ -144,18 +144,19 @@ LevelSummary SceneStore::summary(int level) const
     return s;
 }
 
-DecodedRegion SceneStore::decodeBrick(int level, const IndexCoord& brick, const std::optional<BrickRecord>& record) const
+DecodedRegion SceneStore::decodeBrick(int level, const IndexCoord& brick, const std::optional<BrickRecord>& record,
+                                      std::size_t materialCount) const
 {
     const LeafAlignedBox box = brickBox(brick);
     if (!record) return DecodedRegion(box, kEmptyMaterial);
     const std::string name = store_->path() + " brick " + std::to_string(level) + "/" + std::to_string(brick[0]) + "," +
                              std::to_string(brick[1]) + "," + std::to_string(brick[2]);
     if (record->uniform) {
-        if (*record->uniform > materials_.size()) throw StoreError("'" + name + "' is damaged: it uses an undefined material");
+        if (*record->uniform > materialCount) throw StoreError("'" + name + "' is damaged: it uses an undefined material");
         return DecodedRegion(box, *record->uniform);
     }
     try {
-        return decodeRegion(record->payload, box, levelVoxelSize(voxelSize_, level), materials_.size(), name);
+        return decodeRegion(record->payload, box, levelVoxelSize(voxelSize_, level), materialCount, name);
     } catch (const VolumeIOError& e) {
         throw StoreError(e.what());
     }
@@ -163,14 +164,15 @@ DecodedRegion SceneStore::decodeBrick(int level, const IndexCoord& brick, const 
 
 DecodedRegion SceneStore::readBrick(int level, const IndexCoord& brick, uint64_t* payloadBytes) const
 {
-    return readBrick(level, brick, *store_, payloadBytes);
+    return readBrick(level, brick, *store_, materials_.size(), payloadBytes);
 }
 
-DecodedRegion SceneStore::readBrick(int level, const IndexCoord& brick, const BrickStore& from, uint64_t* payloadBytes) const
+DecodedRegion SceneStore::readBrick(int level, const IndexCoord& brick, const BrickStore& from, std::size_t materialCount,
+                                    uint64_t* payloadBytes) const
 {
     const std::optional<BrickRecord> record = from.get({level, brick});
     if (payloadBytes) *payloadBytes = record ? record->payload.size() : 0;
-    return decodeBrick(level, brick, record);
+    return decodeBrick(level, brick, record, materialCount);
 }
 
 void SceneStore::loadBricks(int level, const std::vector<IndexCoord>& bricks, Volume& into, const Progress& progress,
@@ -187,7 +189,7 @@ void SceneStore::loadBricks(int level, const std::vector<IndexCoord>& bricks, Vo
         std::vector<std::optional<DecodedRegion>> parts(count);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const auto& range) {
             for (std::size_t i = range.begin(); i != range.end(); ++i)
-                if (records[i]) parts[i] = decodeBrick(level, bricks[first + i], records[i]);
+                if (records[i]) parts[i] = decodeBrick(level, bricks[first + i], records[i], materials_.size());
         });
         for (std::optional<DecodedRegion>& part : parts)
             if (part) pasteRegion(into, std::move(*part));

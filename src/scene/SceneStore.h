@@ -78,8 +78,11 @@ public:
     /// where nothing is stored. `payloadBytes` (optional) receives the size of the record read.
     DecodedRegion readBrick(int level, const IndexCoord& brick, uint64_t* payloadBytes = nullptr) const;
     /// The same, read through `from`, a reader of this store (bricks().openReader()): a thread of its
-    /// own reads beside the others instead of waiting for this store's connection.
-    DecodedRegion readBrick(int level, const IndexCoord& brick, const BrickStore& from, uint64_t* payloadBytes = nullptr) const;
+    /// own reads beside the others instead of waiting for this store's connection. The brick may use
+    /// material ids up to `materialCount`, which the caller read where setMaterials cannot run at the
+    /// same time (this store's own table may be replaced meanwhile by the thread that commits).
+    DecodedRegion readBrick(int level, const IndexCoord& brick, const BrickStore& from, std::size_t materialCount,
+                            uint64_t* payloadBytes = nullptr) const;
     /// A whole level as one volume.
     Volume loadLevel(int level, const Progress& progress = {}) const;
     /// Stores the given bricks of `volume` (a level): a payload, a uniform record, or nothing for empty
@@ -90,7 +93,8 @@ public:
 
 private:
     SceneStore(std::unique_ptr<BrickStore> store);
-    DecodedRegion decodeBrick(int level, const IndexCoord& brick, const std::optional<BrickRecord>& record) const;
+    DecodedRegion decodeBrick(int level, const IndexCoord& brick, const std::optional<BrickRecord>& record,
+                              std::size_t materialCount) const;
     void readMeta();
 
     std::unique_ptr<BrickStore> store_;

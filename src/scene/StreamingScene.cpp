@@ -153,12 +153,15 @@ struct StreamingScene::Impl {
             const uint64_t estimate = estimateOf(key);
             inFlight.insert(key);
             inFlightBytes += estimate;
+            // Read under the lock: an autosave on another thread may replace the store's table. The
+            // table only grows, and a brick the reader sees was committed with its materials.
+            const std::size_t materialCount = materials.size();
             lock.unlock();
             std::optional<DecodedRegion> loaded;
             uint64_t payloadBytes = 0;
             bool unreadable = false;
             try {
-                loaded = scene.readBrick(key.level, key.brick, reader, &payloadBytes);
+                loaded = scene.readBrick(key.level, key.brick, reader, materialCount, &payloadBytes);
             } catch (...) {
                 unreadable = true; // a damaged brick shows as missing; sculpting it reports the error
             }
@@ -370,9 +373,10 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script)
     for (const IndexCoord& b : bricks) {
         const BrickKey key{0, b};
         if (s.resident.count(key)) continue;
+        const std::size_t materialCount = s.materials.size(); // as a loader does: an autosave may run meanwhile
         lock.unlock();
         uint64_t payloadBytes = 0;
-        DecodedRegion brick = s.scene.readBrick(0, b, &payloadBytes);
+        DecodedRegion brick = s.scene.readBrick(0, b, s.scene.bricks(), materialCount, &payloadBytes);
         lock.lock();
         if (s.resident.count(key)) continue; // a loader got there first
         const uint64_t bytes = brick.memoryBytes();
