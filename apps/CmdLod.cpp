@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <cmath>
 
 namespace vdbclay::cli {
 
@@ -204,7 +205,7 @@ int runLodInspect(const LodOptions& o)
                  {"resident", "peak " + formatBytes(double(s.peakResidentBytes)) + " of " + formatBytes(double(options.memoryBudgetBytes))},
                  {"read", formatBytes(double(s.bytesRead)) + " in " + std::to_string(s.loads) + " loads, " +
                               std::to_string(s.evictions) + " evictions"},
-                 {"hit rate", formatNumber(100.0 * s.meanHitRate) + " %"},
+                 {"hit rate", formatNumber(std::round(1000.0 * s.meanHitRate) / 10.0) + " % (mean over the frames)"},
                  {"coarse view", "first complete at " + when(s.firstCoarseComplete)},
                  {"refined view", "first complete at " + when(s.firstComplete) + "; refined as far as the budget allows at " +
                                       when(s.firstSettled)},
