@@ -159,6 +159,36 @@ TEST_CASE("streaming holds the memory budget over a flight, and a large budget r
         CHECK_FALSE(compareRegion(resident, stored, {b, kBrickEdge}).any());
 }
 
+TEST_CASE("a frame reports what the view shows: nothing at first, then every brick at its own level", "[streaming]")
+{
+    TempDir dir;
+    const std::string path = makeTerrain(dir);
+    const Viewer view = lookingAt({128, 40, 128}, {129, 30, 128});
+    StreamingOptions options;
+    options.memoryBudgetBytes = 256ull << 20;
+    StreamingScene scene(path, options);
+    const FrameReport first = scene.frame(view);
+    REQUIRE(first.requested > 0);
+    CHECK(first.hits == 0);
+    CHECK_FALSE(first.coarseComplete);
+    CHECK_FALSE(first.complete);
+    CHECK(first.screenError == 0.0); // nothing shown
+    CHECK(first.targetError > 0.0);
+    scene.waitForLoads();
+    const FrameReport loaded = scene.frame(view);
+    CHECK(loaded.requested == first.requested);
+    CHECK(loaded.hits == loaded.requested);
+    CHECK(loaded.coarseComplete);
+    CHECK(loaded.complete);
+    CHECK(loaded.settled);
+    CHECK(loaded.pending == 0);
+    CHECK(loaded.screenError == loaded.targetError); // each brick at the level it asked for
+    uint64_t resident = 0;
+    for (uint64_t n : loaded.residentPerLevel) resident += n;
+    CHECK(resident >= loaded.requested); // the selection and the ancestors that stood in for it
+    CHECK(loaded.residentPerLevel.back() > 0);
+}
+
 TEST_CASE("a damaged brick is reported, shown by its ancestors and not read again every frame", "[streaming]")
 {
     TempDir dir;
@@ -194,6 +224,8 @@ TEST_CASE("a damaged brick is reported, shown by its ancestors and not read agai
     CHECK(report.damagedBricks == 1);
     CHECK(report.coarseComplete); // its ancestors stand in for it
     CHECK_FALSE(report.complete);
+    CHECK(report.hits + 1 == report.requested); // every other brick the view asked for is shown at its level
+    CHECK(report.screenError > 0.0);
     CHECK(report.pending == 0);   // not queued again: it would be read and fail every frame
 }
 
