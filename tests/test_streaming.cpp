@@ -113,6 +113,49 @@ TEST_CASE("a view selects coarse bricks far away and fine ones close by, only in
     CHECK_THROWS_AS(selectBricks(lookingAt({1, 2, 3}, {1, 2, 3}), options, stored), std::invalid_argument);
 }
 
+TEST_CASE("what a view needs: each selected brick and its ancestors once, coarse first", "[streaming]")
+{
+    // A cut through a two-level pyramid: two level-0 bricks under level-1 brick (0,0,0), level-1 brick
+    // (1,0,0), and level-0 brick (4,0,0) under level-1 (2,0,0) and level-2 (1,0,0).
+    const std::vector<SelectedBrick> cut{{{0, {0, 0, 0}}}, {{0, {1, 0, 0}}}, {{1, {1, 0, 0}}}, {{0, {4, 0, 0}}}};
+    const ViewNeeds needs = viewNeeds(cut, 2);
+    const std::vector<BrickKey> bricks{{0, {0, 0, 0}}, {1, {0, 0, 0}}, {2, {0, 0, 0}}, {0, {1, 0, 0}},
+                                       {1, {1, 0, 0}}, {0, {4, 0, 0}}, {1, {2, 0, 0}}, {2, {1, 0, 0}}};
+    CHECK(needs.bricks == bricks);
+    constexpr uint32_t none = ViewNeeds::kNone;
+    CHECK(needs.parent == std::vector<uint32_t>{1, 2, none, 1, 2, 6, 7, none});
+    CHECK(needs.selected == std::vector<uint32_t>{0, 3, 4, 5});
+    CHECK(needs.order == std::vector<uint32_t>{2, 7, 1, 4, 6, 0, 3, 5});
+
+    // The same properties on a real selection of a terrain-like lattice.
+    std::vector<std::set<IndexCoord>> stored(4);
+    for (int x = 0; x < 16; ++x)
+        for (int z = 0; z < 16; ++z) stored[0].insert({x, 0, z});
+    for (int k = 1; k < 4; ++k)
+        for (const IndexCoord& b : stored[std::size_t(k - 1)]) stored[std::size_t(k)].insert(parentBrick(b));
+    SelectionOptions options;
+    options.levels = 3;
+    const std::vector<SelectedBrick> selected = selectBricks(lookingAt({60, 30, 60}, {900, 10, 700}), options, stored);
+    REQUIRE(selected.size() > 8);
+    const ViewNeeds real = viewNeeds(selected, options.levels);
+    CHECK(std::set<BrickKey>(real.bricks.begin(), real.bricks.end()).size() == real.bricks.size());
+    for (std::size_t i = 0; i < selected.size(); ++i) CHECK(real.bricks[real.selected[i]] == selected[i].key);
+    for (std::size_t n = 0; n < real.bricks.size(); ++n) {
+        const BrickKey& b = real.bricks[n];
+        if (b.level == options.levels) {
+            CHECK(real.parent[n] == none);
+            continue;
+        }
+        REQUIRE(real.parent[n] != none);
+        CHECK(real.bricks[real.parent[n]] == BrickKey{b.level + 1, parentBrick(b.brick)});
+    }
+    std::vector<uint32_t> sorted = real.order;
+    std::sort(sorted.begin(), sorted.end());
+    for (uint32_t i = 0; i < sorted.size(); ++i) CHECK(sorted[i] == i);
+    for (std::size_t i = 1; i < real.order.size(); ++i)
+        CHECK(real.bricks[real.order[i - 1]].level >= real.bricks[real.order[i]].level);
+}
+
 TEST_CASE("streaming holds the memory budget over a flight, and a large budget refines the view", "[streaming]")
 {
     TempDir dir;

@@ -261,33 +261,12 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     ++s.frameNumber;
     FrameReport report;
     report.requested = selected.size();
-    // What the view needs, coarse first: each selected brick's ancestors (shown while it loads), then
-    // the selection itself, as far as the budget goes. A brick's chain of ancestors ends where it meets
-    // one already listed (whose own chain is listed); within a level, bricks keep the order of the first
-    // selected brick that needs them. Each needed brick is looked up once per pass: at 90 Hz this runs
-    // under the loaders' lock for a few thousand bricks.
-    constexpr uint32_t kNone = ~uint32_t(0);
-    std::vector<BrickKey> needed;
-    std::vector<uint32_t> parentOf;                          // index in `needed` of the parent, or kNone
-    std::vector<uint32_t> selectedAt(selected.size(), kNone); // index in `needed` of each selected brick
-    {
-        std::unordered_map<BrickKey, uint32_t, BrickKeyHash> indexOf;
-        indexOf.reserve(2 * selected.size());
-        for (std::size_t i = 0; i < selected.size(); ++i) {
-            uint32_t child = kNone;
-            for (BrickKey key = selected[i].key; key.level <= s.levels; key = {key.level + 1, parentBrick(key.brick)}) {
-                const auto [it, inserted] = indexOf.try_emplace(key, uint32_t(needed.size()));
-                (child == kNone ? selectedAt[i] : parentOf[child]) = it->second;
-                if (!inserted) break;
-                needed.push_back(key);
-                parentOf.push_back(kNone);
-                child = it->second;
-            }
-        }
-    }
-    std::vector<uint32_t> order(needed.size());
-    for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return needed[a].level > needed[b].level; });
+    // What the view needs, coarse first (ancestors stand in while the selection loads), as far as the
+    // budget goes. Each needed brick is looked up once per pass: at 90 Hz this runs under the loaders'
+    // lock for a few thousand bricks.
+    const ViewNeeds needs = viewNeeds(selected, s.levels);
+    const std::vector<BrickKey>& needed = needs.bricks;
+    const std::vector<uint32_t>& order = needs.order;
     std::size_t accepted = 0;
     uint64_t cost = 0;
     for (; accepted < order.size(); ++accepted) {
@@ -322,7 +301,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
         const SelectedBrick& b = selected[i];
         report.targetError = std::max(report.targetError, b.screenError);
         int shown = -1;
-        for (uint32_t n = selectedAt[i]; n != kNone; n = parentOf[n])
+        for (uint32_t n = needs.selected[i]; n != ViewNeeds::kNone; n = needs.parent[n])
             if (isResident[n]) {
                 shown = needed[n].level;
                 break;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <unordered_map>
 
 namespace vdbclay {
 
@@ -120,6 +121,31 @@ std::vector<SelectedBrick> selectBricks(const Viewer& viewer, const SelectionOpt
         return a.distance < b.distance;
     });
     return out;
+}
+
+ViewNeeds viewNeeds(const std::vector<SelectedBrick>& selected, int levels)
+{
+    // A brick's chain of ancestors ends where it meets one already listed, whose own chain is listed.
+    ViewNeeds needs;
+    needs.selected.assign(selected.size(), ViewNeeds::kNone);
+    std::unordered_map<BrickKey, uint32_t, BrickKeyHash> indexOf;
+    indexOf.reserve(2 * selected.size());
+    for (std::size_t i = 0; i < selected.size(); ++i) {
+        uint32_t child = ViewNeeds::kNone;
+        for (BrickKey key = selected[i].key; key.level <= levels; key = {key.level + 1, parentBrick(key.brick)}) {
+            const auto [it, inserted] = indexOf.try_emplace(key, uint32_t(needs.bricks.size()));
+            (child == ViewNeeds::kNone ? needs.selected[i] : needs.parent[child]) = it->second;
+            if (!inserted) break;
+            needs.bricks.push_back(key);
+            needs.parent.push_back(ViewNeeds::kNone);
+            child = it->second;
+        }
+    }
+    needs.order.resize(needs.bricks.size());
+    for (uint32_t i = 0; i < needs.order.size(); ++i) needs.order[i] = i;
+    std::stable_sort(needs.order.begin(), needs.order.end(),
+                     [&](uint32_t a, uint32_t b) { return needs.bricks[a].level > needs.bricks[b].level; });
+    return needs;
 }
 
 } // namespace vdbclay

@@ -38,6 +38,19 @@ struct SelectedBrick {
 std::vector<SelectedBrick> selectBricks(const Viewer& viewer, const SelectionOptions& options,
                                         const std::vector<std::set<IndexCoord>>& stored);
 
+/// What a selection needs resident, every brick once: each selected brick and its ancestors up to
+/// `levels` (shown while it loads). Bricks are referred to by their index in `bricks`.
+struct ViewNeeds {
+    static constexpr uint32_t kNone = ~uint32_t(0);
+    std::vector<BrickKey> bricks;
+    std::vector<uint32_t> parent;   // per brick: its parent's index, or kNone at the top level
+    std::vector<uint32_t> selected; // per selected brick: its index
+    /// The loading order: coarse levels first; within a level, in the order of the first selected
+    /// brick that needs each.
+    std::vector<uint32_t> order;
+};
+ViewNeeds viewNeeds(const std::vector<SelectedBrick>& selected, int levels);
+
 /// The parent brick (level k + 1) of a brick of level k.
 inline IndexCoord parentBrick(const IndexCoord& b)
 {
