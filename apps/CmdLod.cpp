@@ -212,7 +212,8 @@ int runLodInspect(const LodOptions& o)
                  {"budget", s.budgetLimited ? "too small for the view at some frames: it refined less there" : "enough"},
                  {"damaged", s.damagedBricks == 0 ? std::string("none")
                                                   : std::to_string(s.damagedBricks) +
-                                                        " bricks could not be read (shown by coarser levels); 'vdbclay export' names the first"}},
+                                                        " bricks could not be read (shown by coarser levels); 'vdbclay lod build' rebuilds the coarse levels "
+                                                          "or names the first damaged brick of level 0"}},
                 0);
     return kExitOk;
 }

@@ -28,7 +28,7 @@ void writeScene(const Volume& volume, const std::string& path, bool progress)
 /// What a written scene holds, for the summary.
 struct SceneCounts {
     uint64_t leaves = 0, activeVoxels = 0;
-    explicit SceneCounts(const Volume& volume) : leaves(volume.stats().leafCount), activeVoxels(volume.stats().activeVoxels) {}
+    explicit SceneCounts(const VolumeStats& stats) : leaves(stats.leafCount), activeVoxels(stats.activeVoxels) {}
     SceneCounts(uint64_t leafCount, uint64_t active) : leaves(leafCount), activeVoxels(active) {}
 };
 
@@ -81,7 +81,7 @@ int importMesh(const ImportOptions& o, std::chrono::steady_clock::time_point sta
             if (report.solidVoxels == 0) throw std::invalid_argument(noSolidMessage(report.voxelSize));
             saveVolume(volume, o.output);
             materials = volume.materials().names();
-            return SceneCounts(volume);
+            return SceneCounts(volume.stats());
         } catch (const std::invalid_argument& e) {
             throw UsageError(e.what());
         }
@@ -178,7 +178,8 @@ int runImport(const ImportOptions& o)
         }
     }()
                              : loadScene(o.input, terminalProgress("reading bricks", !o.json));
-    if (standard && volume.stats().empty)
+    const VolumeStats stats = volume.stats();
+    if (standard && stats.empty)
         throw UsageError("grid '" + printableText(report.grid, 64) + "' of '" + o.input + "' holds no solid voxel read as a " +
                          (report.fog ? "fog volume (solid where the density exceeds " + formatNumber(o.iso.value_or(0.0)) + ")"
                                      : "level set (solid below " + formatNumber(o.iso.value_or(0.0)) + ")") +
@@ -186,7 +187,7 @@ int runImport(const ImportOptions& o)
     writeScene(volume, o.output, !o.json);
     const double seconds = secondsSince(start);
     if (o.json) {
-        nlohmann::json out = sceneSummaryJson(o.output, SceneCounts(volume), seconds);
+        nlohmann::json out = sceneSummaryJson(o.output, SceneCounts(stats), seconds);
         if (standard)
             out["levelset"] = {{"grid", report.grid},   {"class", report.gridClass}, {"value_type", report.valueType},
                                {"fog", report.fog},     {"voxel_size", report.voxelSize},
@@ -203,7 +204,7 @@ int runImport(const ImportOptions& o)
                      {"crossings", std::to_string(report.crossings)}},
                     0);
     }
-    printSummary(o.input, o.output, SceneCounts(volume), seconds);
+    printSummary(o.input, o.output, SceneCounts(stats), seconds);
     return kExitOk;
 }
 
@@ -226,8 +227,9 @@ int runExport(const ExportOptions& o)
     const Volume volume = loadScene(o.input, terminalProgress("reading bricks", !o.json));
     saveVolume(volume, o.output);
     const double seconds = secondsSince(start);
-    if (o.json) printJson(sceneSummaryJson(o.output, SceneCounts(volume), seconds));
-    else printSummary(o.input, o.output, SceneCounts(volume), seconds);
+    const SceneCounts counts(volume.stats());
+    if (o.json) printJson(sceneSummaryJson(o.output, counts, seconds));
+    else printSummary(o.input, o.output, counts, seconds);
     return kExitOk;
 }
 

@@ -55,6 +55,15 @@ Viewer lookingAt(const std::array<double, 3>& from, const std::array<double, 3>&
     return v;
 }
 
+/// A view from just above the terrain's middle, and a budget that holds all it asks for.
+Viewer groundView() { return lookingAt({128, 40, 128}, {129, 30, 128}); }
+StreamingOptions roomyOptions()
+{
+    StreamingOptions options;
+    options.memoryBudgetBytes = 256ull << 20;
+    return options;
+}
+
 std::string stampScript(int count, uint64_t seed, double from = 8.0, double to = 248.0)
 {
     std::mt19937 rng{unsigned(seed)};
@@ -191,10 +200,8 @@ TEST_CASE("streaming holds the memory budget over a flight, and a large budget r
         if (budgetMB == 64) CHECK(complete);
     }
     // What streams in is what the store holds.
-    StreamingOptions big;
-    big.memoryBudgetBytes = 256ull << 20;
-    StreamingScene scene(path, big);
-    scene.frame(lookingAt({128, 40, 128}, {129, 30, 128}));
+    StreamingScene scene(path, roomyOptions());
+    scene.frame(groundView());
     scene.waitForLoads();
     const Volume resident = scene.residentLevel0();
     const Volume stored = loadScene(path);
@@ -206,9 +213,8 @@ TEST_CASE("a frame reports what the view shows: nothing at first, then every bri
 {
     TempDir dir;
     const std::string path = makeTerrain(dir);
-    const Viewer view = lookingAt({128, 40, 128}, {129, 30, 128});
-    StreamingOptions options;
-    options.memoryBudgetBytes = 256ull << 20;
+    const Viewer view = groundView();
+    const StreamingOptions options = roomyOptions();
     StreamingScene scene(path, options);
     const FrameReport first = scene.frame(view);
     REQUIRE(first.requested > 0);
@@ -236,9 +242,8 @@ TEST_CASE("a damaged brick is reported, shown by its ancestors and not read agai
 {
     TempDir dir;
     const std::string path = makeTerrain(dir);
-    const Viewer view = lookingAt({128, 40, 128}, {129, 30, 128});
-    StreamingOptions options;
-    options.memoryBudgetBytes = 256ull << 20;
+    const Viewer view = groundView();
+    const StreamingOptions options = roomyOptions();
     IndexCoord broken{};
     {
         // Which level-0 brick the view loads, then one byte of its payload flipped (its checksum fails).

@@ -61,15 +61,7 @@ public:
     /// locks the process's other connections hold on it).
     SqliteBrickStore(const std::string& path, StoreAccess access, bool sibling = false) : path_(path)
     {
-        std::error_code ec;
-        const bool exists = sibling || fs::exists(path, ec);
-        if (access == StoreAccess::Create && exists) throw StoreError("'" + path + "' already exists");
-        if (access != StoreAccess::Create && !sibling) {
-            if (!exists) throw StoreError("'" + path + "' does not exist");
-            if (!fs::is_regular_file(path, ec)) throw StoreError("'" + path + "' is not a regular file");
-            if (!looksLikeSqliteFile(path))
-                throw StoreError("'" + path + "' is not a VDBClay scene store (not an SQLite database)");
-        }
+        if (!sibling) requireUsableFile(path, access);
         if (access != StoreAccess::ReadOnly) lockForWriting(access == StoreAccess::Create);
         // A reader opens a writable file read-write (and then only queries), so that SQLite removes the
         // -wal and -shm files when the last connection closes instead of leaving them beside the store.
@@ -220,6 +212,21 @@ public:
     }
 
 private:
+    /// What can be told from the file before SQLite opens it: it exists (or, to create, does not) and
+    /// starts like an SQLite database.
+    static void requireUsableFile(const std::string& path, StoreAccess access)
+    {
+        std::error_code ec;
+        const bool exists = fs::exists(path, ec);
+        if (access == StoreAccess::Create) {
+            if (exists) throw StoreError("'" + path + "' already exists");
+            return;
+        }
+        if (!exists) throw StoreError("'" + path + "' does not exist");
+        if (!fs::is_regular_file(path, ec)) throw StoreError("'" + path + "' is not a regular file");
+        if (!looksLikeSqliteFile(path)) throw StoreError("'" + path + "' is not a VDBClay scene store (not an SQLite database)");
+    }
+
     void lockForWriting(bool create)
     {
         lockFd_ = ::open(path_.c_str(), O_RDWR | O_CLOEXEC | (create ? O_CREAT | O_EXCL : 0), 0644);

@@ -117,7 +117,6 @@ private:
     bool armed_ = false;
 };
 
-
 /// Where a save of `path` lands (links followed) and, when it replaces a file, that file's status.
 struct SaveTarget {
     fs::path target, dir;
