@@ -267,7 +267,7 @@ TEST_CASE("a reader connection reads beside the writer and sees only what it com
     uint64_t viaReader = 0, viaWriter = 0;
     Volume a(writer.voxelSize()), b(writer.voxelSize());
     pasteRegion(a, writer.readBrick(0, bricks[1], *reader, writer.materials().size(), &viaReader));
-    pasteRegion(b, writer.readBrick(0, bricks[1], &viaWriter));
+    pasteRegion(b, writer.readBrick(0, bricks[1], writer.bricks(), writer.materials().size(), &viaWriter));
     CHECK(viaReader == viaWriter);
     CHECK(identical(a, b));
 

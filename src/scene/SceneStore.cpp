@@ -162,11 +162,6 @@ DecodedRegion SceneStore::decodeBrick(int level, const IndexCoord& brick, const 
     }
 }
 
-DecodedRegion SceneStore::readBrick(int level, const IndexCoord& brick, uint64_t* payloadBytes) const
-{
-    return readBrick(level, brick, *store_, materials_.size(), payloadBytes);
-}
-
 DecodedRegion SceneStore::readBrick(int level, const IndexCoord& brick, const BrickStore& from, std::size_t materialCount,
                                     uint64_t* payloadBytes) const
 {

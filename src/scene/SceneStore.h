@@ -75,12 +75,11 @@ public:
     void loadBricks(int level, const std::vector<IndexCoord>& bricks, Volume& into, const Progress& progress = {},
                     std::vector<std::optional<BrickRecord>>* records = nullptr) const;
     /// One brick of a level, decoded outside any volume (safe on several threads at once): empty space
-    /// where nothing is stored. `payloadBytes` (optional) receives the size of the record read.
-    DecodedRegion readBrick(int level, const IndexCoord& brick, uint64_t* payloadBytes = nullptr) const;
-    /// The same, read through `from`, a reader of this store (bricks().openReader()): a thread of its
-    /// own reads beside the others instead of waiting for this store's connection. The brick may use
-    /// material ids up to `materialCount`, which the caller read where setMaterials cannot run at the
-    /// same time (this store's own table may be replaced meanwhile by the thread that commits).
+    /// where nothing is stored. It is read through `from`: bricks(), or a reader of this store
+    /// (bricks().openReader()) with which a thread reads beside the others instead of waiting for this
+    /// store's connection. The brick may use material ids up to `materialCount`, which the caller read
+    /// where setMaterials cannot run at the same time (the thread that commits may replace this store's
+    /// table meanwhile). `payloadBytes` (optional) receives the size of the record read.
     DecodedRegion readBrick(int level, const IndexCoord& brick, const BrickStore& from, std::size_t materialCount,
                             uint64_t* payloadBytes = nullptr) const;
     /// A whole level as one volume.
