@@ -2,6 +2,7 @@
 // them, errors mapped to exit codes, and small output helpers. Light header: no OpenVDB trees here.
 #pragma once
 
+#include "scene/OutputCheck.h"
 #include "vdb_hermite/FileExtension.h"
 #include "vdb_hermite/NumberText.h"
 
@@ -60,8 +61,6 @@ nlohmann::json opReportJson(const ScriptOpReport& report);
 std::string formatSeconds(double seconds); // "812 ms", "3.42 s"
 std::string formatBytes(double bytes);     // "12.3 MiB"
 
-/// Throws UsageError unless `path` ends in .obj, .ply or .glb (any case).
-void requireMeshExtension(const std::string& path, const char* optionName);
 /// Throws UsageError unless `path` ends in .vdb or .vdbclay (the forms a scene is written in).
 void requireSceneExtension(const std::string& path);
 /// An option check that refuses zero, negative and non-finite numbers with a short message
@@ -163,6 +162,7 @@ struct ExportLevelSetOptions {
     std::string output;
     double halfWidth = 3.0;
     bool fog = false;
+    bool int32Material = false;
     bool json = false;
 };
 CLI::App* addExportLevelSetCommand(CLI::App& parent, ExportLevelSetOptions& options);

@@ -106,6 +106,14 @@ int runDemo(const DemoOptions& o)
     const std::string scriptPath = (dir / "script.json").string();
     const std::string toolPath = (dir / "knob.vdb").string();
     const std::string toolScriptPath = (dir / "tools.json").string();
+    const std::string storePath = (dir / "scene.vdbclay").string();
+    const std::string lodPath = (dir / "scene-lod2.obj").string();
+    // Every file is checked before the session: a folder of other files is never overwritten.
+    for (const std::string& path : {vdbPath, toolPath}) checkOutput(path, OutputForm::NativeVolume);
+    for (const std::string& path : {objPath, lodPath}) checkOutput(path, OutputForm::ObjMesh);
+    for (const std::string& path : {scriptPath, toolScriptPath}) checkOutput(path, OutputForm::Json);
+    checkOutput(plyPath, OutputForm::PlyMesh);
+    checkOutput(storePath, OutputForm::Store);
 
     const StrokeScript script = parseStrokeScript(kDemoScript);
     Volume volume(kDemoVoxelSize);
@@ -136,8 +144,6 @@ int runDemo(const DemoOptions& o)
     writeMesh(mesh, volume.materials(), objPath);
     writeMesh(mesh, volume.materials(), plyPath);
     // The same scene out of core: a store with its levels of detail, and the coarsest level's mesh.
-    const std::string storePath = (dir / "scene.vdbclay").string();
-    const std::string lodPath = (dir / "scene-lod2.obj").string();
     writeStoreFile(volume, storePath);
     {
         SceneStore store = SceneStore::open(storePath, StoreAccess::ReadWrite);

@@ -160,7 +160,6 @@ int runLodInspect(const LodOptions& o)
     } catch (const std::invalid_argument& e) {
         throw UsageError(e.what());
     }
-    if (!o.plot.empty() && lowerCaseExtension(o.plot) != ".png") throw UsageError("--plot writes a PNG: the name must end in .png");
     StreamingOptions options;
     options.memoryBudgetBytes = uint64_t(o.memoryBudgetMB * 1048576.0);
     options.pixelTolerance = o.pixelError;
@@ -171,8 +170,8 @@ int runLodInspect(const LodOptions& o)
         throw UsageError(e.what());
     }
     // The outputs are checked before the flight, which replays in real time.
-    if (!o.csv.empty()) requireReplaceable(o.csv);
-    if (!o.plot.empty()) requireReplaceable(o.plot);
+    if (!o.csv.empty()) checkOutput(o.csv, OutputForm::Csv, {o.scene, o.cameraPath});
+    if (!o.plot.empty()) checkOutput(o.plot, OutputForm::Png, {o.scene, o.cameraPath});
     const FlightInspection inspection = inspectFlight(*scene, flight, 2.0, terminalProgress("replaying the flight", !o.json));
     if (!o.csv.empty()) writeFlightCsv(inspection, o.csv);
     if (!o.plot.empty()) writeFlightPlot(inspection, options.memoryBudgetBytes, o.plot);

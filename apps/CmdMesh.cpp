@@ -81,7 +81,7 @@ int runMesh(const MeshCommandOptions& o)
     } catch (const std::invalid_argument& e) {
         throw UsageError(e.what());
     }
-    requireMeshExtension(o.output, "--output");
+    checkOutput(o.output, meshFormOf(o.output), {o.input});
 
     const auto start = std::chrono::steady_clock::now();
     const int level = o.lod.value_or(0);

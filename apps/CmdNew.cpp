@@ -87,6 +87,7 @@ int runNew(const NewOptions& o)
     } catch (const std::invalid_argument& e) {
         throw UsageError(std::string("--size: ") + e.what());
     }
+    checkOutput(o.output, OutputForm::NativeVolume);
     applyCsg(volume, Brush(primitive, Placement{}), op);
     saveVolume(volume, o.output);
     const double seconds = secondsSince(start);

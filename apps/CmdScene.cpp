@@ -154,10 +154,10 @@ int runImport(const ImportOptions& o)
 {
     const auto start = std::chrono::steady_clock::now();
     requireSceneExtension(o.output);
-    std::error_code ec;
-    if (std::filesystem::equivalent(o.input, o.output, ec)) // replacing a store by its own level 0 drops its levels of detail
+    if (sameFile(o.input, o.output)) // replacing a store by its own level 0 drops its levels of detail
         throw UsageError("'" + o.output + "' is the input itself: import writes another file (a store's levels of detail "
                          "are refreshed by 'vdbclay lod build')");
+    checkOutput(o.output, isStorePath(o.output) ? OutputForm::Store : OutputForm::NativeVolume, {o.input});
     if (isMeshPath(o.input)) return importMesh(o, start);
     if (o.resolution)
         throw UsageError("--resolution is for meshes (obj ply stl off gltf glb fbx dae); '" + o.input + "' is not one");
@@ -223,6 +223,7 @@ int runExport(const ExportOptions& o)
 {
     requireSceneExtension(o.output);
     if (isStorePath(o.output)) throw UsageError("export writes a native .vdb; use 'vdbclay import' to make a store");
+    checkOutput(o.output, OutputForm::NativeVolume, {o.input});
     const auto start = std::chrono::steady_clock::now();
     const Volume volume = loadScene(o.input, terminalProgress("reading bricks", !o.json));
     saveVolume(volume, o.output);
@@ -240,27 +241,35 @@ CLI::App* addExportLevelSetCommand(CLI::App& parent, ExportLevelSetOptions& o)
     cmd->add_option("-o,--output", o.output, "Standard .vdb file to write (atomically)")->required()->type_name("OUT.vdb");
     cmd->add_option("--half-width", o.halfWidth, "Narrow band half width, in voxels")->capture_default_str()->check(CLI::Range(1.0, 64.0));
     cmd->add_flag("--fog", o.fog, "Also write a fog volume 'density' (FOG_VOLUME) that Blender's volume objects render");
+    cmd->add_flag("--int32-material", o.int32Material,
+                  "Write 'material' as an Int32Grid (exact for any id; pyopenvdb's readAll and Blender cannot read it)");
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text");
     cmd->footer("Grids: 'surface', a FloatGrid narrow-band level set (GRID_LEVEL_SET, negative inside, distances\n"
-                "exact to the scene's CMS mesh); 'material', an Int32Grid of material ids (0: empty); with --fog,\n"
-                "'density', 1 inside falling to 0 across the band. The file is a plain OpenVDB file: vdb_print,\n"
-                "pyopenvdb, Houdini and Blender read it, and 'vdbclay import' brings it back.");
+                "exact to the scene's CMS mesh); 'material', a FloatGrid of material ids (0: empty; whole numbers,\n"
+                "exact as floats; an Int32Grid with --int32-material); with --fog, 'density', 1 inside falling to\n"
+                "0 across the band. vdb_print, pyopenvdb (read and readAll), Houdini and Blender read every grid of\n"
+                "the default file; with --int32-material, pyopenvdb and Blender read 'surface' and 'density' only.\n"
+                "'vdbclay import' brings the level set back. A later export may replace this file; no other file\n"
+                "is replaced.");
     return cmd;
 }
 
 int runExportLevelSet(const ExportLevelSetOptions& o)
 {
     if (isStorePath(o.output)) throw UsageError("export-levelset writes a standard .vdb, not a store");
+    checkOutput(o.output, OutputForm::StandardVdb, {o.input});
     const auto start = std::chrono::steady_clock::now();
     const Volume volume = loadScene(o.input, terminalProgress("reading bricks", !o.json));
     LevelSetExportOptions options;
     options.halfWidth = o.halfWidth;
     options.fog = o.fog;
+    options.int32Material = o.int32Material;
     LevelSetExportReport report;
     exportLevelSet(volume, o.output, options, &report);
     const double seconds = secondsSince(start);
     if (o.json) {
         printJson({{"output", o.output},
+                   {"material_grid", o.int32Material ? "int32" : "float"},
                    {"grids", o.fog ? nlohmann::json::array({"surface", "material", "density"}) : nlohmann::json::array({"surface", "material"})},
                    {"half_width", o.halfWidth},
                    {"triangles", report.triangles},
@@ -271,7 +280,7 @@ int runExportLevelSet(const ExportLevelSetOptions& o)
         return kExitOk;
     }
     printFields({{"exported", o.input + " -> " + o.output},
-                 {"grids", std::string("surface (level set), material (int32)") + (o.fog ? ", density (fog)" : "")},
+                 {"grids", std::string("surface (level set), material (") + (o.int32Material ? "int32" : "float") + ")" + (o.fog ? ", density (fog)" : "")},
                  {"band", formatNumber(o.halfWidth) + " voxels each side, " + std::to_string(report.surfaceVoxels) + " voxels"},
                  {"size", formatBytes(double(std::filesystem::file_size(o.output)))},
                  {"time", formatSeconds(seconds)}},

@@ -120,8 +120,13 @@ int runSculpt(const SculptOptions& o)
     if (!store && o.output.empty()) throw UsageError("--output is required for a .vdb input");
     if (!store && (o.memoryBudgetMB || o.autosaveEvery))
         throw UsageError("--memory-budget and --autosave-every apply to stores (.vdbclay)");
-    if (store && !o.output.empty() && o.output != o.input)
+    if (store && !o.output.empty() && o.output != o.input && !sameFile(o.output, o.input))
         throw UsageError("a store is sculpted in place: leave out --output (or make a copy with 'vdbclay import' first)");
+    if (!store) {
+        requireSceneExtension(o.output);
+        // The output may be the scene itself (saving is atomic), never the script.
+        checkOutput(o.output, isStorePath(o.output) ? OutputForm::Store : OutputForm::NativeVolume, {o.script});
+    }
     // Parse the script first: a typo in it should not cost a large volume load.
     const StrokeScript script = loadStrokeScript(o.script);
     const std::size_t total = script.ops.size();

@@ -2,6 +2,7 @@
 #include "Cli.h"
 
 #include "selftest/SceneChecks.h"
+#include "vdb_hermite/AtomicFile.h"
 
 #include <CLI/CLI.hpp>
 
@@ -36,6 +37,7 @@ CLI::App* addSelftestCommand(CLI::App& parent, SelftestOptions& o)
 
 int runSelftest(const SelftestOptions& o)
 {
+    if (!o.failurePath.empty()) checkOutput(o.failurePath, OutputForm::Json);
     const auto start = std::chrono::steady_clock::now();
     std::vector<RandomScene> sweep;
     SceneCheckOptions checks;
@@ -68,9 +70,8 @@ int runSelftest(const SelftestOptions& o)
     if (firstFailure) {
         const auto& [scene, result] = *firstFailure;
         if (!o.failurePath.empty()) {
-            std::ofstream out(o.failurePath);
-            out << nlohmann::json::parse(scene.script).dump(2) << '\n';
-            if (!out) throw std::runtime_error("cannot write '" + o.failurePath + "'");
+            const std::string text = nlohmann::json::parse(scene.script).dump(2) + "\n";
+            writeFileAtomically(o.failurePath, [&](std::ostream& out) { out << text; });
         }
         if (o.json) {
             printJson({{"passed", false}, {"failures", failures}, {"report", nlohmann::json::parse(sceneReport(scene, result))}});

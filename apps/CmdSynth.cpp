@@ -43,6 +43,7 @@ int runSynth(const SynthCommandOptions& o)
         throw UsageError(e.what());
     }
     if (!isStorePath(o.output)) throw UsageError("synth writes a store: the output must end in .vdbclay");
+    checkOutput(o.output, OutputForm::Store);
     const auto start = std::chrono::steady_clock::now();
     const SynthReport report = synthesizeStore(options, o.output, terminalProgress("generating bricks", !o.json));
     const double seconds = secondsSince(start);

@@ -64,6 +64,7 @@ ToolCommands addToolCommand(CLI::App& parent, ToolMakeOptions& o)
 int runToolMake(const ToolMakeOptions& o)
 {
     if (isStorePath(o.output)) throw UsageError("a tool is written as a native .vdb, not a store");
+    checkOutput(o.output, OutputForm::NativeVolume, {o.scene});
     std::optional<WorldBounds> box;
     if (!o.bbox.empty()) {
         box = WorldBounds{Vec3d(o.bbox[0], o.bbox[1], o.bbox[2]), Vec3d(o.bbox[3], o.bbox[4], o.bbox[5])};

@@ -2,6 +2,7 @@
 
 #include "sculpt/StrokeScript.h"
 #include "voxelize/TriangleMesh.h"
+#include "vdb_hermite/PrintableText.h"
 
 #include <CLI/CLI.hpp>
 
@@ -24,7 +25,7 @@ void printError(const std::string& message)
     // One line: fold any embedded newlines (OpenVDB and JSON messages sometimes carry them).
     std::string line = message;
     std::replace(line.begin(), line.end(), '\n', ' ');
-    std::cerr << "vdbclay: error: " << line << std::endl;
+    std::cerr << "vdbclay: error: " << printableText(line, std::string::npos) << std::endl;
 }
 
 void printJson(const nlohmann::json& object)
@@ -35,9 +36,14 @@ void printJson(const nlohmann::json& object)
 
 void printFields(const std::vector<std::pair<std::string, std::string>>& fields, std::size_t indent)
 {
+    // Values often quote a file's names: they reach the terminal only in printable form.
+    std::vector<std::pair<std::string, std::string>> shown;
     std::size_t width = 0;
-    for (const auto& f : fields) width = std::max(width, f.first.size());
     for (const auto& f : fields) {
+        shown.emplace_back(printableText(f.first, std::string::npos), printableText(f.second, std::string::npos));
+        width = std::max(width, shown.back().first.size());
+    }
+    for (const auto& f : shown) {
         std::cout << std::string(indent, ' ') << f.first << ':' << std::string(width - f.first.size() + 1, ' ')
                   << f.second << '\n';
     }
@@ -138,15 +144,6 @@ const CLI::Validator& sceneInput()
         },
         "");
     return check;
-}
-
-void requireMeshExtension(const std::string& path, const char* optionName)
-{
-    const std::string ext = lowerCaseExtension(path);
-    if (ext != ".obj" && ext != ".ply" && ext != ".glb") {
-        throw UsageError(std::string(optionName) + ": '" + path +
-                         "' has an unknown mesh format; the file name must end in .obj, .ply or .glb");
-    }
 }
 
 std::function<void(uint64_t, uint64_t)> terminalProgress(const std::string& label, bool enabled)

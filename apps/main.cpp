@@ -119,6 +119,9 @@ int main(int argc, char** argv)
     } catch (const UsageError& e) {
         printError(e.what());
         return kExitUsage;
+    } catch (const vdbclay::OutputRefused& e) {
+        printError(e.what());
+        return kExitUsage;
     } catch (const std::bad_alloc&) {
         printError("out of memory");
         return kExitFailure;

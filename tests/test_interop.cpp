@@ -399,7 +399,7 @@ TEST_CASE("export-levelset writes standard grids: a level set with the right sig
     openvdb::io::File file(dir.file("out.vdb"));
     file.open();
     openvdb::FloatGrid::Ptr surface = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("surface"));
-    openvdb::Int32Grid::Ptr material = openvdb::gridPtrCast<openvdb::Int32Grid>(file.readGrid("material"));
+    openvdb::FloatGrid::Ptr material = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("material"));
     openvdb::FloatGrid::Ptr density = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("density"));
     file.close();
     REQUIRE(surface);
@@ -426,17 +426,28 @@ TEST_CASE("export-levelset writes standard grids: a level set with the right sig
                 ++near;
                 CHECK(std::fabs(values.getValue(c) / 0.5 - exact) < 0.1);
                 if (exact < -0.1) {
-                    CHECK(ids.getValue(c) == (x >= 0 ? int(red) : 1)); // the paint box starts at x = 0
+                    CHECK(ids.getValue(c) == (x >= 0 ? float(red) : 1.0f)); // the paint box starts at x = 0
                     CHECK(fog.getValue(c) > 0.0f);
                 }
                 if (exact > 0.1) CHECK(ids.getValue(c) == 0);
             }
     CHECK(near > 1000);
-    CHECK(ids.getValue(openvdb::Coord(-4, 0, 0)) == 1);
-    CHECK(ids.getValue(openvdb::Coord(4, 0, 0)) == int(red));
+    CHECK(ids.getValue(openvdb::Coord(-4, 0, 0)) == 1.0f);
+    CHECK(ids.getValue(openvdb::Coord(4, 0, 0)) == float(red));
     CHECK(fog.getValue(openvdb::Coord(0, 0, 0)) == 1.0f);
     CHECK(fog.getValue(openvdb::Coord(40, 0, 0)) == 0.0f);
     CHECK_THROWS_AS(exportLevelSet(v, dir.file("bad.vdb"), LevelSetExportOptions{0.5, false}), std::invalid_argument);
+
+    // On request the same ids as an Int32Grid, voxel for voxel.
+    o.int32Material = true;
+    exportLevelSet(v, dir.file("int.vdb"), o);
+    openvdb::io::File intFile(dir.file("int.vdb"));
+    intFile.open();
+    openvdb::Int32Grid::Ptr intIds = openvdb::gridPtrCast<openvdb::Int32Grid>(intFile.readGrid("material"));
+    intFile.close();
+    REQUIRE(intIds);
+    CHECK(intIds->activeVoxelCount() == material->activeVoxelCount());
+    for (auto it = material->cbeginValueOn(); it; ++it) CHECK(float(intIds->tree().getValue(it.getCoord())) == *it);
 }
 
 TEST_CASE("import, export-levelset, import again loses no more than quantization", "[interop]")
@@ -510,7 +521,7 @@ TEST_CASE("cli: export-levelset writes a file the stock OpenVDB tools read", "[i
         const std::string printed(text.begin(), text.end());
         CHECK(printed.find("class: level set") != std::string::npos);
         CHECK(printed.find("class: fog volume") != std::string::npos);
-        CHECK(printed.find("Tree_int32_5_4_3") != std::string::npos);
+        CHECK(printed.find("material") != std::string::npos);
     }
     if (std::system("/usr/bin/python3 -c 'import pyopenvdb' >/dev/null 2>&1") == 0) {
         const std::string script = "import pyopenvdb as v; g = v.read('" + dir.file("ls.vdb") +
@@ -518,5 +529,10 @@ TEST_CASE("cli: export-levelset writes a file the stock OpenVDB tools read", "[i
                                    "assert g.gridClass == v.GridClass.LEVEL_SET; assert a.getValue((0, 0, 0)) < 0; "
                                    "assert a.getValue((30, 0, 0)) > 0; assert abs(a.getValue((12, 0, 0))) < 0.05";
         CHECK(std::system(("/usr/bin/python3 -c \"" + script + "\"").c_str()) == 0);
+        // The whole file opens in readAll, materials included (pyopenvdb has no Int32Grid).
+        const std::string all = "import pyopenvdb as v; gs, m = v.readAll('" + dir.file("ls.vdb") +
+                                "'); n = sorted(g.name for g in gs); assert n == ['density', 'material', 'surface'], n; "
+                                "g = [g for g in gs if g.name == 'material'][0]; assert g.getConstAccessor().getValue((0, 0, 0)) == 1";
+        CHECK(std::system(("/usr/bin/python3 -c \"" + all + "\"").c_str()) == 0);
     }
 }

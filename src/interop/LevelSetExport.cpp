@@ -13,6 +13,29 @@
 
 namespace vdbclay {
 
+namespace {
+
+/// Materials as their ids, voxel for voxel (tiles stay tiles); 0 is empty space.
+template <typename GridT>
+typename GridT::Ptr materialGrid(const Volume& volume, const openvdb::math::Transform& xf)
+{
+    using ValueT = typename GridT::ValueType;
+    typename GridT::Ptr material = GridT::create(ValueT(0));
+    material->setTransform(xf.copy());
+    material->setName("material");
+    const HermiteTree& tree = volume.impl().grid->constTree();
+    for (auto value = tree.cbeginValueAll(); value; ++value) {
+        if (!value->solid()) continue;
+        CoordBBox box;
+        value.getBoundingBox(box);
+        if (value.isVoxelValue()) material->tree().setValueOn(box.min(), ValueT(value->id));
+        else material->tree().fill(box, ValueT(value->id), true);
+    }
+    return material;
+}
+
+} // namespace
+
 void exportLevelSet(const Volume& volume, const std::string& path, const LevelSetExportOptions& options,
                     LevelSetExportReport* report)
 {
@@ -38,19 +61,8 @@ void exportLevelSet(const Volume& volume, const std::string& path, const LevelSe
     surface->setGridClass(openvdb::GRID_LEVEL_SET);
     grids.push_back(surface);
 
-    // Materials as their ids, voxel for voxel (tiles stay tiles); 0 is empty space.
-    openvdb::Int32Grid::Ptr material = openvdb::Int32Grid::create(0);
-    material->setTransform(xf->copy());
-    material->setName("material");
-    const HermiteTree& tree = volume.impl().grid->constTree();
-    for (auto value = tree.cbeginValueAll(); value; ++value) {
-        if (!value->solid()) continue;
-        CoordBBox box;
-        value.getBoundingBox(box);
-        if (value.isVoxelValue()) material->tree().setValueOn(box.min(), int32_t(value->id));
-        else material->tree().fill(box, int32_t(value->id), true);
-    }
-    grids.push_back(material);
+    if (options.int32Material) grids.push_back(materialGrid<openvdb::Int32Grid>(volume, *xf));
+    else grids.push_back(materialGrid<openvdb::FloatGrid>(volume, *xf));
 
     if (options.fog) {
         openvdb::FloatGrid::Ptr density = surface->deepCopy();
@@ -62,13 +74,15 @@ void exportLevelSet(const Volume& volume, const std::string& path, const LevelSe
     writeFileAtomically(path, [](std::ostream&) {}, [&](const std::string& temp, uint64_t) {
         openvdb::io::File file(temp);
         file.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
-        file.write(grids);
+        openvdb::MetaMap marker;
+        marker.insertMeta(kLevelSetExportMarker, openvdb::StringMetadata("1"));
+        file.write(grids, marker);
         file.close();
     });
     if (report) {
         report->triangles = mesh.triangleCount();
         report->surfaceVoxels = surface->activeVoxelCount();
-        report->materialVoxels = material->activeVoxelCount();
+        report->materialVoxels = grids[1]->activeVoxelCount();
     }
 }
 

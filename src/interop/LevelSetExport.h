@@ -14,7 +14,14 @@ namespace vdbclay {
 struct LevelSetExportOptions {
     double halfWidth = 3.0; // voxels on each side of the surface
     bool fog = false;       // also a density grid (FOG_VOLUME): 1 inside, falling to 0 across the band
+    // Material ids in an Int32Grid. Off: a FloatGrid of the same ids, since pyopenvdb (readAll) and
+    // Blender read float grids only; ids below 2^24 are exact as floats.
+    bool int32Material = false;
 };
+
+/// The file metadata key that marks a file as export-levelset's (so that a later export may replace
+/// it, and nothing else's .vdb); its value is the VDBClay version that wrote it.
+inline constexpr const char* kLevelSetExportMarker = "vdbclay_levelset_export";
 
 struct LevelSetExportReport {
     uint64_t triangles = 0;       // of the mesh the distances are measured to

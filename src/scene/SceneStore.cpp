@@ -17,7 +17,6 @@
 #include <cstring>
 #include <filesystem>
 #include <iterator>
-#include <random>
 #include <set>
 
 #include <fcntl.h>
@@ -281,9 +280,8 @@ void createStoreFile(const std::string& path, double voxelSize, const MaterialTa
         else throw StoreError("'" + path + "' exists and is not a VDBClay scene store; not replacing it");
     }
     const fs::path target(path);
-    std::random_device random;
-    const fs::path temp = target.parent_path() / ("." + target.filename().string() + ".vdbclay-tmp-" +
-                                                   std::to_string(::getpid()) + "-" + std::to_string(random() % 1000000));
+    removeStaleTemporaries(path);
+    const fs::path temp = temporaryPathFor(path);
     try {
         {
             SceneStore scene = SceneStore::create(temp.string(), voxelSize, materials);

@@ -63,13 +63,22 @@ public:
     {
         if (!sibling) requireUsableFile(path, access);
         if (access != StoreAccess::ReadOnly) lockForWriting(access == StoreAccess::Create);
-        // A reader opens a writable file read-write (and then only queries), so that SQLite removes the
-        // -wal and -shm files when the last connection closes instead of leaving them beside the store.
-        const bool readOnlyFile = ::access(path.c_str(), W_OK) != 0;
-        const int flags = access == StoreAccess::ReadOnly ? (readOnlyFile ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE)
-                          : access == StoreAccess::Create ? SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE
-                                                          : SQLITE_OPEN_READWRITE;
-        if (sqlite3_open_v2(path.c_str(), &db_, flags | SQLITE_OPEN_NOMUTEX, nullptr) != SQLITE_OK) {
+        // A reader opens a store it could write read-write (and then only queries), so that SQLite removes
+        // the -wal and -shm files when the last connection closes instead of leaving them beside the store.
+        // Where it cannot write the file or its folder (a shared or archived folder), it opens the file
+        // read-only; with no -wal beside it no writer can be at work (one would have made it), so the
+        // store is opened as immutable, which needs no -shm file in a folder it cannot write.
+        std::string name = path;
+        int flags = access == StoreAccess::Create ? SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE : SQLITE_OPEN_READWRITE;
+        if (access == StoreAccess::ReadOnly && !writable(path)) {
+            flags = SQLITE_OPEN_READONLY;
+            std::error_code ec;
+            if (!fs::exists(path + "-wal", ec)) {
+                name = immutableUri(path);
+                flags |= SQLITE_OPEN_URI;
+            }
+        }
+        if (sqlite3_open_v2(name.c_str(), &db_, flags | SQLITE_OPEN_NOMUTEX, nullptr) != SQLITE_OK) {
             const std::string why = db_ ? sqlite3_errmsg(db_) : "out of memory";
             close();
             throw StoreError("cannot open '" + path + "': " + why);
@@ -214,6 +223,30 @@ public:
 private:
     /// What can be told from the file before SQLite opens it: it exists (or, to create, does not) and
     /// starts like an SQLite database.
+    /// Whether this process may write the store and create files beside it (SQLite's -wal and -shm).
+    static bool writable(const std::string& path)
+    {
+        const fs::path dir = fs::path(path).has_parent_path() ? fs::path(path).parent_path() : fs::path(".");
+        return ::access(path.c_str(), W_OK) == 0 && ::access(dir.c_str(), W_OK | X_OK) == 0;
+    }
+
+    /// "file:PATH?immutable=1", the path percent-encoded where SQLite's URI syntax needs it.
+    static std::string immutableUri(const std::string& path)
+    {
+        std::string uri = "file:";
+        for (const char c : path) {
+            if (c == '%' || c == '?' || c == '#') {
+                static const char kHex[] = "0123456789ABCDEF";
+                uri += '%';
+                uri += kHex[(unsigned char)c >> 4];
+                uri += kHex[(unsigned char)c & 15];
+            } else {
+                uri += c;
+            }
+        }
+        return uri + "?immutable=1";
+    }
+
     static void requireUsableFile(const std::string& path, StoreAccess access)
     {
         std::error_code ec;

@@ -53,9 +53,8 @@ const char* const kTempMarker = ".vdbclay-tmp-";
 
 std::string tempPrefix(const fs::path& target) { return "." + target.filename().string() + kTempMarker; }
 
-/// Removes this user's temporary files for `target` whose writing process no longer runs (a save
-/// killed with SIGKILL, or a crash). Other users' files and files of live processes stay.
-void removeStaleTemporaries(const fs::path& dir, const fs::path& target)
+/// Other users' files and files of live processes stay.
+void removeStaleTemporariesIn(const fs::path& dir, const fs::path& target)
 {
     const std::string prefix = tempPrefix(target);
     DIR* d = ::opendir(dir.c_str());
@@ -148,6 +147,19 @@ SaveTarget checkSaveTarget(const std::string& path)
 
 void syncFileToDisk(const std::string& path) { syncPath(path, false); }
 
+std::string temporaryPathFor(const std::string& target)
+{
+    const fs::path t(target);
+    std::random_device entropy;
+    return (t.parent_path() / (tempPrefix(t) + std::to_string(::getpid()) + "-" + std::to_string(entropy() % 1000000000u))).string();
+}
+
+void removeStaleTemporaries(const std::string& target)
+{
+    const fs::path t(target);
+    removeStaleTemporariesIn(t.has_parent_path() ? t.parent_path() : fs::path("."), t);
+}
+
 void requireReplaceable(const std::string& path) { (void)checkSaveTarget(path); }
 
 void writeFileAtomically(const std::string& path, const std::function<void(std::ostream&)>& write,
@@ -157,11 +169,8 @@ void writeFileAtomically(const std::string& path, const std::function<void(std::
     const fs::path& target = checked.target;
     const fs::path& dir = checked.dir;
     std::error_code ec;
-    removeStaleTemporaries(dir, target);
-
-    std::random_device entropy;
-    const std::string temp =
-        (dir / (tempPrefix(target) + std::to_string(::getpid()) + "-" + std::to_string(entropy() % 1000000000u))).string();
+    removeStaleTemporariesIn(dir, target);
+    const std::string temp = (dir / fs::path(temporaryPathFor(target.string())).filename()).string();
     const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666); // the umask applies
     if (fd < 0) throw FileWriteError("cannot create '" + temp + "': " + std::strerror(errno));
     TempFileGuard guard(temp);

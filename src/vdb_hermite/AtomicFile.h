@@ -23,6 +23,14 @@ void syncFileToDisk(const std::string& path);
 /// it to refuse an unusable output before long work.
 void requireReplaceable(const std::string& path);
 
+/// A new temporary file name beside `target` (a file name, links already followed):
+/// ".NAME.vdbclay-tmp-PID-RANDOM", whose PID lets a later save tell a killed writer's leftovers.
+std::string temporaryPathFor(const std::string& target);
+
+/// Removes this user's temporaries of `target` (with their SQLite -wal and -shm files) whose writing
+/// process no longer runs: what a save or store import killed by SIGKILL or a crash left behind.
+void removeStaleTemporaries(const std::string& target);
+
 /// Replaces `path` so that a crash leaves either its old content or the complete new one: `write`
 /// fills a temporary file beside it, `finish` (optional) may then append to that file by path, and
 /// the file is flushed to disk, renamed over `path`, and the directory flushed. The temporary file is

@@ -1,5 +1,7 @@
 #include "vdb_hermite/Materials.h"
 
+#include "vdb_hermite/PrintableText.h"
+
 #include <nlohmann/json.hpp>
 
 #include <stdexcept>
@@ -11,6 +13,9 @@ namespace {
 void validate(const Material& m)
 {
     if (m.name.empty()) throw std::invalid_argument("a material needs a non-empty name");
+    if (!isPrintableName(m.name))
+        throw std::invalid_argument("the material name '" + printableText(m.name, 80) +
+                                    "' is not printable text: names are UTF-8 of at most 256 bytes without control characters");
     for (float c : m.color) {
         if (!(c >= 0.0f && c <= 1.0f))
             throw std::invalid_argument("material '" + m.name + "': colour components must lie in [0,1]");

@@ -1,0 +1,137 @@
+// What users hit with files and folders of the real world: stores in folders they cannot write,
+// temporaries left by killed imports, names with control characters, exit codes that must say
+// whether the command line or the file was wrong.
+#include "support/CliRun.h"
+#include "support/TestUtil.h"
+#include "vdb_hermite/Materials.h"
+#include "vdb_hermite/PrintableText.h"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+using namespace vdbclay;
+using namespace vdbclay::test;
+using nlohmann::json;
+
+namespace {
+
+/// A PID that ran and ended (a child reaped at once): what a killed writer's temporary names.
+pid_t deadPid()
+{
+    const pid_t pid = ::fork();
+    if (pid == 0) ::_exit(0);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    return pid;
+}
+
+/// Runs `vdbclay ARGS` in `dir` as a user who cannot write there: as root (CI), as "nobody" through
+/// setpriv; otherwise as this user, with the folder and its files made read-only first.
+CommandResult runAsReader(const TempDir& dir, const std::string& args)
+{
+    ::chmod(dir.path().c_str(), 0555);
+    for (const std::string& name : dir.entries()) ::chmod(dir.file(name).c_str(), 0444);
+    if (::geteuid() != 0) return runCli(dir, args);
+    const std::string prefix = "setpriv --reuid=65534 --regid=65534 --clear-groups ";
+    const std::string command = "cd " + quote(dir.path().string()) + " && " + prefix + quote(kCli) + " " + args +
+                                " >/tmp/vdbclay-reader-out-" + std::to_string(::getpid()) + " 2>&1";
+    CommandResult r;
+    const int status = std::system(command.c_str());
+    r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+    const std::string outPath = "/tmp/vdbclay-reader-out-" + std::to_string(::getpid());
+    const auto out = readBytes(outPath);
+    r.out.assign(out.begin(), out.end());
+    std::filesystem::remove(outPath);
+    return r;
+}
+
+} // namespace
+
+TEST_CASE("cli: a store in a folder the user cannot write is read by every reading command", "[hostile][cli][store]")
+{
+    if (std::string(kCli).empty()) return;
+    if (::geteuid() == 0 && std::system("command -v setpriv >/dev/null 2>&1") != 0) return; // cannot drop root here
+    TempDir dir;
+    REQUIRE(runCli(dir, "synth csg-stack --extent 64 --seed 4 -o c.vdbclay").exitCode == 0);
+    REQUIRE(runCli(dir, "lod build c.vdbclay").exitCode == 0);
+    writeText(dir.file("path.json"), R"({"frames": [{"position": [-40, 40, -40], "target": [32, 8, 32]},
+                                                    {"position": [-30, 40, -40], "target": [32, 8, 32], "t": 0.2}]})");
+    const auto before = dir.entries();
+    const std::string out = "/tmp/vdbclay-ro-" + std::to_string(::getpid());
+    std::filesystem::create_directories(out);
+    ::chmod(out.c_str(), 0777);
+    for (const std::string& args : std::vector<std::string>{"info c.vdbclay --json", "lod info c.vdbclay", "mesh c.vdbclay -o " + out + "/m.ply",
+          "mesh c.vdbclay --lod 1 -o " + out + "/m1.ply", "export c.vdbclay -o " + out + "/c.vdb",
+          "diff c.vdbclay c.vdbclay", "lod inspect c.vdbclay --camera-path path.json --memory-budget 64"}) {
+        INFO(args);
+        const CommandResult r = runAsReader(dir, args);
+        INFO(r.out);
+        CHECK(r.exitCode == 0);
+        CHECK(r.out.find("readonly") == std::string::npos);
+    }
+    CHECK(dir.entries() == before); // no -wal or -shm left beside the store
+    // Writers are refused with a clear line, and the store is untouched.
+    const CommandResult write = runAsReader(dir, "lod build c.vdbclay");
+    CHECK(write.exitCode == 1);
+    CHECK(write.out.find("vdbclay: error: ") != std::string::npos);
+    ::chmod(dir.path().c_str(), 0755);
+    std::filesystem::remove_all(out);
+}
+
+TEST_CASE("cli: temporaries a killed store import left behind are removed by the next import", "[hostile][cli][store]")
+{
+    if (std::string(kCli).empty()) return;
+    TempDir dir;
+    REQUIRE(runCli(dir, "new s.vdb --shape sphere --size 4").exitCode == 0);
+    const std::string stale = ".c.vdbclay.vdbclay-tmp-" + std::to_string(deadPid()) + "-123";
+    const std::string live = ".c.vdbclay.vdbclay-tmp-" + std::to_string(::getpid()) + "-456"; // this process runs
+    for (const std::string& name : {stale, stale + "-wal", stale + "-shm", live}) writeText(dir.file(name), "partial");
+    REQUIRE(runCli(dir, "import s.vdb -o c.vdbclay").exitCode == 0);
+    const auto entries = dir.entries();
+    CHECK(std::find(entries.begin(), entries.end(), stale) == entries.end());
+    CHECK(std::find(entries.begin(), entries.end(), stale + "-wal") == entries.end());
+    CHECK(std::find(entries.begin(), entries.end(), stale + "-shm") == entries.end());
+    CHECK(std::find(entries.begin(), entries.end(), live) != entries.end()); // not ours to judge: its writer lives
+}
+
+TEST_CASE("printable text: control characters and bytes that are not UTF-8 are escaped, printable UTF-8 stays", "[hostile]")
+{
+    CHECK(printableText("stone") == "stone");
+    CHECK(printableText("Stein-gr\xc3\xbcn") == "Stein-gr\xc3\xbcn");
+    CHECK(printableText("a\x1b]0;owned\x07z") == "a\\x1b]0;owned\\x07z");
+    CHECK(printableText("line\nforged") == "line\\x0aforged");
+    CHECK(printableText("grid\x1e" "2") == "grid\\x1e2");
+    CHECK(printableText("\xc2\x9b" "31m") == "\\xc2\\x9b31m"); // C1 CSI
+    CHECK(printableText("\xff\xfe") == "\\xff\\xfe");
+    CHECK(printableText("\xe0\x80\xaf") == "\\xe0\\x80\\xaf"); // overlong
+    CHECK(printableText("abcdef", 3) == "abc...");
+    CHECK(isPrintableName("colour-ff00aa"));
+    CHECK_FALSE(isPrintableName("bad\x1b"));
+    CHECK_FALSE(isPrintableName("bad\n"));
+    CHECK_FALSE(isPrintableName("bad\xff"));
+    CHECK_FALSE(isPrintableName(std::string(300, 'a')));
+    MaterialTable table;
+    CHECK_THROWS_AS(table.define(Material{"evil\x1b[2J"}), std::invalid_argument);
+    CHECK_THROWS_AS(MaterialTable::fromJson(R"([{"name": "a\u0007", "color": [1, 1, 1, 1], "toughness": 0.5}])"), std::runtime_error);
+}
+
+TEST_CASE("cli: names with control characters are refused where they are made and never printed raw", "[hostile][cli]")
+{
+    if (std::string(kCli).empty()) return;
+    TempDir dir;
+    const CommandResult made = runCli(dir, "new s.vdb --shape box --size 2 --material \"$(printf 'evil\\033]0;title\\007')\"");
+    CHECK(made.exitCode == 2);
+    CHECK(made.err.find('\x1b') == std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir.file("s.vdb")));
+    REQUIRE(runCli(dir, "new s.vdb --shape box --size 2").exitCode == 0);
+    writeText(dir.file("evil.json"),
+              R"({"materials": [{"name": "x\u001b[2Jy", "color": [1, 0, 0, 1], "toughness": 0.5}], "ops": [{"mode": "add", "material": "x\u001b[2Jy", "brush": {"shape": "sphere", "radius": 1}}]})");
+    const CommandResult script = runCli(dir, "sculpt s.vdb evil.json -o t.vdb");
+    CHECK(script.exitCode == 1);
+    CHECK(script.err.find('\x1b') == std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir.file("t.vdb")));
+}
