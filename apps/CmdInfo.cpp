@@ -74,7 +74,8 @@ int standardInfo(const InfoOptions& o)
     if (o.json) {
         nlohmann::json grids = nlohmann::json::array();
         for (const StandardGridInfo& g : info.grids)
-            grids.push_back({{"name", g.header.name},
+            grids.push_back({{"name", g.name},
+                             {"base_name", g.baseName},
                              {"type", g.header.type},
                              {"value_type", g.header.valueType},
                              {"class", g.header.gridClass},
@@ -95,7 +96,7 @@ int standardInfo(const InfoOptions& o)
         if (!g.uniformVoxels || !g.axisAligned) text += " (transform resampled on import)";
         if (g.activeVoxels) text += ", " + std::to_string(g.activeVoxels) + " active voxels";
         text += g.importable() ? "" : " (not importable)";
-        rows.push_back({"grid '" + g.header.name + "'", text});
+        rows.push_back({"grid '" + g.name + "'", text});
     }
     rows.push_back({"import", hint + (std::any_of(info.grids.begin(), info.grids.end(), [](const StandardGridInfo& g) {
                                           return g.fogVolume();

@@ -8,6 +8,7 @@
 #include "support/CliRun.h"
 #include "support/HermiteProbe.h"
 #include "support/Sculpt.h"
+#include "support/PyramidCompare.h"
 #include "support/TestUtil.h"
 #include "vdb_hermite/HermiteGrid.h"
 #include "vdb_hermite/Quantize.h"
@@ -263,6 +264,50 @@ TEST_CASE("a grid holding NaN or infinity is refused as damaged, with where", "[
         good.write({sphere});
         good.close();
         CHECK(checkInvariants(importLevelSet(dir.file("good.vdb"), {})).empty());
+    }
+}
+
+TEST_CASE("grids that share a name are each picked by their typed name and give their own data", "[interop]")
+{
+    TempDir dir;
+    openvdb::initialize();
+    // A fog volume and a level set both named "surface", the fog first (OpenVDB allows it).
+    openvdb::FloatGrid::Ptr fog = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(3.0f, openvdb::Vec3f(0.0f), 0.5f);
+    openvdb::tools::sdfToFogVolume(*fog);
+    fog->setName("surface");
+    openvdb::FloatGrid::Ptr ls = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(5.0f, openvdb::Vec3f(0.0f), 0.5f);
+    ls->setName("surface");
+    {
+        openvdb::io::File file(dir.file("dup.vdb"));
+        file.write({fog, ls});
+        openvdb::io::File alone(dir.file("ls.vdb"));
+        alone.write({ls});
+        openvdb::io::File fogAlone(dir.file("fog.vdb"));
+        fogAlone.write({fog});
+    }
+    const StandardVdbInfo info = describeStandardVdb(dir.file("dup.vdb"));
+    REQUIRE(info.grids.size() == 2);
+    CHECK(info.grids[0].name == "surface[0]");
+    CHECK(info.grids[1].name == "surface[1]");
+    CHECK(info.grids[0].baseName == "surface");
+    // The default takes the level set, and reads the level set's data: the same volume as a file of it alone.
+    LevelSetImportReport report;
+    const Volume picked = importLevelSet(dir.file("dup.vdb"), {}, &report);
+    CHECK(report.grid == "surface[1]");
+    CHECK(picked.stats().activeVoxels == importLevelSet(dir.file("ls.vdb"), {}).stats().activeVoxels);
+    CHECK(sameContent(picked, importLevelSet(dir.file("ls.vdb"), {})));
+    LevelSetImportOptions first;
+    first.grid = "surface[0]";
+    first.iso = 0.5;
+    CHECK(sameContent(importLevelSet(dir.file("dup.vdb"), first), importLevelSet(dir.file("fog.vdb"), LevelSetImportOptions{"surface", 0.5})));
+    // The shared name alone is ambiguous: refused, naming both typed names.
+    LevelSetImportOptions shared;
+    shared.grid = "surface";
+    try {
+        importLevelSet(dir.file("dup.vdb"), shared);
+        FAIL("an ambiguous name was accepted");
+    } catch (const VolumeIOError& e) {
+        CHECK(std::string(e.what()).find("'surface[0]', 'surface[1]'") != std::string::npos);
     }
 }
 

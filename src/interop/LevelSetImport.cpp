@@ -225,30 +225,34 @@ Volume importLevelSet(const std::string& path, const LevelSetImportOptions& opti
     const StandardVdbInfo info = describeStandardVdb(path);
     const StandardGridInfo& chosen = chooseImportGrid(info, options.grid, path);
     if (chosen.fogVolume() && !options.iso)
-        throw std::invalid_argument("grid '" + printableText(chosen.header.name, 64) + "' of '" + path +
+        throw std::invalid_argument("grid '" + printableText(chosen.name, 64) + "' of '" + path +
                                     "' is a fog volume: give --iso VALUE (solid where the density exceeds it)");
     if (options.voxelSize && !(*options.voxelSize >= kMinVoxelSize && *options.voxelSize <= kMaxVoxelSize))
         throw std::invalid_argument("a voxel size must be between " + formatNumber(kMinVoxelSize) + " and " +
                                     formatNumber(kMaxVoxelSize));
     const double voxelSize = options.voxelSize.value_or(chosen.voxelSize[0]);
     if (!(voxelSize >= kMinVoxelSize && voxelSize <= kMaxVoxelSize))
-        throw std::invalid_argument("grid '" + printableText(chosen.header.name, 64) + "' has a voxel size of " +
+        throw std::invalid_argument("grid '" + printableText(chosen.name, 64) + "' has a voxel size of " +
                                     formatNumber(voxelSize) + "; give --voxel-size");
 
-    openvdb::GridBase::Ptr base = readStandardGrid(path, chosen.header.name);
+    openvdb::GridBase::Ptr base = readStandardGrid(path, chosen.name);
+    // The grid read must be the one chosen (OpenVDB picks among repeated names by the typed form).
+    if (base->valueType() != chosen.header.valueType ||
+        base->getGridClass() != openvdb::GridBase::stringToGridClass(chosen.header.gridClass))
+        throw VolumeIOError("'" + path + "': reading grid '" + printableText(chosen.name, 64) + "' gave another grid's data");
     FloatGrid::Ptr grid = openvdb::gridPtrCast<FloatGrid>(base);
     if (!grid) {
         const openvdb::DoubleGrid::Ptr d = openvdb::gridPtrCast<openvdb::DoubleGrid>(base);
-        if (!d) throw VolumeIOError("'" + path + "': grid '" + printableText(chosen.header.name, 64) + "' is not a float grid");
+        if (!d) throw VolumeIOError("'" + path + "': grid '" + printableText(chosen.name, 64) + "' is not a float grid");
         grid = FloatGrid::create(std::make_shared<openvdb::FloatTree>(d->tree())); // values converted
         grid->setTransform(d->transform().copy());
         grid->setGridClass(d->getGridClass());
     }
-    requireFiniteValues(*grid, chosen.header.name, path);
+    requireFiniteValues(*grid, chosen.name, path);
     const bool fog = readAsFog(chosen, grid->background(), options.iso);
     const float iso = float(options.iso.value_or(0.0));
     if (fog ? grid->background() > iso : grid->background() < iso)
-        throw std::invalid_argument("grid '" + printableText(chosen.header.name, 64) + "' read as a " +
+        throw std::invalid_argument("grid '" + printableText(chosen.name, 64) + "' read as a " +
                                     (fog ? "fog volume (solid above the iso value)" : "level set (solid below the iso value)") +
                                     " would be solid everywhere outside its active voxels: its background " +
                                     formatNumber(grid->background()) + " is " + (fog ? "above" : "below") + " the iso value " +
@@ -258,7 +262,7 @@ Volume importLevelSet(const std::string& path, const LevelSetImportOptions& opti
     try {
         resampled = onLattice(grid, voxelSize, options.maxResampledVoxels, shift);
     } catch (const std::exception& e) { // OpenVDB's own failures (a transform it cannot invert, ...)
-        throw VolumeIOError("'" + path + "': grid '" + printableText(chosen.header.name, 64) +
+        throw VolumeIOError("'" + path + "': grid '" + printableText(chosen.name, 64) +
                             "' cannot be resampled onto VDBClay's lattice: " + printableText(e.what(), 200));
     }
 
@@ -290,7 +294,7 @@ Volume importLevelSet(const std::string& path, const LevelSetImportOptions& opti
     for (uint64_t c : crossings) total += c;
     placeLeaves(out, candidates, data);
     if (report) {
-        report->grid = chosen.header.name;
+        report->grid = chosen.name;
         report->gridClass = chosen.header.gridClass;
         report->valueType = chosen.header.valueType;
         report->fog = fog;

@@ -1,17 +1,21 @@
 #include "interop/StandardVdb.h"
 
 #include "interop/StandardGridRead.h"
+#include "vdb_hermite/NumberText.h"
 #include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/Volume.h"
 #include "vdb_hermite/VolumeIO.h"
 
 #include <openvdb/io/DelayedLoadMetadata.h>
+#include <openvdb/io/GridDescriptor.h>
+#include <openvdb/util/logging.h>
 
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <algorithm>
 #include <mutex>
 
 namespace vdbclay {
@@ -57,6 +61,9 @@ void initializeForForeignFiles()
     static std::once_flag once;
     std::call_once(once, [] {
         openvdb::initialize();
+        // OpenVDB's warnings (a repeated grid name, ...) would reach stdout in colour; what matters is
+        // said in VDBClay's own messages.
+        openvdb::logging::setLevel(openvdb::logging::Level::Fatal);
         if (openvdb::Metadata::isRegisteredType(openvdb::io::DelayedLoadMetadata::staticTypeName()))
             openvdb::Metadata::unregisterType(openvdb::io::DelayedLoadMetadata::staticTypeName());
     });
@@ -91,6 +98,9 @@ StandardVdbInfo describeStandardVdb(const std::string& path)
             const openvdb::GridBase& grid = *(*grids)[i];
             StandardGridInfo g;
             g.header = summary.grids[i];
+            g.name = openvdb::io::GridDescriptor::nameAsString(g.header.name);
+            g.baseName = openvdb::io::GridDescriptor::stripSuffix(g.header.name);
+            g.selectable = openvdb::io::GridDescriptor::stringAsUniqueName(g.name) == g.header.name;
             const openvdb::Vec3d voxel = grid.voxelSize();
             g.voxelSize = {voxel[0], voxel[1], voxel[2]};
             g.uniformVoxels = grid.hasUniformVoxels();
@@ -98,6 +108,8 @@ StandardVdbInfo describeStandardVdb(const std::string& path)
             g.usableTransform = usableTransform(grid.transform());
             if (const auto count = grid.getMetadata<openvdb::Int64Metadata>(openvdb::GridBase::META_FILE_VOXEL_COUNT))
                 g.activeVoxels = uint64_t(count->value());
+            // A crafted file may repeat a unique name: OpenVDB then reads the first of them only.
+            for (const StandardGridInfo& earlier : info.grids) g.selectable = g.selectable && earlier.name != g.name;
             info.grids.push_back(std::move(g));
         }
         return 0;
@@ -108,8 +120,20 @@ StandardVdbInfo describeStandardVdb(const std::string& path)
 const StandardGridInfo& chooseImportGrid(const StandardVdbInfo& info, const std::string& name, const std::string& path)
 {
     if (!name.empty()) {
+        std::vector<const StandardGridInfo*> sharing;
+        for (const StandardGridInfo& g : info.grids)
+            if (g.baseName == name) sharing.push_back(&g);
+        if (sharing.size() > 1 && std::none_of(info.grids.begin(), info.grids.end(), [&](const auto& g) { return g.name == name; })) {
+            std::string names;
+            for (const StandardGridInfo* g : sharing) names += (names.empty() ? "'" : ", '") + printableText(g->name, 64) + "'";
+            throw VolumeIOError("'" + path + "' holds " + std::to_string(sharing.size()) + " grids named '" + printableText(name, 64) +
+                                "': " + names + "; pick one with --grid '" + printableText(sharing.back()->name, 64) + "'");
+        }
         for (const StandardGridInfo& g : info.grids) {
-            if (g.header.name != name) continue;
+            if (g.name != name && !(sharing.size() == 1 && &g == sharing.front())) continue;
+            if (!g.selectable)
+                throw VolumeIOError("grid '" + printableText(g.name, 64) + "' of '" + path +
+                                    "' has a name OpenVDB cannot select it by; the file is damaged");
             if (g.header.treeChecked && !g.usableTransform)
                 throw VolumeIOError("grid '" + printableText(name, 64) + "' of '" + path +
                                     "' has a transform that is singular, not finite, or of voxels outside VDBClay's range");
@@ -125,6 +149,17 @@ const StandardGridInfo& chooseImportGrid(const StandardVdbInfo& info, const std:
             if (g.importable() && (g.*wanted)()) return g;
     for (const StandardGridInfo& g : info.grids)
         if (g.importable()) return g;
+    // Say why a float grid cannot be taken rather than that there is none.
+    for (const StandardGridInfo& g : info.grids) {
+        if (!g.header.treeChecked || (g.header.valueType != "float" && g.header.valueType != "double")) continue;
+        if (!g.usableTransform)
+            throw VolumeIOError("grid '" + printableText(g.name, 64) + "' of '" + path + "' has a transform VDBClay cannot use: " +
+                                "voxels of " + formatNumber(g.voxelSize[0]) + " x " + formatNumber(g.voxelSize[1]) + " x " +
+                                formatNumber(g.voxelSize[2]) + " (each must lie in " + formatNumber(kMinVoxelSize) + " .. " +
+                                formatNumber(kMaxVoxelSize) + "), or a singular, non-finite or non-linear map");
+        if (!g.selectable)
+            throw VolumeIOError("grid '" + printableText(g.name, 64) + "' of '" + path + "' repeats another grid's unique name; the file is damaged");
+    }
     throw VolumeIOError("'" + path + "' holds no float or double grid to import; it holds: " + listGrids(info));
 }
 
@@ -133,7 +168,7 @@ std::string listGrids(const StandardVdbInfo& info)
     std::string out;
     for (const StandardGridInfo& g : info.grids) {
         if (!out.empty()) out += ", ";
-        out += "'" + printableText(g.header.name, 64) + "' (" + (g.header.gridClass.empty() ? "no class" : printableText(g.header.gridClass, 32)) +
+        out += "'" + printableText(g.name, 64) + "' (" + (g.header.gridClass.empty() ? "no class" : printableText(g.header.gridClass, 32)) +
                ", " + (g.header.valueType.empty() ? printableText(g.header.type, 64) : g.header.valueType) + ")";
     }
     return out;

@@ -14,7 +14,11 @@
 namespace vdbclay {
 
 struct StandardGridInfo {
-    GridHeader header;
+    GridHeader header; // header.name is OpenVDB's unique name ("surface", or "surface\x1e1" for a repeated one)
+    /// The name a user types to pick this grid: the grid's name, or "surface[1]" where names repeat
+    /// (OpenVDB's own form); `baseName` is the name the tool that wrote the file gave it.
+    std::string name, baseName;
+    bool selectable = false; // OpenVDB can read it by `name` (a crafted unique name may not map back)
     std::array<double, 3> voxelSize{0.0, 0.0, 0.0};
     bool uniformVoxels = false;
     bool axisAligned = false; // a scale and translation only (no rotation or shear)
@@ -25,7 +29,7 @@ struct StandardGridInfo {
     /// Whether `vdbclay import` can bring it in: a float or double grid.
     bool importable() const
     {
-        return header.treeChecked && usableTransform && (header.valueType == "float" || header.valueType == "double");
+        return header.treeChecked && usableTransform && selectable && (header.valueType == "float" || header.valueType == "double");
     }
 };
 
@@ -37,8 +41,9 @@ struct StandardVdbInfo {
 /// does not read too, from their headers). Throws VolumeIOError with one line.
 StandardVdbInfo describeStandardVdb(const std::string& path);
 
-/// The grid an import takes: the one named `name`, or (empty name) the first level set, else the
-/// first fog volume, else the first float or double grid. Throws VolumeIOError naming what the file holds.
+/// The grid an import takes: the one named `name` (its typable name, or its base name when no other
+/// grid shares it), or (empty name) the first level set, else the first fog volume, else the first
+/// float or double grid. Throws VolumeIOError naming what the file holds.
 const StandardGridInfo& chooseImportGrid(const StandardVdbInfo& info, const std::string& name, const std::string& path);
 
 /// One line per grid for messages: "name (class, value type)".
