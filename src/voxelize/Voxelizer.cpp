@@ -226,7 +226,10 @@ bool fillVotes(const Lattice& lattice, const std::array<RayHits, 3>& rays, Windo
                 const std::size_t ray = std::size_t(iu) * std::size_t(lattice.dim[std::size_t(v)]) + std::size_t(iv);
                 const Hit* first = rh.hits.data() + rh.first[ray];
                 const Hit* end = rh.hits.data() + rh.first[ray + 1];
-                if (first == end) continue;
+                // A ray with an odd number of hits has no outside at one of its ends: it passes through a
+                // hole, a seam or an open surface and cannot tell inside from outside. It does not vote; the
+                // other two rays settle its points (a lone triangle or open sheet then encloses nothing).
+                if (first == end || ((end - first) & 1) != 0) continue;
                 const Hit* h = std::partition_point(first, end, [&](const Hit& hit) { return hit.at < double(w0) + offset; });
                 bool inside = ((h - first) & 1) != 0;
                 for (int w = w0; w < w1; ++w) {
