@@ -78,7 +78,7 @@ int importMesh(const ImportOptions& o, std::chrono::steady_clock::time_point sta
                 return SceneCounts(stored.leaves, stored.activeVoxels);
             }
             const Volume volume = voxelizeMesh(mesh, options, &report);
-            if (report.solidVoxels == 0) throw std::invalid_argument(noSolidMessage(report.voxelSize));
+            if (report.solidVoxels == 0) throw MeshImportError(noSolidMessage(report.voxelSize));
             saveVolume(volume, o.output);
             materials = volume.materials().names();
             return SceneCounts(volume.stats());
@@ -180,7 +180,7 @@ int runImport(const ImportOptions& o)
                              : loadScene(o.input, terminalProgress("reading bricks", !o.json));
     const VolumeStats stats = volume.stats();
     if (standard && stats.empty)
-        throw UsageError("grid '" + printableText(report.grid, 64) + "' of '" + o.input + "' holds no solid voxel read as a " +
+        throw std::runtime_error("grid '" + printableText(report.grid, 64) + "' of '" + o.input + "' holds no solid voxel read as a " +
                          (report.fog ? "fog volume (solid where the density exceeds " + formatNumber(o.iso.value_or(0.0)) + ")"
                                      : "level set (solid below " + formatNumber(o.iso.value_or(0.0)) + ")") +
                          ": nothing to import");

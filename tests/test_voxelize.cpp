@@ -238,6 +238,14 @@ TEST_CASE("open surfaces enclose nothing whatever their orientation: lone triang
     }
 }
 
+TEST_CASE("a mesh beyond what the lattice indexes is refused, naming the position and the limit", "[voxelize]")
+{
+    TriangleSoup far = uvSphere(8.0, {1e12, 0.0, 0.0}, 8, 16);
+    VoxelizeOptions o;
+    o.voxelSize = 0.5;
+    CHECK_THROWS_WITH(voxelizeMesh(far, o), Catch::Contains("lattice indexes at most") && Catch::Contains("1e+12"));
+}
+
 TEST_CASE("the real models voxelize into closed meshes", "[voxelize]")
 {
     const std::string models = std::string(VDBCLAY_SHARED_DATA) + "/models/";
@@ -647,6 +655,7 @@ TEST_CASE("cli: import voxelizes a mesh with its materials and says what it repa
     for (const char* output : {"flat.vdb", "flat.vdbclay"}) {
         const CommandResult flat = runCli(dir, std::string("import flat.obj --resolution 16 -o ") + output);
         checkCleanFailure(flat);
+        CHECK(flat.exitCode == 1); // the file's content: the command line was right
         CHECK(flat.err.find("encloses no solid") != std::string::npos);
         CHECK_FALSE(std::filesystem::exists(dir.path() / output));
     }
@@ -665,7 +674,7 @@ TEST_CASE("cli: import voxelizes a mesh with its materials and says what it repa
     CHECK(zero.err.size() < 200);
     const CommandResult tiny = runCli(dir, "import cube.obj --voxel-size 1e-9 -o x.vdb");
     checkCleanFailure(tiny);
-    CHECK(tiny.err.find("1e-09 is outside 0.0001 .. 1e+06") != std::string::npos);
+    CHECK(tiny.err.find("1e-09 is outside 2e-05 .. 1e+06") != std::string::npos);
     CHECK_FALSE(std::filesystem::exists(dir.path() / "x.vdb"));
     // A mesh given where a scene is read is pointed at import, in every command that reads scenes.
     for (const char* command : {"info cube.obj", "mesh cube.obj -o m.obj", "sculpt cube.obj s.json -o x.vdb", "export cube.obj -o x.vdb",

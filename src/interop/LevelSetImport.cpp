@@ -175,6 +175,26 @@ void requireFiniteValues(const FloatGrid& grid, const std::string& name, const s
                         "): the grid is damaged");
 }
 
+/// Refuses a grid whose active voxels lie beyond what VDBClay's lattice indexes at `voxelSize` (a level
+/// set translated by 1e12 spun for minutes, then said it held nothing).
+void requireOnLattice(const FloatGrid& grid, double voxelSize, const std::string& name, const std::string& path)
+{
+    const CoordBBox box = grid.evalActiveVoxelBoundingBox();
+    if (box.empty()) return;
+    for (int corner = 0; corner < 8; ++corner) {
+        const openvdb::Vec3d index(corner & 1 ? box.max().x() + 1 : box.min().x(), corner & 2 ? box.max().y() + 1 : box.min().y(),
+                                   corner & 4 ? box.max().z() + 1 : box.min().z());
+        const openvdb::Vec3d world = grid.indexToWorld(index);
+        for (int a = 0; a < 3; ++a) {
+            if (std::fabs(world[a] / voxelSize) <= kMaxLatticeCoordinate) continue;
+            throw VolumeIOError("'" + path + "': grid '" + printableText(name, 64) + "' reaches " + formatNumber(world[a]) + " along " +
+                                "xyz"[a] + ", " + formatNumber(std::fabs(world[a] / voxelSize)) + " voxels of " + formatNumber(voxelSize) +
+                                " from the origin; VDBClay's lattice indexes at most " + formatNumber(kMaxLatticeCoordinate) +
+                                " (move it near the origin, or give a larger --voxel-size)");
+        }
+    }
+}
+
 /// A grid without a class (many tools leave it unset) is a density when its background lies below the
 /// iso value: read as a level set, everything outside its active voxels would be solid.
 bool readAsFog(const StandardGridInfo& grid, float background, const std::optional<double>& iso)
@@ -249,6 +269,7 @@ Volume importLevelSet(const std::string& path, const LevelSetImportOptions& opti
         grid->setGridClass(d->getGridClass());
     }
     requireFiniteValues(*grid, chosen.name, path);
+    requireOnLattice(*grid, voxelSize, chosen.name, path);
     const bool fog = readAsFog(chosen, grid->background(), options.iso);
     const float iso = float(options.iso.value_or(0.0));
     if (fog ? grid->background() > iso : grid->background() < iso)

@@ -1,6 +1,7 @@
 #include "vdb_hermite/Volume.h"
 
 #include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/NumberText.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -14,7 +15,9 @@ Volume::Volume(detail::VolumeGrid*) : impl_(std::make_unique<detail::VolumeGrid>
 Volume::Volume(double voxelSize) : Volume(nullptr)
 {
     if (!(voxelSize >= kMinVoxelSize && voxelSize <= kMaxVoxelSize))
-        throw std::invalid_argument("the voxel size must lie between 0.0001 and 1e+06 world units");
+        throw std::invalid_argument("a voxel size of " + formatNumber(voxelSize) + " is outside " + formatNumber(kMinVoxelSize) +
+                                    " .. " + formatNumber(kMaxVoxelSize) + " world units (OpenVDB's transforms refuse finer voxels: "
+                                    "give sizes in a smaller unit, millimetres instead of metres)");
     impl_->grid = HermiteGrid::create(MaterialValue{});
     impl_->grid->setName("hermite");
     impl_->grid->setTransform(openvdb::math::Transform::createLinearTransform(voxelSize));

@@ -30,9 +30,14 @@ struct VolumeStats {
     uint64_t memoryBytes = 0;
 };
 
-/// Voxel sizes a volume may have (world units): OpenVDB refuses transforms below about 2e-5, and with a
-/// volume spanning +-250,000 voxels, positions, sizes and distances stay well inside double precision.
-constexpr double kMinVoxelSize = 1e-4, kMaxVoxelSize = 1e6;
+/// Voxel sizes a volume may have (world units). The unit is the user's: positions are held in voxels,
+/// so only OpenVDB's transforms bound it (they refuse scales below about 1.5e-5: "non-zero scale values
+/// required"). 2e-5 lets a 10 cm scan in metres take 4096 voxels; finer lattices need a smaller unit.
+constexpr double kMinVoxelSize = 2e-5, kMaxVoxelSize = 1e6;
+
+/// The farthest a voxel may lie from the origin along an axis, in voxels: OpenVDB indexes 32-bit
+/// coordinates, and the levels of detail, bricks and meshers need room beyond a solid's own voxels.
+constexpr double kMaxLatticeCoordinate = double(1 << 30);
 
 class Volume {
 public:

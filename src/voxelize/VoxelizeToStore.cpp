@@ -32,7 +32,7 @@ StoreVoxelizeReport voxelizeMeshToStore(const TriangleSoup& mesh, const Voxelize
             },
             progress);
         // A store of nothing replaces no file: the caller hears why instead.
-        if (stored.bricks == 0) throw std::invalid_argument(noSolidMessage(voxelizer.voxelSize()));
+        if (stored.bricks == 0) throw MeshImportError(noSolidMessage(voxelizer.voxelSize()));
         report.bricks = stored.bricks;
         report.leaves = stored.leaves;
     });

@@ -20,7 +20,7 @@ struct StoreVoxelizeReport {
 
 /// Voxelizes `mesh` into a new store at `path` (an existing store is replaced only once the new one is
 /// complete). Level 0 holds exactly what voxelizeMesh gives. Throws as MeshVoxelizer's constructor, and
-/// as createStoreFile; std::invalid_argument (noSolidMessage) when the mesh encloses no solid voxel.
+/// as createStoreFile; MeshImportError (noSolidMessage) when the mesh encloses no solid voxel.
 StoreVoxelizeReport voxelizeMeshToStore(const TriangleSoup& mesh, const VoxelizeOptions& options, const std::string& path,
                                         const Progress& progress = {});
 

@@ -314,7 +314,11 @@ MeshVoxelizer::MeshVoxelizer(const TriangleSoup& mesh, const VoxelizeOptions& op
     std::array<double, 3> extent{};
     for (std::size_t a = 0; a < 3; ++a) {
         const double first = std::floor(lo[a] / voxelSize) - 1.0, last = std::ceil(hi[a] / voxelSize) + 1.0;
-        if (!(std::fabs(first) < 1e9 && std::fabs(last) < 1e9)) throw std::invalid_argument("the mesh lies too far out for this voxel size");
+        if (!(std::fabs(first) <= kMaxLatticeCoordinate && std::fabs(last) <= kMaxLatticeCoordinate))
+            throw std::invalid_argument("the mesh reaches " + formatNumber(std::fabs(lo[a]) > std::fabs(hi[a]) ? lo[a] : hi[a]) +
+                                        " along " + "xyz"[a] + ", " + formatNumber(std::max(std::fabs(first), std::fabs(last))) +
+                                        " voxels from the origin at this voxel size; the lattice indexes at most " +
+                                        formatNumber(kMaxLatticeCoordinate) + ": move the mesh near the origin or choose a coarser voxel size");
         lattice.lo[a] = int32_t(first);
         lattice.dim[a] = int32_t(last - first) + 1;
         extent[a] = double(lattice.dim[a]);
