@@ -208,6 +208,19 @@ TEST_CASE("stores that are damaged, truncated, foreign or newer are refused with
                       "WHERE uniform IS NULL;");
         refused(good, "damaged");
     }
+    SECTION("brick rows whose coordinates or counts SQLite's loose typing let through")
+    {
+        // Each was skipped silently (export and mesh left voxels out, exit 0): now each is damage.
+        for (const char* change : {"x = 1099511627776", "y = 1.5", "z = 'abc'", "x = -2147483649", "leaves = 'many'",
+                                   "leaves = 100000", "uniform = 70000", "uniform = 2.5"}) {
+            CAPTURE(change);
+            std::filesystem::copy_file(good, dir.file("rows.vdbclay"), std::filesystem::copy_options::overwrite_existing);
+            execSql(dir.file("rows.vdbclay"), std::string("UPDATE bricks SET ") + change +
+                                                  " WHERE (level, x, y, z) = (SELECT level, x, y, z FROM bricks WHERE level = 0 "
+                                                  "ORDER BY x, y, z LIMIT 1);");
+            refused(dir.file("rows.vdbclay"), "is damaged: ");
+        }
+    }
     SECTION("truncated and overwritten files")
     {
         const std::vector<char> bytes = readBytes(good);

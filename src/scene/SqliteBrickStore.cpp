@@ -4,6 +4,8 @@
 // own locks are fcntl locks, which flock does not disturb).
 #include "scene/BrickStore.h"
 
+#include "scene/SceneStore.h" // the brick edge: what a row may hold
+
 #include <sqlite3.h>
 
 #include <cerrno>
@@ -25,6 +27,9 @@ namespace fs = std::filesystem;
 constexpr int32_t kApplicationId = 0x56434C59; // "VCLY"
 /// 2: brick payloads are RegionCodec records (1: .vdb streams of the brick, which 2 still reads).
 constexpr int kStoreFormatVersion = 2;
+/// The farthest brick from the origin the lattice can hold, and the leaves a brick can hold.
+constexpr int64_t kMaxBrickCoordinate = int64_t(kMaxLatticeCoordinate) / kBrickEdge;
+constexpr int64_t kMaxLeavesPerBrick = int64_t(kBrickEdge / 8) * (kBrickEdge / 8) * (kBrickEdge / 8);
 
 /// Resets a statement when it goes out of scope: a statement left on a row holds a read transaction
 /// open, which pins the reader's snapshot and stops checkpoints from emptying the WAL.
@@ -119,8 +124,10 @@ public:
         if (rc == SQLITE_DONE) return std::nullopt;
         if (rc != SQLITE_ROW) fail("read a brick");
         BrickRecord record;
-        if (sqlite3_column_type(s, 0) != SQLITE_NULL) record.uniform = MaterialId(sqlite3_column_int(s, 0));
-        record.leaves = uint32_t(sqlite3_column_int64(s, 1));
+        const auto where = [&] { return "brick (" + std::to_string(key.brick[0]) + ", " + std::to_string(key.brick[1]) + ", " +
+                                        std::to_string(key.brick[2]) + ") of level " + std::to_string(key.level); };
+        if (sqlite3_column_type(s, 0) != SQLITE_NULL) record.uniform = MaterialId(checkedInteger(s, 0, 0, 65535, where, "uniform"));
+        record.leaves = uint32_t(checkedInteger(s, 1, 0, kMaxLeavesPerBrick, where, "leaves"));
         const auto* bytes = static_cast<const char*>(sqlite3_column_blob(s, 2));
         record.payload.assign(bytes ? bytes : "", std::size_t(sqlite3_column_bytes(s, 2)));
         return record;
@@ -156,10 +163,15 @@ public:
         sqlite3_bind_int(s, 1, level);
         int rc;
         while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
-            BrickKey key{level, {sqlite3_column_int(s, 0), sqlite3_column_int(s, 1), sqlite3_column_int(s, 2)}};
+            // A row SQLite's loose typing let through (a coordinate of 2^40 or 1.5, a text count) is damage:
+            // skipping it would lose its voxels without a word.
+            const auto where = [&] { return "a brick row of level " + std::to_string(level); };
+            BrickKey key{level, {}};
+            for (int a = 0; a < 3; ++a)
+                key.brick[std::size_t(a)] = int32_t(checkedInteger(s, a, -kMaxBrickCoordinate, kMaxBrickCoordinate, where, "xyz" + a));
             BrickSummary summary;
-            if (sqlite3_column_type(s, 3) != SQLITE_NULL) summary.uniform = MaterialId(sqlite3_column_int(s, 3));
-            summary.leaves = uint32_t(sqlite3_column_int64(s, 4));
+            if (sqlite3_column_type(s, 3) != SQLITE_NULL) summary.uniform = MaterialId(checkedInteger(s, 3, 0, 65535, where, "uniform"));
+            summary.leaves = uint32_t(checkedInteger(s, 4, 0, kMaxLeavesPerBrick, where, "leaves"));
             summary.bytes = uint64_t(sqlite3_column_int64(s, 5));
             fn(key, summary);
         }
@@ -309,6 +321,19 @@ private:
     [[noreturn]] void fail(const char* what) const
     {
         throw StoreError(describe(std::string("cannot ") + what + ": " + sqlite3_errmsg(db_)));
+    }
+
+    /// Column `col` of the current row as an integer in lo .. hi; anything else (a real, text, a blob, a
+    /// value out of range) is a damaged row, named by `where` and the column.
+    template <typename Where>
+    int64_t checkedInteger(sqlite3_stmt* s, int col, int64_t lo, int64_t hi, const Where& where, const char* column) const
+    {
+        const int64_t value = sqlite3_column_int64(s, col);
+        if (sqlite3_column_type(s, col) != SQLITE_INTEGER || value < lo || value > hi)
+            throw StoreError("'" + path_ + "' is damaged: " + where() + " has a '" + column + "' of " +
+                             (sqlite3_column_type(s, col) == SQLITE_INTEGER ? std::to_string(value) : std::string("another type than an integer")) +
+                             " (" + std::to_string(lo) + " .. " + std::to_string(hi) + " expected)");
+        return value;
     }
 
     int64_t pragmaInt(const char* sql) const
