@@ -1,6 +1,7 @@
 // The scene store: round trips against the native .vdb, sculpting in place against sculpting the
 // .vdb, and stores that are damaged, truncated, foreign, newer or open for writing elsewhere.
 #include "scene/SceneStore.h"
+#include "scene/StoreLod.h"
 #include "scene/StoreSculpt.h"
 #include "sculpt/StrokeScript.h"
 #include "support/HermiteProbe.h"
@@ -201,6 +202,22 @@ TEST_CASE("stores that are damaged, truncated, foreign or newer are refused with
     {
         execSql(good, "DELETE FROM meta WHERE key = 'voxel_size';");
         refused(good, "lacks 'voxel_size'");
+    }
+    SECTION("metadata values that are not what they claim, each named with its key")
+    {
+        // std::stod read "0x10" as 16 and blamed the bricks; "(stoi)" named no key; garbage flags passed.
+        const std::vector<std::pair<std::string, std::string>> cases{
+            {"voxel_size", "0x10"}, {"voxel_size", "inf"},    {"voxel_size", "1e-9"}, {"voxel_size", "0.5 "},
+            {"lod_levels", "abc"},  {"lod_levels", "99"},     {"lod_levels", "-1"},   {"lod_stale", "yes"},
+            {"lod_stale", ""},      {"materials", "[1, 2]"}};
+        for (const auto& [key, value] : cases) {
+            CAPTURE(key, value);
+            std::filesystem::copy_file(good, dir.file("meta.vdbclay"), std::filesystem::copy_options::overwrite_existing);
+            execSql(dir.file("meta.vdbclay"), "UPDATE meta SET value = '" + value + "' WHERE key = '" + key + "';");
+            refused(dir.file("meta.vdbclay"), "its metadata '" + key + "'");
+        }
+        execSql(good, "INSERT OR REPLACE INTO meta (key, value) VALUES ('lod_levels', '1'), ('lod_densities', 'garbage');");
+        CHECK_THROWS_WITH(lodFollowsEdits(SceneStore::open(good, StoreAccess::ReadOnly)), Catch::Contains("'lod_densities'"));
     }
     SECTION("a payload damaged inside the database")
     {

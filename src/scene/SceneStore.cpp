@@ -4,6 +4,8 @@
 
 #include "vdb_hermite/AtomicFile.h"
 #include "vdb_hermite/FileExtension.h"
+#include "vdb_hermite/NumberText.h"
+#include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/VolumeIO.h"
 #include "vdb_hermite/VolumeRegions.h"
 
@@ -81,6 +83,18 @@ SceneStore SceneStore::open(const std::string& path, StoreAccess access)
     return scene;
 }
 
+StoreError damagedMeta(const std::string& path, const std::string& key, const std::string& value, const std::string& expected)
+{
+    return StoreError("'" + path + "' is damaged: its metadata '" + key + "' is '" + printableText(value, 40) + "', not " + expected);
+}
+
+bool metaFlag(const BrickStore& store, const std::string& key)
+{
+    const std::string text = store.meta(key).value_or("0");
+    if (text != "0" && text != "1") throw damagedMeta(store.path(), key, text, "0 or 1");
+    return text == "1";
+}
+
 void SceneStore::readMeta()
 {
     const std::string& path = store_->path();
@@ -90,22 +104,20 @@ void SceneStore::readMeta()
         return *value;
     };
     if (require(kFormatKey) != kFormatValue) throw StoreError("'" + path + "' is not a VDBClay scene store");
+    const std::string voxelText = require(kVoxelSizeKey);
+    voxelSize_ = parseDecimal(voxelText).value_or(0.0);
+    if (!(voxelSize_ >= kMinVoxelSize && voxelSize_ <= kMaxVoxelSize))
+        throw damagedMeta(path, kVoxelSizeKey, voxelText, "a decimal number from " + formatNumber(kMinVoxelSize) + " to " + formatNumber(kMaxVoxelSize));
+    if (require(kBrickLeavesKey) != std::to_string(kBrickLeaves))
+        throw StoreError("'" + path + "' has bricks of " + printableText(require(kBrickLeavesKey), 40) + " leaves; this build reads " +
+                         std::to_string(kBrickLeaves));
     try {
-        std::size_t used = 0;
-        const std::string text = require(kVoxelSizeKey);
-        voxelSize_ = std::stod(text, &used);
-        if (used != text.size() || !(voxelSize_ >= kMinVoxelSize && voxelSize_ <= kMaxVoxelSize)) throw std::invalid_argument(text);
-        if (require(kBrickLeavesKey) != std::to_string(kBrickLeaves))
-            throw StoreError("'" + path + "' has bricks of " + require(kBrickLeavesKey) + " leaves; this build reads " +
-                             std::to_string(kBrickLeaves));
         materials_ = MaterialTable::fromJson(require(kMaterialsKey));
-        const int levels = lodLevels();
-        if (levels < 0 || levels > 16) throw std::invalid_argument("lod_levels");
-    } catch (const StoreError&) {
-        throw;
     } catch (const std::exception& e) {
-        throw StoreError("'" + path + "' is damaged: its metadata is not valid (" + e.what() + ")");
+        throw StoreError("'" + path + "' is damaged: its metadata 'materials' is not valid (" + printableText(e.what(), 200) + ")");
     }
+    (void)lodLevels();
+    (void)lodStale();
 }
 
 const std::string& SceneStore::path() const { return store_->path(); }
@@ -116,8 +128,16 @@ void SceneStore::setMaterials(const MaterialTable& materials)
     materials_ = materials;
 }
 
-int SceneStore::lodLevels() const { return std::stoi(store_->meta(kLodLevelsKey).value_or("0")); }
-bool SceneStore::lodStale() const { return store_->meta(kLodStaleKey).value_or("0") != "0"; }
+int SceneStore::lodLevels() const
+{
+    const std::string text = store_->meta(kLodLevelsKey).value_or("0");
+    const bool digits = !text.empty() && text.size() <= 2 && text.find_first_not_of("0123456789") == std::string::npos;
+    if (!digits || std::stoi(text) > kMaxLodLevels)
+        throw damagedMeta(store_->path(), kLodLevelsKey, text, "a whole number from 0 to " + std::to_string(kMaxLodLevels));
+    return std::stoi(text);
+}
+
+bool SceneStore::lodStale() const { return metaFlag(*store_, kLodStaleKey); }
 void SceneStore::setLod(int levels, bool stale)
 {
     store_->putMeta(kLodLevelsKey, std::to_string(levels));

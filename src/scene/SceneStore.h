@@ -41,6 +41,15 @@ struct LevelSummary {
     uint64_t bytes = 0;
 };
 
+/// The most coarse levels a store may have (level k's voxels are 2^k level-0 voxels wide).
+constexpr int kMaxLodLevels = 16;
+
+/// The error for a damaged metadata value: names the store, the key, the value (printable) and what
+/// was expected.
+StoreError damagedMeta(const std::string& path, const std::string& key, const std::string& value, const std::string& expected);
+/// A metadata flag: "1" true, "0" or absent false, anything else damage.
+bool metaFlag(const BrickStore& store, const std::string& key);
+
 /// Progress of long work: done out of total units.
 using Progress = std::function<void(uint64_t done, uint64_t total)>;
 
@@ -60,6 +69,8 @@ public:
     /// Replaces the materials table (inside a transaction).
     void setMaterials(const MaterialTable& materials);
     /// The number of coarse levels stored (0 until `lod build`), and whether edits since made them stale.
+    /// The coarse levels built and whether edits since left them behind; StoreError when the metadata
+    /// holds anything but a whole number of 0 .. kMaxLodLevels, or 0 or 1.
     int lodLevels() const;
     bool lodStale() const;
     void setLod(int levels, bool stale);

@@ -381,7 +381,7 @@ int buildStoreLod(SceneStore& scene, int levels, const Progress& progress)
 
 bool lodFollowsEdits(const SceneStore& scene)
 {
-    return scene.lodLevels() > 0 && !scene.lodStale() && scene.bricks().meta(kLodDensitiesKey).value_or("0") == "1";
+    return scene.lodLevels() > 0 && !scene.lodStale() && metaFlag(scene.bricks(), kLodDensitiesKey);
 }
 
 LodRefresh updateStoreLod(SceneStore& scene, const std::vector<IndexCoord>& changedBricks)
