@@ -68,6 +68,8 @@ void requireSceneExtension(const std::string& path);
 const CLI::Validator& positiveNumber();
 /// The same for zero and positive numbers (CLI::NonNegativeNumber lets NaN through).
 const CLI::Validator& nonNegativeNumber();
+/// A memory budget in MB: above 0, at most 1e9 (2^64 bytes overflowed into a budget of 0).
+const CLI::Validator& memoryBudget();
 /// The same for any finite number (an iso value).
 const CLI::Validator& finiteNumber();
 /// An option check for a whole number from 0 to 2^64 - 1 typed in decimal (a seed, an index): a larger

@@ -17,7 +17,7 @@ CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& o)
     cmd->add_flag("--quick", o.quick, "Small sizes (seconds, for CI); the default runs the full sizes");
     cmd->add_option("--memory-budget", o.memoryBudgetMb, "stream: the memory budget (default 192, or 2 with --quick)")
         ->type_name("MB")
-        ->check(positiveNumber());
+        ->check(memoryBudget());
     cmd->footer("csg     sphere creation, then median time of remove-sphere stamps on its surface\n"
                 "        vs createLevelSetSphere + csgDifference on a FloatGrid level set\n"
                 "memory  bytes per surface voxel of a sphere and a box vs a narrow-band level set\n"

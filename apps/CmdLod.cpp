@@ -11,6 +11,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include <iostream>
+
 #include <chrono>
 #include <cmath>
 
@@ -76,7 +78,7 @@ LodCommands addLodCommand(CLI::App& parent, LodOptions& o)
     cmds.inspect->add_option("--memory-budget", o.memoryBudgetMB, "Resident bricks may take at most this many MB")
         ->required()
         ->type_name("MB")
-        ->check(positiveNumber());
+        ->check(memoryBudget());
     cmds.inspect->add_option("--pixel-error", o.pixelError, "Screen-space error a brick may show, in pixels")
         ->capture_default_str()
         ->type_name("PX")
@@ -154,12 +156,8 @@ nlohmann::json optionalSeconds(const std::optional<double>& t) { return t ? nloh
 int runLodInspect(const LodOptions& o)
 {
     requireStore(o.scene);
-    std::vector<CameraFrame> flight;
-    try {
-        flight = loadCameraPath(o.cameraPath);
-    } catch (const std::invalid_argument& e) {
-        throw UsageError(e.what());
-    }
+    // A path's content is the file's: a failed command (exit 1), like a bad script.
+    const std::vector<CameraFrame> flight = loadCameraPath(o.cameraPath);
     StreamingOptions options;
     options.memoryBudgetBytes = uint64_t(o.memoryBudgetMB * 1048576.0);
     options.pixelTolerance = o.pixelError;
@@ -177,26 +175,30 @@ int runLodInspect(const LodOptions& o)
     if (!o.plot.empty()) writeFlightPlot(inspection, options.memoryBudgetBytes, o.plot);
     const FlightSummary& s = inspection.summary;
     if (o.json) {
-        nlohmann::json frames = nlohmann::json::array();
-        for (const InspectedFrame& f : inspection.frames)
-            if (!f.settling) frames.push_back(frameJson(f));
-        printJson({{"frames", frames},
-                   {"summary",
-                    {{"frames", flight.size()},
-                     {"settle_frames", inspection.frames.size() - flight.size()},
-                     {"seconds", s.seconds},
-                     {"memory_budget_bytes", options.memoryBudgetBytes},
-                     {"peak_resident_bytes", s.peakResidentBytes},
-                     {"bytes_read", s.bytesRead},
-                     {"loads", s.loads},
-                     {"evictions", s.evictions},
-                     {"mean_hit_rate", s.meanHitRate},
-                     {"max_screen_error_px", s.maxScreenError},
-                     {"first_coarse_complete_s", optionalSeconds(s.firstCoarseComplete)},
-                     {"first_complete_s", optionalSeconds(s.firstComplete)},
-                     {"first_settled_s", optionalSeconds(s.firstSettled)},
-                     {"budget_limited", s.budgetLimited},
-                     {"damaged_bricks", s.damagedBricks}}}});
+        // Frame by frame: a flight of a million frames would make a document of gigabytes in memory.
+        std::cout << "{\"frames\":[";
+        bool first = true;
+        for (const InspectedFrame& f : inspection.frames) {
+            if (f.settling) continue;
+            std::cout << (first ? "" : ",") << frameJson(f).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+            first = false;
+        }
+        const nlohmann::json summary{{"frames", flight.size()},
+                                     {"settle_frames", inspection.frames.size() - flight.size()},
+                                     {"seconds", s.seconds},
+                                     {"memory_budget_bytes", options.memoryBudgetBytes},
+                                     {"peak_resident_bytes", s.peakResidentBytes},
+                                     {"bytes_read", s.bytesRead},
+                                     {"loads", s.loads},
+                                     {"evictions", s.evictions},
+                                     {"mean_hit_rate", s.meanHitRate},
+                                     {"max_screen_error_px", s.maxScreenError},
+                                     {"first_coarse_complete_s", optionalSeconds(s.firstCoarseComplete)},
+                                     {"first_complete_s", optionalSeconds(s.firstComplete)},
+                                     {"first_settled_s", optionalSeconds(s.firstSettled)},
+                                     {"budget_limited", s.budgetLimited},
+                                     {"damaged_bricks", s.damagedBricks}};
+        std::cout << "],\"summary\":" << summary.dump() << "}" << std::endl;
         return kExitOk;
     }
     const auto when = [](const std::optional<double>& t) { return t ? formatSeconds(*t) : std::string("never"); };

@@ -29,7 +29,7 @@ CLI::App* addSculptCommand(CLI::App& parent, SculptOptions& o)
     cmd->add_option("--memory-budget", o.memoryBudgetMB,
                     "Stores: keep at most this many MB of bricks resident, paging bricks in and out as the ops reach them")
         ->type_name("MB")
-        ->check(positiveNumber());
+        ->check(memoryBudget());
     cmd->add_option("--autosave-every", o.autosaveEvery,
                     "Stores: commit the changed bricks every N ops (a crash loses at most the ops since the last commit)")
         ->type_name("N")

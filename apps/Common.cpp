@@ -114,6 +114,14 @@ const CLI::Validator& nonNegativeNumber()
     return check;
 }
 
+const CLI::Validator& memoryBudget()
+{
+    // Beyond a petabyte the budget is no limit at all, and its bytes (MB x 2^20) leave 64 bits.
+    static const CLI::Validator check =
+        numberCheck([](double v) { return v > 0.0 && v <= 1e9; }, "a number of MB above 0 and at most 1e9 (a petabyte)", "MB");
+    return check;
+}
+
 const CLI::Validator& finiteNumber()
 {
     static const CLI::Validator check = numberCheck([](double) { return true; }, "a finite number", "");

@@ -1,6 +1,7 @@
 // What users hit with files and folders of the real world: stores in folders they cannot write,
 // temporaries left by killed imports, names with control characters, exit codes that must say
 // whether the command line or the file was wrong.
+#include "scene/CameraPath.h"
 #include "support/CliRun.h"
 #include "support/TestUtil.h"
 #include "vdb_hermite/Materials.h"
@@ -134,4 +135,42 @@ TEST_CASE("cli: names with control characters are refused where they are made an
     CHECK(script.exitCode == 1);
     CHECK(script.err.find('\x1b') == std::string::npos);
     CHECK_FALSE(std::filesystem::exists(dir.file("t.vdb")));
+}
+
+TEST_CASE("camera paths: repeated keys, a target a hair from the camera, raw bytes are refused with one printable line", "[hostile]")
+{
+    CHECK_THROWS_WITH(parseCameraPath(R"({"frames": [{"position": [0, 0, 0], "target": [1, 0, 0], "target": [2, 0, 0]}]})"),
+                      Catch::Contains("'target' appears twice"));
+    CHECK_THROWS_WITH(parseCameraPath(R"({"frames": [{"position": [0, 0, 0], "target": [1, 0, 0]}], "frames": []})"),
+                      Catch::Contains("'frames' appears twice"));
+    // 1e-300 apart: the squared distance underflows; it is not "equal", and it says how far it is.
+    CHECK_THROWS_WITH(parseCameraPath(R"({"frames": [{"position": [0, 0, 0], "target": [1e-300, 0, 0]}]})"),
+                      Catch::Contains("lies 1e-300 from its position"));
+    CHECK_THROWS_WITH(parseCameraPath(R"({"frames": [{"position": [5, 5, 5], "target": [5, 5, 5]}]})"), Catch::Contains("must differ"));
+    CHECK_NOTHROW(parseCameraPath(R"({"frames": [{"position": [0, 0, 0], "target": [1e-6, 0, 0]}]})"));
+    try {
+        parseCameraPath("{\"frames\": [{\"position\": [0, 0, 0], \"\x1b]0;x\x07\xff\": 1}]}");
+        FAIL("accepted");
+    } catch (const std::invalid_argument& e) {
+        CHECK(isPrintableName(e.what(), 100000));
+    }
+}
+
+TEST_CASE("cli: lod inspect --json streams its frames, budgets beyond a petabyte are refused", "[hostile][cli][store]")
+{
+    if (std::string(kCli).empty()) return;
+    TempDir dir;
+    REQUIRE(runCli(dir, "synth csg-stack --extent 64 --seed 5 -o c.vdbclay").exitCode == 0);
+    json frames = json::array();
+    for (int i = 0; i < 30; ++i) frames.push_back({{"position", {-40.0 + i, 40.0, -40.0}}, {"target", {32.0, 8.0, 32.0}}, {"t", 0.01 * i}});
+    writeText(dir.file("path.json"), json{{"frames", frames}}.dump());
+    const json report = parseJsonOutput(runCli(dir, "lod inspect c.vdbclay --camera-path path.json --memory-budget 64 --json"));
+    CHECK(report["frames"].size() == 30);
+    CHECK(report["summary"]["frames"] == 30);
+    for (const char* budget : {"18446744073709551616", "1e10", "0", "-5", "nan"}) {
+        INFO(budget);
+        const CommandResult r = runCli(dir, std::string("lod inspect c.vdbclay --camera-path path.json --memory-budget ") + budget);
+        CHECK(r.exitCode == 2);
+        CHECK(r.err.find("--memory-budget") != std::string::npos);
+    }
 }

@@ -1,5 +1,7 @@
 #include "scene/CameraPath.h"
 
+#include "vdb_hermite/StrictJson.h"
+
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -37,12 +39,7 @@ std::array<double, 3> vec3(const json& j, const std::string& where)
 
 std::vector<CameraFrame> parseCameraPath(const std::string& text)
 {
-    json root;
-    try {
-        root = json::parse(text);
-    } catch (const json::exception& e) {
-        throw std::invalid_argument(std::string("camera path: not valid JSON (") + e.what() + ")");
-    }
+    const json root = parseStrictJson(text, "camera path");
     if (!root.is_object()) fail("top level", "must be an object");
     for (const auto& [key, value] : root.items())
         if (key != "fov_degrees" && key != "viewport" && key != "frames") fail(key, "unknown key");

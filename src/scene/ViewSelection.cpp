@@ -1,6 +1,7 @@
 #include "scene/ViewSelection.h"
 
 #include "scene/SceneStore.h"
+#include "vdb_hermite/NumberText.h"
 
 #include <algorithm>
 #include <cmath>
@@ -74,7 +75,13 @@ double distanceToBox(const V3& p, const V3& lo, const V3& hi)
 void validateViewer(const Viewer& v)
 {
     const V3 d = sub(v.target, v.position);
-    if (!(dot(d, d) > 0.0)) throw std::invalid_argument("a camera's target must differ from its position");
+    double largest = 0.0, scale = 1.0;
+    for (int a = 0; a < 3; ++a) largest = std::max(largest, std::fabs(d[a])), scale = std::max(scale, std::fabs(v.position[a]));
+    if (largest == 0.0) throw std::invalid_argument("a camera's target must differ from its position");
+    // Closer than this, the view direction is rounding noise (and its squared length underflows).
+    if (largest < 1e-9 * scale)
+        throw std::invalid_argument("a camera's target lies " + formatNumber(largest) + " from its position: too close to aim by (at least " +
+                                    formatNumber(1e-9 * scale) + " here)");
     if (!(v.fovDegrees > 0.0 && v.fovDegrees < 180.0)) throw std::invalid_argument("the field of view must lie in (0, 180) degrees");
     if (v.viewport[0] <= 0 || v.viewport[1] <= 0) throw std::invalid_argument("the viewport must have a positive size");
 }

@@ -1,5 +1,7 @@
 #include "sculpt/StrokeScript.h"
 
+#include "vdb_hermite/StrictJson.h"
+
 #include "vdb_hermite/FileExtension.h"
 #include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/VolumeIO.h"
@@ -228,25 +230,11 @@ ScriptOp parseOp(const json& o, const std::string& where)
 StrokeScript parseStrokeScript(const std::string& jsonText)
 {
     json root;
-    // JSON allows a key twice in an object and keeps the last; in a script that is a typo or a merge
-    // gone wrong, so it is an error. The parser reports each object's keys as it reads them.
-    std::vector<std::set<std::string>> openObjects;
-    std::string duplicate;
-    const json::parser_callback_t noDuplicateKeys = [&](int, json::parse_event_t event, json& parsed) {
-        if (event == json::parse_event_t::object_start) openObjects.emplace_back();
-        else if (event == json::parse_event_t::object_end && !openObjects.empty()) openObjects.pop_back();
-        else if (event == json::parse_event_t::key && !openObjects.empty() &&
-                 !openObjects.back().insert(parsed.get<std::string>()).second && duplicate.empty())
-            duplicate = parsed.get<std::string>();
-        return true;
-    };
     try {
-        root = json::parse(jsonText, noDuplicateKeys);
-    } catch (const json::exception& e) { // a syntax error, or a number too large for a double
-        // The parser quotes the text it stopped at, which may be any bytes.
-        throw ScriptError("script is not valid JSON: " + printableText(e.what()));
+        root = parseStrictJson(jsonText, "script");
+    } catch (const std::invalid_argument& e) {
+        throw ScriptError(e.what());
     }
-    if (!duplicate.empty()) throw ScriptError("script: the key '" + duplicate + "' appears twice in one object");
     checkKeys(root, "script", {"materials", "ops"});
     StrokeScript script;
     if (root.contains("materials")) {
