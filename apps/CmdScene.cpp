@@ -6,6 +6,7 @@
 #include "interop/LevelSetImport.h"
 #include "scene/SceneStore.h"
 #include "voxelize/VoxelizeToStore.h"
+#include "vdb_hermite/FileStatus.h"
 #include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/VolumeIO.h"
 
@@ -57,7 +58,7 @@ void printSummary(const std::string& input, const std::string& output, const Sce
 /// A mesh file, voxelized.
 int importMesh(const ImportOptions& o, std::chrono::steady_clock::time_point start)
 {
-    if (!std::filesystem::is_regular_file(o.input)) throw MeshImportError("'" + o.input + "' does not exist or is not a file");
+    if (const auto why = unreachableFile(o.input)) throw MeshImportError(*why); // before the options: the first thing to fix
     if (!o.grid.empty() || o.iso) throw UsageError("--grid and --iso are for .vdb files of other tools, not meshes");
     VoxelizeOptions options;
     options.voxelSize = o.voxelSize;
@@ -239,7 +240,10 @@ CLI::App* addExportLevelSetCommand(CLI::App& parent, ExportLevelSetOptions& o)
     CLI::App* cmd = parent.add_subcommand("export-levelset", "Write a scene as standard OpenVDB grids (a level set, materials, a fog)");
     cmd->add_option("input", o.input, "Scene to export (.vdbclay store or .vdb)")->required()->check(sceneInput())->type_name("SCENE");
     cmd->add_option("-o,--output", o.output, "Standard .vdb file to write (atomically)")->required()->type_name("OUT.vdb");
-    cmd->add_option("--half-width", o.halfWidth, "Narrow band half width, in voxels")->capture_default_str()->check(CLI::Range(1.0, 64.0));
+    cmd->add_option("--half-width", o.halfWidth, "Narrow band half width, in voxels (1 to 64)")
+        ->capture_default_str()
+        ->check(finiteNumber())
+        ->check(CLI::Range(1.0, 64.0));
     cmd->add_flag("--fog", o.fog, "Also write a fog volume 'density' (FOG_VOLUME) that Blender's volume objects render");
     cmd->add_flag("--int32-material", o.int32Material,
                   "Write 'material' as an Int32Grid (exact for any id; pyopenvdb's readAll and Blender cannot read it)");

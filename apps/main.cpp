@@ -19,6 +19,9 @@ namespace {
 
 using namespace vdbclay::cli;
 
+constexpr const char* kCommandList =
+    "new, sculpt, mesh, info, import, export, export-levelset, lod, synth, diff, tool, demo, bench or selftest";
+
 int run(int argc, char** argv)
 {
     CLI::App app{"VDBClay: sparse volume sculpting on OpenVDB (Hermite data, materials, CSG brushes).", "vdbclay"};
@@ -60,6 +63,16 @@ int run(int argc, char** argv)
     app.footer("Run 'vdbclay COMMAND --help' for the options of one command.\n"
                "Exit codes: 0 success, 1 the command failed, 2 wrong command line.");
 
+    // CLI11 answers --help before it looks at the command: "vdbclay NOSUCHCOMMAND --help" printed the
+    // general help and exited 0, as if the command existed.
+    if (argc > 1 && argv[1][0] != '-') {
+        bool known = false;
+        for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) known = known || sub->check_name(argv[1]);
+        if (!known) {
+            printError(std::string("unknown command '") + argv[1] + "' (expected " + kCommandList + "; see 'vdbclay --help')");
+            return kExitUsage;
+        }
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {
@@ -70,8 +83,7 @@ int run(int argc, char** argv)
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
         if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-') {
-            printError(std::string("unknown command '") + argv[1] +
-                       "' (expected new, sculpt, mesh, info, import, export, export-levelset, lod, synth, diff, tool, demo, bench or selftest; see 'vdbclay --help')");
+            printError(std::string("unknown command '") + argv[1] + "' (expected " + kCommandList + "; see 'vdbclay --help')");
             return kExitUsage;
         }
         std::string hint = "vdbclay --help";

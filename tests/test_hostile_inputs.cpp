@@ -174,3 +174,27 @@ TEST_CASE("cli: lod inspect --json streams its frames, budgets beyond a petabyte
         CHECK(r.err.find("--memory-budget") != std::string::npos);
     }
 }
+
+TEST_CASE("cli: exit codes and messages name the real cause", "[hostile][cli]")
+{
+    if (std::string(kCli).empty()) return;
+    TempDir dir;
+    REQUIRE(runCli(dir, "new s.vdb --shape sphere --size 3").exitCode == 0);
+    const CommandResult unknown = runCli(dir, "NOSUCHCOMMAND --help"); // printed the general help, exit 0
+    CHECK(unknown.exitCode == 2);
+    CHECK(unknown.err.find("unknown command 'NOSUCHCOMMAND'") != std::string::npos);
+    const CommandResult nanWidth = runCli(dir, "export-levelset s.vdb -o ls.vdb --half-width nan"); // exit 1 before
+    CHECK(nanWidth.exitCode == 2);
+    std::filesystem::create_symlink("loop.vdb", dir.file("loop.vdb"));
+    for (const char* command : {"info loop.vdb", "mesh loop.vdb -o m.ply", "import loop.vdb -o x.vdbclay"}) {
+        INFO(command);
+        const CommandResult loop = runCli(dir, command); // said "does not exist"
+        CHECK(loop.exitCode == 1);
+        CHECK(loop.err.find("loop of symbolic links") != std::string::npos);
+    }
+    // Corners a hair apart collapse in single precision: the message says so, not "holds no triangle".
+    writeText(dir.file("collapsed.obj"), "v 1e8 0 0\nv 100000000.000001 0 0\nv 1e8 0.0000001 0\nf 1 2 3\n");
+    const CommandResult collapsed = runCli(dir, "import collapsed.obj --resolution 8 -o c.vdb");
+    CHECK(collapsed.exitCode == 1);
+    CHECK(collapsed.err.find("single precision") != std::string::npos);
+}

@@ -246,6 +246,19 @@ TEST_CASE("a mesh beyond what the lattice indexes is refused, naming the positio
     CHECK_THROWS_WITH(voxelizeMesh(far, o), Catch::Contains("lattice indexes at most") && Catch::Contains("1e+12"));
 }
 
+TEST_CASE("a mesh of more materials than a scene holds is refused before any work, or imported as one", "[voxelize]")
+{
+    TriangleSoup many = uvSphere(8.0, {0.0, 0.0, 0.0}, 8, 16);
+    many.materials.clear();
+    for (int m = 0; m < 70000; ++m) many.materials.push_back({"m" + std::to_string(m), {1.0f, 1.0f, 1.0f, 1.0f}});
+    for (std::size_t t = 0; t < many.triangles.size(); ++t) many.triangleMaterials[t] = uint32_t(t * 997 % 70000);
+    VoxelizeOptions o;
+    o.resolution = 16;
+    CHECK_THROWS_WITH(voxelizeMesh(many, o), Catch::Contains("has 70000 materials") && Catch::Contains("--material"));
+    o.material = "clay";
+    CHECK(voxelizeMesh(many, o).materials().names() == std::vector<std::string>{"default", "clay"});
+}
+
 TEST_CASE("the real models voxelize into closed meshes", "[voxelize]")
 {
     const std::string models = std::string(VDBCLAY_SHARED_DATA) + "/models/";

@@ -227,6 +227,10 @@ std::string onLattice(FloatGrid::Ptr& grid, double voxelSize, double maxVoxels, 
     if (!(expected <= maxVoxels))
         throw std::invalid_argument("resampling this grid at a voxel size of " + formatNumber(voxelSize) + " would make about " +
                                     formatNumber(expected) + " voxels; give a larger --voxel-size");
+    // OpenVDB rebuilds a level set's band with the background as its outside distance.
+    if (grid->getGridClass() == openvdb::GRID_LEVEL_SET && !(grid->background() > 0.0f))
+        throw std::invalid_argument("it is a level set whose background, its distance outside the band, is " +
+                                    formatNumber(grid->background()) + ", not positive");
     FloatGrid::Ptr out = FloatGrid::create(grid->background());
     out->setTransform(openvdb::math::Transform::createLinearTransform(voxelSize));
     out->setGridClass(grid->getGridClass());

@@ -1,5 +1,6 @@
 #include "scene/CameraPath.h"
 
+#include "vdb_hermite/FileStatus.h"
 #include "vdb_hermite/StrictJson.h"
 
 #include <nlohmann/json.hpp>
@@ -88,7 +89,8 @@ std::vector<CameraFrame> parseCameraPath(const std::string& text)
 std::vector<CameraFrame> loadCameraPath(const std::string& path)
 {
     std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) throw std::invalid_argument("camera path '" + path + "' is not a readable file");
+    if (const auto why = unreachableFile(path)) throw std::invalid_argument("camera path: " + *why);
+    if (!std::filesystem::is_regular_file(path, ec)) throw std::invalid_argument("camera path '" + path + "' is not a regular file");
     if (std::filesystem::file_size(path, ec) > (256u << 20)) throw std::invalid_argument("camera path '" + path + "' is larger than 256 MB");
     std::ifstream in(path);
     std::stringstream text;

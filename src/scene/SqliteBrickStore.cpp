@@ -5,6 +5,7 @@
 #include "scene/BrickStore.h"
 
 #include "scene/SceneStore.h" // the brick edge: what a row may hold
+#include "vdb_hermite/FileStatus.h"
 
 #include <sqlite3.h>
 
@@ -267,7 +268,7 @@ private:
             if (exists) throw StoreError("'" + path + "' already exists");
             return;
         }
-        if (!exists) throw StoreError("'" + path + "' does not exist");
+        if (const auto why = unreachableFile(path)) throw StoreError(*why);
         if (!fs::is_regular_file(path, ec)) throw StoreError("'" + path + "' is not a regular file");
         if (!looksLikeSqliteFile(path)) throw StoreError("'" + path + "' is not a VDBClay scene store (not an SQLite database)");
     }

@@ -1,5 +1,7 @@
 #include "vdb_hermite/VolumeIO.h"
 
+#include "vdb_hermite/FileStatus.h"
+
 #include "vdb_hermite/AtomicFile.h"
 #include "vdb_hermite/HermiteGrid.h"
 #include "vdb_hermite/PayloadCheck.h"
@@ -281,7 +283,7 @@ void saveVolume(const Volume& volume, const std::string& path)
 VdbFileKind classifyVdbFile(const std::string& path)
 {
     std::error_code ec;
-    if (!fs::exists(path, ec)) throw VolumeIOError("'" + path + "' does not exist");
+    if (const auto why = unreachableFile(path)) throw VolumeIOError(*why);
     if (!fs::is_regular_file(path, ec)) throw VolumeIOError("'" + path + "' is not a regular file");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw VolumeIOError("cannot open '" + path + "': " + std::strerror(errno));
@@ -301,7 +303,7 @@ Volume loadVolume(const std::string& path)
 {
     initializeHermiteGrid();
     std::error_code ec;
-    if (!fs::exists(path, ec)) throw VolumeIOError("'" + path + "' does not exist");
+    if (const auto why = unreachableFile(path)) throw VolumeIOError(*why);
     if (!fs::is_regular_file(path, ec)) throw VolumeIOError("'" + path + "' is not a regular file");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw VolumeIOError("cannot open '" + path + "': " + std::strerror(errno));

@@ -150,6 +150,10 @@ TriangleSoup readMeshWithAssimp(const std::string& path)
     }
     if (soup.materials.empty()) soup.materials.push_back({});
     if (!coloured.empty()) coloursToMaterials(soup, coloured);
+    if (soup.triangles.empty() && soup.droppedTriangles > 0)
+        throw MeshImportError("'" + path + "' holds " + std::to_string(soup.droppedTriangles) +
+                              " triangles and none encloses an area: their corners coincide once read in single precision "
+                              "(as the importer reads them; move the model near the origin or scale it up), or are not finite numbers");
     if (soup.triangles.empty()) throw MeshImportError("'" + path + "' holds no triangle");
     return soup;
 }

@@ -1,6 +1,7 @@
 #include "voxelize/TriangleMesh.h"
 
 #include "vdb_hermite/FileExtension.h"
+#include "vdb_hermite/FileStatus.h"
 #include "vdb_hermite/PrintableText.h"
 #include "voxelize/AssimpMeshReader.h"
 
@@ -215,7 +216,8 @@ TriangleSoup loadTriangleMesh(const std::string& path)
 TriangleSoup loadTriangleMesh(const std::string& path, const MeshReadLimits& limits)
 {
     std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) throw MeshImportError("'" + path + "' does not exist or is not a file");
+    if (const auto why = unreachableFile(path)) throw MeshImportError(*why);
+    if (!std::filesystem::is_regular_file(path, ec)) throw MeshImportError("'" + path + "' is not a regular file");
     // Assimp runs in a child process: a crash or an endless loop on a damaged file (Debian's 5.2 has
     // both, on truncated PLY files) costs the child, and the user gets one line instead of losing the
     // session.

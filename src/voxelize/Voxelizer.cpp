@@ -13,6 +13,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <set>
 #include <memory>
 #include <stdexcept>
 
@@ -292,6 +293,14 @@ struct MeshVoxelizer::Impl {
 MeshVoxelizer::MeshVoxelizer(const TriangleSoup& mesh, const VoxelizeOptions& options) : impl_(std::make_unique<Impl>())
 {
     if (mesh.triangles.empty()) throw std::invalid_argument("the mesh holds no triangle");
+    if (options.material.empty() && mesh.materials.size() >= kMaxMaterials) {
+        std::set<std::string> named;
+        for (const MeshMaterial& m : mesh.materials)
+            if (!m.name.empty()) named.insert(m.name);
+        if (named.size() >= kMaxMaterials) // before any work: the table holds 65535 with 'default'
+            throw MeshImportError("the mesh has " + std::to_string(named.size()) + " materials; a scene holds at most " +
+                                  std::to_string(kMaxMaterials - 1) + " besides 'default': give --material NAME to import it as one");
+    }
     std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
     for (const auto& t : mesh.triangles)
         for (uint32_t i : t)
