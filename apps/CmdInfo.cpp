@@ -26,7 +26,9 @@ CLI::App* addInfoCommand(CLI::App& parent, InfoOptions& o)
     cmd->add_option("input", o.input, "Scene: a volume file (.vdb) or a store (.vdbclay)")->required()->check(sceneInput())->type_name("IN");
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of text");
     cmd->footer("bbox_min/bbox_max are index-space voxel coordinates of the solid and surface voxels\n"
-                "(both (0, 0, 0) for an empty volume); memory_bytes is the in-memory size of the tree.");
+                "(both (0, 0, 0) for an empty volume), for a store too, with world_min/world_max, the same\n"
+                "voxels' positions in world units (to aim a camera path); memory_bytes is the in-memory size\n"
+                "of the tree.");
     return cmd;
 }
 
@@ -47,8 +49,17 @@ int storeInfo(const InfoOptions& o)
                         std::to_string(s.bricks) + " bricks, " + std::to_string(s.leaves) + " leaves, " + formatBytes(double(s.bytes))});
     }
     const LevelSummary fine = scene.summary(0);
+    const auto box = scene.bounds();
+    const IndexCoord lo = box ? box->first : IndexCoord{0, 0, 0}, hi = box ? box->second : IndexCoord{0, 0, 0};
+    const auto world = [&](const IndexCoord& c) {
+        return std::array<double, 3>{c[0] * scene.voxelSize(), c[1] * scene.voxelSize(), c[2] * scene.voxelSize()};
+    };
     if (o.json) {
         printJson({{"form", "store"},
+                   {"bbox_min", lo},
+                   {"bbox_max", hi},
+                   {"world_min", world(lo)},
+                   {"world_max", world(hi)},
                    {"voxel_size", scene.voxelSize()},
                    {"leaf_count", fine.leaves},
                    {"bricks", fine.bricks},
@@ -60,6 +71,13 @@ int storeInfo(const InfoOptions& o)
     }
     std::string names;
     for (const auto& n : materials) names += (names.empty() ? "" : ", ") + n;
+    rows.push_back({"bbox_min", box ? coordText(lo) : "(empty)"});
+    rows.push_back({"bbox_max", box ? coordText(hi) : "(empty)"});
+    if (box) {
+        const auto w0 = world(lo), w1 = world(hi);
+        rows.push_back({"world bounds", "(" + formatNumber(w0[0]) + ", " + formatNumber(w0[1]) + ", " + formatNumber(w0[2]) + ") .. (" +
+                                            formatNumber(w1[0]) + ", " + formatNumber(w1[1]) + ", " + formatNumber(w1[2]) + ")"});
+    }
     rows.push_back({"materials", std::to_string(materials.size()) + ": " + names});
     if (scene.lodStale()) rows.push_back({"lod", "stale (edited since 'vdbclay lod build')"});
     printFields(rows, 0);

@@ -313,3 +313,35 @@ TEST_CASE("a reader connection reads beside the writer and sees only what it com
     CHECK(sameBrick(reader->get(key), changed));
     CHECK_THROWS_AS(reader->put(key, *before), StoreError); // it only reads
 }
+
+TEST_CASE("a store's bounds equal its volume's, kept by writers and found again after edits", "[store]")
+{
+    TempDir dir;
+    const std::string path = dir.file("s.vdbclay");
+    const Volume v = multiBrickScene();
+    writeStoreFile(v, path);
+    const auto expect = [](const SceneStore& scene, const Volume& volume) {
+        const auto box = scene.bounds();
+        REQUIRE(box);
+        CHECK(box->first == volume.stats().bboxMin);
+        CHECK(box->second == volume.stats().bboxMax);
+    };
+    expect(SceneStore::open(path, StoreAccess::ReadOnly), v);
+    CHECK(SceneStore::open(path, StoreAccess::ReadOnly).bricks().meta("bbox").value_or("") != ""); // kept by the import
+    // Edits that grow and shrink the scene, at random: the bounds follow (forgotten, then found from the bricks).
+    std::mt19937 rng(3);
+    for (int trial = 0; trial < 6; ++trial) {
+        const int x = int(rng() % 200) - 100, r = 4 + int(rng() % 20);
+        const std::string mode = trial % 2 ? "remove" : "add";
+        const std::string script = R"({"ops": [{"mode": ")" + mode + R"(", "brush": {"shape": "sphere", "radius": )" +
+                                   std::to_string(r) + R"(}, "at": [)" + std::to_string(x) + R"(, 3, -5]}]})";
+        {
+            SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
+            sculptStore(scene, parseStrokeScript(script));
+        }
+        const SceneStore scene = SceneStore::open(path, StoreAccess::ReadOnly);
+        expect(scene, scene.loadLevel(0));
+    }
+    execSql(path, "UPDATE meta SET value = '1 2 3' WHERE key = 'bbox';");
+    CHECK_THROWS_WITH(SceneStore::open(path, StoreAccess::ReadOnly).bounds(), Catch::Contains("'bbox'"));
+}

@@ -3,6 +3,7 @@
 #include "interop/StandardVdb.h"
 
 #include "vdb_hermite/AtomicFile.h"
+#include "wavelet/LodPyramid.h"
 #include "vdb_hermite/FileExtension.h"
 #include "vdb_hermite/NumberText.h"
 #include "vdb_hermite/PrintableText.h"
@@ -20,6 +21,7 @@
 #include <filesystem>
 #include <iterator>
 #include <set>
+#include <sstream>
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -38,6 +40,7 @@ constexpr const char* kMaterialsKey = "materials";
 constexpr const char* kBrickLeavesKey = "brick_leaves";
 constexpr const char* kLodLevelsKey = "lod_levels";
 constexpr const char* kLodStaleKey = "lod_stale";
+constexpr const char* kBoundsKey = "bbox"; // "x0 y0 z0 x1 y1 z1", "empty", or "" (unknown: edited since)
 
 std::string exactNumber(double v)
 {
@@ -128,12 +131,57 @@ void SceneStore::setMaterials(const MaterialTable& materials)
     materials_ = materials;
 }
 
+std::optional<std::pair<IndexCoord, IndexCoord>> SceneStore::bounds() const
+{
+    const std::string kept = store_->meta(kBoundsKey).value_or("");
+    if (kept == "empty") return std::nullopt;
+    if (!kept.empty()) {
+        std::istringstream in(kept);
+        std::array<long long, 6> v{};
+        for (long long& x : v) in >> x;
+        std::string rest;
+        const bool valid = in && !(in >> rest) && std::all_of(v.begin(), v.end(), [](long long x) { return std::llabs(x) <= (1ll << 31) - 1; }) &&
+                           v[0] <= v[3] && v[1] <= v[4] && v[2] <= v[5];
+        if (!valid) throw damagedMeta(path(), kBoundsKey, kept, "six integers x0 y0 z0 x1 y1 z1 with x0 <= x1, y0 <= y1, z0 <= z1");
+        return std::make_pair(IndexCoord{int32_t(v[0]), int32_t(v[1]), int32_t(v[2])}, IndexCoord{int32_t(v[3]), int32_t(v[4]), int32_t(v[5])});
+    }
+    const std::vector<IndexCoord> all = brickCoords(0);
+    if (all.empty()) return std::nullopt;
+    IndexCoord lo = all.front(), hi = all.front();
+    for (const IndexCoord& b : all)
+        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], b[a]), hi[a] = std::max(hi[a], b[a]);
+    std::vector<IndexCoord> sides;
+    for (const IndexCoord& b : all)
+        if (b[0] == lo[0] || b[0] == hi[0] || b[1] == lo[1] || b[1] == hi[1] || b[2] == lo[2] || b[2] == hi[2]) sides.push_back(b);
+    Volume part(voxelSize_);
+    part.materials() = materials_;
+    loadBricks(0, sides, part);
+    const VolumeStats stats = part.stats();
+    if (stats.empty) return std::nullopt;
+    return std::make_pair(stats.bboxMin, stats.bboxMax);
+}
+
+void SceneStore::storeBounds()
+{
+    store_->putMeta(kBoundsKey, ""); // found from the bricks, not from what was kept
+    const auto box = bounds();
+    std::string text = "empty";
+    if (box) {
+        text.clear();
+        for (const IndexCoord* c : {&box->first, &box->second})
+            for (int a = 0; a < 3; ++a) text += (text.empty() ? "" : " ") + std::to_string((*c)[a]);
+    }
+    store_->putMeta(kBoundsKey, text);
+}
+
+void SceneStore::forgetBounds() { store_->putMeta(kBoundsKey, ""); }
+
 int SceneStore::lodLevels() const
 {
     const std::string text = store_->meta(kLodLevelsKey).value_or("0");
     const bool digits = !text.empty() && text.size() <= 2 && text.find_first_not_of("0123456789") == std::string::npos;
-    if (!digits || std::stoi(text) > kMaxLodLevels)
-        throw damagedMeta(store_->path(), kLodLevelsKey, text, "a whole number from 0 to " + std::to_string(kMaxLodLevels));
+    if (!digits || std::stoi(text) > wavelet::kMaxLodLevels)
+        throw damagedMeta(store_->path(), kLodLevelsKey, text, "a whole number from 0 to " + std::to_string(wavelet::kMaxLodLevels));
     return std::stoi(text);
 }
 
@@ -307,6 +355,7 @@ void createStoreFile(const std::string& path, double voxelSize, const MaterialTa
             SceneStore scene = SceneStore::create(temp.string(), voxelSize, materials);
             scene.bricks().begin();
             fill(scene);
+            scene.storeBounds();
             scene.bricks().commit();
         } // closing checkpoints the WAL into the file
         syncFileToDisk(temp.string());

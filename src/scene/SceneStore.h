@@ -41,9 +41,6 @@ struct LevelSummary {
     uint64_t bytes = 0;
 };
 
-/// The most coarse levels a store may have (level k's voxels are 2^k level-0 voxels wide).
-constexpr int kMaxLodLevels = 16;
-
 /// The error for a damaged metadata value: names the store, the key, the value (printable) and what
 /// was expected.
 StoreError damagedMeta(const std::string& path, const std::string& key, const std::string& value, const std::string& expected);
@@ -68,12 +65,20 @@ public:
     const MaterialTable& materials() const { return materials_; }
     /// Replaces the materials table (inside a transaction).
     void setMaterials(const MaterialTable& materials);
-    /// The number of coarse levels stored (0 until `lod build`), and whether edits since made them stale.
     /// The coarse levels built and whether edits since left them behind; StoreError when the metadata
-    /// holds anything but a whole number of 0 .. kMaxLodLevels, or 0 or 1.
+    /// holds anything but a whole number of 0 .. wavelet::kMaxLodLevels, or 0 or 1.
     int lodLevels() const;
     bool lodStale() const;
     void setLod(int levels, bool stale);
+
+    /// The index-space box of level 0's solid and surface voxels (as VolumeStats has it), nullopt for
+    /// an empty scene. Read from the metadata where a writer kept it; else found from the bricks on the
+    /// six sides of the brick grid (the only ones that can hold an extreme voxel).
+    std::optional<std::pair<IndexCoord, IndexCoord>> bounds() const;
+    /// Writes bounds() into the metadata, found from the bricks (call inside a transaction).
+    void storeBounds();
+    /// Marks the kept bounds unknown: edits call it when they change level 0.
+    void forgetBounds();
 
     BrickStore& bricks() { return *store_; }
     const BrickStore& bricks() const { return *store_; }

@@ -375,6 +375,7 @@ int buildStoreLod(SceneStore& scene, int levels, const Progress& progress)
     LodPass(scene, levels, true, progress).run(scene.brickCoords(0));
     scene.setLod(levels, false);
     scene.bricks().putMeta(kLodDensitiesKey, "1");
+    scene.storeBounds(); // a writer's pass over the store: the bounds of level 0 kept for readers
     transaction.commit();
     return levels;
 }

@@ -81,6 +81,7 @@ StoreSculptReport sculptStore(SceneStore& scene, const StrokeScript& script,
     report.bricksWritten = written.size();
     scene.setMaterials(part.materials());
     if (!written.empty()) {
+        scene.forgetBounds();
         if (lodFollowsEdits(scene)) report.lodBricksWritten = updateStoreLod(scene, written).bricksWritten();
         else if (scene.lodLevels() > 0) scene.setLod(scene.lodLevels(), true);
     }

@@ -200,6 +200,7 @@ struct StreamingScene::Impl {
         LodRefresh lod;
         if (!dirty.empty()) {
             scene.setMaterials(materials);
+            scene.forgetBounds();
             std::vector<IndexCoord> bricks;
             for (auto& [key, r] : dirty) bricks.push_back(key.brick);
             if (lodFollowsEdits(scene)) lod = updateStoreLod(scene, bricks);
