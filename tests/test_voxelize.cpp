@@ -699,3 +699,35 @@ TEST_CASE("cli: import voxelizes a mesh with its materials and says what it repa
         CHECK(mesh.err.find("'cube.obj' is a mesh, not a scene: bring it in first with 'vdbclay import cube.obj") != std::string::npos);
     }
 }
+
+TEST_CASE("a glTF reads its buffers from inside its own folder only", "[voxelize]")
+{
+    TempDir model, elsewhere;
+    // A tetrahedron: 4 float positions and 12 uint16 indices in one buffer.
+    const float positions[12] = {0, 0, 0, 4, 0, 0, 0, 4, 0, 0, 0, 4};
+    const uint16_t indices[12] = {0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2};
+    std::string bin(reinterpret_cast<const char*>(positions), sizeof positions);
+    bin.append(reinterpret_cast<const char*>(indices), sizeof indices);
+    writeText(model.file("tet.bin"), bin);
+    writeText(elsewhere.file("secret.bin"), bin);
+    std::filesystem::create_directories(model.path() / "sub");
+    writeText(model.file("sub/inner.bin"), bin);
+    const auto gltf = [&](const std::string& uri) {
+        return R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+            "buffers": [{"uri": ")" + uri + R"(", "byteLength": 72}],
+            "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 24}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [4, 4, 4]},
+                          {"bufferView": 1, "componentType": 5123, "count": 12, "type": "SCALAR"}]})";
+    };
+    writeText(model.file("inside.gltf"), gltf("tet.bin"));
+    writeText(model.file("nested.gltf"), gltf("sub/inner.bin"));
+    writeText(model.file("absolute.gltf"), gltf(elsewhere.file("secret.bin")));
+    writeText(model.file("climbing.gltf"), gltf("../" + elsewhere.path().filename().string() + "/secret.bin"));
+    CHECK(loadTriangleMesh(model.file("inside.gltf")).triangles.size() == 4);
+    CHECK(loadTriangleMesh(model.file("nested.gltf")).triangles.size() == 4);
+    for (const char* name : {"absolute.gltf", "climbing.gltf"}) {
+        CAPTURE(name);
+        CHECK_THROWS_AS(loadTriangleMesh(model.file(name)), MeshImportError);
+    }
+}

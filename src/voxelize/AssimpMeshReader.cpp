@@ -3,6 +3,7 @@
 #include "vdb_hermite/PrintableText.h"
 #include "voxelize/MeshHeaderCheck.h"
 
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/Importer.hpp>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
@@ -11,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <new>
 #include <stdexcept>
@@ -32,6 +34,39 @@ void aiAssertViolation(const char* failedExpression, const char* /*file*/, int /
 namespace vdbclay {
 
 namespace {
+
+/// Files as Assimp opens them, but only the model itself and files inside its folder: a glTF may name
+/// its buffers and images by any path ("/etc/passwd", "../../secret"), and a model from elsewhere must
+/// not make the importer read the user's other files. Links are followed before the check.
+class ModelFolderIOSystem : public Assimp::DefaultIOSystem {
+public:
+    explicit ModelFolderIOSystem(const std::string& model)
+    {
+        namespace fs = std::filesystem;
+        std::error_code ec;
+        model_ = fs::weakly_canonical(model, ec);
+        folder_ = model_.parent_path();
+    }
+    bool Exists(const char* file) const override { return allowed(file) && Assimp::DefaultIOSystem::Exists(file); }
+    Assimp::IOStream* Open(const char* file, const char* mode = "rb") override
+    {
+        return allowed(file) ? Assimp::DefaultIOSystem::Open(file, mode) : nullptr;
+    }
+
+private:
+    bool allowed(const char* file) const
+    {
+        namespace fs = std::filesystem;
+        std::error_code ec;
+        const fs::path resolved = fs::weakly_canonical(file, ec);
+        if (ec || folder_.empty()) return false;
+        if (resolved == model_) return true;
+        const fs::path relative = resolved.lexically_relative(folder_);
+        return !relative.empty() && *relative.begin() != ".." && !relative.is_absolute();
+    }
+
+    std::filesystem::path model_, folder_;
+};
 
 /// Few distinct vertex colours (a painted model, VDBClay's own PLY) each become a material; more (a
 /// colour scan) are binned on a palette of 4 levels per channel, so the table stays small.
@@ -85,6 +120,7 @@ TriangleSoup readMeshWithAssimp(const std::string& path)
 {
     refuseImplausibleMeshHeader(path);
     Assimp::Importer importer;
+    importer.SetIOHandler(new ModelFolderIOSystem(path)); // the importer owns it
     // Points and lines are no surface. No normals are asked for: the voxelizer takes each triangle's own.
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
     const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_PreTransformVertices);
