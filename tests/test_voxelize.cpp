@@ -731,3 +731,18 @@ TEST_CASE("a glTF reads its buffers from inside its own folder only", "[voxelize
         CHECK_THROWS_AS(loadTriangleMesh(model.file(name)), MeshImportError);
     }
 }
+
+TEST_CASE("a PLY of triangle strips is refused naming the strips, not read as an empty or wrong surface", "[voxelize]")
+{
+    TempDir dir;
+    const float vertices[12] = {0, 0, 0, 4, 0, 0, 0, 4, 0, 0, 0, 4};
+    const int32_t strip[16] = {0, 2, 1, -1, 0, 1, 3, -1, 1, 2, 3, -1, 0, 3, 2, -1};
+    std::string ply = "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                      "element tristrips 1\nproperty list int int vertex_indices\nend_header\n";
+    ply.append(reinterpret_cast<const char*>(vertices), sizeof vertices);
+    const int32_t count = 16;
+    ply.append(reinterpret_cast<const char*>(&count), sizeof count);
+    ply.append(reinterpret_cast<const char*>(strip), sizeof strip);
+    writeText(dir.file("strip.ply"), ply);
+    CHECK_THROWS_WITH(loadTriangleMesh(dir.file("strip.ply")), Catch::Contains("triangle strips"));
+}
