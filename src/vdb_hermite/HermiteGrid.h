@@ -273,6 +273,9 @@ bool uniformWithoutSamples(const HermiteLeafData& data, MaterialValue& value);
 /// material without samples becomes a tile (none where the tree already has that value), the others
 /// leaves; then the nodes made uniform are pruned. `data` is moved from.
 void placeLeaves(HermiteTree& tree, const std::vector<Coord>& origins, std::vector<HermiteLeafData>& data);
+/// The same for leaves of one material without samples, given by that material alone (a solid's
+/// interior: its leaves as data would take a kilobyte each); call after placeLeaves for the others.
+void placeUniformLeaves(HermiteTree& tree, const std::vector<Coord>& origins, const std::vector<MaterialValue>& values);
 
 /// Metadata keys stored on the grid.
 constexpr const char* kFormatVersionKey = "vdbclay_format_version";

@@ -234,19 +234,32 @@ bool uniformWithoutSamples(const HermiteLeafData& data, MaterialValue& value)
     return std::all_of(data.material.begin(), data.material.end(), [&](MaterialValue m) { return m == value; });
 }
 
+namespace {
+
+void placeTile(HermiteTree& tree, const Coord& origin, const MaterialValue& value, std::set<Coord>& lowers)
+{
+    if (tree.getValue(origin) == value && !tree.probeConstLeaf(origin)) return;
+    tree.addTile(1, origin, value, false);
+    lowers.insert(alignDown(origin, kLowerDim));
+}
+
+} // namespace
+
 void placeLeaves(HermiteTree& tree, const std::vector<Coord>& origins, std::vector<HermiteLeafData>& data)
 {
     std::set<Coord> lowers;
     for (std::size_t i = 0; i < origins.size(); ++i) {
         MaterialValue uniform;
-        if (uniformWithoutSamples(data[i], uniform)) {
-            if (tree.getValue(origins[i]) == uniform && !tree.probeConstLeaf(origins[i])) continue;
-            tree.addTile(1, origins[i], uniform, false);
-            lowers.insert(alignDown(origins[i], kLowerDim));
-        } else {
-            tree.touchLeaf(origins[i])->assign(std::move(data[i]));
-        }
+        if (uniformWithoutSamples(data[i], uniform)) placeTile(tree, origins[i], uniform, lowers);
+        else tree.touchLeaf(origins[i])->assign(std::move(data[i]));
     }
+    pruneNodes(tree, lowers);
+}
+
+void placeUniformLeaves(HermiteTree& tree, const std::vector<Coord>& origins, const std::vector<MaterialValue>& values)
+{
+    std::set<Coord> lowers;
+    for (std::size_t i = 0; i < origins.size(); ++i) placeTile(tree, origins[i], values[i], lowers);
     pruneNodes(tree, lowers);
 }
 

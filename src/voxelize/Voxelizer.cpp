@@ -264,7 +264,15 @@ bool fillVotes(const Lattice& lattice, const std::array<RayHits, 3>& rays, Windo
 struct BlockLeaves {
     std::vector<Coord> origins;
     std::vector<HermiteLeafData> data;
+    std::vector<Coord> uniformOrigins; // leaves of one material without crossings: the solid's inside
+    std::vector<MaterialValue> uniformValues;
     VoxelizeReport counts;
+
+    void placeInto(HermiteTree& tree)
+    {
+        placeLeaves(tree, origins, data);
+        placeUniformLeaves(tree, uniformOrigins, uniformValues);
+    }
 };
 
 } // namespace
@@ -508,7 +516,10 @@ BlockLeaves MeshVoxelizer::Impl::voxelizeBlock(const LeafAlignedBox& box) const
                         }
                 counts.solidVoxels += leafSolid;
                 counts.crossings += leafCrossings;
-                if (leafSolid > 0 || leafCrossings > 0) out.origins.push_back(origin), out.data.push_back(std::move(d));
+                MaterialValue uniform;
+                if (leafSolid == 0 && leafCrossings == 0) continue;
+                if (uniformWithoutSamples(d, uniform)) out.uniformOrigins.push_back(origin), out.uniformValues.push_back(uniform);
+                else out.origins.push_back(origin), out.data.push_back(std::move(d));
             }
     return out;
 }
@@ -518,7 +529,7 @@ Volume MeshVoxelizer::voxelizeBlock(const LeafAlignedBox& box, VoxelizeReport& c
     BlockLeaves leaves = impl_->voxelizeBlock(box);
     Volume volume(impl_->lattice.voxelSize);
     volume.materials() = impl_->materials;
-    placeLeaves(volume.impl().grid->tree(), leaves.origins, leaves.data);
+    leaves.placeInto(volume.impl().grid->tree());
     addBlockCounts(counts, leaves.counts);
     return volume;
 }
@@ -538,17 +549,13 @@ Volume voxelizeMesh(const TriangleSoup& mesh, const VoxelizeOptions& options, Vo
         for (std::size_t b = range.begin(); b != range.end(); ++b) leaves[b] = voxelizer.impl_->voxelizeBlock(blocks[b]);
     });
     VoxelizeReport r = voxelizer.castReport();
-    std::vector<Coord> origins;
-    std::vector<HermiteLeafData> data;
-    for (BlockLeaves& block : leaves) {
-        addBlockCounts(r, block.counts);
-        origins.insert(origins.end(), block.origins.begin(), block.origins.end());
-        std::move(block.data.begin(), block.data.end(), std::back_inserter(data));
-        block = {};
-    }
     Volume volume(voxelizer.voxelSize());
     volume.materials() = voxelizer.materials();
-    placeLeaves(volume.impl().grid->tree(), origins, data);
+    for (BlockLeaves& block : leaves) { // block by block: each one's memory goes once it is placed
+        addBlockCounts(r, block.counts);
+        block.placeInto(volume.impl().grid->tree());
+        block = {};
+    }
     if (report) *report = r;
     return volume;
 }
