@@ -133,7 +133,9 @@ CLI::App* addImportCommand(CLI::App& parent, ImportOptions& o)
     cmd->add_option("--voxel-size", o.voxelSize, "Voxel size of a voxelized mesh, or to resample a standard grid to (default: its own)")
         ->type_name("V")
         ->check(positiveNumber());
-    cmd->add_option("--resolution", o.resolution, "Voxels along a mesh's longest side (instead of --voxel-size)")
+    cmd->add_option("--resolution", o.resolution,
+                    "Voxels along a mesh's longest side (instead of --voxel-size); up to 16384 for a flat mesh, about 4090 "
+                    "for a cube-like one (the mesh's box may span 2^36 lattice points; the error says this mesh's limit)")
         ->type_name("N")
         ->check(CLI::Range(1, 16384));
     cmd->add_option("--material", o.material, "Material of what a standard grid or a mesh brings in (a mesh: default its own materials)")

@@ -6,10 +6,14 @@
 #include "support/TestUtil.h"
 #include "vdb_hermite/Materials.h"
 #include "vdb_hermite/PrintableText.h"
+#include "voxelize/TriangleMesh.h"
 
 #include <catch2/catch.hpp>
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
 #include <nlohmann/json.hpp>
 
+#include <random>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -197,4 +201,41 @@ TEST_CASE("cli: exit codes and messages name the real cause", "[hostile][cli]")
     const CommandResult collapsed = runCli(dir, "import collapsed.obj --resolution 8 -o c.vdb");
     CHECK(collapsed.exitCode == 1);
     CHECK(collapsed.err.find("single precision") != std::string::npos);
+}
+
+TEST_CASE("cli: small inputs that ask for more memory than the process may use are refused at once, naming the limit", "[hostile][cli]")
+{
+    if (std::string(kCli).empty()) return;
+    if (!meshReadMemoryIsCapped()) return; // AddressSanitizer reserves terabytes of addresses: no ulimit -v under it
+    TempDir dir;
+    // A level set of a few hundred bytes: inside tiles of a 4096-voxel cube (3 million surface leaves).
+    openvdb::initialize();
+    openvdb::FloatGrid::Ptr cube = openvdb::FloatGrid::create(3.0f);
+    cube->setName("surface");
+    cube->setGridClass(openvdb::GRID_LEVEL_SET);
+    cube->tree().fill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(4095)), -3.0f, true);
+    openvdb::io::File(dir.file("tiles.vdb")).write({cube});
+    REQUIRE(std::filesystem::file_size(dir.file("tiles.vdb")) < 2000);
+    // 20,000 random triangles across their box: billions of ray hits at resolution 128.
+    std::string soup;
+    std::mt19937 rng(8);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (int v = 0; v < 60000; ++v) soup += "v " + std::to_string(unit(rng)) + " " + std::to_string(unit(rng)) + " " + std::to_string(unit(rng)) + "\n";
+    for (int t = 0; t < 20000; ++t) soup += "f " + std::to_string(3 * t + 1) + " " + std::to_string(3 * t + 2) + " " + std::to_string(3 * t + 3) + "\n";
+    writeText(dir.file("soup.obj"), soup);
+    for (const char* command : {"import tiles.vdb -o t.vdb", "import tiles.vdb -o t.vdbclay", "import soup.obj --resolution 128 -o s.vdb"}) {
+        INFO(command);
+        // Under a 4 GB address-space limit: without the estimate, the work would run into it (out of memory).
+        const std::string errPath = dir.file("err.txt");
+        const std::string line = "cd " + quote(dir.path().string()) + " && ulimit -v 4000000 && " + quote(kCli) + " " + command +
+                                 " >/dev/null 2>" + quote(errPath);
+        const int status = std::system(line.c_str());
+        CHECK((WIFEXITED(status) && WEXITSTATUS(status) == 1));
+        const auto err = readBytes(errPath);
+        const std::string text(err.begin(), err.end());
+        CHECK(text.find("needs about") != std::string::npos);
+        CHECK(text.find("this process may use 4 GB") != std::string::npos);
+    }
+    CHECK_FALSE(std::filesystem::exists(dir.file("t.vdb")));
+    CHECK_FALSE(std::filesystem::exists(dir.file("s.vdb")));
 }

@@ -1,5 +1,7 @@
 #include "interop/LevelSetImport.h"
 
+#include "vdb_hermite/MemoryLimit.h"
+
 #include "interop/StandardGridRead.h"
 #include "interop/StandardVdb.h"
 #include "vdb_hermite/HermiteGrid.h"
@@ -175,6 +177,9 @@ void requireFiniteValues(const FloatGrid& grid, const std::string& name, const s
                         "): the grid is damaged");
 }
 
+/// What one surface leaf takes while an import builds it: its data, then the leaf in the tree.
+constexpr double kLeafBuildBytes = 4096.0;
+
 /// Refuses a grid whose active voxels lie beyond what VDBClay's lattice indexes at `voxelSize` (a level
 /// set translated by 1e12 spun for minutes, then said it held nothing).
 void requireOnLattice(const FloatGrid& grid, double voxelSize, const std::string& name, const std::string& path)
@@ -310,6 +315,10 @@ Volume importLevelSet(const std::string& path, const LevelSetImportOptions& opti
         }
     }
     const std::vector<Coord> candidates = candidateLeaves(field);
+    // A file of a few tiles may hold a huge solid: its surface leaves are built as data, then as leaves.
+    requireMemory(double(candidates.size()) * kLeafBuildBytes,
+                  "importing grid '" + printableText(chosen.name, 64) + "' (" + std::to_string(candidates.size()) + " surface leaves)",
+                  "give a larger --voxel-size");
     std::vector<HermiteLeafData> data(candidates.size());
     std::vector<uint64_t> crossings(candidates.size(), 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 16), [&](const auto& range) {

@@ -1,6 +1,7 @@
 #include "voxelize/Voxelizer.h"
 
 #include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/MemoryLimit.h"
 #include "vdb_hermite/NumberText.h"
 #include "vdb_hermite/Quantize.h"
 
@@ -342,10 +343,38 @@ MeshVoxelizer::MeshVoxelizer(const TriangleSoup& mesh, const VoxelizeOptions& op
     }
     const double points = extent[0] * extent[1] * extent[2];
     const double face = std::max({extent[0] * extent[1], extent[1] * extent[2], extent[0] * extent[2]});
-    if (points > kMaxLatticePoints || face > kMaxRaysPerAxis)
+    if (points > kMaxLatticePoints || face > kMaxRaysPerAxis) {
+        // The finest resolution this mesh's proportions allow, so the user knows what to type.
+        const auto fits = [&](int resolution) {
+            std::array<double, 3> d{};
+            for (std::size_t a = 0; a < 3; ++a) d[a] = std::ceil((hi[a] - lo[a]) / longest * resolution) + 3.0;
+            return d[0] * d[1] * d[2] <= kMaxLatticePoints && std::max({d[0] * d[1], d[1] * d[2], d[0] * d[2]}) <= kMaxRaysPerAxis;
+        };
+        int finest = 0;
+        for (int step = 1 << 14; step > 0; step >>= 1)
+            if (finest + step <= 16384 && fits(finest + step)) finest += step;
         throw std::invalid_argument("the mesh spans " + std::to_string(lattice.dim[0]) + " x " + std::to_string(lattice.dim[1]) + " x " +
                                     std::to_string(lattice.dim[2]) +
-                                    " lattice points at this voxel size (at most 2^36, and 2^26 on a face): choose a coarser one");
+                                    " lattice points at this voxel size (the voxelizer's vote takes at most 2^36, and 2^26 on a face): "
+                                    "for this mesh --resolution may be at most " + std::to_string(finest) +
+                                    " (--voxel-size at least " + formatNumber(longest / std::max(finest, 1)) + ")");
+    }
+
+    // Each ray keeps its hits until the blocks are voxelized: a mesh of many large triangles (a 50 MB
+    // soup across its box) makes billions. Counted from the triangles' projected areas before casting.
+    double expectedHits = 0.0;
+    for (const auto& t : mesh.triangles) {
+        const auto& a = mesh.positions[t[0]];
+        const auto& b = mesh.positions[t[1]];
+        const auto& c = mesh.positions[t[2]];
+        const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        expectedHits += 0.5 * (std::fabs(u[1] * w[2] - u[2] * w[1]) + std::fabs(u[2] * w[0] - u[0] * w[2]) + std::fabs(u[0] * w[1] - u[1] * w[0]));
+    }
+    expectedHits /= voxelSize * voxelSize;
+    requireMemory(expectedHits * double(sizeof(Hit)) * 2.0, // the hits, and their copy while sorted and grouped
+                  "voxelizing the mesh at voxel size " + formatNumber(voxelSize) + " (its triangles cross about " +
+                      formatNumber(expectedHits) + " lattice lines)",
+                  "choose a coarser voxel size or a lower --resolution");
 
     VoxelizeReport& r = impl_->cast;
     r.voxelSize = voxelSize;
