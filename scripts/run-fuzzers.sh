@@ -12,7 +12,7 @@ seconds="${2:-60}"
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 artifacts="$build/fuzz-artifacts"
 mkdir -p "$artifacts"
-for target in vdb_reader standard_vdb script_parser mesh_writers mesh_import region_codec; do
+for target in vdb_reader standard_vdb script_parser mesh_writers mesh_import region_codec camera_path store_rows; do
     case "$target" in
         vdb_reader) corpus_name=vdb ;;
         standard_vdb) corpus_name=standard ;;
@@ -20,6 +20,8 @@ for target in vdb_reader standard_vdb script_parser mesh_writers mesh_import reg
         mesh_writers) corpus_name=mesh ;;
         mesh_import) corpus_name=import ;;
         region_codec) corpus_name=region ;;
+        camera_path) corpus_name=camera ;;
+        store_rows) corpus_name=store ;;
     esac
     work="$build/fuzz-corpus/$target"
     mkdir -p "$work"

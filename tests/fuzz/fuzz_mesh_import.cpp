@@ -2,6 +2,7 @@
 // glb), the rest is the file. Assimp reads it and the voxelizer turns it into Hermite data at a small
 // resolution (soups of at most 2000 triangles); every input must be imported or refused with one
 // printable line.
+#include "vdb_hermite/PrintableText.h"
 #include "voxelize/TriangleMesh.h"
 #include "voxelize/Voxelizer.h"
 
@@ -24,8 +25,7 @@ std::string scratchPath(const char* extension)
 
 void requirePrintable(const char* message)
 {
-    for (const char* c = message; *c; ++c)
-        if (*c < 32 || *c > 126) std::abort(); // a message with raw bytes or several lines
+    if (!vdbclay::isPrintableName(message, std::string::npos)) std::abort(); // raw bytes, control characters or several lines
 }
 
 } // namespace

@@ -1,7 +1,9 @@
 // Another tool's .vdb on crafted bytes: the input is the whole file (no VDBClay trailer), so every input
 // reaches the standard-grid check (PayloadCheck with AcceptedGrids::Standard) and, when that passes,
 // OpenVDB's parser and the level-set import. They must import it or refuse it with one printable line.
+#include "vdb_hermite/PrintableText.h"
 #include "interop/LevelSetImport.h"
+#include "vdb_hermite/MemoryLimit.h"
 #include "vdb_hermite/VolumeIO.h"
 
 #include <cstdint>
@@ -21,8 +23,7 @@ const std::string& scratchPath()
 
 void requirePrintable(const char* message)
 {
-    for (const char* c = message; *c; ++c)
-        if (*c < 32 || *c > 126) std::abort(); // a message with raw bytes or several lines
+    if (!vdbclay::isPrintableName(message, std::string::npos)) std::abort(); // raw bytes, control characters or several lines
 }
 
 } // namespace
@@ -42,6 +43,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     } catch (const vdbclay::VolumeIOError& e) {
         requirePrintable(e.what());
     } catch (const std::invalid_argument& e) {
+        requirePrintable(e.what());
+    } catch (const vdbclay::MemoryLimitError& e) { // a few tiles may hold a huge solid
         requirePrintable(e.what());
     }
     return 0;

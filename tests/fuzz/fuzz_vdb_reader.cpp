@@ -1,6 +1,7 @@
 // The .vdb reader on crafted bytes. The input is a payload; the target seals it with a valid VDBClay
 // trailer (as anyone can), so every input reaches the structural check and, when that passes, OpenVDB's
 // parser. loadVolume must load the file or refuse it with a VolumeIOError of one printable line.
+#include "vdb_hermite/PrintableText.h"
 #include "support/HermiteProbe.h"
 #include "vdb_hermite/VolumeIO.h"
 
@@ -30,8 +31,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     try {
         (void)vdbclay::loadVolume(scratchPath());
     } catch (const vdbclay::VolumeIOError& e) {
-        for (const char* c = e.what(); *c; ++c)
-            if (*c < 32 || *c > 126) std::abort(); // a message with raw bytes or several lines
+        if (!vdbclay::isPrintableName(e.what(), std::string::npos)) std::abort(); // raw bytes, control characters or several lines
     }
     return 0;
 }
