@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdint>
 #include <stdexcept>
 #include <utility>
@@ -511,6 +512,17 @@ double SweptBrush::distance(const Vec3d& x) const
     const auto found = g.cells.find(cellHash(x));
     double best = 0.5 * cell_; // every piece not listed here lies farther away
     if (found == g.cells.end()) return best;
+    if (capsuleRadius_ > 0.0) {
+        // A swept sphere: the nearest segment by squared distance, one square root at the end (a dense
+        // stroke lists hundreds of pieces in a cell; the root per piece was most of its cost).
+        double nearestSq = std::numeric_limits<double>::infinity();
+        for (uint32_t id : found->second) {
+            const Piece& piece = g.pieces[id];
+            const double along = std::clamp((x - piece.start).dot(piece.direction), 0.0, piece.length);
+            nearestSq = std::min(nearestSq, (x - (piece.start + piece.direction * along)).lengthSqr());
+        }
+        return std::min(best, std::sqrt(nearestSq) - capsuleRadius_);
+    }
     for (uint32_t id : found->second) best = std::min(best, pieceDistance(g.pieces[id], x, best));
     return best;
 }
