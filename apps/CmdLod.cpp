@@ -11,10 +11,9 @@
 
 #include <CLI/CLI.hpp>
 
-#include <iostream>
-
 #include <chrono>
 #include <cmath>
+#include <iostream>
 
 namespace vdbclay::cli {
 
