@@ -153,12 +153,19 @@ std::optional<std::pair<IndexCoord, IndexCoord>> SceneStore::bounds() const
     std::vector<IndexCoord> sides;
     for (const IndexCoord& b : all)
         if (b[0] == lo[0] || b[0] == hi[0] || b[1] == lo[1] || b[1] == hi[1] || b[2] == lo[2] || b[2] == hi[2]) sides.push_back(b);
-    Volume part(voxelSize_);
-    part.materials() = materials_;
-    loadBricks(0, sides, part);
-    const VolumeStats stats = part.stats();
-    if (stats.empty) return std::nullopt;
-    return std::make_pair(stats.bboxMin, stats.bboxMax);
+    // One brick at a time: the sides of a wide flat scene (a terrain) may hold most of its bricks.
+    std::optional<std::pair<IndexCoord, IndexCoord>> box;
+    for (const IndexCoord& b : sides) {
+        Volume one(voxelSize_);
+        one.materials() = materials_;
+        loadBricks(0, {b}, one);
+        const VolumeStats stats = one.stats();
+        if (stats.empty) continue;
+        if (!box) box = std::make_pair(stats.bboxMin, stats.bboxMax);
+        for (int a = 0; a < 3; ++a)
+            box->first[a] = std::min(box->first[a], stats.bboxMin[a]), box->second[a] = std::max(box->second[a], stats.bboxMax[a]);
+    }
+    return box;
 }
 
 void SceneStore::storeBounds()
