@@ -4,6 +4,7 @@
 
 #include "interop/LevelSetExport.h"
 #include "interop/LevelSetImport.h"
+#include "scene/LevelSetToStore.h"
 #include "scene/SceneStore.h"
 #include "voxelize/VoxelizeToStore.h"
 #include "vdb_hermite/FileStatus.h"
@@ -114,6 +115,56 @@ int importMesh(const ImportOptions& o, std::chrono::steady_clock::time_point sta
     return kExitOk;
 }
 
+/// A level set or fog volume of another tool's .vdb. Into a store it is built brick by brick.
+int importStandardGrid(const ImportOptions& o, std::chrono::steady_clock::time_point start)
+{
+    LevelSetImportOptions options;
+    options.grid = o.grid;
+    options.iso = o.iso;
+    options.voxelSize = o.voxelSize;
+    options.material = o.material;
+    LevelSetImportReport report;
+    const SceneCounts counts = [&] {
+        try {
+            if (isStorePath(o.output)) {
+                const StoreLevelSetReport stored =
+                    importLevelSetToStore(o.input, options, o.output, terminalProgress("importing bricks", !o.json));
+                report = stored.levelSet;
+                return SceneCounts(stored.leaves, stored.activeVoxels);
+            }
+            const Volume volume = importLevelSet(o.input, options, &report);
+            const VolumeStats stats = volume.stats();
+            if (stats.empty)
+                throw std::runtime_error("grid '" + printableText(report.grid, 64) + "' of '" + o.input + "' holds no solid voxel read as a " +
+                                         (report.fog ? "fog volume (solid where the density exceeds " + formatNumber(o.iso.value_or(0.0)) + ")"
+                                                     : "level set (solid below " + formatNumber(o.iso.value_or(0.0)) + ")") +
+                                         ": nothing to import");
+            saveVolume(volume, o.output);
+            return SceneCounts(stats);
+        } catch (const std::invalid_argument& e) {
+            throw UsageError(e.what());
+        }
+    }();
+    const double seconds = secondsSince(start);
+    if (o.json) {
+        nlohmann::json out = sceneSummaryJson(o.output, counts, seconds);
+        out["levelset"] = {{"grid", report.grid},   {"class", report.gridClass}, {"value_type", report.valueType},
+                           {"fog", report.fog},     {"voxel_size", report.voxelSize},
+                           {"resampled", !report.resampled.empty()}, {"resampled_because", report.resampled},
+                           {"crossings", report.crossings}};
+        printJson(out);
+        return kExitOk;
+    }
+    printFields({{"grid", report.grid + " (" + (report.gridClass.empty() ? "no class" : report.gridClass) + ", " + report.valueType + ")"},
+                 {"read as", report.fog ? "fog volume (solid where the value exceeds --iso)" : "level set (solid below the iso value)"},
+                 {"voxel size", formatNumber(report.voxelSize)},
+                 {"resampled", report.resampled.empty() ? "no" : "yes: " + report.resampled},
+                 {"crossings", std::to_string(report.crossings)}},
+                0);
+    printSummary(o.input, o.output, counts, seconds);
+    return kExitOk;
+}
+
 CLI::App* addImportCommand(CLI::App& parent, ImportOptions& o)
 {
     CLI::App* cmd = parent.add_subcommand(
@@ -167,47 +218,13 @@ int runImport(const ImportOptions& o)
     const bool standard = !isStorePath(o.input) && classifyVdbFile(o.input) == VdbFileKind::Other;
     if (!standard && (!o.grid.empty() || o.iso || o.voxelSize))
         throw UsageError("--grid, --iso and --voxel-size are for .vdb files of other tools; '" + o.input + "' is VDBClay's own");
-    LevelSetImportReport report;
-    Volume volume = standard ? [&] {
-        LevelSetImportOptions options;
-        options.grid = o.grid;
-        options.iso = o.iso;
-        options.voxelSize = o.voxelSize;
-        options.material = o.material;
-        try {
-            return importLevelSet(o.input, options, &report);
-        } catch (const std::invalid_argument& e) {
-            throw UsageError(e.what());
-        }
-    }()
-                             : loadScene(o.input, terminalProgress("reading bricks", !o.json));
+    if (standard) return importStandardGrid(o, start);
+    const Volume volume = loadScene(o.input, terminalProgress("reading bricks", !o.json));
     const VolumeStats stats = volume.stats();
-    if (standard && stats.empty)
-        throw std::runtime_error("grid '" + printableText(report.grid, 64) + "' of '" + o.input + "' holds no solid voxel read as a " +
-                         (report.fog ? "fog volume (solid where the density exceeds " + formatNumber(o.iso.value_or(0.0)) + ")"
-                                     : "level set (solid below " + formatNumber(o.iso.value_or(0.0)) + ")") +
-                         ": nothing to import");
     writeScene(volume, o.output, !o.json);
     const double seconds = secondsSince(start);
-    if (o.json) {
-        nlohmann::json out = sceneSummaryJson(o.output, SceneCounts(stats), seconds);
-        if (standard)
-            out["levelset"] = {{"grid", report.grid},   {"class", report.gridClass}, {"value_type", report.valueType},
-                               {"fog", report.fog},     {"voxel_size", report.voxelSize},
-                               {"resampled", !report.resampled.empty()}, {"resampled_because", report.resampled},
-                               {"crossings", report.crossings}};
-        printJson(out);
-        return kExitOk;
-    }
-    if (standard) {
-        printFields({{"grid", report.grid + " (" + (report.gridClass.empty() ? "no class" : report.gridClass) + ", " + report.valueType + ")"},
-                     {"read as", report.fog ? "fog volume (solid where the value exceeds --iso)" : "level set (solid below the iso value)"},
-                     {"voxel size", formatNumber(report.voxelSize)},
-                     {"resampled", report.resampled.empty() ? "no" : "yes: " + report.resampled},
-                     {"crossings", std::to_string(report.crossings)}},
-                    0);
-    }
-    printSummary(o.input, o.output, SceneCounts(stats), seconds);
+    if (o.json) printJson(sceneSummaryJson(o.output, SceneCounts(stats), seconds));
+    else printSummary(o.input, o.output, SceneCounts(stats), seconds);
     return kExitOk;
 }
 

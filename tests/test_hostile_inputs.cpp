@@ -223,7 +223,9 @@ TEST_CASE("cli: small inputs that ask for more memory than the process may use a
     for (int v = 0; v < 60000; ++v) soup += "v " + std::to_string(unit(rng)) + " " + std::to_string(unit(rng)) + " " + std::to_string(unit(rng)) + "\n";
     for (int t = 0; t < 20000; ++t) soup += "f " + std::to_string(3 * t + 1) + " " + std::to_string(3 * t + 2) + " " + std::to_string(3 * t + 3) + "\n";
     writeText(dir.file("soup.obj"), soup);
-    for (const char* command : {"import tiles.vdb -o t.vdb", "import tiles.vdb -o t.vdbclay", "import soup.obj --resolution 128 -o s.vdb"}) {
+    // (Into a store the tiles import brick by brick in bounded memory: 77 s for this cube, too long for
+    // the suite; "a grid imported into a store brick by brick equals its import into memory" covers it.)
+    for (const char* command : {"import tiles.vdb -o t.vdb", "import soup.obj --resolution 128 -o s.vdb"}) {
         INFO(command);
         // Under a 4 GB address-space limit: without the estimate, the work would run into it (out of memory).
         const std::string errPath = dir.file("err.txt");

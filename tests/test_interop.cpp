@@ -2,6 +2,7 @@
 // fog volumes imported as Hermite data within error bounds of the analytic surface.
 #include "interop/LevelSetExport.h"
 #include "interop/LevelSetImport.h"
+#include "scene/LevelSetToStore.h"
 #include "interop/StandardVdb.h"
 #include "mesher/MeshMetrics.h"
 #include "mesher/Mesher.h"
@@ -328,6 +329,44 @@ TEST_CASE("a grid beyond what the lattice indexes is refused at once, naming the
         } catch (const VolumeIOError& e) {
             CHECK(std::string(e.what()).find("lattice indexes at most") != std::string::npos);
         }
+    }
+}
+
+TEST_CASE("a grid imported into a store brick by brick equals its import into memory", "[interop][store]")
+{
+    TempDir dir;
+    openvdb::initialize();
+    // A solid of inside tiles across negative and positive bricks (a 512-voxel cube whose faces are
+    // the level set's only leaves), a sphere with a fog beside it, a grid resampled off the lattice.
+    openvdb::FloatGrid::Ptr cube = openvdb::FloatGrid::create(1.5f);
+    cube->setName("surface");
+    cube->setGridClass(openvdb::GRID_LEVEL_SET);
+    cube->tree().fill(openvdb::CoordBBox(openvdb::Coord(-300, -40, -257), openvdb::Coord(211, 471, 254)), -1.5f, true);
+    openvdb::io::File(dir.file("cube.vdb")).write({cube});
+    const std::string spheres = writeSphereFile(dir, "s.vdb", 10.0, 0.5, {3.3f, -2.2f, 7.1f});
+    openvdb::math::Transform::Ptr rotated = openvdb::math::Transform::createLinearTransform(0.5);
+    rotated->postRotate(0.4, openvdb::math::Z_AXIS);
+    const std::string turned = writeSphereFile(dir, "r.vdb", 6.0, 0.5, {1.0f, 2.0f, 3.0f}, {}, rotated);
+    struct Case {
+        std::string file;
+        LevelSetImportOptions options;
+    };
+    LevelSetImportOptions fog;
+    fog.grid = "density";
+    fog.iso = 0.5;
+    fog.material = "fog";
+    for (const Case& c : {Case{dir.file("cube.vdb"), {}}, Case{spheres, {}}, Case{spheres, fog}, Case{turned, {}}}) {
+        CAPTURE(c.file, c.options.grid);
+        LevelSetImportReport whole;
+        const Volume expected = importLevelSet(c.file, c.options, &whole);
+        const std::string store = dir.file("out.vdbclay");
+        std::filesystem::remove(store);
+        const StoreLevelSetReport stored = importLevelSetToStore(c.file, c.options, store);
+        const Volume got = loadScene(store);
+        CHECK(sameContent(got, expected));
+        CHECK(got.materials() == expected.materials());
+        CHECK(stored.levelSet.crossings == whole.crossings);
+        CHECK(stored.activeVoxels == expected.stats().activeVoxels);
     }
 }
 

@@ -249,7 +249,22 @@ std::string onLattice(FloatGrid::Ptr& grid, double voxelSize, double maxVoxels, 
 
 } // namespace
 
-Volume importLevelSet(const std::string& path, const LevelSetImportOptions& options, LevelSetImportReport* report)
+struct LevelSetImporter::Impl {
+    FloatGrid::Ptr grid;
+    float iso = 0.0f;
+    bool fog = false;
+    openvdb::Coord shift{0};
+    double voxelSize = 1.0;
+    MaterialTable materials;
+    MaterialId material = 1;
+    std::vector<Coord> candidates;  // sorted: the leaves near the surface
+    std::vector<CoordBBox> solidTiles; // our index space
+    LevelSetImportReport report;
+
+    SignedField field() const { return SignedField{grid->tree(), iso, fog, shift}; }
+};
+
+LevelSetImporter::LevelSetImporter(const std::string& path, const LevelSetImportOptions& options) : impl_(std::make_unique<Impl>())
 {
     const StandardVdbInfo info = describeStandardVdb(path);
     const StandardGridInfo& chosen = chooseImportGrid(info, options.grid, path);
@@ -296,13 +311,15 @@ Volume importLevelSet(const std::string& path, const LevelSetImportOptions& opti
                             "' cannot be resampled onto VDBClay's lattice: " + printableText(e.what(), 200));
     }
 
-    Volume volume(voxelSize);
-    const MaterialId material = volume.materials().find(options.material).value_or(0) != 0
-                                    ? *volume.materials().find(options.material)
-                                    : volume.materials().define(Material{options.material});
-    const SignedField field{grid->tree(), iso, fog, shift};
-    HermiteTree& out = volume.impl().grid->tree();
-    // Solid tiles first; the leaves near the surface then replace what they cover.
+    Impl& m = *impl_;
+    m.grid = grid;
+    m.iso = iso;
+    m.fog = fog;
+    m.shift = shift;
+    m.voxelSize = voxelSize;
+    m.material = m.materials.find(options.material).value_or(0) != 0 ? *m.materials.find(options.material)
+                                                                       : m.materials.define(Material{options.material});
+    const SignedField field = m.field();
     {
         FloatAccessor a(grid->tree());
         auto tiles = grid->tree().cbeginValueAll();
@@ -311,31 +328,106 @@ Volume importLevelSet(const std::string& path, const LevelSetImportOptions& opti
             CoordBBox box;
             tiles.getBoundingBox(box);
             box.translate(shift);
-            if (field.at(a, box.min()) < 0.0f) out.fill(box, MaterialValue{material}, false);
+            if (field.at(a, box.min()) < 0.0f) m.solidTiles.push_back(box);
         }
     }
-    const std::vector<Coord> candidates = candidateLeaves(field);
-    // A file of a few tiles may hold a huge solid: its surface leaves are built as data, then as leaves.
-    requireMemory(double(candidates.size()) * kLeafBuildBytes,
-                  "importing grid '" + printableText(chosen.name, 64) + "' (" + std::to_string(candidates.size()) + " surface leaves)",
+    m.candidates = candidateLeaves(field);
+    std::sort(m.candidates.begin(), m.candidates.end());
+    m.report.grid = chosen.name;
+    m.report.gridClass = chosen.header.gridClass;
+    m.report.valueType = chosen.header.valueType;
+    m.report.fog = fog;
+    m.report.voxelSize = voxelSize;
+    m.report.resampled = resampled;
+}
+
+LevelSetImporter::LevelSetImporter(LevelSetImporter&&) noexcept = default;
+LevelSetImporter& LevelSetImporter::operator=(LevelSetImporter&&) noexcept = default;
+LevelSetImporter::~LevelSetImporter() = default;
+
+double LevelSetImporter::voxelSize() const { return impl_->voxelSize; }
+const MaterialTable& LevelSetImporter::materials() const { return impl_->materials; }
+const LevelSetImportReport& LevelSetImporter::report() const { return impl_->report; }
+uint64_t LevelSetImporter::surfaceLeaves() const { return impl_->candidates.size(); }
+
+std::vector<IndexCoord> LevelSetImporter::occupiedBoxes(int32_t edge) const
+{
+    const auto floorDiv = [edge](int32_t v) { return v >= 0 ? v / edge : -((-int64_t(v) + edge - 1) / edge); };
+    // Solid tiles may be huge (a 4096^3 tile is 262,144 bricks): the list is counted before it is made.
+    double listed = double(impl_->candidates.size());
+    for (const CoordBBox& t : impl_->solidTiles) listed += double(t.volume()) / (double(edge) * edge * edge) + 1.0;
+    requireMemory(listed * 64.0, "listing the " + formatNumber(listed) + " boxes of " + std::to_string(edge) + " voxels the grid fills",
                   "give a larger --voxel-size");
-    std::vector<HermiteLeafData> data(candidates.size());
-    std::vector<uint64_t> crossings(candidates.size(), 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 16), [&](const auto& range) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) data[i] = leafData(field, candidates[i], material, crossings[i]);
+    std::set<IndexCoord> boxes;
+    for (const Coord& c : impl_->candidates) boxes.insert({int32_t(floorDiv(c.x())), int32_t(floorDiv(c.y())), int32_t(floorDiv(c.z()))});
+    for (const CoordBBox& t : impl_->solidTiles)
+        for (int64_t x = floorDiv(t.min().x()); x <= floorDiv(t.max().x()); ++x)
+            for (int64_t y = floorDiv(t.min().y()); y <= floorDiv(t.max().y()); ++y)
+                for (int64_t z = floorDiv(t.min().z()); z <= floorDiv(t.max().z()); ++z) boxes.insert({int32_t(x), int32_t(y), int32_t(z)});
+    return {boxes.begin(), boxes.end()};
+}
+
+Volume LevelSetImporter::region(const LeafAlignedBox& box, uint64_t* crossings) const
+{
+    // Each leaf-sized block is a surface leaf, or uniform: solid where the field is below zero (inside a
+    // solid tile), empty elsewhere. The same content as the whole volume's, block for block.
+    const Impl& m = *impl_;
+    const SignedField field = m.field();
+    FloatAccessor a(m.grid->tree());
+    std::vector<Coord> origins, uniformOrigins;
+    std::vector<HermiteLeafData> data;
+    std::vector<MaterialValue> uniformValues;
+    uint64_t count = 0;
+    for (int32_t x = 0; x < box.edge; x += kLeafDim)
+        for (int32_t y = 0; y < box.edge; y += kLeafDim)
+            for (int32_t z = 0; z < box.edge; z += kLeafDim) {
+                const Coord origin(box.min[0] + x, box.min[1] + y, box.min[2] + z);
+                if (std::binary_search(m.candidates.begin(), m.candidates.end(), origin)) {
+                    origins.push_back(origin);
+                    data.push_back(leafData(field, origin, m.material, count));
+                } else if (field.at(a, origin) < 0.0f) {
+                    uniformOrigins.push_back(origin);
+                    uniformValues.push_back(MaterialValue{m.material});
+                }
+            }
+    Volume volume(m.voxelSize);
+    volume.materials() = m.materials;
+    placeLeaves(volume.impl().grid->tree(), origins, data);
+    placeUniformLeaves(volume.impl().grid->tree(), uniformOrigins, uniformValues);
+    if (crossings) *crossings += count;
+    return volume;
+}
+
+Volume LevelSetImporter::whole()
+{
+    Impl& m = *impl_;
+    // A file of a few tiles may hold a huge solid: its surface leaves are built as data, then as leaves.
+    requireMemory(double(m.candidates.size()) * kLeafBuildBytes,
+                  "importing grid '" + printableText(m.report.grid, 64) + "' (" + std::to_string(m.candidates.size()) +
+                      " surface leaves) into memory",
+                  "import it into a store (-o NAME.vdbclay), which is written brick by brick, or give a larger --voxel-size");
+    Volume volume(m.voxelSize);
+    volume.materials() = m.materials;
+    HermiteTree& out = volume.impl().grid->tree();
+    // Solid tiles first; the leaves near the surface then replace what they cover.
+    for (const CoordBBox& box : m.solidTiles) out.fill(box, MaterialValue{m.material}, false);
+    const SignedField field = m.field();
+    std::vector<HermiteLeafData> data(m.candidates.size());
+    std::vector<uint64_t> crossings(m.candidates.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.candidates.size(), 16), [&](const auto& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) data[i] = leafData(field, m.candidates[i], m.material, crossings[i]);
     });
-    uint64_t total = 0;
-    for (uint64_t c : crossings) total += c;
-    placeLeaves(out, candidates, data);
-    if (report) {
-        report->grid = chosen.name;
-        report->gridClass = chosen.header.gridClass;
-        report->valueType = chosen.header.valueType;
-        report->fog = fog;
-        report->voxelSize = voxelSize;
-        report->resampled = resampled;
-        report->crossings = total;
-    }
+    m.report.crossings = 0;
+    for (uint64_t c : crossings) m.report.crossings += c;
+    placeLeaves(out, m.candidates, data);
+    return volume;
+}
+
+Volume importLevelSet(const std::string& path, const LevelSetImportOptions& options, LevelSetImportReport* report)
+{
+    LevelSetImporter importer(path, options);
+    Volume volume = importer.whole();
+    if (report) *report = importer.report();
     return volume;
 }
 

@@ -6,9 +6,12 @@
 #pragma once
 
 #include "vdb_hermite/Volume.h"
+#include "vdb_hermite/VolumeRegions.h"
 
 #include <optional>
+#include <memory>
 #include <string>
+#include <vector>
 
 namespace vdbclay {
 
@@ -36,5 +39,33 @@ struct LevelSetImportReport {
 /// background solid (everything outside the grid's active voxels) is refused. Throws VolumeIOError (the file) or
 /// std::invalid_argument (the options) with one line.
 Volume importLevelSet(const std::string& path, const LevelSetImportOptions& options, LevelSetImportReport* report = nullptr);
+
+/// importLevelSet in steps: the constructor reads and checks the grid and puts it on the lattice (the
+/// same refusals); then the volume is built whole, or one leaf-aligned box at a time, so that a store is
+/// written brick by brick whatever the solid's size. Boxes built one by one hold exactly what the whole
+/// volume holds there.
+class LevelSetImporter {
+public:
+    LevelSetImporter(const std::string& path, const LevelSetImportOptions& options);
+    LevelSetImporter(LevelSetImporter&&) noexcept;
+    LevelSetImporter& operator=(LevelSetImporter&&) noexcept;
+    ~LevelSetImporter();
+
+    double voxelSize() const;
+    const MaterialTable& materials() const;
+    /// The grid read and how; `crossings` is counted by whole().
+    const LevelSetImportReport& report() const;
+    uint64_t surfaceLeaves() const;
+    /// The boxes of `edge` voxels (a multiple of 8, coordinates in units of edge) that may hold anything.
+    std::vector<IndexCoord> occupiedBoxes(int32_t edge) const;
+    /// The content of one box; adds its crossings to `crossings` (optional). Safe on several threads.
+    Volume region(const LeafAlignedBox& box, uint64_t* crossings = nullptr) const;
+    /// The whole volume; MemoryLimitError when its surface leaves would not fit in memory.
+    Volume whole();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 } // namespace vdbclay
