@@ -255,6 +255,7 @@ struct LevelSetImporter::Impl {
     bool fog = false;
     openvdb::Coord shift{0};
     double voxelSize = 1.0;
+    double memoryLimit = 0.0;
     MaterialTable materials;
     MaterialId material = 1;
     std::vector<Coord> candidates;  // sorted: the leaves near the surface
@@ -317,6 +318,7 @@ LevelSetImporter::LevelSetImporter(const std::string& path, const LevelSetImport
     m.fog = fog;
     m.shift = shift;
     m.voxelSize = voxelSize;
+    m.memoryLimit = options.memoryLimitBytes;
     m.material = m.materials.find(options.material).value_or(0) != 0 ? *m.materials.find(options.material)
                                                                        : m.materials.define(Material{options.material});
     const SignedField field = m.field();
@@ -357,7 +359,7 @@ std::vector<IndexCoord> LevelSetImporter::occupiedBoxes(int32_t edge) const
     double listed = double(impl_->candidates.size());
     for (const CoordBBox& t : impl_->solidTiles) listed += double(t.volume()) / (double(edge) * edge * edge) + 1.0;
     requireMemory(listed * 64.0, "listing the " + formatNumber(listed) + " boxes of " + std::to_string(edge) + " voxels the grid fills",
-                  "give a larger --voxel-size");
+                  "give a larger --voxel-size", impl_->memoryLimit);
     std::set<IndexCoord> boxes;
     for (const Coord& c : impl_->candidates) boxes.insert({int32_t(floorDiv(c.x())), int32_t(floorDiv(c.y())), int32_t(floorDiv(c.z()))});
     for (const CoordBBox& t : impl_->solidTiles)
@@ -405,7 +407,8 @@ Volume LevelSetImporter::whole()
     requireMemory(double(m.candidates.size()) * kLeafBuildBytes,
                   "importing grid '" + printableText(m.report.grid, 64) + "' (" + std::to_string(m.candidates.size()) +
                       " surface leaves) into memory",
-                  "import it into a store (-o NAME.vdbclay), which is written brick by brick, or give a larger --voxel-size");
+                  "import it into a store (-o NAME.vdbclay), which is written brick by brick, or give a larger --voxel-size",
+                  m.memoryLimit);
     Volume volume(m.voxelSize);
     volume.materials() = m.materials;
     HermiteTree& out = volume.impl().grid->tree();

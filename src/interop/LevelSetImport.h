@@ -21,6 +21,7 @@ struct LevelSetImportOptions {
     std::optional<double> voxelSize; // resample to it (default: the grid's own, when uniform)
     std::string material = "default";
     double maxResampledVoxels = double(1u << 28); // a resampling that would make more is refused, not run
+    double memoryLimitBytes = 0.0; // the memory the import may count on (0: this machine's, usableMemoryBytes())
 };
 
 struct LevelSetImportReport {

@@ -34,11 +34,11 @@ inline uint64_t usableMemoryBytes()
     return bytes;
 }
 
-/// Throws MemoryLimitError when `bytes` exceed 80 % of usableMemoryBytes(): "WHAT needs about X GB;
-/// this process may use Y GB: ADVICE".
-inline void requireMemory(double bytes, const std::string& what, const std::string& advice)
+/// Throws MemoryLimitError when `bytes` exceed 80 % of `usable` (default usableMemoryBytes()): "WHAT
+/// needs about X GB; this process may use Y GB: ADVICE".
+inline void requireMemory(double bytes, const std::string& what, const std::string& advice, double usable = 0.0)
 {
-    const double usable = double(usableMemoryBytes());
+    if (!(usable > 0.0)) usable = double(usableMemoryBytes());
     if (bytes <= 0.8 * usable) return;
     const auto gb = [](double b) { return formatNumber(double(int64_t(b / 1e8)) / 10.0) + " GB"; };
     throw MemoryLimitError(what + " needs about " + gb(bytes) + " of memory; this process may use " + gb(usable) + ": " + advice);

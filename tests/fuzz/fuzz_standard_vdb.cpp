@@ -38,6 +38,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     options.iso = 0.5; // fog volumes import too
     // OpenVDB's resampling runs about 25 times slower under ASan; what it reads was checked already.
     options.maxResampledVoxels = 1 << 16;
+    // libFuzzer stops at 2 GB of memory: a few flipped tiles may hold a solid of gigabytes.
+    options.memoryLimitBytes = double(512u << 20);
     try {
         (void)vdbclay::importLevelSet(scratchPath(), options);
     } catch (const vdbclay::VolumeIOError& e) {
