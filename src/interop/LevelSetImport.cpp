@@ -1,10 +1,9 @@
 #include "interop/LevelSetImport.h"
 
-#include "vdb_hermite/MemoryLimit.h"
-
 #include "interop/StandardGridRead.h"
 #include "interop/StandardVdb.h"
 #include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/MemoryLimit.h"
 #include "vdb_hermite/NumberText.h"
 #include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/Quantize.h"

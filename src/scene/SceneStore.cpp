@@ -3,12 +3,12 @@
 #include "interop/StandardVdb.h"
 
 #include "vdb_hermite/AtomicFile.h"
-#include "wavelet/LodPyramid.h"
 #include "vdb_hermite/FileExtension.h"
 #include "vdb_hermite/NumberText.h"
 #include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/VolumeIO.h"
 #include "vdb_hermite/VolumeRegions.h"
+#include "wavelet/LodPyramid.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

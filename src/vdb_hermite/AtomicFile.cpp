@@ -53,7 +53,7 @@ const char* const kTempMarker = ".vdbclay-tmp-";
 
 std::string tempPrefix(const fs::path& target) { return "." + target.filename().string() + kTempMarker; }
 
-/// Other users' files and files of live processes stay.
+/// removeStaleTemporaries within `dir`: other users' files and files of live processes stay.
 void removeStaleTemporariesIn(const fs::path& dir, const fs::path& target)
 {
     const std::string prefix = tempPrefix(target);
