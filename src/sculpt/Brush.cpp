@@ -474,7 +474,7 @@ const SweptBrush::PieceGrid& SweptBrush::grid() const
             const Vec3d dir = len > 1e-12 ? (b - a) / len : Vec3d(0.0);
             for (int k = 0; k < count; ++k) {
                 const double t0 = len * k / count, t1 = len * (k + 1) / count;
-                g.pieces.push_back({a + dir * t0, dir, t1 - t0});
+                g.pieces.push_back({a + dir * t0, dir, t1 - t0, uint32_t(i), t0});
             }
         }
         const double grow = reach_ + 0.5 * cell_;
@@ -515,11 +515,19 @@ double SweptBrush::distance(const Vec3d& x) const
     if (capsuleRadius_ > 0.0) {
         // A swept sphere: the nearest segment by squared distance, one square root at the end (a dense
         // stroke lists hundreds of pieces in a cell; the root per piece was most of its cost).
+        // Consecutive pieces of one path segment listed together are one longer segment (a cell holds a
+        // run of several): one test for the run.
         double nearestSq = std::numeric_limits<double>::infinity();
-        for (uint32_t id : found->second) {
-            const Piece& piece = g.pieces[id];
-            const double along = std::clamp((x - piece.start).dot(piece.direction), 0.0, piece.length);
-            nearestSq = std::min(nearestSq, (x - (piece.start + piece.direction * along)).lengthSqr());
+        const std::vector<uint32_t>& ids = found->second;
+        for (std::size_t k = 0; k < ids.size();) {
+            const Piece& first = g.pieces[ids[k]];
+            std::size_t last = k;
+            while (last + 1 < ids.size() && ids[last + 1] == ids[last] + 1 && g.pieces[ids[last + 1]].segment == first.segment) ++last;
+            const Piece& end = g.pieces[ids[last]];
+            const double length = end.along + end.length - first.along;
+            const double along = std::clamp((x - first.start).dot(first.direction), 0.0, length);
+            nearestSq = std::min(nearestSq, (x - (first.start + first.direction * along)).lengthSqr());
+            k = last + 1;
         }
         return std::min(best, std::sqrt(nearestSq) - capsuleRadius_);
     }

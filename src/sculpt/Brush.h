@@ -225,6 +225,8 @@ private:
     struct Piece {
         Vec3d start, direction;
         double length;
+        uint32_t segment; // of the path: consecutive pieces of one segment continue each other
+        double along;     // where the piece starts on its segment
     };
     struct PieceGrid {
         std::once_flag built;
