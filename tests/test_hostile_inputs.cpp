@@ -152,6 +152,14 @@ TEST_CASE("camera paths: repeated keys, a target a hair from the camera, raw byt
                       Catch::Contains("lies 1e-300 from its position"));
     CHECK_THROWS_WITH(parseCameraPath(R"({"frames": [{"position": [5, 5, 5], "target": [5, 5, 5]}]})"), Catch::Contains("must differ"));
     CHECK_NOTHROW(parseCameraPath(R"({"frames": [{"position": [0, 0, 0], "target": [1e-6, 0, 0]}]})"));
+    // An unknown key of control characters is quoted printable (found by fuzz_camera_path: DEL in a key).
+    try {
+        parseCameraPath("{\"frames\": [{\"position\": [0, 0, 0], \"a\x7f\x1b]0;x\x07\": [1, 2, 3]}]}");
+        FAIL("accepted");
+    } catch (const std::invalid_argument& e) {
+        CHECK(std::string(e.what()).find("unknown key") != std::string::npos);
+        CHECK(isPrintableName(e.what(), 100000));
+    }
     try {
         parseCameraPath("{\"frames\": [{\"position\": [0, 0, 0], \"\x1b]0;x\x07\xff\": 1}]}");
         FAIL("accepted");

@@ -43,7 +43,7 @@ std::vector<CameraFrame> parseCameraPath(const std::string& text)
     const json root = parseStrictJson(text, "camera path");
     if (!root.is_object()) fail("top level", "must be an object");
     for (const auto& [key, value] : root.items())
-        if (key != "fov_degrees" && key != "viewport" && key != "frames") fail(key, "unknown key");
+        if (key != "fov_degrees" && key != "viewport" && key != "frames") fail(printableText(key, 80), "unknown key");
     Viewer base;
     if (root.contains("fov_degrees")) base.fovDegrees = number(root["fov_degrees"], "fov_degrees");
     if (root.contains("viewport")) {
@@ -64,7 +64,7 @@ std::vector<CameraFrame> parseCameraPath(const std::string& text)
         const std::string where = "frames[" + std::to_string(i) + "]";
         if (!f.is_object()) fail(where, "must be an object");
         for (const auto& [key, value] : f.items())
-            if (key != "position" && key != "target" && key != "t") fail(where + "." + key, "unknown key");
+            if (key != "position" && key != "target" && key != "t") fail(where + "." + printableText(key, 80), "unknown key");
         if (!f.contains("position") || !f.contains("target")) fail(where, "needs \"position\" and \"target\"");
         CameraFrame frame;
         frame.viewer = base;
