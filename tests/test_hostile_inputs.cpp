@@ -252,7 +252,7 @@ TEST_CASE("cli: small inputs that ask for more memory than the process may use a
         const auto err = readBytes(errPath);
         const std::string text(err.begin(), err.end());
         CHECK(text.find("needs about") != std::string::npos);
-        CHECK(text.find("this process may use 4 GB") != std::string::npos);
+        CHECK(text.find("this process may use ") != std::string::npos); // 4 GB, or less on a smaller machine
     }
     CHECK_FALSE(std::filesystem::exists(dir.file("t.vdb")));
     CHECK_FALSE(std::filesystem::exists(dir.file("s.vdb")));
