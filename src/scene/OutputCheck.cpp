@@ -1,6 +1,7 @@
 #include "scene/OutputCheck.h"
 
 #include "interop/LevelSetExport.h"
+#include "mesher/MeshIO.h"
 #include "vdb_hermite/AtomicFile.h"
 #include "vdb_hermite/FileExtension.h"
 #include "vdb_hermite/VolumeIO.h"
@@ -192,11 +193,16 @@ const char* formExtension(OutputForm form)
 
 OutputForm meshFormOf(const std::string& path)
 {
-    const std::string ext = lowerCaseExtension(path);
-    if (ext == ".obj") return OutputForm::ObjMesh;
-    if (ext == ".ply") return OutputForm::PlyMesh;
-    if (ext == ".glb") return OutputForm::GlbMesh;
-    throw OutputRefused("'" + path + "' has an unknown mesh format; the file name must end in .obj, .ply or .glb");
+    try {
+        switch (meshFormatOf(path)) {
+        case MeshFormat::Obj: return OutputForm::ObjMesh;
+        case MeshFormat::Ply: return OutputForm::PlyMesh;
+        case MeshFormat::Glb: return OutputForm::GlbMesh;
+        }
+    } catch (const MeshIOError& e) {
+        throw OutputRefused(e.what());
+    }
+    throw OutputRefused("'" + path + "': no mesh format");
 }
 
 void checkOutput(const std::string& output, OutputForm form, const std::vector<std::string>& inputs)

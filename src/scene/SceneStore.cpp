@@ -134,17 +134,20 @@ void SceneStore::setMaterials(const MaterialTable& materials)
 std::optional<std::pair<IndexCoord, IndexCoord>> SceneStore::bounds() const
 {
     const std::string kept = store_->meta(kBoundsKey).value_or("");
+    if (kept.empty()) return boundsFromBricks();
     if (kept == "empty") return std::nullopt;
-    if (!kept.empty()) {
-        std::istringstream in(kept);
-        std::array<long long, 6> v{};
-        for (long long& x : v) in >> x;
-        std::string rest;
-        const bool valid = in && !(in >> rest) && std::all_of(v.begin(), v.end(), [](long long x) { return std::llabs(x) <= (1ll << 31) - 1; }) &&
-                           v[0] <= v[3] && v[1] <= v[4] && v[2] <= v[5];
-        if (!valid) throw damagedMeta(path(), kBoundsKey, kept, "six integers x0 y0 z0 x1 y1 z1 with x0 <= x1, y0 <= y1, z0 <= z1");
-        return std::make_pair(IndexCoord{int32_t(v[0]), int32_t(v[1]), int32_t(v[2])}, IndexCoord{int32_t(v[3]), int32_t(v[4]), int32_t(v[5])});
-    }
+    std::istringstream in(kept);
+    std::array<long long, 6> v{};
+    for (long long& x : v) in >> x;
+    std::string rest;
+    const bool valid = in && !(in >> rest) && std::all_of(v.begin(), v.end(), [](long long x) { return std::llabs(x) <= (1ll << 31) - 1; }) &&
+                       v[0] <= v[3] && v[1] <= v[4] && v[2] <= v[5];
+    if (!valid) throw damagedMeta(path(), kBoundsKey, kept, "six integers x0 y0 z0 x1 y1 z1 with x0 <= x1, y0 <= y1, z0 <= z1");
+    return std::make_pair(IndexCoord{int32_t(v[0]), int32_t(v[1]), int32_t(v[2])}, IndexCoord{int32_t(v[3]), int32_t(v[4]), int32_t(v[5])});
+}
+
+std::optional<std::pair<IndexCoord, IndexCoord>> SceneStore::boundsFromBricks() const
+{
     const std::vector<IndexCoord> all = brickCoords(0);
     if (all.empty()) return std::nullopt;
     IndexCoord lo = all.front(), hi = all.front();
@@ -170,8 +173,7 @@ std::optional<std::pair<IndexCoord, IndexCoord>> SceneStore::bounds() const
 
 void SceneStore::storeBounds()
 {
-    store_->putMeta(kBoundsKey, ""); // found from the bricks, not from what was kept
-    const auto box = bounds();
+    const auto box = boundsFromBricks();
     std::string text = "empty";
     if (box) {
         text.clear();

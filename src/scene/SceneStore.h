@@ -110,6 +110,7 @@ private:
     SceneStore(std::unique_ptr<BrickStore> store);
     DecodedRegion decodeBrick(int level, const IndexCoord& brick, const std::optional<BrickRecord>& record,
                               std::size_t materialCount) const;
+    std::optional<std::pair<IndexCoord, IndexCoord>> boundsFromBricks() const;
     void readMeta();
 
     std::unique_ptr<BrickStore> store_;

@@ -170,7 +170,7 @@ void writeFileAtomically(const std::string& path, const std::function<void(std::
     const fs::path& dir = checked.dir;
     std::error_code ec;
     removeStaleTemporariesIn(dir, target);
-    const std::string temp = (dir / fs::path(temporaryPathFor(target.string())).filename()).string();
+    const std::string temp = temporaryPathFor(target.string());
     const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666); // the umask applies
     if (fd < 0) throw FileWriteError("cannot create '" + temp + "': " + std::strerror(errno));
     TempFileGuard guard(temp);
