@@ -181,6 +181,22 @@ struct LodOptions {
     std::string csv;
     std::string plot;
 };
+struct RenderOptions {
+    std::string scene;
+    std::string output;
+    std::string size = "1280x720";
+    std::string camera;
+    std::string cameraPath;
+    std::optional<uint64_t> frame;
+    std::string view = "shaded";
+    bool wireframe = false;
+    double memoryBudgetMB = 512.0;
+    double pixelError = 1.0;
+    bool json = false;
+};
+CLI::App* addRenderCommand(CLI::App& parent, RenderOptions& options);
+int runRender(const RenderOptions& options);
+
 struct LodCommands {
     CLI::App* build = nullptr;
     CLI::App* info = nullptr;

@@ -17,3 +17,7 @@ if(NOT TARGET Blosc::blosc)
 endif()
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(PLplot REQUIRED IMPORTED_TARGET plplot)
+# The renderer: Vulkan (glslc compiles the shaders at build time), GLM, stb for pictures.
+find_package(Vulkan REQUIRED COMPONENTS glslc)
+find_package(glm REQUIRED)
+pkg_check_modules(STB REQUIRED IMPORTED_TARGET stb)

@@ -109,6 +109,27 @@ std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions&
     return chunks;
 }
 
+std::vector<MeshChunk> meshRegionChunks(const Volume& volume, const std::array<int32_t, 3>& min, int32_t edge,
+                                        const MeshOptions& options)
+{
+    using namespace mesher_detail;
+    validateMeshOptions(options);
+    const HermiteTree& tree = volume.impl().grid->constTree();
+    if (edge <= 0 || edge % kLeafDim != 0) throw std::invalid_argument("a meshed region must be whole leaves wide");
+    // Probes the box's leaf origins, so a brick of a large level costs its own leaves.
+    std::vector<const HermiteLeaf*> leaves;
+    ConstAccessor acc(tree);
+    for (int32_t x = min[0]; x < min[0] + edge; x += kLeafDim)
+        for (int32_t y = min[1]; y < min[1] + edge; y += kLeafDim)
+            for (int32_t z = min[2]; z < min[2] + edge; z += kLeafDim)
+                if (const HermiteLeaf* leaf = acc.probeConstLeaf(Coord(x, y, z))) leaves.push_back(leaf);
+    std::vector<MeshChunk> chunks(leaves.size());
+    std::vector<MeshChunk*> into(chunks.size());
+    for (std::size_t i = 0; i < chunks.size(); ++i) into[i] = &chunks[i];
+    meshLeavesInto(tree, leaves, into, volume.voxelSize(), options, nullptr);
+    return chunks;
+}
+
 std::vector<std::array<int32_t, 3>> leavesAffectedBy(const std::vector<std::array<int32_t, 3>>& dirtyBlocks,
                                                      const MeshOptions& options)
 {

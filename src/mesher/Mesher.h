@@ -62,5 +62,9 @@ class AdaptiveCellCache;
 std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions& options = {},
                                         mesher_detail::AdaptiveCellCache* cells = nullptr);
 Mesh meshVolume(const Volume& volume, const MeshOptions& options = {});
+/// The chunks of the leaves whose origins lie in the box [min, min + edge) of index space, each the same
+/// as meshVolumeChunks gives for that leaf (cells read their neighbours outside the box as usual).
+std::vector<MeshChunk> meshRegionChunks(const Volume& volume, const std::array<int32_t, 3>& min, int32_t edge,
+                                        const MeshOptions& options = {});
 
 } // namespace vdbclay

@@ -1,5 +1,7 @@
 #include "scene/StreamingScene.h"
 
+#include "mesher/LodMesh.h"
+#include "mesher/VertexOcclusion.h"
 #include "scene/StoreLod.h"
 #include "scene/StoreSculpt.h"
 #include "vdb_hermite/VolumeRegions.h"
@@ -33,6 +35,7 @@ struct StreamingScene::Impl {
         uint64_t bytes = 0;
         uint64_t lastUsed = 0;
         bool dirty = false;
+        uint64_t version = 0;
     };
 
     StreamingOptions options;
@@ -57,6 +60,8 @@ struct StreamingScene::Impl {
     uint64_t bytesRead = 0, loads = 0, evictions = 0;
     uint64_t edits = 0;
     uint64_t lodBricksWritten = 0;
+    uint64_t versions = 0; // the last content version handed out
+    std::vector<BrickKey> shown;
     MaterialTable materials; // the scene's, with what edits defined since the last autosave
     bool stopping = false;
     std::vector<std::unique_ptr<BrickStore>> readers; // one per worker
@@ -112,7 +117,7 @@ struct StreamingScene::Impl {
     void install(const BrickKey& key, DecodedRegion&& brick, uint64_t bytes, uint64_t bytesReadFromStore)
     {
         pasteRegion(levelVolumes[std::size_t(key.level)], std::move(brick));
-        resident[key] = Resident{bytes, frameNumber, false};
+        resident[key] = Resident{bytes, frameNumber, false, ++versions};
         residentBytes += bytes;
         bytesRead += bytesReadFromStore;
         ++loads;
@@ -234,6 +239,52 @@ struct StreamingScene::Impl {
     }
 };
 
+namespace {
+
+/// The bricks to draw for a selection: see StreamingScene::shownBricks.
+std::vector<BrickKey> shownCut(const ViewNeeds& needs, const std::vector<char>& isResident)
+{
+    const std::size_t n = needs.bricks.size();
+    std::vector<std::vector<uint32_t>> children(n);
+    std::vector<char> selected(n, 0);
+    for (uint32_t s : needs.selected) selected[s] = 1;
+    for (uint32_t i = 0; i < n; ++i)
+        if (needs.parent[i] != ViewNeeds::kNone) children[needs.parent[i]].push_back(i);
+    // Whether a node's region can be drawn completely, from itself or its descendants: finer levels first.
+    std::vector<uint32_t> byLevel(n);
+    for (uint32_t i = 0; i < n; ++i) byLevel[i] = i;
+    std::sort(byLevel.begin(), byLevel.end(), [&](uint32_t a, uint32_t b) { return needs.bricks[a].level < needs.bricks[b].level; });
+    std::vector<char> coverable(n, 0);
+    for (uint32_t i : byLevel) {
+        bool split = !children[i].empty();
+        for (uint32_t c : children[i]) split = split && coverable[c];
+        coverable[i] = isResident[i] || split;
+    }
+    std::vector<BrickKey> out;
+    std::vector<uint32_t> stack;
+    for (uint32_t i = 0; i < n; ++i)
+        if (needs.parent[i] == ViewNeeds::kNone) stack.push_back(i);
+    while (!stack.empty()) {
+        const uint32_t i = stack.back();
+        stack.pop_back();
+        if (selected[i]) {
+            if (isResident[i]) out.push_back(needs.bricks[i]);
+            continue;
+        }
+        bool split = !children[i].empty();
+        for (uint32_t c : children[i]) split = split && coverable[c];
+        if (!split && isResident[i]) {
+            out.push_back(needs.bricks[i]);
+            continue;
+        }
+        for (uint32_t c : children[i]) stack.push_back(c);
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+} // namespace
+
 StreamingScene::StreamingScene(const std::string& path, const StreamingOptions& options)
     : impl_(std::make_unique<Impl>(path, options))
 {
@@ -316,6 +367,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
         else report.complete = false;
         report.screenError = std::max(report.screenError, b.screenError * double(1 << (shown - b.key.level)));
     }
+    s.shown = shownCut(needs, isResident);
     report.settled = std::all_of(order.begin(), order.begin() + std::ptrdiff_t(accepted), [&](uint32_t n) { return isResident[n] != 0; });
     report.residentPerLevel.assign(std::size_t(s.levels) + 1, 0);
     for (const auto& [key, r] : s.resident) ++report.residentPerLevel[std::size_t(key.level)];
@@ -380,6 +432,7 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script)
         s.residentBytes = s.residentBytes - r.bytes + bytes;
         r.bytes = bytes;
         r.dirty = true;
+        r.version = ++s.versions;
         ++report.bricksChanged;
     }
     s.materials = work.materials();
@@ -431,6 +484,40 @@ uint64_t StreamingScene::residentActiveVoxels() const
 }
 
 const SceneStore& StreamingScene::store() const { return impl_->scene; }
+
+int StreamingScene::levels() const { return impl_->levels; }
+
+std::vector<BrickKey> StreamingScene::shownBricks() const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    return impl_->shown;
+}
+
+uint64_t StreamingScene::brickVersion(const BrickKey& key) const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    const auto it = impl_->resident.find(key);
+    return it == impl_->resident.end() ? 0 : it->second.version;
+}
+
+std::optional<StreamingScene::BrickMesh> StreamingScene::meshBrick(const BrickKey& key, const MeshOptions& options) const
+{
+    // Under the lock: loaders paste bricks into the same level tree.
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    const auto it = impl_->resident.find(key);
+    if (it == impl_->resident.end()) return std::nullopt;
+    const Volume& level = impl_->levelVolumes[std::size_t(key.level)];
+    const LeafAlignedBox box = brickBox(key.brick);
+    BrickMesh out;
+    out.mesh = weldChunks(meshRegionChunks(level, box.min, box.edge, options));
+    out.occlusion = vertexOcclusion(level, out.mesh);
+    if (key.level > 0) {
+        const double shift = wavelet::LodPyramid::levelOffset(key.level) * impl_->scene.voxelSize();
+        translateMesh(out.mesh, {shift, shift, shift});
+    }
+    out.version = it->second.version;
+    return out;
+}
 
 Volume StreamingScene::residentLevel0() const
 {

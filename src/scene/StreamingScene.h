@@ -6,6 +6,7 @@
 
 #include "scene/SceneStore.h"
 #include "scene/ViewSelection.h"
+#include "mesher/Mesher.h"
 #include "sculpt/StrokeScript.h"
 
 #include <cstdint>
@@ -84,6 +85,23 @@ public:
     const SceneStore& store() const;
     /// The resident level-0 bricks, for checks: a volume holding them (dirty content included).
     Volume residentLevel0() const;
+
+    /// What the last frame showed, without overlaps: each selected brick where it is resident; where a
+    /// selected brick is not, the finest resident ancestor that stands for all of its selected
+    /// descendants (a brick is shown split into its children only once all of them can be shown).
+    std::vector<BrickKey> shownBricks() const;
+    /// A number that changes whenever a resident brick's content does (loaded again, sculpted); 0 when
+    /// the brick is not resident.
+    uint64_t brickVersion(const BrickKey& key) const;
+    /// The mesh of a resident brick on its own level's lattice, in world units, with the version of the
+    /// content it was made from; nullopt when the brick is not resident.
+    struct BrickMesh {
+        Mesh mesh;
+        std::vector<uint8_t> occlusion; // per vertex (vertexOcclusion)
+        uint64_t version = 0;
+    };
+    std::optional<BrickMesh> meshBrick(const BrickKey& key, const MeshOptions& options) const;
+    int levels() const;
 
 private:
     struct Impl;

@@ -1,0 +1,63 @@
+// A render target in device memory (colour RGBA8 + 32-bit depth) whose pixels can be read back: what
+// `vdbclay render`, thumbnails and the tests draw into. The editor's swapchain images and the headset's
+// eye images are targets of the same render pass shape.
+#pragma once
+
+#include "render/GpuMemory.h"
+#include "render/VulkanContext.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace vdbclay::render {
+
+constexpr VkFormat kColourFormat = VK_FORMAT_R8G8B8A8_UNORM;
+constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
+
+/// An RGBA8 picture, rows top to bottom.
+struct Image {
+    int width = 0, height = 0;
+    std::vector<uint8_t> rgba; // width * height * 4
+    const uint8_t* pixel(int x, int y) const { return &rgba[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * 4]; }
+};
+
+/// The render pass every target uses: one colour attachment of `colourFormat` left in `finalLayout`,
+/// and depth. Cleared on load.
+VkRenderPass createRenderPass(VkDevice device, VkFormat colourFormat, VkImageLayout finalLayout);
+
+class OffscreenTarget {
+public:
+    /// Throws std::invalid_argument for sizes outside 1 .. the device's image limit.
+    OffscreenTarget(const VulkanContext& context, int width, int height);
+    ~OffscreenTarget();
+    OffscreenTarget(const OffscreenTarget&) = delete;
+    OffscreenTarget& operator=(const OffscreenTarget&) = delete;
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    VkRenderPass renderPass() const { return renderPass_; }
+    VkFramebuffer framebuffer() const { return framebuffer_; }
+    VkImage colourImage() const { return colour_; }
+    VkImage depthImage() const { return depth_; }
+
+    /// Records the copy of the colour and depth images into host memory (after the render pass).
+    void recordReadback(VkCommandBuffer cmd) const;
+    /// The pixels copied by the last readback that completed.
+    Image colour() const;
+    /// Depth per pixel (0 near .. 1 far, 1 where nothing was drawn), rows top to bottom.
+    std::vector<float> depth() const;
+
+private:
+    void release();
+
+    const VulkanContext& context_;
+    int width_, height_;
+    VkImage colour_ = VK_NULL_HANDLE, depth_ = VK_NULL_HANDLE;
+    VkDeviceMemory colourMemory_ = VK_NULL_HANDLE, depthMemory_ = VK_NULL_HANDLE;
+    VkImageView colourView_ = VK_NULL_HANDLE, depthView_ = VK_NULL_HANDLE;
+    VkRenderPass renderPass_ = VK_NULL_HANDLE;
+    VkFramebuffer framebuffer_ = VK_NULL_HANDLE;
+    std::unique_ptr<HostBuffer> colourReadback_, depthReadback_;
+};
+
+} // namespace vdbclay::render

@@ -1,0 +1,179 @@
+#include "render/Pipelines.h"
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+
+namespace vdbclay::render {
+
+namespace {
+
+const uint32_t kMeshVert[] =
+#include "shaders/mesh.vert.inc"
+    ;
+const uint32_t kMeshFrag[] =
+#include "shaders/mesh.frag.inc"
+    ;
+const uint32_t kBrushVert[] =
+#include "shaders/brush.vert.inc"
+    ;
+const uint32_t kBrushFrag[] =
+#include "shaders/brush.frag.inc"
+    ;
+
+VkShaderModule shaderModule(VkDevice device, const uint32_t* code, std::size_t bytes)
+{
+    VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    info.codeSize = bytes;
+    info.pCode = code;
+    VkShaderModule module = VK_NULL_HANDLE;
+    check(vkCreateShaderModule(device, &info, nullptr, &module), "vkCreateShaderModule");
+    return module;
+}
+
+struct PipelineShape {
+    VkShaderModule vert, frag;
+    bool meshInput = true;
+    VkPolygonMode polygonMode = VK_POLYGON_MODE_FILL;
+    bool depthWrite = true;
+    bool blend = false;
+};
+
+VkPipeline createPipeline(VkDevice device, VkRenderPass pass, VkPipelineLayout layout, const PipelineShape& shape)
+{
+    VkPipelineShaderStageCreateInfo stages[2]{};
+    stages[0] = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0, VK_SHADER_STAGE_VERTEX_BIT, shape.vert,
+                 "main", nullptr};
+    stages[1] = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0, VK_SHADER_STAGE_FRAGMENT_BIT,
+                 shape.frag, "main", nullptr};
+    VkVertexInputBindingDescription binding{0, sizeof(GpuVertex), VK_VERTEX_INPUT_RATE_VERTEX};
+    VkVertexInputAttributeDescription attributes[3] = {
+        {0, 0, VK_FORMAT_R32G32B32_SFLOAT, uint32_t(offsetof(GpuVertex, position))},
+        {1, 0, VK_FORMAT_R32G32B32_SFLOAT, uint32_t(offsetof(GpuVertex, normal))},
+        {2, 0, VK_FORMAT_R32_UINT, uint32_t(offsetof(GpuVertex, packed))},
+    };
+    VkPipelineVertexInputStateCreateInfo input{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+    if (shape.meshInput) {
+        input.vertexBindingDescriptionCount = 1;
+        input.pVertexBindingDescriptions = &binding;
+        input.vertexAttributeDescriptionCount = 3;
+        input.pVertexAttributeDescriptions = attributes;
+    }
+    VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+    assembly.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+    VkPipelineViewportStateCreateInfo viewport{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+    viewport.viewportCount = 1;
+    viewport.scissorCount = 1;
+    VkPipelineRasterizationStateCreateInfo raster{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+    raster.polygonMode = shape.polygonMode;
+    // Meshes are closed, counter-clockwise seen from outside; the projection flips Y for Vulkan, which
+    // keeps counter-clockwise as the front face.
+    raster.cullMode = shape.meshInput && shape.polygonMode == VK_POLYGON_MODE_FILL ? VK_CULL_MODE_BACK_BIT
+                                                                                    : VK_CULL_MODE_NONE;
+    raster.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+    raster.lineWidth = 1.0f;
+    VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+    multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+    VkPipelineDepthStencilStateCreateInfo depth{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+    depth.depthTestEnable = VK_TRUE;
+    depth.depthWriteEnable = shape.depthWrite ? VK_TRUE : VK_FALSE;
+    depth.depthCompareOp = VK_COMPARE_OP_LESS_OR_EQUAL;
+    VkPipelineColorBlendAttachmentState attachment{};
+    attachment.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT |
+                                VK_COLOR_COMPONENT_A_BIT;
+    if (shape.blend) {
+        attachment.blendEnable = VK_TRUE;
+        attachment.srcColorBlendFactor = VK_BLEND_FACTOR_SRC_ALPHA;
+        attachment.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+        attachment.colorBlendOp = VK_BLEND_OP_ADD;
+        attachment.srcAlphaBlendFactor = VK_BLEND_FACTOR_ZERO;
+        attachment.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+        attachment.alphaBlendOp = VK_BLEND_OP_ADD;
+    }
+    VkPipelineColorBlendStateCreateInfo blend{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+    blend.attachmentCount = 1;
+    blend.pAttachments = &attachment;
+    VkDynamicState dynamicStates[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+    VkPipelineDynamicStateCreateInfo dynamic{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
+    dynamic.dynamicStateCount = 2;
+    dynamic.pDynamicStates = dynamicStates;
+
+    VkGraphicsPipelineCreateInfo info{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+    info.stageCount = 2;
+    info.pStages = stages;
+    info.pVertexInputState = &input;
+    info.pInputAssemblyState = &assembly;
+    info.pViewportState = &viewport;
+    info.pRasterizationState = &raster;
+    info.pMultisampleState = &multisample;
+    info.pDepthStencilState = &depth;
+    info.pColorBlendState = &blend;
+    info.pDynamicState = &dynamic;
+    info.layout = layout;
+    info.renderPass = pass;
+    VkPipeline pipeline = VK_NULL_HANDLE;
+    check(vkCreateGraphicsPipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline), "vkCreateGraphicsPipelines");
+    return pipeline;
+}
+
+} // namespace
+
+Pipelines::Pipelines(const VulkanContext& context, VkRenderPass renderPass) : context_(context)
+{
+    const auto start = std::chrono::steady_clock::now();
+    VkDevice device = context.device();
+    VkDescriptorSetLayoutBinding bindings[2]{};
+    bindings[0].binding = 0;
+    bindings[0].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC;
+    bindings[0].descriptorCount = 1;
+    bindings[0].stageFlags = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+    bindings[1].binding = 1;
+    bindings[1].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    bindings[1].descriptorCount = 1;
+    bindings[1].stageFlags = VK_SHADER_STAGE_FRAGMENT_BIT;
+    VkDescriptorSetLayoutCreateInfo setInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    setInfo.bindingCount = 2;
+    setInfo.pBindings = bindings;
+    check(vkCreateDescriptorSetLayout(device, &setInfo, nullptr, &setLayout_), "vkCreateDescriptorSetLayout");
+    VkPushConstantRange push{VK_SHADER_STAGE_FRAGMENT_BIT, 0, 16};
+    VkPipelineLayoutCreateInfo layoutInfo{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+    layoutInfo.setLayoutCount = 1;
+    layoutInfo.pSetLayouts = &setLayout_;
+    layoutInfo.pushConstantRangeCount = 1;
+    layoutInfo.pPushConstantRanges = &push;
+    check(vkCreatePipelineLayout(device, &layoutInfo, nullptr, &layout_), "vkCreatePipelineLayout");
+
+    VkShaderModule meshVert = shaderModule(device, kMeshVert, sizeof(kMeshVert));
+    VkShaderModule meshFrag = shaderModule(device, kMeshFrag, sizeof(kMeshFrag));
+    VkShaderModule brushVert = shaderModule(device, kBrushVert, sizeof(kBrushVert));
+    VkShaderModule brushFrag = shaderModule(device, kBrushFrag, sizeof(kBrushFrag));
+    try {
+        surface_ = createPipeline(device, renderPass, layout_, {meshVert, meshFrag});
+        if (context.supportsWireframe())
+            wireframe_ = createPipeline(device, renderPass, layout_,
+                                        {meshVert, meshFrag, true, VK_POLYGON_MODE_LINE, false, false});
+        brush_ = createPipeline(device, renderPass, layout_, {brushVert, brushFrag, false, VK_POLYGON_MODE_FILL, false, true});
+    } catch (...) {
+        for (VkShaderModule m : {meshVert, meshFrag, brushVert, brushFrag}) vkDestroyShaderModule(device, m, nullptr);
+        release();
+        throw;
+    }
+    for (VkShaderModule m : {meshVert, meshFrag, brushVert, brushFrag}) vkDestroyShaderModule(device, m, nullptr);
+    buildMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+Pipelines::~Pipelines() { release(); }
+
+void Pipelines::release()
+{
+    VkDevice device = context_.device();
+    for (VkPipeline p : {surface_, wireframe_, brush_})
+        if (p) vkDestroyPipeline(device, p, nullptr);
+    if (layout_) vkDestroyPipelineLayout(device, layout_, nullptr);
+    if (setLayout_) vkDestroyDescriptorSetLayout(device, setLayout_, nullptr);
+    surface_ = wireframe_ = brush_ = VK_NULL_HANDLE;
+    layout_ = VK_NULL_HANDLE;
+    setLayout_ = VK_NULL_HANDLE;
+}
+
+} // namespace vdbclay::render

@@ -1,0 +1,41 @@
+// The graphics pipelines, built once per render pass shape from the SPIR-V embedded at build time
+// (glslc): the surface, its wireframe, and the brush preview.
+#pragma once
+
+#include "render/VulkanContext.h"
+
+namespace vdbclay::render {
+
+/// A vertex as the GPU reads it: position, normal, material (16 bits) | level (8) | occlusion (8).
+struct GpuVertex {
+    float position[3];
+    float normal[3];
+    uint32_t packed;
+};
+
+class Pipelines {
+public:
+    Pipelines(const VulkanContext& context, VkRenderPass renderPass);
+    ~Pipelines();
+    Pipelines(const Pipelines&) = delete;
+    Pipelines& operator=(const Pipelines&) = delete;
+
+    VkDescriptorSetLayout setLayout() const { return setLayout_; }
+    VkPipelineLayout layout() const { return layout_; }
+    VkPipeline surface() const { return surface_; }
+    VkPipeline wireframe() const { return wireframe_; } // VK_NULL_HANDLE where lines are unsupported
+    VkPipeline brushPreview() const { return brush_; }
+    /// Wall time spent creating the shader modules and pipelines (the first frame's compilation).
+    double buildMs() const { return buildMs_; }
+
+private:
+    void release();
+
+    const VulkanContext& context_;
+    VkDescriptorSetLayout setLayout_ = VK_NULL_HANDLE;
+    VkPipelineLayout layout_ = VK_NULL_HANDLE;
+    VkPipeline surface_ = VK_NULL_HANDLE, wireframe_ = VK_NULL_HANDLE, brush_ = VK_NULL_HANDLE;
+    double buildMs_ = 0.0;
+};
+
+} // namespace vdbclay::render

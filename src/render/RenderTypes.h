@@ -1,0 +1,77 @@
+// What the renderer draws and reports, in plain structs: cameras and views, display modes, the brush
+// overlay, per-frame figures. Light header: no Vulkan, no OpenVDB.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace vdbclay::render {
+
+using Vec3f = std::array<float, 3>;
+
+/// A pinhole camera in world units, looking from `eye` at `target`, +Y up unless `up` says otherwise.
+struct Camera {
+    std::array<double, 3> eye{0.0, 0.0, 5.0};
+    std::array<double, 3> target{0.0, 0.0, 0.0};
+    std::array<double, 3> up{0.0, 1.0, 0.0};
+    double fovYDegrees = 45.0;
+    double nearPlane = 0.05; // world units; 0: chosen from the scene's bounds
+    double farPlane = 1000.0;
+};
+
+/// What the surface's colour shows.
+enum class ViewMode : uint32_t {
+    Shaded = 0,    // material colour, tri-planar procedural texture, key light and ambient occlusion
+    Lod = 1,       // each chunk coloured by the level it is shown at
+    Toughness = 2, // colour by material toughness: blue (soft) to red (unerodable)
+    Normals = 3,   // the surface normal as RGB
+};
+const char* viewModeName(ViewMode mode);
+/// "shaded", "lod", "toughness", "normals"; throws std::invalid_argument listing them.
+ViewMode parseViewMode(const std::string& name);
+
+/// The brush's field as the shaders evaluate it: a primitive in its local frame (same shapes and
+/// parameters as sculpt's Primitive) and the world-to-local transform of its placement.
+struct BrushOverlay {
+    enum class Shape : uint32_t { Sphere = 0, Box = 1, Cylinder = 2, Capsule = 3, Torus = 4, Cone = 5 };
+    Shape shape = Shape::Sphere;
+    std::array<float, 4> params{1.0f, 1.0f, 1.0f, 0.0f}; // sphere/cylinder/capsule/cone: radius; box: half
+                                                          // extents xyz + rounding; torus: major, minor
+    float height = 2.0f;                                  // cylinder, cone: full height; capsule: length
+    std::array<float, 16> worldToLocal{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}; // column-major
+    float distanceScale = 1.0f; // local distances times this are world distances (the smallest scale)
+    std::array<float, 4> worldBoundsMin{-1, -1, -1, 0}; // where the preview's ray march looks
+    std::array<float, 4> worldBoundsMax{1, 1, 1, 0};
+    bool preview = true;    // draw the brush itself, translucent
+    bool highlight = true;  // tint the surface the brush reaches (inside the brush's field)
+    std::array<float, 4> previewColour{0.35f, 0.65f, 1.0f, 0.35f};
+    std::array<float, 4> highlightColour{1.0f, 0.55f, 0.1f, 0.55f};
+};
+
+struct ShadingOptions {
+    ViewMode mode = ViewMode::Shaded;
+    bool wireframe = false;
+    bool ambientOcclusion = true;
+    std::array<float, 3> background{0.16f, 0.17f, 0.19f};
+    std::array<float, 3> lightDirection{-0.45f, -0.8f, -0.4f}; // the key light travels along this
+};
+
+/// Per-frame figures.
+struct FrameStats {
+    uint64_t triangles = 0;          // drawn, summed over the views
+    uint64_t chunksDrawn = 0;        // after frustum culling, summed over the views
+    uint64_t chunksCulled = 0;
+    uint64_t chunksUploaded = 0;     // this frame
+    uint64_t uploadBytes = 0;        // this frame
+    uint64_t chunksFreed = 0;        // this frame
+    uint64_t gpuMemoryBytes = 0;     // mesh buffers resident on the device after the frame
+    uint64_t residentChunks = 0;
+    double cpuMs = 0.0;              // recording: culling, upload copies and draw commands
+    double gpuMs = 0.0;              // device time of the frame (timestamp queries), 0 when unavailable
+    double submitWaitMs = 0.0;       // wall time from submission to completion
+    std::vector<int> levelsShown;    // sorted, unique levels of the chunks drawn
+};
+
+} // namespace vdbclay::render

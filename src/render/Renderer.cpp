@@ -1,0 +1,524 @@
+#include "render/Renderer.h"
+
+#include "render/GpuMemory.h"
+#include "render/OffscreenTarget.h"
+#include "render/Pipelines.h"
+#include "render/VulkanContext.h"
+
+#define GLM_FORCE_DEPTH_ZERO_TO_ONE
+#include <glm/glm.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <unordered_map>
+
+namespace vdbclay::render {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+/// The per-view uniform block, laid out as common.glsl's ViewData (std140).
+struct ViewUniforms {
+    float viewProj[16];
+    float invViewProj[16];
+    float eye[4];
+    float lightDir[4];
+    uint32_t mode[4];
+    float brushWorldToLocal[16];
+    float brushParams[4];
+    float brushExtra[4];
+    float brushMin[4];
+    float brushMax[4];
+    float previewColour[4];
+    float highlightColour[4];
+};
+static_assert(sizeof(ViewUniforms) == 336, "ViewUniforms must match common.glsl");
+
+constexpr int kMaxViews = 8;
+
+glm::dmat4 viewProjectionMatrix(const Camera& c, double aspect)
+{
+    const glm::dvec3 eye(c.eye[0], c.eye[1], c.eye[2]), target(c.target[0], c.target[1], c.target[2]),
+        up(c.up[0], c.up[1], c.up[2]);
+    glm::dmat4 proj = glm::perspective(glm::radians(c.fovYDegrees), aspect, c.nearPlane, c.farPlane);
+    proj[1][1] *= -1.0; // Vulkan's framebuffer Y points down
+    return proj * glm::lookAt(eye, target, up);
+}
+
+struct Frustum {
+    glm::dvec4 planes[6];
+    bool outside(const float lo[3], const float hi[3]) const
+    {
+        for (const auto& p : planes) {
+            const double x = p.x >= 0.0 ? hi[0] : lo[0];
+            const double y = p.y >= 0.0 ? hi[1] : lo[1];
+            const double z = p.z >= 0.0 ? hi[2] : lo[2];
+            if (p.x * x + p.y * y + p.z * z + p.w < 0.0) return true;
+        }
+        return false;
+    }
+};
+
+Frustum frustumOf(const glm::dmat4& m)
+{
+    auto row = [&](int r) { return glm::dvec4(m[0][r], m[1][r], m[2][r], m[3][r]); };
+    Frustum f;
+    f.planes[0] = row(3) + row(0);
+    f.planes[1] = row(3) - row(0);
+    f.planes[2] = row(3) + row(1);
+    f.planes[3] = row(3) - row(1);
+    f.planes[4] = row(2); // depth 0..1
+    f.planes[5] = row(3) - row(2);
+    return f;
+}
+
+void copyMatrix(float out[16], const glm::dmat4& m)
+{
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) out[c * 4 + r] = float(m[c][r]);
+}
+
+} // namespace
+
+std::array<float, 16> viewProjection(const Camera& camera, double aspect)
+{
+    std::array<float, 16> out{};
+    copyMatrix(out.data(), viewProjectionMatrix(camera, aspect));
+    return out;
+}
+
+struct Renderer::Impl {
+    struct GpuChunk {
+        VkBuffer buffer = VK_NULL_HANDLE;
+        GpuAllocation allocation;
+        VkDeviceSize indexOffset = 0;
+        uint32_t indexCount = 0;
+        float lo[3], hi[3];
+        int level = 0;
+        uint64_t lastDrawn = 0;
+    };
+    struct PendingChunk {
+        std::vector<uint8_t> bytes; // vertices, then uint32 indices
+        VkDeviceSize indexOffset = 0;
+        uint32_t indexCount = 0;
+        float lo[3], hi[3];
+        int level = 0;
+    };
+
+    VulkanContext& context;
+    RendererOptions options;
+    VkRenderPass compatiblePass = VK_NULL_HANDLE;
+    std::unique_ptr<Pipelines> pipelines;
+    GpuHeap heap;
+    std::unique_ptr<HostBuffer> staging, uniforms, materialBuffer;
+    VkDeviceSize uniformStride = 0;
+    VkDescriptorPool descriptorPool = VK_NULL_HANDLE;
+    VkDescriptorSet descriptorSet = VK_NULL_HANDLE;
+    VkCommandBuffer cmd = VK_NULL_HANDLE;
+    VkFence fence = VK_NULL_HANDLE;
+    VkQueryPool queries = VK_NULL_HANDLE;
+
+    std::unordered_map<ChunkId, GpuChunk> chunks;
+    std::map<ChunkId, PendingChunk> pending;
+    std::set<ChunkId> removals;
+    std::vector<ChunkId> evicted;
+    ShadingOptions shading;
+    std::optional<BrushOverlay> brush;
+    uint64_t frameNumber = 0;
+
+    Impl(VulkanContext& c, const RendererOptions& o)
+        : context(c), options(o), heap(c, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)
+    {
+        VkDevice device = c.device();
+        compatiblePass = createRenderPass(device, kColourFormat, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+        pipelines = std::make_unique<Pipelines>(c, compatiblePass);
+        staging = std::make_unique<HostBuffer>(c, std::max<uint64_t>(o.stagingBytes, 1 << 20), VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
+        const VkDeviceSize align = std::max<VkDeviceSize>(c.properties().limits.minUniformBufferOffsetAlignment, 16);
+        uniformStride = (sizeof(ViewUniforms) + align - 1) / align * align;
+        uniforms = std::make_unique<HostBuffer>(c, uniformStride * kMaxViews, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT);
+
+        VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, 1}, {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1}};
+        VkDescriptorPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+        poolInfo.maxSets = 1;
+        poolInfo.poolSizeCount = 2;
+        poolInfo.pPoolSizes = sizes;
+        check(vkCreateDescriptorPool(device, &poolInfo, nullptr, &descriptorPool), "vkCreateDescriptorPool");
+        VkDescriptorSetLayout layout = pipelines->setLayout();
+        VkDescriptorSetAllocateInfo setAlloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+        setAlloc.descriptorPool = descriptorPool;
+        setAlloc.descriptorSetCount = 1;
+        setAlloc.pSetLayouts = &layout;
+        check(vkAllocateDescriptorSets(device, &setAlloc, &descriptorSet), "vkAllocateDescriptorSets");
+        setMaterials(MaterialTable());
+
+        VkCommandBufferAllocateInfo cmdAlloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+        cmdAlloc.commandPool = c.commandPool();
+        cmdAlloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+        cmdAlloc.commandBufferCount = 1;
+        check(vkAllocateCommandBuffers(device, &cmdAlloc, &cmd), "vkAllocateCommandBuffers");
+        VkFenceCreateInfo fenceInfo{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+        check(vkCreateFence(device, &fenceInfo, nullptr, &fence), "vkCreateFence");
+        if (c.timestampPeriodNs() > 0.0) {
+            VkQueryPoolCreateInfo q{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+            q.queryType = VK_QUERY_TYPE_TIMESTAMP;
+            q.queryCount = 2;
+            check(vkCreateQueryPool(device, &q, nullptr, &queries), "vkCreateQueryPool");
+        }
+    }
+
+    ~Impl()
+    {
+        VkDevice device = context.device();
+        vkDeviceWaitIdle(device);
+        for (auto& [id, c] : chunks) vkDestroyBuffer(device, c.buffer, nullptr);
+        if (queries) vkDestroyQueryPool(device, queries, nullptr);
+        if (fence) vkDestroyFence(device, fence, nullptr);
+        if (cmd) vkFreeCommandBuffers(device, context.commandPool(), 1, &cmd);
+        if (descriptorPool) vkDestroyDescriptorPool(device, descriptorPool, nullptr);
+        pipelines.reset();
+        if (compatiblePass) vkDestroyRenderPass(device, compatiblePass, nullptr);
+    }
+
+    void setMaterials(const MaterialTable& table)
+    {
+        // Entry 0 (empty) is never drawn; it gets the default colour so a stray id still shows.
+        const std::size_t count = table.size() + 1;
+        const VkDeviceSize bytes = count * 2 * 4 * sizeof(float);
+        if (!materialBuffer || materialBuffer->size() < bytes) {
+            vkDeviceWaitIdle(context.device());
+            materialBuffer = std::make_unique<HostBuffer>(context, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+            VkDescriptorBufferInfo uniformInfo{uniforms->buffer(), 0, sizeof(ViewUniforms)};
+            VkDescriptorBufferInfo materialInfo{materialBuffer->buffer(), 0, VK_WHOLE_SIZE};
+            VkWriteDescriptorSet writes[2]{};
+            writes[0] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+            writes[0].dstSet = descriptorSet;
+            writes[0].dstBinding = 0;
+            writes[0].descriptorCount = 1;
+            writes[0].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC;
+            writes[0].pBufferInfo = &uniformInfo;
+            writes[1] = writes[0];
+            writes[1].dstBinding = 1;
+            writes[1].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+            writes[1].pBufferInfo = &materialInfo;
+            vkUpdateDescriptorSets(context.device(), 2, writes, 0, nullptr);
+        } else {
+            vkDeviceWaitIdle(context.device()); // the last frame may still read the table
+        }
+        float* out = reinterpret_cast<float*>(materialBuffer->data());
+        for (std::size_t id = 0; id < count; ++id) {
+            const Material m = id == 0 ? Material{} : table.at(MaterialId(id));
+            std::memcpy(out + id * 8, m.color.data(), 4 * sizeof(float));
+            out[id * 8 + 4] = m.toughness;
+            out[id * 8 + 5] = float((id * 37) % 101); // texture pattern seed
+            out[id * 8 + 6] = 0.35f;                    // pattern frequency per world unit
+            out[id * 8 + 7] = 0.0f;
+        }
+    }
+
+    void destroyChunk(ChunkId id, FrameStats& stats)
+    {
+        auto it = chunks.find(id);
+        if (it == chunks.end()) return;
+        vkDestroyBuffer(context.device(), it->second.buffer, nullptr);
+        heap.free(it->second.allocation);
+        chunks.erase(it);
+        ++stats.chunksFreed;
+    }
+
+    void beginCommands()
+    {
+        VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+        begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+        check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
+    }
+
+    void submitAndWait()
+    {
+        check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+        VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+        submit.commandBufferCount = 1;
+        submit.pCommandBuffers = &cmd;
+        check(vkResetFences(context.device(), 1, &fence), "vkResetFences");
+        check(vkQueueSubmit(context.queue(), 1, &submit, fence), "vkQueueSubmit");
+        check(vkWaitForFences(context.device(), 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+        check(vkResetCommandBuffer(cmd, 0), "vkResetCommandBuffer");
+    }
+
+    /// Records the copies of the queued chunks through the staging ring; when the ring is full the
+    /// copies so far are submitted and waited for, and the ring starts over.
+    void recordUploads(FrameStats& stats)
+    {
+        VkDeviceSize ringOffset = 0;
+        for (auto& [id, p] : pending) {
+            const VkDeviceSize size = p.bytes.size();
+            if (size > staging->size())
+                throw std::runtime_error("a mesh chunk of " + std::to_string(size) + " bytes exceeds the staging ring of " +
+                                         std::to_string(staging->size()) + " bytes");
+            if (ringOffset + size > staging->size()) {
+                submitAndWait();
+                beginCommands();
+                ringOffset = 0;
+            }
+            if (chunks.count(id)) destroyChunk(id, stats), --stats.chunksFreed; // replaced, not freed
+            GpuChunk chunk;
+            VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+            info.size = size;
+            info.usage = VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+            check(vkCreateBuffer(context.device(), &info, nullptr, &chunk.buffer), "vkCreateBuffer");
+            VkMemoryRequirements req;
+            vkGetBufferMemoryRequirements(context.device(), chunk.buffer, &req);
+            chunk.allocation = heap.allocate(req);
+            check(vkBindBufferMemory(context.device(), chunk.buffer, chunk.allocation.memory, chunk.allocation.offset),
+                  "vkBindBufferMemory");
+            std::memcpy(staging->data() + ringOffset, p.bytes.data(), size);
+            VkBufferCopy copy{ringOffset, 0, size};
+            vkCmdCopyBuffer(cmd, staging->buffer(), chunk.buffer, 1, &copy);
+            ringOffset = (ringOffset + size + 15) / 16 * 16;
+            chunk.indexOffset = p.indexOffset;
+            chunk.indexCount = p.indexCount;
+            std::copy(p.lo, p.lo + 3, chunk.lo);
+            std::copy(p.hi, p.hi + 3, chunk.hi);
+            chunk.level = p.level;
+            chunks.emplace(id, chunk);
+            ++stats.chunksUploaded;
+            stats.uploadBytes += size;
+        }
+        pending.clear();
+        VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+        barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+        barrier.dstAccessMask = VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT;
+        vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_VERTEX_INPUT_BIT, 0, 1, &barrier, 0,
+                             nullptr, 0, nullptr);
+    }
+
+    void fillUniforms(ViewUniforms& u, const Camera& camera, double aspect) const
+    {
+        const glm::dmat4 vp = viewProjectionMatrix(camera, aspect);
+        copyMatrix(u.viewProj, vp);
+        copyMatrix(u.invViewProj, glm::inverse(vp));
+        for (int i = 0; i < 3; ++i) {
+            u.eye[i] = float(camera.eye[std::size_t(i)]);
+            u.lightDir[i] = shading.lightDirection[std::size_t(i)];
+        }
+        u.eye[3] = 1.0f;
+        u.lightDir[3] = shading.ambientOcclusion ? 1.0f : 0.0f;
+        u.mode[0] = uint32_t(shading.mode);
+        u.mode[1] = brush ? (brush->preview ? 1u : 0u) | (brush->highlight ? 2u : 0u) : 0u;
+        u.mode[2] = brush ? uint32_t(brush->shape) : 0u;
+        u.mode[3] = 0;
+        const BrushOverlay b = brush.value_or(BrushOverlay{});
+        std::copy(b.worldToLocal.begin(), b.worldToLocal.end(), u.brushWorldToLocal);
+        std::copy(b.params.begin(), b.params.end(), u.brushParams);
+        u.brushExtra[0] = b.height;
+        u.brushExtra[1] = b.distanceScale;
+        u.brushExtra[2] = u.brushExtra[3] = 0.0f;
+        std::copy(b.worldBoundsMin.begin(), b.worldBoundsMin.end(), u.brushMin);
+        std::copy(b.worldBoundsMax.begin(), b.worldBoundsMax.end(), u.brushMax);
+        std::copy(b.previewColour.begin(), b.previewColour.end(), u.previewColour);
+        std::copy(b.highlightColour.begin(), b.highlightColour.end(), u.highlightColour);
+    }
+
+    FrameStats render(const std::vector<RenderView>& views)
+    {
+        const auto start = Clock::now();
+        FrameStats stats;
+        if (views.size() > std::size_t(kMaxViews))
+            throw std::invalid_argument("a frame draws at most " + std::to_string(kMaxViews) + " views");
+        ++frameNumber;
+        beginCommands();
+        for (ChunkId id : removals) destroyChunk(id, stats);
+        removals.clear();
+        recordUploads(stats);
+        if (queries) {
+            vkCmdResetQueryPool(cmd, queries, 0, 2);
+            vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, queries, 0);
+        }
+
+        std::set<int> levels;
+        // Views that share a target are drawn in one render pass, which clears the target once.
+        std::vector<OffscreenTarget*> targets;
+        for (const auto& v : views) {
+            if (!v.target) throw std::invalid_argument("a view has no render target");
+            if (std::find(targets.begin(), targets.end(), v.target) == targets.end()) targets.push_back(v.target);
+        }
+        for (OffscreenTarget* target : targets) {
+            VkClearValue clears[2]{};
+            clears[0].color = {{shading.background[0], shading.background[1], shading.background[2], 1.0f}};
+            clears[1].depthStencil = {1.0f, 0};
+            VkRenderPassBeginInfo begin{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+            begin.renderPass = target->renderPass();
+            begin.framebuffer = target->framebuffer();
+            begin.renderArea = {{0, 0}, {uint32_t(target->width()), uint32_t(target->height())}};
+            begin.clearValueCount = 2;
+            begin.pClearValues = clears;
+            vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
+            for (std::size_t vi = 0; vi < views.size(); ++vi) {
+                const RenderView& v = views[vi];
+                if (v.target != target) continue;
+                std::array<int, 4> vp = v.viewport;
+                if (vp[2] <= 0 || vp[3] <= 0) vp = {0, 0, target->width(), target->height()};
+                const double aspect = double(vp[2]) / double(vp[3]);
+                auto* u = reinterpret_cast<ViewUniforms*>(uniforms->data() + uniformStride * vi);
+                fillUniforms(*u, v.camera, aspect);
+                VkViewport viewport{float(vp[0]), float(vp[1]), float(vp[2]), float(vp[3]), 0.0f, 1.0f};
+                VkRect2D scissor{{vp[0], vp[1]}, {uint32_t(vp[2]), uint32_t(vp[3])}};
+                vkCmdSetViewport(cmd, 0, 1, &viewport);
+                vkCmdSetScissor(cmd, 0, 1, &scissor);
+                const uint32_t dynamicOffset = uint32_t(uniformStride * vi);
+                vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelines->layout(), 0, 1, &descriptorSet, 1,
+                                        &dynamicOffset);
+                const Frustum frustum = frustumOf(viewProjectionMatrix(v.camera, aspect));
+                std::vector<const GpuChunk*> visible;
+                for (auto& [id, c] : chunks) {
+                    if (frustum.outside(c.lo, c.hi)) {
+                        ++stats.chunksCulled;
+                        continue;
+                    }
+                    c.lastDrawn = frameNumber;
+                    visible.push_back(&c);
+                    levels.insert(c.level);
+                }
+                const float noTint[4] = {0, 0, 0, 0};
+                const float lineTint[4] = {0.05f, 0.05f, 0.05f, 1.0f};
+                auto drawChunks = [&](VkPipeline pipeline, const float* tint) {
+                    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
+                    vkCmdPushConstants(cmd, pipelines->layout(), VK_SHADER_STAGE_FRAGMENT_BIT, 0, 16, tint);
+                    for (const GpuChunk* c : visible) {
+                        const VkDeviceSize zero = 0;
+                        vkCmdBindVertexBuffers(cmd, 0, 1, &c->buffer, &zero);
+                        vkCmdBindIndexBuffer(cmd, c->buffer, c->indexOffset, VK_INDEX_TYPE_UINT32);
+                        vkCmdDrawIndexed(cmd, c->indexCount, 1, 0, 0, 0);
+                    }
+                };
+                drawChunks(pipelines->surface(), noTint);
+                if (shading.wireframe && pipelines->wireframe()) drawChunks(pipelines->wireframe(), lineTint);
+                for (const GpuChunk* c : visible) stats.triangles += c->indexCount / 3;
+                stats.chunksDrawn += visible.size();
+                if (brush && brush->preview) {
+                    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelines->brushPreview());
+                    vkCmdPushConstants(cmd, pipelines->layout(), VK_SHADER_STAGE_FRAGMENT_BIT, 0, 16, noTint);
+                    vkCmdDraw(cmd, 3, 1, 0, 0);
+                }
+            }
+            vkCmdEndRenderPass(cmd);
+            target->recordReadback(cmd);
+        }
+        if (queries) vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queries, 1);
+        stats.cpuMs = msSince(start);
+        const auto submitted = Clock::now();
+        submitAndWait();
+        stats.submitWaitMs = msSince(submitted);
+        if (queries) {
+            uint64_t ticks[2] = {0, 0};
+            if (vkGetQueryPoolResults(context.device(), queries, 0, 2, sizeof(ticks), ticks, sizeof(uint64_t),
+                                      VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS)
+                stats.gpuMs = double(ticks[1] - ticks[0]) * context.timestampPeriodNs() * 1e-6;
+        }
+        enforceBudget(stats);
+        stats.gpuMemoryBytes = heap.usedBytes();
+        stats.residentChunks = chunks.size();
+        stats.levelsShown.assign(levels.begin(), levels.end());
+        return stats;
+    }
+
+    /// Frees the chunks drawn longest ago (never this frame's) while over the budget.
+    void enforceBudget(FrameStats& stats)
+    {
+        if (heap.usedBytes() <= options.gpuBudgetBytes) return;
+        std::vector<std::pair<uint64_t, ChunkId>> byAge;
+        for (const auto& [id, c] : chunks)
+            if (c.lastDrawn < frameNumber) byAge.emplace_back(c.lastDrawn, id);
+        std::sort(byAge.begin(), byAge.end());
+        for (const auto& [age, id] : byAge) {
+            if (heap.usedBytes() <= options.gpuBudgetBytes) break;
+            destroyChunk(id, stats);
+            evicted.push_back(id);
+        }
+    }
+};
+
+Renderer::Renderer(VulkanContext& context, const RendererOptions& options)
+    : impl_(std::make_unique<Impl>(context, options))
+{
+}
+
+Renderer::~Renderer() = default;
+
+void Renderer::setMaterials(const MaterialTable& materials) { impl_->setMaterials(materials); }
+
+void Renderer::setChunk(ChunkId id, const Mesh& mesh, int level, const std::vector<uint8_t>* occlusion)
+{
+    impl_->removals.erase(id);
+    if (mesh.triangles.empty()) {
+        impl_->pending.erase(id);
+        if (impl_->chunks.count(id)) impl_->removals.insert(id);
+        return;
+    }
+    Impl::PendingChunk p;
+    p.level = level;
+    const std::size_t nv = mesh.positions.size();
+    const VkDeviceSize vertexBytes = nv * sizeof(GpuVertex);
+    p.indexOffset = vertexBytes;
+    p.indexCount = uint32_t(mesh.triangles.size() * 3);
+    p.bytes.resize(vertexBytes + std::size_t(p.indexCount) * sizeof(uint32_t));
+    auto* v = reinterpret_cast<GpuVertex*>(p.bytes.data());
+    for (int a = 0; a < 3; ++a) {
+        p.lo[a] = std::numeric_limits<float>::max();
+        p.hi[a] = std::numeric_limits<float>::lowest();
+    }
+    const uint32_t levelBits = uint32_t(std::clamp(level, 0, 255)) << 16;
+    for (std::size_t i = 0; i < nv; ++i) {
+        for (int a = 0; a < 3; ++a) {
+            v[i].position[a] = mesh.positions[i][std::size_t(a)];
+            v[i].normal[a] = i < mesh.normals.size() ? mesh.normals[i][std::size_t(a)] : 0.0f;
+            p.lo[a] = std::min(p.lo[a], v[i].position[a]);
+            p.hi[a] = std::max(p.hi[a], v[i].position[a]);
+        }
+        const uint32_t material = i < mesh.materials.size() ? mesh.materials[i] : 1u;
+        const uint32_t open = occlusion && i < occlusion->size() ? (*occlusion)[i] : 255u;
+        v[i].packed = material | levelBits | (open << 24);
+    }
+    auto* indices = reinterpret_cast<uint32_t*>(p.bytes.data() + vertexBytes);
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+        for (int k = 0; k < 3; ++k) {
+            if (mesh.triangles[t][std::size_t(k)] >= nv)
+                throw std::invalid_argument("a mesh triangle names vertex " + std::to_string(mesh.triangles[t][std::size_t(k)]) +
+                                            " of " + std::to_string(nv));
+            indices[t * 3 + std::size_t(k)] = mesh.triangles[t][std::size_t(k)];
+        }
+    impl_->pending[id] = std::move(p);
+}
+
+void Renderer::removeChunk(ChunkId id)
+{
+    impl_->pending.erase(id);
+    if (impl_->chunks.count(id)) impl_->removals.insert(id);
+}
+
+bool Renderer::hasChunk(ChunkId id) const { return impl_->chunks.count(id) || impl_->pending.count(id); }
+std::size_t Renderer::chunkCount() const { return impl_->chunks.size(); }
+void Renderer::setShading(const ShadingOptions& shading) { impl_->shading = shading; }
+const ShadingOptions& Renderer::shading() const { return impl_->shading; }
+void Renderer::setBrush(const std::optional<BrushOverlay>& brush) { impl_->brush = brush; }
+FrameStats Renderer::render(const std::vector<RenderView>& views) { return impl_->render(views); }
+
+std::vector<ChunkId> Renderer::takeEvicted()
+{
+    std::vector<ChunkId> out;
+    out.swap(impl_->evicted);
+    return out;
+}
+
+uint64_t Renderer::gpuMemoryBytes() const { return impl_->heap.usedBytes(); }
+double Renderer::pipelineBuildMs() const { return impl_->pipelines->buildMs(); }
+const VulkanContext& Renderer::context() const { return impl_->context; }
+
+} // namespace vdbclay::render

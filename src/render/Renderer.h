@@ -1,0 +1,76 @@
+// The renderer: mesh chunks in GPU buffers, uploaded only when new or changed (through a staging ring
+// that is never reallocated), freed when their brick goes, culled per chunk against each view's
+// frustum; a frame draws one or more views (camera + viewport + target), so stereo is two views of
+// one frame. Shading, debug views and the brush overlay follow ShadingOptions and BrushOverlay.
+#pragma once
+
+#include "mesher/Mesh.h"
+#include "render/RenderTypes.h"
+#include "vdb_hermite/Materials.h"
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+namespace vdbclay::render {
+
+class VulkanContext;
+class OffscreenTarget;
+
+using ChunkId = uint64_t;
+
+struct RendererOptions {
+    uint64_t gpuBudgetBytes = 1ull << 30; // mesh buffers; chunks not drawn lately are freed beyond it
+    uint64_t stagingBytes = 16ull << 20;  // the staging ring: uploads beyond it in one frame flush early
+};
+
+struct RenderView {
+    Camera camera;
+    OffscreenTarget* target = nullptr;
+    std::array<int, 4> viewport{0, 0, 0, 0}; // x, y, width, height in pixels; zero size: the whole target
+};
+
+class Renderer {
+public:
+    Renderer(VulkanContext& context, const RendererOptions& options = {});
+    ~Renderer();
+    Renderer(const Renderer&) = delete;
+    Renderer& operator=(const Renderer&) = delete;
+
+    /// Colours, toughness and texture patterns of the materials the meshes name.
+    void setMaterials(const MaterialTable& materials);
+    /// Queues `mesh` as chunk `id` (a new chunk, or a new version of one); uploaded by the next frame.
+    /// `level` is what the lod view shows; `occlusion` (optional, one per vertex, 0 = fully occluded,
+    /// 255 = open) darkens creases in the shaded view.
+    void setChunk(ChunkId id, const Mesh& mesh, int level = 0, const std::vector<uint8_t>* occlusion = nullptr);
+    /// Frees the chunk's buffers at the next frame (its brick was evicted or it became empty).
+    void removeChunk(ChunkId id);
+    bool hasChunk(ChunkId id) const;
+    std::size_t chunkCount() const;
+
+    void setShading(const ShadingOptions& shading);
+    const ShadingOptions& shading() const;
+    void setBrush(const std::optional<BrushOverlay>& brush);
+
+    /// Uploads what changed, draws the views and, for offscreen targets, reads their pixels back.
+    FrameStats render(const std::vector<RenderView>& views);
+    /// Chunks freed to keep within the GPU budget since the last call (their owner uploads them again
+    /// when they are needed).
+    std::vector<ChunkId> takeEvicted();
+
+    uint64_t gpuMemoryBytes() const;
+    /// Time spent building shaders and pipelines (once, at construction).
+    double pipelineBuildMs() const;
+    const VulkanContext& context() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+/// The view-projection matrix (column-major, depth 0..1, Y down as Vulkan's framebuffer) of a camera.
+std::array<float, 16> viewProjection(const Camera& camera, double aspect);
+
+} // namespace vdbclay::render

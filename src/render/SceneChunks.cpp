@@ -1,0 +1,87 @@
+#include "render/SceneChunks.h"
+
+#include "mesher/VertexOcclusion.h"
+
+#include <chrono>
+#include <iterator>
+#include <set>
+
+namespace vdbclay::render {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+uint64_t packCoordinates(const std::array<int32_t, 3>& c)
+{
+    // 20 bits per coordinate (offset), enough for +-2^19 leaves.
+    uint64_t out = 0;
+    for (int a = 0; a < 3; ++a) out = (out << 20) | (uint64_t(int64_t(c[std::size_t(a)]) + (1 << 19)) & 0xFFFFF);
+    return out;
+}
+} // namespace
+
+ChunkId leafChunkId(const std::array<int32_t, 3>& o)
+{
+    return packCoordinates({o[0] >> 3, o[1] >> 3, o[2] >> 3});
+}
+
+std::optional<ChunkId> StreamedSceneChunks::chunkOf(const BrickKey& key) const
+{
+    const auto it = uploaded_.find(key);
+    if (it == uploaded_.end()) return std::nullopt;
+    return it->second.id;
+}
+
+VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOptions& options)
+{
+    const auto start = Clock::now();
+    VolumeUpload out;
+    renderer.setMaterials(volume.materials());
+    for (const MeshChunk& chunk : meshVolumeChunks(volume, options)) {
+        if (chunk.mesh.triangles.empty()) continue;
+        const std::vector<uint8_t> occlusion = vertexOcclusion(volume, chunk.mesh);
+        renderer.setChunk(leafChunkId(chunk.leafOrigin), chunk.mesh, 0, &occlusion);
+        ++out.chunks;
+        out.triangles += chunk.mesh.triangles.size();
+    }
+    out.meshSeconds = secondsSince(start);
+    return out;
+}
+
+StreamedSceneChunks::SyncReport StreamedSceneChunks::sync(const StreamingScene& scene, Renderer& renderer)
+{
+    const auto start = Clock::now();
+    SyncReport report;
+    const std::vector<ChunkId> evicted = renderer.takeEvicted();
+    const std::set<ChunkId> evictedSet(evicted.begin(), evicted.end());
+    for (auto it = uploaded_.begin(); it != uploaded_.end();)
+        it = evictedSet.count(it->second.id) ? uploaded_.erase(it) : std::next(it);
+    const std::vector<BrickKey> shown = scene.shownBricks();
+    report.shown = shown.size();
+    const std::set<BrickKey> shownSet(shown.begin(), shown.end());
+    for (auto it = uploaded_.begin(); it != uploaded_.end();) {
+        if (shownSet.count(it->first)) {
+            ++it;
+            continue;
+        }
+        renderer.removeChunk(it->second.id);
+        it = uploaded_.erase(it);
+        ++report.removed;
+    }
+    for (const BrickKey& key : shown) {
+        const uint64_t version = scene.brickVersion(key);
+        const auto it = uploaded_.find(key);
+        if (it != uploaded_.end() && it->second.version == version) continue;
+        std::optional<StreamingScene::BrickMesh> m = scene.meshBrick(key, options_);
+        if (!m) continue;
+        const ChunkId id = it != uploaded_.end() ? it->second.id : nextId_++;
+        renderer.setChunk(id, m->mesh, key.level, &m->occlusion);
+        uploaded_[key] = {id, m->version};
+        ++report.meshed;
+    }
+    report.meshSeconds = secondsSince(start);
+    return report;
+}
+
+} // namespace vdbclay::render

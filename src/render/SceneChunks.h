@@ -1,0 +1,52 @@
+// What the renderer draws of a scene: a whole volume as one chunk per leaf, or a streaming scene's
+// shown bricks, each meshed at its level and uploaded when it is new or its content changed.
+#pragma once
+
+#include "mesher/Mesher.h"
+#include "render/Renderer.h"
+#include "scene/StreamingScene.h"
+
+#include <cstdint>
+#include <map>
+
+namespace vdbclay::render {
+
+/// The chunk id of a leaf of a whole volume (leaves within +-2^22 voxels of the origin).
+ChunkId leafChunkId(const std::array<int32_t, 3>& leafOrigin);
+
+struct VolumeUpload {
+    uint64_t chunks = 0;
+    uint64_t triangles = 0;
+    double meshSeconds = 0.0;
+};
+/// Meshes `volume` (per leaf, with per-vertex occlusion) and queues every chunk on the renderer.
+VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOptions& options);
+
+/// Keeps the renderer's chunks equal to a streaming scene's shown bricks.
+class StreamedSceneChunks {
+public:
+    explicit StreamedSceneChunks(const MeshOptions& options) : options_(options) {}
+
+    struct SyncReport {
+        uint64_t meshed = 0;   // bricks meshed and queued for upload
+        uint64_t removed = 0;  // chunks of bricks no longer shown
+        uint64_t shown = 0;
+        double meshSeconds = 0.0;
+    };
+    /// After scene.frame(): meshes the shown bricks that are new or changed, drops the ones not shown.
+    SyncReport sync(const StreamingScene& scene, Renderer& renderer);
+
+    /// The chunk a shown brick is drawn as, if it has one.
+    std::optional<ChunkId> chunkOf(const BrickKey& key) const;
+
+private:
+    struct Uploaded {
+        ChunkId id;
+        uint64_t version; // of the content the chunk was made from
+    };
+    MeshOptions options_;
+    std::map<BrickKey, Uploaded> uploaded_;
+    ChunkId nextId_ = ChunkId(1) << 62; // apart from leaf ids
+};
+
+} // namespace vdbclay::render

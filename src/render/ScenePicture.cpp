@@ -1,0 +1,120 @@
+#include "render/ScenePicture.h"
+
+#include "render/Framing.h"
+#include "render/Renderer.h"
+#include "render/SceneChunks.h"
+#include "render/VulkanContext.h"
+#include "scene/StreamingScene.h"
+
+#include <chrono>
+
+namespace vdbclay::render {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+MeshOptions pictureMeshOptions()
+{
+    MeshOptions o;
+    o.kind = MesherKind::CubicalMarchingSquares;
+    return o;
+}
+
+Viewer viewerOf(const Camera& camera, int width, int height)
+{
+    Viewer v;
+    v.position = camera.eye;
+    v.target = camera.target;
+    v.fovDegrees = camera.fovYDegrees;
+    v.viewport = {width, height};
+    return v;
+}
+
+Picture draw(VulkanContext& context, Renderer& renderer, const Camera& camera, const PictureRequest& request)
+{
+    OffscreenTarget target(context, request.width, request.height);
+    RenderView view;
+    view.camera = camera;
+    view.target = &target;
+    renderer.setShading(request.shading);
+    Picture p;
+    p.stats = renderer.render({view});
+    p.image = target.colour();
+    p.camera = camera;
+    p.pipelineMs = renderer.pipelineBuildMs();
+    return p;
+}
+
+std::array<double, 3> worldOf(const IndexCoord& c, double voxel)
+{
+    return {c[0] * voxel, c[1] * voxel, c[2] * voxel};
+}
+
+} // namespace
+
+Camera defaultCamera(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int width, int height)
+{
+    return framingCamera(lo, hi, double(width) / double(height));
+}
+
+Picture renderVolume(VulkanContext& context, const Volume& volume, const PictureRequest& request)
+{
+    const VolumeStats s = volume.stats();
+    const double h = volume.voxelSize();
+    const std::array<double, 3> lo{s.bboxMin[0] * h, s.bboxMin[1] * h, s.bboxMin[2] * h};
+    const std::array<double, 3> hi{(s.bboxMax[0] + 1) * h, (s.bboxMax[1] + 1) * h, (s.bboxMax[2] + 1) * h};
+    Camera camera = request.camera.value_or(defaultCamera(lo, hi, request.width, request.height));
+    fitDepthRange(camera, lo, hi);
+    Renderer renderer(context);
+    const VolumeUpload upload = uploadVolume(renderer, volume, pictureMeshOptions());
+    Picture p = draw(context, renderer, camera, request);
+    p.meshMs = upload.meshSeconds * 1000.0;
+    return p;
+}
+
+Picture renderStreamed(VulkanContext& context, const StreamingScene& scene, const Camera& camera, const PictureRequest& request)
+{
+    Renderer renderer(context);
+    renderer.setMaterials(scene.store().materials());
+    StreamedSceneChunks chunks(pictureMeshOptions());
+    const StreamedSceneChunks::SyncReport sync = chunks.sync(scene, renderer);
+    Picture p = draw(context, renderer, camera, request);
+    p.meshMs = sync.meshSeconds * 1000.0;
+    p.bricksShown = sync.shown;
+    return p;
+}
+
+Picture renderStore(VulkanContext& context, const std::string& path, const PictureRequest& request)
+{
+    StreamingOptions options;
+    options.memoryBudgetBytes = request.memoryBudgetBytes;
+    options.pixelTolerance = request.pixelTolerance;
+    StreamingScene scene(path, options);
+    Camera camera;
+    const double voxel = scene.store().voxelSize();
+    const auto box = scene.store().bounds();
+    std::array<double, 3> lo{0, 0, 0}, hi{1, 1, 1};
+    if (box) {
+        lo = worldOf(box->first, voxel);
+        hi = worldOf({box->second[0] + 1, box->second[1] + 1, box->second[2] + 1}, voxel);
+    }
+    camera = request.camera.value_or(defaultCamera(lo, hi, request.width, request.height));
+    fitDepthRange(camera, lo, hi);
+    const auto start = Clock::now();
+    const Viewer viewer = viewerOf(camera, request.width, request.height);
+    FrameReport report;
+    do {
+        report = scene.frame(viewer);
+        if (report.settled && report.pending == 0) break;
+        scene.waitForLoads();
+    } while (msSince(start) < request.settleSeconds * 1000.0);
+    const double streamMs = msSince(start);
+    Picture p = renderStreamed(context, scene, camera, request);
+    p.streamMs = streamMs;
+    p.refined = report.complete;
+    return p;
+}
+
+} // namespace vdbclay::render
