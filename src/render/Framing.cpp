@@ -20,25 +20,71 @@ void fitDepthRange(Camera& camera, const std::array<double, 3>& lo, const std::a
     camera.nearPlane = std::max(distance - radius * 1.01, camera.farPlane * 1e-4);
 }
 
-Camera framingCamera(const std::array<double, 3>& lo, const std::array<double, 3>& hi, double aspect, double fovYDegrees)
+namespace {
+
+/// The camera frame of the three-quarter view: back (towards the eye), right, up.
+struct ViewFrame {
+    double back[3], right[3], up[3];
+};
+
+ViewFrame threeQuarterFrame()
+{
+    ViewFrame f{{0.62, 0.52, 0.59}, {}, {}};
+    const double bn = std::sqrt(f.back[0] * f.back[0] + f.back[1] * f.back[1] + f.back[2] * f.back[2]);
+    for (double& v : f.back) v /= bn;
+    const double rn = std::sqrt(f.back[2] * f.back[2] + f.back[0] * f.back[0]);
+    f.right[0] = f.back[2] / rn; // world up x back
+    f.right[1] = 0.0;
+    f.right[2] = -f.back[0] / rn;
+    f.up[0] = f.back[1] * f.right[2] - f.back[2] * f.right[1];
+    f.up[1] = f.back[2] * f.right[0] - f.back[0] * f.right[2];
+    f.up[2] = f.back[0] * f.right[1] - f.back[1] * f.right[0];
+    return f;
+}
+
+/// Places the eye along the frame's back axis from the box's centre, at the nearest distance from which
+/// every point projects inside the view: a point at (x, y) across and z towards the eye needs
+/// distance - z >= |x| / tan(half fov x) and |y| / tan(half fov y).
+template <typename ForEachPoint>
+Camera frame(const std::array<double, 3>& lo, const std::array<double, 3>& hi, double aspect, double fovYDegrees,
+             const ForEachPoint& forEachPoint)
 {
     Camera camera;
     camera.fovYDegrees = fovYDegrees;
-    double radius2 = 0.0;
-    for (int a = 0; a < 3; ++a) {
-        camera.target[std::size_t(a)] = 0.5 * (lo[std::size_t(a)] + hi[std::size_t(a)]);
-        const double r = 0.5 * (hi[std::size_t(a)] - lo[std::size_t(a)]);
-        radius2 += r * r;
-    }
-    const double radius = std::max(std::sqrt(radius2), 1e-6);
-    const double halfY = 0.5 * fovYDegrees * M_PI / 180.0;
-    const double halfX = std::atan(std::tan(halfY) * aspect);
-    const double distance = radius / std::sin(std::min(halfX, halfY)) * 1.02;
-    const double dir[3] = {0.62, 0.52, 0.59}; // a three-quarter view, a little from above
-    const double norm = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
-    for (int a = 0; a < 3; ++a) camera.eye[std::size_t(a)] = camera.target[std::size_t(a)] + dir[a] / norm * distance;
+    for (int a = 0; a < 3; ++a) camera.target[std::size_t(a)] = 0.5 * (lo[std::size_t(a)] + hi[std::size_t(a)]);
+    const ViewFrame f = threeQuarterFrame();
+    const double tanY = std::tan(0.5 * fovYDegrees * M_PI / 180.0), tanX = tanY * aspect;
+    double distance = 0.0;
+    forEachPoint([&](double px, double py, double pz) {
+        const double d[3] = {px - camera.target[0], py - camera.target[1], pz - camera.target[2]};
+        const double x = d[0] * f.right[0] + d[1] * f.right[1] + d[2] * f.right[2];
+        const double y = d[0] * f.up[0] + d[1] * f.up[1] + d[2] * f.up[2];
+        const double z = d[0] * f.back[0] + d[1] * f.back[1] + d[2] * f.back[2];
+        distance = std::max({distance, z + std::fabs(x) / tanX, z + std::fabs(y) / tanY});
+    });
+    distance = std::max(distance * 1.05, 1e-6);
+    for (int a = 0; a < 3; ++a) camera.eye[std::size_t(a)] = camera.target[std::size_t(a)] + f.back[a] * distance;
     fitDepthRange(camera, lo, hi);
     return camera;
+}
+
+} // namespace
+
+Camera framingCamera(const std::array<double, 3>& lo, const std::array<double, 3>& hi, double aspect, double fovYDegrees)
+{
+    return frame(lo, hi, aspect, fovYDegrees, [&](const auto& visit) {
+        for (int corner = 0; corner < 8; ++corner)
+            visit(corner & 1 ? hi[0] : lo[0], corner & 2 ? hi[1] : lo[1], corner & 4 ? hi[2] : lo[2]);
+    });
+}
+
+Camera framingCamera(const std::vector<std::array<float, 3>>& points, const std::array<double, 3>& lo,
+                     const std::array<double, 3>& hi, double aspect, double fovYDegrees)
+{
+    if (points.empty()) return framingCamera(lo, hi, aspect, fovYDegrees);
+    return frame(lo, hi, aspect, fovYDegrees, [&](const auto& visit) {
+        for (const auto& p : points) visit(p[0], p[1], p[2]);
+    });
 }
 
 } // namespace vdbclay::render

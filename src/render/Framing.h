@@ -3,13 +3,19 @@
 
 #include "render/RenderTypes.h"
 
+#include <vector>
+
 namespace vdbclay::render {
 
 /// A camera looking at the centre of the box [lo, hi] from a three-quarter view (from +x, +y, +z),
-/// far enough that the box's bounding sphere fits the vertical and horizontal fields of view, with
-/// near and far planes around it.
+/// just far enough that every corner of the box lies inside the view, with near and far planes around it.
 Camera framingCamera(const std::array<double, 3>& lo, const std::array<double, 3>& hi, double aspect,
                      double fovYDegrees = 40.0);
+
+/// The same camera, just far enough that every one of `points` lies inside the view (tighter than the
+/// box for round shapes); the box [lo, hi] holds the points and sets the depth range.
+Camera framingCamera(const std::vector<std::array<float, 3>>& points, const std::array<double, 3>& lo,
+                     const std::array<double, 3>& hi, double aspect, double fovYDegrees = 40.0);
 
 /// Chooses near and far planes for `camera` that hold the box [lo, hi] (near at least 1e-4 of far).
 void fitDepthRange(Camera& camera, const std::array<double, 3>& lo, const std::array<double, 3>& hi);

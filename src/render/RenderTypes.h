@@ -55,7 +55,7 @@ struct ShadingOptions {
     bool wireframe = false;
     bool ambientOcclusion = true;
     std::array<float, 3> background{0.16f, 0.17f, 0.19f};
-    std::array<float, 3> lightDirection{-0.45f, -0.8f, -0.4f}; // the key light travels along this
+    std::array<float, 3> lightDirection{0.3f, -0.8f, -0.52f}; // the key light travels along this (from the upper left of the default view)
 };
 
 /// Per-frame figures.

@@ -2,7 +2,9 @@
 
 #include "mesher/VertexOcclusion.h"
 
+#include <algorithm>
 #include <chrono>
+#include <limits>
 #include <iterator>
 #include <set>
 
@@ -37,14 +39,23 @@ VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOp
 {
     const auto start = Clock::now();
     VolumeUpload out;
+    out.lo.fill(std::numeric_limits<double>::max());
+    out.hi.fill(std::numeric_limits<double>::lowest());
     renderer.setMaterials(volume.materials());
     for (const MeshChunk& chunk : meshVolumeChunks(volume, options)) {
         if (chunk.mesh.triangles.empty()) continue;
+        for (std::size_t i = 0; i < chunk.mesh.positions.size(); i += 8) out.outline.push_back(chunk.mesh.positions[i]);
+        for (const auto& p : chunk.mesh.positions)
+            for (std::size_t a = 0; a < 3; ++a) {
+                out.lo[a] = std::min(out.lo[a], double(p[a]));
+                out.hi[a] = std::max(out.hi[a], double(p[a]));
+            }
         const std::vector<uint8_t> occlusion = vertexOcclusion(volume, chunk.mesh);
         renderer.setChunk(leafChunkId(chunk.leafOrigin), chunk.mesh, 0, &occlusion);
         ++out.chunks;
         out.triangles += chunk.mesh.triangles.size();
     }
+    if (out.chunks == 0) out.lo = out.hi = {0.0, 0.0, 0.0};
     out.meshSeconds = secondsSince(start);
     return out;
 }

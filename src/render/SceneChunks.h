@@ -15,6 +15,8 @@ namespace vdbclay::render {
 ChunkId leafChunkId(const std::array<int32_t, 3>& leafOrigin);
 
 struct VolumeUpload {
+    std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0}; // the meshes' bounds, world units
+    std::vector<std::array<float, 3>> outline;       // every 8th vertex: enough to frame the meshes
     uint64_t chunks = 0;
     uint64_t triangles = 0;
     double meshSeconds = 0.0;

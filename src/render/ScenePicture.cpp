@@ -61,14 +61,11 @@ Camera defaultCamera(const std::array<double, 3>& lo, const std::array<double, 3
 
 Picture renderVolume(VulkanContext& context, const Volume& volume, const PictureRequest& request)
 {
-    const VolumeStats s = volume.stats();
-    const double h = volume.voxelSize();
-    const std::array<double, 3> lo{s.bboxMin[0] * h, s.bboxMin[1] * h, s.bboxMin[2] * h};
-    const std::array<double, 3> hi{(s.bboxMax[0] + 1) * h, (s.bboxMax[1] + 1) * h, (s.bboxMax[2] + 1) * h};
-    Camera camera = request.camera.value_or(defaultCamera(lo, hi, request.width, request.height));
-    fitDepthRange(camera, lo, hi);
     Renderer renderer(context);
     const VolumeUpload upload = uploadVolume(renderer, volume, pictureMeshOptions());
+    Camera camera = request.camera.value_or(
+        framingCamera(upload.outline, upload.lo, upload.hi, double(request.width) / double(request.height)));
+    fitDepthRange(camera, upload.lo, upload.hi);
     Picture p = draw(context, renderer, camera, request);
     p.meshMs = upload.meshSeconds * 1000.0;
     return p;
