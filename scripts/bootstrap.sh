@@ -51,6 +51,7 @@ packages=(
     libsqlite3-dev libplplot-dev plplot-driver-cairo pkg-config
     libopenvdb-tools python3-openvdb libassimp-dev
     clang-14 libclang-rt-14-dev
+    libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslc libglm-dev libstb-dev
 )
 
 installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q 'install ok installed'; }

@@ -4,17 +4,27 @@
 // brush highlight against the brush's field, uploads and frees counted.
 #include "mesher/Mesher.h"
 #include "render/Framing.h"
+#include "render/SceneChunks.h"
+#include "render/ScenePicture.h"
+#include "scene/SceneStore.h"
+#include "scene/StoreLod.h"
+#include "scene/StreamingScene.h"
+#include "sculpt/StrokeScript.h"
 #include "render/ImageFile.h"
 #include "render/OffscreenTarget.h"
 #include "render/Renderer.h"
 #include "render/Thumbnail.h"
 #include "render/VulkanContext.h"
+#include "support/CliRun.h"
 #include "support/Sculpt.h"
 #include "support/TestUtil.h"
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <memory>
 
 using namespace vdbclay;
@@ -47,6 +57,47 @@ std::vector<bool> coverage(const OffscreenTarget& target)
 }
 
 double srgbToLinear(uint8_t v) { return std::pow(double(v) / 255.0, 2.2); }
+
+/// A camera on the +z axis looking at the origin.
+Camera frontCamera(double distance, double fov = 40.0)
+{
+    Camera c;
+    c.eye = {0.0, 0.0, distance};
+    c.target = {0.0, 0.0, 0.0};
+    c.fovYDegrees = fov;
+    c.nearPlane = distance * 0.05;
+    c.farPlane = distance * 4.0;
+    return c;
+}
+
+/// Where the ray through a pixel's centre meets the plane z = planeZ (camera on +z looking at -z).
+std::array<double, 2> onPlane(const Camera& c, int x, int y, int size, double planeZ)
+{
+    const double t = std::tan(c.fovYDegrees * M_PI / 360.0);
+    const double nx = (x + 0.5) / size * 2.0 - 1.0, ny = 1.0 - (y + 0.5) / size * 2.0;
+    const double d = c.eye[2] - planeZ;
+    return {nx * t * d, ny * t * d};
+}
+
+/// The pixel size on the plane z = planeZ (world units).
+double pixelOnPlane(const Camera& c, int size, double planeZ)
+{
+    return 2.0 * std::tan(c.fovYDegrees * M_PI / 360.0) * (c.eye[2] - planeZ) / size;
+}
+
+/// A slab whose +z face (z = 8) faces a front camera, 80 wide.
+Volume slab()
+{
+    Volume v(1.0);
+    apply(v, CsgMode::Add, box(Vec3d(40.0, 40.0, 8.0)), at(Vec3d(0.0)));
+    return v;
+}
+
+void requireNoValidationMessages(const VulkanContext& context)
+{
+    INFO("validation messages go to stderr");
+    CHECK(context.validationMessages() == 0);
+}
 
 } // namespace
 
@@ -99,4 +150,313 @@ TEST_CASE("render: a sphere's silhouette matches its analytic projection within 
     CHECK(std::abs(int(centre[0]) - 128) < 12);
     CHECK(std::abs(int(centre[1]) - 128) < 12);
     CHECK(context->validationMessages() == 0);
+}
+
+TEST_CASE("render: a painted region shows its material's colour, the rest the default's", "[render]")
+{
+    auto context = validatedContext();
+    Volume volume = slab();
+    const MaterialId red = defineMaterial(volume, "red", 0.9f, {0.8f, 0.1f, 0.1f, 1.0f});
+    // Paint the left half of the face (x < 0).
+    apply(volume, CsgMode::Paint, box(Vec3d(40.0, 40.0, 20.0)), at(Vec3d(-40.0, 0.0, 0.0)), red);
+    Renderer renderer(*context);
+    uploadVolume(renderer, volume, cmsOptions());
+    const int size = 64;
+    OffscreenTarget target(*context, size, size);
+    RenderView view{frontCamera(120.0), &target, {}};
+    renderer.render({view});
+    const Image image = target.colour();
+    const Material& grey = volume.materials().at(1);
+    const Material& paint = volume.materials().at(red);
+    int checked[2] = {0, 0};
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const auto p = onPlane(view.camera, x, y, size, 8.0);
+            if (std::fabs(p[0]) < 3.0 || std::fabs(p[0]) > 36.0 || std::fabs(p[1]) > 36.0) continue; // edges, the seam
+            const Material& expected = p[0] < 0.0 ? paint : grey;
+            const uint8_t* px = image.pixel(x, y);
+            // Light, occlusion and texture scale every channel alike: the chromaticity is the material's.
+            const double r = srgbToLinear(px[0]), g = srgbToLinear(px[1]), b = srgbToLinear(px[2]);
+            const double sum = r + g + b, expectedSum = expected.color[0] + expected.color[1] + expected.color[2];
+            INFO("pixel " << x << "," << y << " rgb " << int(px[0]) << " " << int(px[1]) << " " << int(px[2]));
+            REQUIRE(sum > 0.01);
+            CHECK(std::fabs(r / sum - expected.color[0] / expectedSum) < 0.03);
+            CHECK(std::fabs(g / sum - expected.color[1] / expectedSum) < 0.03);
+            ++checked[p[0] < 0.0];
+        }
+    CHECK(checked[0] > 300);
+    CHECK(checked[1] > 300);
+
+    // The toughness view: red (0.9) is nearer red than blue, the default (0.5) between.
+    ShadingOptions toughness;
+    toughness.mode = ViewMode::Toughness;
+    renderer.setShading(toughness);
+    renderer.render({view});
+    const Image t = target.colour();
+    const uint8_t* hard = t.pixel(size / 4, size / 2);
+    const uint8_t* soft = t.pixel(3 * size / 4, size / 2);
+    CHECK(hard[0] > hard[2]);
+    CHECK(int(hard[0]) - int(hard[2]) > int(soft[0]) - int(soft[2]));
+    requireNoValidationMessages(*context);
+}
+
+TEST_CASE("render: the brush highlight covers exactly the surface inside the brush; the preview draws the brush", "[render]")
+{
+    auto context = validatedContext();
+    const Volume volume = slab();
+    Renderer renderer(*context);
+    uploadVolume(renderer, volume, cmsOptions());
+    const int size = 80;
+    OffscreenTarget target(*context, size, size);
+    RenderView view{frontCamera(100.0), &target, {}};
+    renderer.render({view});
+    const Image plain = target.colour();
+
+    BrushOverlay brush;
+    brush.shape = BrushOverlay::Shape::Sphere;
+    const double radius = 14.0;
+    const std::array<double, 3> centre{6.0, -4.0, 10.0}; // 2 above the face: a disc of radius sqrt(14^2 - 2^2)
+    brush.params = {float(radius), 0, 0, 0};
+    brush.worldToLocal = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -float(centre[0]), -float(centre[1]), -float(centre[2]), 1};
+    brush.preview = false;
+    renderer.setBrush(brush);
+    renderer.render({view});
+    const Image lit = target.colour();
+    const double pixel = pixelOnPlane(view.camera, size, 8.0);
+    const double disc = std::sqrt(radius * radius - 2.0 * 2.0);
+    int inside = 0, mismatches = 0;
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const auto p = onPlane(view.camera, x, y, size, 8.0);
+            if (std::fabs(p[0]) > 38.0 || std::fabs(p[1]) > 38.0) continue;
+            const double r = std::hypot(p[0] - centre[0], p[1] - centre[1]);
+            if (std::fabs(r - disc) < 1.5 * pixel) continue;
+            const uint8_t *a = plain.pixel(x, y), *b = lit.pixel(x, y);
+            const bool highlighted = std::abs(int(a[0]) - int(b[0])) + std::abs(int(a[1]) - int(b[1])) + std::abs(int(a[2]) - int(b[2])) > 30;
+            inside += r < disc;
+            mismatches += highlighted != (r < disc);
+        }
+    CHECK(inside > 200);
+    CHECK(mismatches == 0);
+
+    // The preview: the brush's upper cap pokes out of the face, so pixels over the disc change again.
+    brush.preview = true;
+    brush.highlight = false;
+    brush.worldBoundsMin = {float(centre[0] - radius), float(centre[1] - radius), float(centre[2] - radius), 0};
+    brush.worldBoundsMax = {float(centre[0] + radius), float(centre[1] + radius), float(centre[2] + radius), 0};
+    renderer.setBrush(brush);
+    renderer.render({view});
+    const Image previewed = target.colour();
+    int changedInside = 0, changedOutside = 0;
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const auto p = onPlane(view.camera, x, y, size, 8.0);
+            const double r = std::hypot(p[0] - centre[0], p[1] - centre[1]);
+            const uint8_t *a = plain.pixel(x, y), *b = previewed.pixel(x, y);
+            const bool changed = std::abs(int(a[0]) - int(b[0])) + std::abs(int(a[1]) - int(b[1])) + std::abs(int(a[2]) - int(b[2])) > 12;
+            if (r < disc - 2.0 * pixel) changedInside += changed;
+            if (r > radius * 1.3) changedOutside += changed;
+        }
+    CHECK(changedInside > 150);
+    CHECK(changedOutside == 0);
+    requireNoValidationMessages(*context);
+}
+
+TEST_CASE("render: two views of one frame (stereo) each see the scene; a thumbnail frames a mesh", "[render]")
+{
+    auto context = validatedContext();
+    Volume volume(1.0);
+    apply(volume, CsgMode::Add, sphere(10.0), at(Vec3d(0.0)));
+    const Mesh mesh = meshVolume(volume, cmsOptions());
+    Renderer renderer(*context);
+    renderer.setChunk(7, mesh);
+    OffscreenTarget target(*context, 96, 48);
+    RenderView left{frontCamera(60.0), &target, {0, 0, 48, 48}};
+    RenderView right{frontCamera(60.0), &target, {48, 0, 48, 48}};
+    left.camera.eye[0] = -3.0;
+    right.camera.eye[0] = 3.0;
+    const FrameStats stats = renderer.render({left, right});
+    CHECK(stats.triangles == 2 * mesh.triangleCount());
+    const std::vector<bool> covered = coverage(target);
+    int coveredHalves[2] = {0, 0};
+    for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 96; ++x) coveredHalves[x >= 48] += covered[std::size_t(y * 96 + x)];
+    CHECK(coveredHalves[0] > 200);
+    CHECK(std::abs(coveredHalves[0] - coveredHalves[1]) < coveredHalves[0] / 10);
+
+    ThumbnailOptions options;
+    options.size = 48;
+    options.transparentBackground = true;
+    const Image thumb = renderThumbnail(*context, mesh, volume.materials(), options);
+    REQUIRE(thumb.width == 48);
+    int opaque = 0, touchesEdge = 0;
+    for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 48; ++x) {
+            const bool drawn = thumb.pixel(x, y)[3] == 255;
+            opaque += drawn;
+            if (drawn && (x == 0 || y == 0 || x == 47 || y == 47)) ++touchesEdge;
+        }
+    // Framed: the sphere fills much of the square and is not cut by its edges.
+    CHECK(opaque > 48 * 48 / 3);
+    CHECK(touchesEdge == 0);
+    CHECK_THROWS_AS(renderThumbnail(*context, Mesh{}, volume.materials(), options), std::invalid_argument);
+    requireNoValidationMessages(*context);
+}
+
+TEST_CASE("render: uploads happen once per new or changed chunk; removed and over-budget chunks free their memory", "[render]")
+{
+    auto context = validatedContext();
+    Volume volume(1.0);
+    apply(volume, CsgMode::Add, sphere(12.0), at(Vec3d(0.0)));
+    const std::vector<MeshChunk> chunks = meshVolumeChunks(volume, cmsOptions());
+    RendererOptions options;
+    options.stagingBytes = 1 << 20;
+    Renderer renderer(*context, options);
+    uint64_t ids = 0;
+    for (const MeshChunk& c : chunks)
+        if (!c.mesh.triangles.empty()) renderer.setChunk(++ids, c.mesh);
+    OffscreenTarget target(*context, 32, 32);
+    RenderView view{frontCamera(60.0), &target, {}};
+    FrameStats first = renderer.render({view});
+    CHECK(first.chunksUploaded == ids);
+    const uint64_t allBytes = first.gpuMemoryBytes;
+    CHECK(allBytes >= first.uploadBytes);
+    FrameStats second = renderer.render({view});
+    CHECK(second.chunksUploaded == 0);
+    CHECK(second.uploadBytes == 0);
+    // Replace one, remove two: one upload, two frees, and the memory follows.
+    renderer.setChunk(1, chunks[0].mesh.triangles.empty() ? chunks[1].mesh : chunks[0].mesh);
+    renderer.removeChunk(2);
+    renderer.removeChunk(3);
+    FrameStats third = renderer.render({view});
+    CHECK(third.chunksUploaded == 1);
+    CHECK(third.chunksFreed == 2);
+    CHECK(third.residentChunks == ids - 2);
+    CHECK(third.gpuMemoryBytes < allBytes);
+    for (uint64_t id = 1; id <= ids; ++id) renderer.removeChunk(id);
+    FrameStats emptied = renderer.render({view});
+    CHECK(emptied.gpuMemoryBytes == 0);
+    CHECK(emptied.residentChunks == 0);
+
+    // Over the GPU budget, chunks not drawn this frame go first (a camera facing away draws none).
+    RendererOptions tight;
+    tight.gpuBudgetBytes = allBytes / 3;
+    Renderer budgeted(*context, tight);
+    ids = 0;
+    for (const MeshChunk& c : chunks)
+        if (!c.mesh.triangles.empty()) budgeted.setChunk(++ids, c.mesh);
+    RenderView away{frontCamera(60.0), &target, {}};
+    away.camera.target = {0.0, 0.0, 120.0};
+    const FrameStats s = budgeted.render({away});
+    CHECK(s.chunksDrawn == 0);
+    CHECK(s.gpuMemoryBytes <= tight.gpuBudgetBytes);
+    CHECK(budgeted.takeEvicted().size() == s.chunksFreed);
+    CHECK(s.chunksFreed > 0);
+    requireNoValidationMessages(*context);
+}
+
+TEST_CASE("render: a store streamed under a small budget draws what the .vdb draws at level 0; an edit re-uploads only its bricks", "[render]")
+{
+    auto context = validatedContext();
+    TempDir dir;
+    Volume volume = multiBrickScene();
+    const std::string path = dir.file("scene.vdbclay");
+    writeStoreFile(volume, path);
+    {
+        SceneStore store = SceneStore::open(path, StoreAccess::ReadWrite);
+        buildStoreLod(store, 2);
+    }
+    const int size = 64;
+    PictureRequest request;
+    request.width = request.height = size;
+    Camera camera;
+    camera.eye = {90.0, 60.0, 110.0};
+    camera.target = {0.0, 0.0, 0.0};
+    camera.fovYDegrees = 45.0;
+    request.camera = camera;
+    request.pixelTolerance = 1e-3; // level 0 everywhere
+    request.memoryBudgetBytes = 24ull << 20;
+    request.shading.ambientOcclusion = false; // occlusion near a brick's edge depends on what else is resident
+    const Picture fromStore = renderStore(*context, path, request);
+    const Picture fromVolume = renderVolume(*context, volume, request);
+    REQUIRE(fromStore.refined);
+    CHECK(fromStore.stats.levelsShown == std::vector<int>{0});
+    int differing = 0;
+    for (std::size_t i = 0; i < fromStore.image.rgba.size(); i += 4) {
+        int d = 0;
+        for (int c = 0; c < 3; ++c) d = std::max(d, std::abs(int(fromStore.image.rgba[i + c]) - int(fromVolume.image.rgba[i + c])));
+        differing += d > 2;
+    }
+    CHECK(differing <= size * size / 200);
+
+    // Sculpt one small stamp: only the bricks it changed are meshed and uploaded again.
+    StreamingOptions streaming;
+    streaming.memoryBudgetBytes = 64ull << 20;
+    streaming.pixelTolerance = 1e-3;
+    streaming.access = StoreAccess::ReadWrite;
+    StreamingScene scene(path, streaming);
+    Viewer viewer;
+    viewer.position = camera.eye;
+    viewer.target = camera.target;
+    viewer.fovDegrees = camera.fovYDegrees;
+    viewer.viewport = {size, size};
+    FrameReport report;
+    for (int i = 0; i < 50 && !(report.settled && report.pending == 0); ++i) {
+        report = scene.frame(viewer);
+        scene.waitForLoads();
+    }
+    Renderer renderer(*context);
+    renderer.setMaterials(scene.store().materials());
+    StreamedSceneChunks chunks(cmsOptions());
+    const auto firstSync = chunks.sync(scene, renderer);
+    OffscreenTarget target(*context, size, size);
+    const RenderView view{camera, &target, {}};
+    const FrameStats before = renderer.render({view});
+    CHECK(before.chunksUploaded <= firstSync.meshed); // bricks whose mesh is empty upload nothing
+    CHECK(before.chunksUploaded > 0);
+    REQUIRE(firstSync.shown > 4);
+
+    const StrokeScript stamp = parseStrokeScript(R"({"ops": [{"mode": "add", "brush": {"shape": "sphere", "radius": 3}, "at": [43, 25, 50]}]})");
+    const StreamingScene::EditReport edit = scene.sculpt(stamp);
+    REQUIRE(edit.bricksChanged >= 1);
+    scene.frame(viewer);
+    const auto secondSync = chunks.sync(scene, renderer);
+    const FrameStats after = renderer.render({view});
+    CHECK(secondSync.meshed == edit.bricksChanged);
+    CHECK(after.chunksUploaded == edit.bricksChanged);
+    CHECK(after.chunksUploaded < before.chunksUploaded);
+    requireNoValidationMessages(*context);
+}
+
+TEST_CASE("cli: render writes the picture it is asked for; bad arguments and a missing device fail cleanly", "[render][cli]")
+{
+    TempDir dir;
+    REQUIRE(runCli(dir, "new s.vdb --shape sphere --size 6").exitCode == 0);
+    const nlohmann::json j = parseJsonOutput(runCli(dir, "render s.vdb -o s.png --size 40x30 --view normals --json"));
+    for (const char* key : {"triangles", "chunks", "levels_shown", "gpu_memory_bytes", "cpu_ms", "gpu_ms", "device"}) CHECK(j.contains(key));
+    CHECK(j["triangles"].get<int>() > 100);
+    const Image image = readImage(dir.file("s.png"));
+    CHECK(image.width == 40);
+    CHECK(image.height == 30);
+
+    for (const char* bad : {"render s.vdb -o t.png --size 0x10", "render s.vdb -o t.png --size 10", "render s.vdb -o t.png --camera 1,2,3",
+                            "render s.vdb -o t.png --view fancy", "render s.vdb -o t.obj", "render s.vdb -o t.png --frame 2",
+                            "render s.vdb -o t.png --camera 1,1,1,1,1,1"}) {
+        INFO(bad);
+        const CommandResult r = runCli(dir, bad);
+        CHECK(r.exitCode == 2);
+        checkCleanFailure(r);
+        CHECK_FALSE(std::filesystem::exists(dir.file("t.png")));
+    }
+    // No Vulkan driver at all: one line, exit 1, nothing written.
+    ::setenv("VK_DRIVER_FILES", "/nonexistent/icd.json", 1);
+    ::setenv("VK_ICD_FILENAMES", "/nonexistent/icd.json", 1);
+    const CommandResult missing = runCli(dir, "render s.vdb -o v.png");
+    ::unsetenv("VK_DRIVER_FILES");
+    ::unsetenv("VK_ICD_FILENAMES");
+    CHECK(missing.exitCode == 1);
+    checkCleanFailure(missing);
+    CHECK(std::count(missing.err.begin(), missing.err.end(), '\n') == 1);
+    CHECK(missing.err.find("Vulkan") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir.file("v.png")));
 }

@@ -32,7 +32,7 @@ Image renderThumbnail(VulkanContext& context, const Mesh& mesh, const MaterialTa
     renderer.setChunk(0, mesh);
     OffscreenTarget target(context, options.size, options.size);
     RenderView view;
-    view.camera = framingCamera(lo, hi, 1.0);
+    view.camera = framingCamera(mesh.positions, lo, hi, 1.0);
     view.target = &target;
     renderer.render({view});
     Image image = target.colour();
