@@ -180,6 +180,10 @@ struct LodOptions {
     double pixelError = 1.0;
     std::string csv;
     std::string plot;
+    std::string framesDir;        // pictures of the flight
+    uint64_t every = 1;           // a picture every N frames
+    std::string frameView = "lod";
+    std::string frameSize;        // WxH; default: the flight's viewport, at most 640 wide
 };
 struct RenderOptions {
     std::string scene;
@@ -195,6 +199,8 @@ struct RenderOptions {
     bool json = false;
 };
 CLI::App* addRenderCommand(CLI::App& parent, RenderOptions& options);
+/// "WxH" in pixels, each 1 .. 8192; throws UsageError naming `option` otherwise.
+std::pair<int, int> parsePictureSize(const std::string& text, const std::string& option);
 int runRender(const RenderOptions& options);
 
 struct LodCommands {

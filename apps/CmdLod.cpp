@@ -1,6 +1,11 @@
 // vdbclay lod build / lod info: the levels of detail of a store.
 #include "Cli.h"
 
+#include "render/Framing.h"
+#include "render/ImageFile.h"
+#include "render/Renderer.h"
+#include "render/SceneChunks.h"
+#include "render/VulkanContext.h"
 #include "scene/CameraPath.h"
 #include "scene/FlightInspection.h"
 #include "scene/SceneStore.h"
@@ -13,7 +18,10 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <iostream>
+#include <tuple>
 
 namespace vdbclay::cli {
 
@@ -84,6 +92,17 @@ LodCommands addLodCommand(CLI::App& parent, LodOptions& o)
         ->check(positiveNumber());
     cmds.inspect->add_option("--csv", o.csv, "Write one row per frame")->type_name("OUT.csv");
     cmds.inspect->add_option("--plot", o.plot, "Draw the figures over the flight (PNG, PLplot)")->type_name("OUT.png");
+    cmds.inspect->add_option("--frames", o.framesDir, "Draw pictures of the flight into this folder (frame-NNNNN.png, and settled.png once the view refined)")
+        ->type_name("DIR");
+    cmds.inspect->add_option("--every", o.every, "With --frames: a picture every N camera frames")
+        ->capture_default_str()
+        ->type_name("N")
+        ->check(CLI::Range(uint64_t(1), uint64_t(1) << 40));
+    cmds.inspect->add_option("--view", o.frameView, "With --frames: what the colours show (lod: each region's level)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"shaded", "lod", "toughness", "normals"}));
+    cmds.inspect->add_option("--frame-size", o.frameSize, "With --frames: picture size (default: the flight's viewport, at most 640 wide)")
+        ->type_name("WxH");
     cmds.inspect->add_flag("--json", o.json, "Print {\"frames\": [one object per camera frame], \"summary\": {...}}");
     cmds.inspect->footer(
         "The camera path: {\"fov_degrees\": 60, \"viewport\": [1920, 1080], \"frames\": [{\"position\": [x, y, z],\n"
@@ -150,6 +169,96 @@ nlohmann::json frameJson(const InspectedFrame& f)
 
 nlohmann::json optionalSeconds(const std::optional<double>& t) { return t ? nlohmann::json(*t) : nlohmann::json(); }
 
+/// `lod inspect --frames`: pictures of what the scene shows along the flight, drawn with one renderer
+/// that uploads only the bricks that changed since the last picture.
+class FlightPictures {
+public:
+    FlightPictures(const LodOptions& o, const std::vector<CameraFrame>& flight, const StreamingScene& scene)
+        : dir_(o.framesDir), every_(o.every), scene_(scene)
+    {
+        namespace fs = std::filesystem;
+        std::error_code ec;
+        if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec))
+            throw UsageError("--frames '" + dir_ + "' is a file, not a folder");
+        fs::create_directories(dir_, ec);
+        if (!fs::is_directory(dir_, ec)) throw std::runtime_error("cannot create the folder '" + dir_ + "'" + (ec ? ": " + ec.message() : ""));
+        if (!o.frameSize.empty()) {
+            std::tie(width_, height_) = parsePictureSize(o.frameSize, "--frame-size");
+        } else {
+            const auto [w, h] = flight.front().viewer.viewport;
+            const double scale = std::min(1.0, 640.0 / double(w));
+            width_ = std::max(1, int(std::lround(w * scale)));
+            height_ = std::max(1, int(std::lround(h * scale)));
+        }
+        // Every picture is checked before the flight: a folder of other files is never overwritten.
+        for (std::size_t i = 0; i < flight.size(); i += every_) checkOutput(pathOf(i, flight.size()), OutputForm::Png);
+        checkOutput(pathOf(flight.size(), flight.size()), OutputForm::Png);
+        total_ = flight.size();
+        try {
+            context_ = std::make_unique<render::VulkanContext>();
+        } catch (const render::NoVulkanDevice& e) {
+            throw std::runtime_error(std::string("cannot draw the frames: ") + e.what());
+        }
+        renderer_ = std::make_unique<render::Renderer>(*context_);
+        renderer_->setMaterials(scene.store().materials());
+        render::ShadingOptions shading;
+        shading.mode = render::parseViewMode(o.frameView);
+        renderer_->setShading(shading);
+        target_ = std::make_unique<render::OffscreenTarget>(*context_, width_, height_);
+        const auto box = scene.store().bounds();
+        const double voxel = scene.store().voxelSize();
+        if (box)
+            for (int a = 0; a < 3; ++a) {
+                lo_[std::size_t(a)] = box->first[std::size_t(a)] * voxel;
+                hi_[std::size_t(a)] = (box->second[std::size_t(a)] + 1) * voxel;
+            }
+    }
+
+    void observe(std::size_t index, const Viewer& viewer, const InspectedFrame&)
+    {
+        if (index < total_ && index % every_ != 0) return;
+        chunks_.sync(scene_, *renderer_);
+        render::RenderView view;
+        view.camera.eye = viewer.position;
+        view.camera.target = viewer.target;
+        view.camera.fovYDegrees = viewer.fovDegrees;
+        render::fitDepthRange(view.camera, lo_, hi_);
+        view.target = target_.get();
+        renderer_->render({view});
+        render::writePng(target_->colour(), pathOf(index, total_));
+        ++written_;
+    }
+
+    std::size_t written() const { return written_; }
+
+private:
+    std::string pathOf(std::size_t index, std::size_t total) const
+    {
+        if (index >= total) return (std::filesystem::path(dir_) / "settled.png").string();
+        char name[32];
+        std::snprintf(name, sizeof name, "frame-%05zu.png", index);
+        return (std::filesystem::path(dir_) / name).string();
+    }
+
+    std::string dir_;
+    uint64_t every_;
+    const StreamingScene& scene_;
+    int width_ = 0, height_ = 0;
+    std::size_t total_ = 0, written_ = 0;
+    std::array<double, 3> lo_{0, 0, 0}, hi_{1, 1, 1};
+    std::unique_ptr<render::VulkanContext> context_;
+    std::unique_ptr<render::Renderer> renderer_;
+    std::unique_ptr<render::OffscreenTarget> target_;
+    render::StreamedSceneChunks chunks_{meshOptionsForPictures()};
+
+    static MeshOptions meshOptionsForPictures()
+    {
+        MeshOptions m;
+        m.kind = MesherKind::CubicalMarchingSquares;
+        return m;
+    }
+};
+
 } // namespace
 
 int runLodInspect(const LodOptions& o)
@@ -169,7 +278,14 @@ int runLodInspect(const LodOptions& o)
     // The outputs are checked before the flight, which replays in real time.
     if (!o.csv.empty()) checkOutput(o.csv, OutputForm::Csv, {o.scene, o.cameraPath});
     if (!o.plot.empty()) checkOutput(o.plot, OutputForm::Png, {o.scene, o.cameraPath});
-    const FlightInspection inspection = inspectFlight(*scene, flight, 2.0, terminalProgress("replaying the flight", !o.json));
+    std::unique_ptr<FlightPictures> pictures;
+    if (!o.framesDir.empty()) pictures = std::make_unique<FlightPictures>(o, flight, *scene);
+    else if (o.every != 1 || o.frameView != "lod" || !o.frameSize.empty())
+        throw UsageError("--every, --view and --frame-size go with --frames DIR");
+    FrameObserver observer;
+    if (pictures) observer = [&](std::size_t index, const Viewer& viewer, const InspectedFrame& f) { pictures->observe(index, viewer, f); };
+    const FlightInspection inspection =
+        inspectFlight(*scene, flight, 2.0, terminalProgress("replaying the flight", !o.json), observer);
     if (!o.csv.empty()) writeFlightCsv(inspection, o.csv);
     if (!o.plot.empty()) writeFlightPlot(inspection, options.memoryBudgetBytes, o.plot);
     const FlightSummary& s = inspection.summary;

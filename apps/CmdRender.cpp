@@ -17,10 +17,12 @@ namespace vdbclay::cli {
 
 namespace {
 
-std::pair<int, int> parseSize(const std::string& text)
+} // namespace
+
+std::pair<int, int> parsePictureSize(const std::string& text, const std::string& option)
 {
     const auto x = text.find('x');
-    const auto bad = [&] { return UsageError("--size '" + text + "' is not WIDTHxHEIGHT in pixels, each 1 .. 8192 (e.g. 1280x720)"); };
+    const auto bad = [&] { return UsageError(option + " '" + text + "' is not WIDTHxHEIGHT in pixels, each 1 .. 8192 (e.g. 1280x720)"); };
     if (x == std::string::npos || x == 0 || x + 1 >= text.size()) throw bad();
     const std::string w = text.substr(0, x), h = text.substr(x + 1);
     if (w.size() > 5 || h.size() > 5 || w.find_first_not_of("0123456789") != std::string::npos ||
@@ -30,6 +32,8 @@ std::pair<int, int> parseSize(const std::string& text)
     if (width < 1 || height < 1 || width > 8192 || height > 8192) throw bad();
     return {width, height};
 }
+
+namespace {
 
 render::Camera parseCamera(const std::string& text)
 {
@@ -87,7 +91,7 @@ CLI::App* addRenderCommand(CLI::App& parent, RenderOptions& o)
 
 int runRender(const RenderOptions& o)
 {
-    const auto [width, height] = parseSize(o.size);
+    const auto [width, height] = parsePictureSize(o.size, "--size");
     if (o.frame && o.cameraPath.empty()) throw UsageError("--frame needs --camera-path");
     if (!o.camera.empty() && !o.cameraPath.empty()) throw UsageError("give --camera or --camera-path, not both");
     std::vector<std::string> inputs{o.scene};

@@ -27,11 +27,18 @@ double since(Clock::time_point start) { return std::chrono::duration<double>(Clo
 } // namespace
 
 FlightInspection inspectFlight(StreamingScene& scene, const std::vector<CameraFrame>& flight, double settleSeconds,
-                               const std::function<void(uint64_t, uint64_t)>& progress)
+                               const std::function<void(uint64_t, uint64_t)>& progress, const FrameObserver& observer)
 {
     FlightInspection out;
     if (flight.empty()) return out;
-    const auto start = Clock::now();
+    auto start = Clock::now();
+    // The observer's time does not count: the flight's clock starts that much later.
+    const auto observe = [&](std::size_t index, const Viewer& viewer) {
+        if (!observer) return;
+        const auto before = Clock::now();
+        observer(index, viewer, out.frames.back());
+        start += Clock::now() - before;
+    };
     const auto record = [&](const Viewer& viewer, bool settling) {
         InspectedFrame f;
         f.settling = settling;
@@ -55,6 +62,7 @@ FlightInspection inspectFlight(StreamingScene& scene, const std::vector<CameraFr
         const double wait = flight[i].time - since(start);
         if (wait > 0.0) std::this_thread::sleep_for(std::chrono::duration<double>(wait));
         record(flight[i].viewer, false);
+        observe(i, flight[i].viewer);
         if (progress) progress(i + 1, flight.size());
     }
     const double end = since(start) + settleSeconds;
@@ -62,6 +70,7 @@ FlightInspection inspectFlight(StreamingScene& scene, const std::vector<CameraFr
         std::this_thread::sleep_for(std::chrono::duration<double>(1.0 / kDefaultFrameRate));
         record(flight.back().viewer, true);
     }
+    observe(flight.size(), flight.back().viewer);
     FlightSummary& s = out.summary;
     s.frames = out.frames.size();
     s.seconds = since(start);

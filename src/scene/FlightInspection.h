@@ -38,11 +38,17 @@ struct FlightInspection {
     FlightSummary summary;
 };
 
+/// Called after a frame was asked for: its index in the flight (the flight's size for the frames asked
+/// after it, while the view settles), its viewer and what the scene reported. Time spent here (drawing
+/// a picture of the frame) is left out of the flight's clock: the loaders keep working meanwhile.
+using FrameObserver = std::function<void(std::size_t index, const Viewer& viewer, const InspectedFrame& frame)>;
+
 /// Replays the flight in real time (frames at their "t"); after the last frame, keeps asking for its
 /// view at 90 Hz for up to `settleSeconds` until it is complete. `progress` (optional) hears of each
 /// frame replayed, out of the flight's frames.
 FlightInspection inspectFlight(StreamingScene& scene, const std::vector<CameraFrame>& flight, double settleSeconds = 2.0,
-                               const std::function<void(uint64_t done, uint64_t total)>& progress = {});
+                               const std::function<void(uint64_t done, uint64_t total)>& progress = {},
+                               const FrameObserver& observer = {});
 
 /// Writes the frames as CSV (one row per frame) and as a PNG plot (PLplot): resident bytes against the
 /// budget, bytes read, loads and evictions, and screen-space error over the flight.
