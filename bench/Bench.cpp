@@ -8,7 +8,7 @@
 
 namespace vdbclay::bench {
 
-std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream", "import", "tool"}; }
+std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream", "import", "tool", "render"}; }
 
 int runBench(const std::string& which, bool json, bool quick, double memoryBudgetMb)
 {
@@ -21,7 +21,8 @@ int runBench(const std::string& which, bool json, bool quick, double memoryBudge
     if (which == "stream") return benchStream(json, quick, memoryBudgetMb);
     if (which == "import") return benchImport(json, quick);
     if (which == "tool") return benchTool(json, quick);
-    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet, stream, import or tool)");
+    if (which == "render") return benchRender(json, quick, memoryBudgetMb);
+    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool or render)");
 }
 
 } // namespace vdbclay::bench

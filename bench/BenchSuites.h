@@ -11,5 +11,6 @@ int benchWavelet(bool json, bool quick);
 int benchStream(bool json, bool quick, double memoryBudgetMb);
 int benchImport(bool json, bool quick);
 int benchTool(bool json, bool quick);
+int benchRender(bool json, bool quick, double memoryBudgetMb);
 
 } // namespace vdbclay::bench

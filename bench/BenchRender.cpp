@@ -1,0 +1,323 @@
+// bench render: the renderer on streamed terrains. Per terrain extent (the 4096 one is bench stream's,
+// about 10^10 voxels of bounds): triangles of a complete 1080p view at 1 px of error, the CPU time per
+// frame of a 90 Hz flight for selection, culling and upload recording, upload bytes per frame, GPU time
+// on this machine's Vulkan device, and the time from an r=32 stamp to its chunks uploaded, beside
+// OpenVDB's volumeToMesh of the same bricks in the same run.
+#include "BenchSuites.h"
+#include "BenchUtil.h"
+
+#include "mesher/Mesher.h"
+#include "render/OffscreenTarget.h"
+#include "render/Renderer.h"
+#include "render/SceneChunks.h"
+#include "render/VulkanContext.h"
+#include "scene/SceneStore.h"
+#include "scene/StoreLod.h"
+#include "scene/StreamingScene.h"
+#include "scene/Synthesize.h"
+#include "sculpt/StrokeScript.h"
+
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/VolumeToMesh.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <thread>
+
+#include <unistd.h>
+
+namespace vdbclay::bench {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kWidth = 1920, kHeight = 1080;
+
+MeshOptions cms()
+{
+    MeshOptions o;
+    o.kind = MesherKind::CubicalMarchingSquares;
+    return o;
+}
+
+Viewer viewerAt(double x, double z, double height, double lookAhead)
+{
+    Viewer v;
+    v.position = {x, height, z};
+    v.target = {x + lookAhead, height * 0.3, z};
+    v.fovDegrees = 60.0;
+    v.viewport = {kWidth, kHeight};
+    return v;
+}
+
+render::Camera cameraOf(const Viewer& v, double far)
+{
+    render::Camera c;
+    c.eye = v.position;
+    c.target = v.target;
+    c.fovYDegrees = v.fovDegrees;
+    c.nearPlane = 0.5;
+    c.farPlane = far;
+    return c;
+}
+
+double percentile(std::vector<double> v, double p)
+{
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    return v[std::min(v.size() - 1, std::size_t(std::ceil(p * double(v.size()))) - 1)];
+}
+
+double mean(const std::vector<double>& v)
+{
+    double s = 0.0;
+    for (double x : v) s += x;
+    return v.empty() ? 0.0 : s / double(v.size());
+}
+
+/// Frames and waits until the view is refined as far as the budget allows.
+FrameReport settle(StreamingScene& scene, const Viewer& viewer)
+{
+    FrameReport r;
+    for (int i = 0; i < 400; ++i) {
+        r = scene.frame(viewer);
+        if (r.settled && r.pending == 0) break;
+        scene.waitForLoads();
+    }
+    return r;
+}
+
+struct TerrainFigures {
+    int extent = 0;
+    uint64_t storeBytes = 0;
+    // Complete views at 1080p, 1 px of error, over several stations.
+    std::vector<double> viewTriangles;
+    uint64_t maxChunks = 0, maxGpuBytes = 0;
+    double gpuMs1080 = 0.0; // one complete view drawn at full size
+    // The flight.
+    std::vector<double> cpuMs, selectMs, recordMs, meshMs, uploadBytes, triangles;
+    // The stamp.
+    double stampSculptMs = 0.0, stampMeshMs = 0.0, stampUploadMs = 0.0, stampTotalMs = 0.0;
+    uint64_t stampBricks = 0, stampChunksUploaded = 0;
+    double openvdbMeshMs = 0.0;
+};
+
+/// OpenVDB's meshing of the same surface: a level set of our mesh of the bricks (meshToLevelSet, half
+/// width 3), then volumeToMesh, timed alone.
+double openvdbRemeshMs(const Mesh& mesh, double voxel)
+{
+    if (mesh.triangles.empty()) return 0.0;
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec3I> triangles;
+    for (const auto& p : mesh.positions) points.emplace_back(float(p[0] / voxel), float(p[1] / voxel), float(p[2] / voxel));
+    for (const auto& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
+    const auto transform = openvdb::math::Transform::createLinearTransform(1.0);
+    const openvdb::FloatGrid::Ptr grid = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*transform, points, triangles, 3.0f);
+    std::vector<openvdb::Vec3s> outPoints;
+    std::vector<openvdb::Vec3I> outTriangles;
+    std::vector<openvdb::Vec4I> outQuads;
+    return timeMs([&] { openvdb::tools::volumeToMesh(*grid, outPoints, outTriangles, outQuads, 0.0, 0.0); });
+}
+
+TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool quick, uint64_t budget, const fs::path& dir)
+{
+    TerrainFigures f;
+    f.extent = extent;
+    const std::string store = (dir / ("terrain-" + std::to_string(extent) + ".vdbclay")).string();
+    SynthOptions synth;
+    synth.kind = SynthKind::Terrain;
+    synth.extent = extent;
+    synth.seed = 7;
+    synthesizeStore(synth, store);
+    {
+        SceneStore s = SceneStore::open(store, StoreAccess::ReadWrite);
+        buildStoreLod(s, 0);
+    }
+    f.storeBytes = fs::file_size(store);
+
+    StreamingOptions options;
+    options.memoryBudgetBytes = budget;
+    options.access = StoreAccess::ReadWrite;
+    StreamingScene scene(store, options);
+    render::Renderer renderer(context);
+    renderer.setMaterials(scene.store().materials());
+    render::StreamedSceneChunks chunks(cms());
+    // Fill costs on lavapipe grow with the pixels; the selection is the 1080p view's whatever the target.
+    render::OffscreenTarget small(context, 480, 270);
+    const double height = 80.0, lookAhead = 200.0, far = 4.0 * extent;
+
+    // Complete views at stations across the terrain.
+    const int stations = quick ? 2 : 4;
+    for (int i = 0; i < stations; ++i) {
+        const double x = extent * (0.1 + 0.2 * i), z = extent * (0.3 + 0.1 * i);
+        const Viewer v = viewerAt(x, z, height, lookAhead);
+        settle(scene, v);
+        chunks.sync(scene, renderer);
+        const render::FrameStats s = renderer.render({{cameraOf(v, far), &small, {}}});
+        f.viewTriangles.push_back(double(s.triangles));
+        f.maxChunks = std::max(f.maxChunks, s.chunksDrawn);
+        f.maxGpuBytes = std::max(f.maxGpuBytes, s.gpuMemoryBytes);
+        if (i == 0) {
+            render::OffscreenTarget full(context, kWidth, kHeight);
+            f.gpuMs1080 = renderer.render({{cameraOf(v, far), &full, {}}}).gpuMs;
+        }
+    }
+
+    // The flight: along x at 90 Hz of wall time (the loaders stream meanwhile), each frame selected,
+    // synced and drawn.
+    const double seconds = quick ? 1.5 : 4.0, speed = extent * 0.5 / seconds;
+    const auto start = Clock::now();
+    for (int frame = 0; frame < int(seconds * 90.0); ++frame) {
+        const Viewer v = viewerAt(extent * 0.15 + speed * frame / 90.0, extent * 0.5, height, lookAhead);
+        FrameReport report;
+        const double select = timeMs([&] { report = scene.frame(v); });
+        const double mesh = timeMs([&] { chunks.sync(scene, renderer); });
+        const render::FrameStats s = renderer.render({{cameraOf(v, far), &small, {}}});
+        f.selectMs.push_back(select);
+        f.recordMs.push_back(s.cpuMs);
+        f.cpuMs.push_back(select + s.cpuMs);
+        f.meshMs.push_back(mesh);
+        f.uploadBytes.push_back(double(s.uploadBytes));
+        f.triangles.push_back(double(s.triangles));
+        const double due = (frame + 1) / 90.0 * 1000.0 - millisecondsSince(start);
+        if (due > 0.0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(due));
+    }
+
+    // A stamp of radius 32 on the surface in front of the camera, then its bricks re-meshed and uploaded.
+    const Viewer v = viewerAt(extent * 0.5, extent * 0.5, height, lookAhead);
+    settle(scene, v);
+    chunks.sync(scene, renderer);
+    renderer.render({{cameraOf(v, far), &small, {}}});
+    const Volume resident = scene.residentLevel0();
+    const double voxel = scene.store().voxelSize();
+    const int32_t sx = int32_t((v.position[0] + lookAhead * 0.5) / voxel), sz = int32_t(v.position[2] / voxel);
+    int32_t sy = 0;
+    for (int32_t y = int32_t(extent); y > -int32_t(extent); --y)
+        if (resident.materialAt({sx, y, sz}) != kEmptyMaterial) {
+            sy = y;
+            break;
+        }
+    char text[200];
+    std::snprintf(text, sizeof text, R"({"ops": [{"mode": "add", "brush": {"shape": "sphere", "radius": 32}, "at": [%.1f, %.1f, %.1f]}]})",
+                  sx * voxel, sy * voxel, sz * voxel);
+    const StrokeScript stamp = parseStrokeScript(text);
+    const auto stampStart = Clock::now();
+    StreamingScene::EditReport edit;
+    f.stampSculptMs = timeMs([&] { edit = scene.sculpt(stamp); });
+    scene.frame(v);
+    render::StreamedSceneChunks::SyncReport sync;
+    f.stampMeshMs = timeMs([&] { sync = chunks.sync(scene, renderer); });
+    render::FrameStats after;
+    f.stampUploadMs = timeMs([&] { after = renderer.render({{cameraOf(v, far), &small, {}}}); });
+    f.stampTotalMs = millisecondsSince(stampStart);
+    f.stampBricks = edit.bricksChanged;
+    f.stampChunksUploaded = after.chunksUploaded;
+    // OpenVDB on the same bricks: the union of their meshes as one surface.
+    Mesh changed;
+    for (const BrickKey& key : scene.shownBricks()) {
+        if (key.level != 0) continue;
+        const auto box = brickBox(key.brick);
+        const double cx = (box.min[0] + 32) * voxel, cz = (box.min[2] + 32) * voxel;
+        if (std::fabs(cx - sx * voxel) > 32 + 48 || std::fabs(cz - sz * voxel) > 32 + 48) continue;
+        const auto m = scene.meshBrick(key, cms());
+        if (!m) continue;
+        const uint32_t base = uint32_t(changed.positions.size());
+        changed.positions.insert(changed.positions.end(), m->mesh.positions.begin(), m->mesh.positions.end());
+        for (auto t : m->mesh.triangles) changed.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    }
+    f.openvdbMeshMs = openvdbRemeshMs(changed, voxel);
+    return f;
+}
+
+} // namespace
+
+int benchRender(bool json, bool quick, double memoryBudgetMb)
+{
+    const uint64_t budget = memoryBudgetMb > 0.0 ? uint64_t(memoryBudgetMb * double(1 << 20)) : 384ull << 20;
+    const fs::path dir = fs::temp_directory_path() / ("vdbclay-bench-render-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    struct Cleanup {
+        fs::path dir;
+        ~Cleanup()
+        {
+            std::error_code ec;
+            fs::remove_all(dir, ec);
+        }
+    } cleanup{dir};
+
+    render::VulkanContext context;
+    std::vector<TerrainFigures> terrains;
+    for (int extent : quick ? std::vector<int>{512, 768} : std::vector<int>{1024, 4096}) {
+        if (!json) std::cerr << "bench render: terrain of extent " << extent << " ..." << std::endl;
+        terrains.push_back(measureTerrain(context, extent, quick, budget, dir));
+    }
+
+    if (json) {
+        nlohmann::json out = jsonPreamble("render", quick);
+        out["device"] = context.deviceName();
+        out["memory_budget_bytes"] = budget;
+        out["viewport"] = {kWidth, kHeight};
+        nlohmann::json list = nlohmann::json::array();
+        for (const TerrainFigures& f : terrains)
+            list.push_back({{"extent", f.extent},
+                            {"store_bytes", f.storeBytes},
+                            {"complete_view_triangles_max", maximum(f.viewTriangles)},
+                            {"complete_view_triangles_mean", mean(f.viewTriangles)},
+                            {"complete_view_chunks_max", f.maxChunks},
+                            {"gpu_memory_bytes_max", f.maxGpuBytes},
+                            {"gpu_ms_1080p", f.gpuMs1080},
+                            {"flight_frames", f.cpuMs.size()},
+                            {"cpu_ms_p50", percentile(f.cpuMs, 0.5)},
+                            {"cpu_ms_p99", percentile(f.cpuMs, 0.99)},
+                            {"select_ms_p99", percentile(f.selectMs, 0.99)},
+                            {"record_ms_p99", percentile(f.recordMs, 0.99)},
+                            {"mesh_ms_per_frame_mean", mean(f.meshMs)},
+                            {"mesh_ms_per_frame_p99", percentile(f.meshMs, 0.99)},
+                            {"upload_bytes_per_frame_mean", mean(f.uploadBytes)},
+                            {"upload_bytes_per_frame_max", maximum(f.uploadBytes)},
+                            {"triangles_per_frame_mean", mean(f.triangles)},
+                            {"triangles_per_frame_max", maximum(f.triangles)},
+                            {"stamp_bricks", f.stampBricks},
+                            {"stamp_chunks_uploaded", f.stampChunksUploaded},
+                            {"stamp_sculpt_ms", f.stampSculptMs},
+                            {"stamp_mesh_ms", f.stampMeshMs},
+                            {"stamp_upload_ms", f.stampUploadMs},
+                            {"stamp_to_uploaded_ms", f.stampTotalMs},
+                            {"openvdb_volume_to_mesh_ms", f.openvdbMeshMs}});
+        out["terrains"] = list;
+        std::cout << out.dump(2) << std::endl;
+        return 0;
+    }
+    printPreamble(std::cout, "render", quick);
+    std::cout << "device: " << context.deviceName() << "; views selected for " << kWidth << "x" << kHeight
+              << " at 1 px of error; memory budget " << megabytes(double(budget)) << "\n\n";
+    Table t;
+    t.header = {"figure"};
+    for (const TerrainFigures& f : terrains) t.header.push_back("extent " + std::to_string(f.extent));
+    t.header.push_back("goal / baseline");
+    const auto row = [&](const std::string& name, auto value, const std::string& goal) {
+        std::vector<std::string> r{name};
+        for (const TerrainFigures& f : terrains) r.push_back(value(f));
+        r.push_back(goal);
+        t.rows.push_back(r);
+    };
+    row("triangles of a complete view (max)", [](const TerrainFigures& f) { return fixed(maximum(f.viewTriangles) / 1e6, 2) + " M"; }, "<= 2 M");
+    row("chunks drawn (max) / GPU memory", [](const TerrainFigures& f) { return std::to_string(f.maxChunks) + " / " + megabytes(double(f.maxGpuBytes)); }, "");
+    row("CPU per frame p50 / p99 (select + record)", [](const TerrainFigures& f) { return fixed(percentile(f.cpuMs, 0.5), 2) + " / " + fixed(percentile(f.cpuMs, 0.99), 2) + " ms"; }, "p99 <= 2 ms");
+    row("meshing per frame mean / p99 (workers' share)", [](const TerrainFigures& f) { return fixed(mean(f.meshMs), 1) + " / " + fixed(percentile(f.meshMs, 0.99), 1) + " ms"; }, "");
+    row("upload per frame mean / max", [](const TerrainFigures& f) { return megabytes(mean(f.uploadBytes)) + " / " + megabytes(maximum(f.uploadBytes)); }, "");
+    row("triangles per flight frame mean / max", [](const TerrainFigures& f) { return fixed(mean(f.triangles) / 1e6, 2) + " / " + fixed(maximum(f.triangles) / 1e6, 2) + " M"; }, "");
+    row("r=32 stamp to chunks uploaded", [](const TerrainFigures& f) { return fixed(f.stampTotalMs, 1) + " ms (" + std::to_string(f.stampBricks) + " bricks)"; }, "<= 3 ms");
+    row("  sculpt / re-mesh / upload", [](const TerrainFigures& f) { return fixed(f.stampSculptMs, 1) + " / " + fixed(f.stampMeshMs, 1) + " / " + fixed(f.stampUploadMs, 1) + " ms"; }, "");
+    row("  OpenVDB volumeToMesh of those bricks", [](const TerrainFigures& f) { return fixed(f.openvdbMeshMs, 1) + " ms"; }, "baseline");
+    row("GPU, one complete view at 1080p", [](const TerrainFigures& f) { return fixed(f.gpuMs1080, 1) + " ms"; }, "<= 5 ms on a GPU");
+    t.print(std::cout);
+    return 0;
+}
+
+} // namespace vdbclay::bench
