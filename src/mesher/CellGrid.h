@@ -3,6 +3,7 @@
 #pragma once
 
 #include "mesher/BlockSets.h"
+#include "mesher/LodCut.h"
 #include "mesher/CellTopology.h"
 #include "mesher/Mesh.h"
 #include "mesher/Mesher.h"
@@ -12,6 +13,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #if defined(__SSE2__)
@@ -334,6 +336,29 @@ void meshLeavesInto(const HermiteTree& tree, const std::vector<const HermiteLeaf
 
 /// Cubical Marching Squares, one leaf at a time; keeps its buffers from one leaf to the next, so use
 /// one per thread.
+/// The brick of a level-of-detail cut being meshed (LodCut.h): its unit cells that touch a finer brick
+/// are left to the transition mesher, and the faces beside them are meshed plainly.
+struct LodBoundary {
+    const LodCut* cut;
+    int level;
+    Coord brickMin, brickMax; // the brick's cells: [brickMin, brickMax)
+
+    /// Whether a cell or face at `c` lies within `margin` cells of the brick's box (only those can touch
+    /// another brick or a transition cell).
+    bool holds(const Coord& c) const
+    {
+        for (int a = 0; a < 3; ++a)
+            if (c[a] < brickMin[a] || c[a] >= brickMax[a]) return false;
+        return true;
+    }
+    bool nearBoundary(const Coord& c, int margin) const
+    {
+        for (int a = 0; a < 3; ++a)
+            if (c[a] < brickMin[a] + margin || c[a] >= brickMax[a] - margin) return true;
+        return false;
+    }
+};
+
 class CubicalMarchingSquaresMesher {
 public:
     /// `walkEveryCell` turns off the shortcut for smooth voxel cells, for tests that check it changes
@@ -351,6 +376,9 @@ public:
     void meshInto(const HermiteLeaf& leaf, ConstAccessor& acc, const CellWidthField* widths,
                   const LeafSurroundings* surroundings, MeshChunk& out);
 
+    /// Meshing one brick of a level-of-detail cut at `level` (null: an ordinary volume).
+    void setLodBoundary(const LodCut* cut, int level, const Coord& brickMin, int brickEdge);
+
     /// Cells meshed so far: all of them, and those the smooth-cell shortcut took.
     std::size_t cellsMeshed() const { return cellsMeshed_; }
     std::size_t cellsFromCaseTable() const { return cellsFromCaseTable_; }
@@ -361,6 +389,7 @@ private:
     double voxelSize_;
     double cosSharp_;
     bool walkEveryCell_;
+    std::optional<LodBoundary> lod_;
     std::size_t cellsMeshed_ = 0, cellsFromCaseTable_ = 0;
     std::unique_ptr<Buffers> buffers_;
 };

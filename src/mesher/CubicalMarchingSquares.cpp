@@ -351,6 +351,13 @@ struct LeafContext {
     double voxelSize;
     double cosSharp;
     Buffers& buffers;
+    const LodBoundary* lod = nullptr; // a brick of a level-of-detail cut: plain faces beside transition cells
+
+    /// Whether the unit square with this minimum corner and normal is meshed plainly (LodCut::plainFace).
+    bool plainSquare(const Coord& minCorner, int axis) const
+    {
+        return lod && lod->nearBoundary(minCorner, 2) && lod->cut->plainFace(lod->level, {minCorner.x(), minCorner.y(), minCorner.z()}, axis);
+    }
 
     /// The material at a voxel, from the corner grid where it reaches.
     MaterialValue material(const Coord& c) const
@@ -809,6 +816,13 @@ private:
             ++count;
         }
         if (count == 0) return;
+        if (sq.width == 1 && ctx_.plainSquare(sq.minCorner, axis)) {
+            // Beside a transition cell: each entering crossing joined straight to the leaving one after
+            // it, as the transition mesher joins them.
+            for (int i = 0; i < count; ++i)
+                if (entering[i]) segments_.emplace_back(squareCrossing(sq, sides[i]), squareCrossing(sq, sides[(i + 1) % count]));
+            return;
+        }
         struct Pairing {
             int in, out; // square sides
             SegmentShape shape;
@@ -1346,6 +1360,15 @@ CubicalMarchingSquaresMesher::CubicalMarchingSquaresMesher(double voxelSize, dou
 
 CubicalMarchingSquaresMesher::~CubicalMarchingSquaresMesher() = default;
 
+void CubicalMarchingSquaresMesher::setLodBoundary(const LodCut* cut, int level, const Coord& brickMin, int brickEdge)
+{
+    if (!cut) {
+        lod_.reset();
+        return;
+    }
+    lod_ = LodBoundary{cut, level, brickMin, brickMin.offsetBy(brickEdge, brickEdge, brickEdge)};
+}
+
 MeshChunk CubicalMarchingSquaresMesher::mesh(const HermiteLeaf& leaf, ConstAccessor& acc, const CellWidthField* widths,
                                              const LeafSurroundings* surroundings)
 {
@@ -1365,10 +1388,23 @@ void CubicalMarchingSquaresMesher::meshInto(const HermiteLeaf& leaf, ConstAccess
     const Neighbourhood& hood = surroundings ? surroundings->hood : built.hood;
     const CornerGrid& grid = surroundings ? surroundings->grid : built.grid;
     buffers_->startLeaf(leaf.origin());
-    LeafContext ctx{hood, grid, widths, leaf.origin(), voxelSize_, cosSharp_, *buffers_};
+    LeafContext ctx{hood, grid, widths, leaf.origin(), voxelSize_, cosSharp_, *buffers_, lod_ ? &*lod_ : nullptr};
+    auto hasPlainFace = [&](const Coord& base) {
+        if (!ctx.lod || !ctx.lod->nearBoundary(base, 2)) return false;
+        for (int f = 0; f < 6; ++f) {
+            Coord corner = base;
+            corner[f / 2] += f % 2;
+            if (ctx.plainSquare(corner, f / 2)) return true;
+        }
+        return false;
+    };
     auto meshVoxelCell = [&](const Coord& base, const MaterialValue mats[8], unsigned solid) {
+        if (ctx.lod && ctx.lod->nearBoundary(base, 1)) {
+            if (!ctx.lod->holds(base)) return; // another brick's cell
+            if (ctx.lod->cut->transitionCell(ctx.lod->level, {base.x(), base.y(), base.z()})) return; // the transition mesher's
+        }
         ++cellsMeshed_;
-        if (!walkEveryCell_ && meshSmoothCell<false>(ctx, base, 1, mats, solid)) ++cellsFromCaseTable_;
+        if (!walkEveryCell_ && !hasPlainFace(base) && meshSmoothCell<false>(ctx, base, 1, mats, solid)) ++cellsFromCaseTable_;
         else CellMesher(ctx, base, 1, mats).run();
     };
     const LeafCellSizes* own = widths ? widths->own() : nullptr;
@@ -1392,11 +1428,12 @@ void CubicalMarchingSquaresMesher::meshInto(const HermiteLeaf& leaf, ConstAccess
                 }
                 if (solid == 0 || solid == 0xFF) continue;
                 const Coord base = grid.origin.offsetBy(x, y, z);
+                if (lod_ && !lod_->holds(base)) continue; // another brick's cell
                 if (width == 1) {
                     meshVoxelCell(base, mats, solid);
                 } else {
                     ++cellsMeshed_;
-                    if (!walkEveryCell_ && meshSmoothCell<true>(ctx, base, width, mats, solid)) ++cellsFromCaseTable_;
+                    if (!walkEveryCell_ && !hasPlainFace(base) && meshSmoothCell<true>(ctx, base, width, mats, solid)) ++cellsFromCaseTable_;
                     else CellMesher(ctx, base, width, mats).run();
                 }
             }

@@ -1,6 +1,7 @@
 // Meshing a level of the LOD pyramid with the same mesher as level 0.
 #pragma once
 
+#include "mesher/LodCut.h"
 #include "mesher/Mesher.h"
 #include "wavelet/LodPyramid.h"
 
@@ -18,5 +19,16 @@ Mesh meshLevelVolume(const Volume& levelVolume, int level, const MeshOptions& op
 /// volume's own mesh; level k meshes the coarse Hermite data (LodPyramid::coarseVolume) and moves it by
 /// the level's offset.
 Mesh meshLevel(const Volume& fine, const wavelet::LodPyramid& pyramid, int level, const MeshOptions& options = {});
+
+/// The mesh of one brick of a level-of-detail cut, on its level's own lattice, vertex-aligned: level k's
+/// point i is the level-0 point 2^k i, at world position i times level k's voxel size (no level offset,
+/// so every level's lattice lies on the finer ones'; a coarse level shows up to half its voxel off
+/// meshLevel's placement). `levels[k]`: level k's Hermite data (voxel size 2^k times level 0's), holding
+/// at least the cut's bricks of level k. Together the meshes of a cut's bricks are closed wherever the
+/// scene is: a brick's cells that touch a finer brick (transition cells) take the finer side's data
+/// where they meet it and are meshed by the transition mesher, and the kernel meshes the faces beside
+/// them plainly (LodCut::plainFace). Needs CMS; throws std::invalid_argument otherwise.
+Mesh meshLodBrick(const std::vector<const Volume*>& levels, const LodCut& cut, const LodBrick& brick,
+                  const MeshOptions& options);
 
 } // namespace vdbclay

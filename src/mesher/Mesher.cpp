@@ -78,6 +78,8 @@ void meshLeavesInto(const HermiteTree& tree, const std::vector<const HermiteLeaf
         std::unique_ptr<CubicalMarchingSquaresMesher>& local = meshers.local();
         if (!local) local = std::make_unique<CubicalMarchingSquaresMesher>(voxelSize, options.sharpAngleDegrees);
         CubicalMarchingSquaresMesher& cms = *local;
+        const auto& b = options.lodBrickMin;
+        cms.setLodBoundary(options.lodCut, options.lodLevel, Coord(b[0], b[1], b[2]), kLodBrickVoxels);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const HermiteLeaf& leaf = *leaves[i];
             const LeafSurroundings* read = surroundings ? surroundings->find(leaf.origin()) : nullptr;
@@ -119,9 +121,13 @@ std::vector<MeshChunk> meshRegionChunks(const Volume& volume, const std::array<i
     // Probes the box's leaf origins, so a brick of a large level costs its own leaves.
     std::vector<const HermiteLeaf*> leaves;
     ConstAccessor acc(tree);
-    for (int32_t x = min[0]; x < min[0] + edge; x += kLeafDim)
-        for (int32_t y = min[1]; y < min[1] + edge; y += kLeafDim)
-            for (int32_t z = min[2]; z < min[2] + edge; z += kLeafDim)
+    // A brick of a level-of-detail cut meshes the cells whose minimum corner it holds, whoever owns them:
+    // a cell at its far faces whose other corners lie in the next brick's leaves (its own corners in
+    // tile blocks) belongs to one of those leaves, which are visited too, for those cells only.
+    const int32_t reach = options.lodCut ? edge + kLeafDim : edge;
+    for (int32_t x = min[0]; x < min[0] + reach; x += kLeafDim)
+        for (int32_t y = min[1]; y < min[1] + reach; y += kLeafDim)
+            for (int32_t z = min[2]; z < min[2] + reach; z += kLeafDim)
                 if (const HermiteLeaf* leaf = acc.probeConstLeaf(Coord(x, y, z))) leaves.push_back(leaf);
     std::vector<MeshChunk> chunks(leaves.size());
     std::vector<MeshChunk*> into(chunks.size());

@@ -2,6 +2,7 @@
 // so chunks tile the surface without overlaps and weld into a watertight mesh.
 #pragma once
 
+#include "mesher/LodCut.h"
 #include "mesher/Mesh.h"
 #include "vdb_hermite/BlockChange.h"
 #include "vdb_hermite/Volume.h"
@@ -33,6 +34,11 @@ struct MeshOptions {
     /// for meshing regions at different depths; the mesh stays watertight across them.
     /// Called from several threads at once, so it must be thread-safe.
     std::function<int(const std::array<int32_t, 3>&)> leafMaxCellWidth;
+    /// CMS, optional: the brick of a level-of-detail cut being meshed (meshLodBrick in LodMesh.h sets
+    /// these): its level and box (level-`lodLevel` index space, 64 voxels wide).
+    const LodCut* lodCut = nullptr;
+    int lodLevel = 0;
+    std::array<int32_t, 3> lodBrickMin{0, 0, 0};
 };
 
 /// Throws std::invalid_argument for options the meshers cannot use (angles outside (0, 180), a widest

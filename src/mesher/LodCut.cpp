@@ -1,0 +1,163 @@
+#include "mesher/LodCut.h"
+
+#include <algorithm>
+
+namespace vdbclay {
+
+namespace {
+
+int64_t floorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+} // namespace
+
+LodCut::LodCut(const std::vector<LodBrick>& shown) : shown_(shown.begin(), shown.end()), list_(shown)
+{
+    finest_ = 1 << 30;
+    for (const LodBrick& b : shown) {
+        finest_ = std::min(finest_, b.level);
+        coarsest_ = std::max(coarsest_, b.level);
+    }
+    if (shown.empty()) finest_ = 0;
+}
+
+int LodCut::finestHolding(const Point& lo, const Point& hi) const
+{
+    for (int level = finest_; level <= coarsest_; ++level) {
+        const int64_t span = brickSpan(level);
+        // The bricks whose closed box holds the box: those whose box holds lo, of which the one with
+        // a face on lo's plane may be either side.
+        int64_t from[3], to[3];
+        for (int a = 0; a < 3; ++a) {
+            to[a] = floorDiv(lo[std::size_t(a)], span);
+            from[a] = lo[std::size_t(a)] % span == 0 ? to[a] - 1 : to[a];
+        }
+        for (int64_t x = from[0]; x <= to[0]; ++x)
+            for (int64_t y = from[1]; y <= to[1]; ++y)
+                for (int64_t z = from[2]; z <= to[2]; ++z) {
+                    const int64_t b[3] = {x, y, z};
+                    bool holds = true;
+                    for (int a = 0; a < 3 && holds; ++a)
+                        holds = b[a] * span <= lo[std::size_t(a)] && hi[std::size_t(a)] <= (b[a] + 1) * span;
+                    if (holds && shows({level, {int32_t(x), int32_t(y), int32_t(z)}})) return level;
+                }
+    }
+    return -1;
+}
+
+bool LodCut::finerTouches(const Point& lo, const Point& hi, int level) const
+{
+    for (int l = finest_; l < level && l <= coarsest_; ++l) {
+        const int64_t span = brickSpan(l);
+        int64_t from[3], to[3];
+        for (int a = 0; a < 3; ++a) {
+            from[a] = floorDiv(lo[std::size_t(a)], span) - (lo[std::size_t(a)] % span == 0 ? 1 : 0);
+            to[a] = floorDiv(hi[std::size_t(a)], span);
+        }
+        if ((to[0] - from[0] + 1) * (to[1] - from[1] + 1) * (to[2] - from[2] + 1) > 4096) {
+            // A box far wider than this level's bricks (a coarse cell beside very fine bricks): scan the cut.
+            for (const LodBrick& b : list_) {
+                if (b.level != l) continue;
+                bool touches = true;
+                for (int a = 0; a < 3 && touches; ++a)
+                    touches = int64_t(b.brick[std::size_t(a)]) * span <= hi[std::size_t(a)] &&
+                              lo[std::size_t(a)] <= (int64_t(b.brick[std::size_t(a)]) + 1) * span;
+                if (touches) return true;
+            }
+            continue;
+        }
+        for (int64_t x = from[0]; x <= to[0]; ++x)
+            for (int64_t y = from[1]; y <= to[1]; ++y)
+                for (int64_t z = from[2]; z <= to[2]; ++z)
+                    if (shows({l, {int32_t(x), int32_t(y), int32_t(z)}})) return true;
+    }
+    return false;
+}
+
+int LodCut::levelAround(const Point& lo, const Point& hi) const
+{
+    for (int level = finest_; level <= coarsest_; ++level) {
+        const int64_t span = brickSpan(level);
+        // The middle of [lo, hi], doubled to stay on integers: inside exactly one brick per level.
+        std::array<int32_t, 3> b;
+        for (int a = 0; a < 3; ++a)
+            b[std::size_t(a)] = int32_t(floorDiv(lo[std::size_t(a)] + hi[std::size_t(a)], 2 * span));
+        if (shows({level, b})) return level;
+    }
+    return -1;
+}
+
+bool LodCut::transitionCell(int level, const std::array<int32_t, 3>& cell) const
+{
+    if (level <= finest_) return false;
+    Point lo, hi;
+    for (int a = 0; a < 3; ++a) {
+        lo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) << level;
+        hi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) << level;
+    }
+    return finerTouches(lo, hi, level);
+}
+
+bool LodCut::plainFace(int level, const std::array<int32_t, 3>& corner, int axis) const
+{
+    for (int side = 0; side < 2; ++side) {
+        std::array<int32_t, 3> cell = corner;
+        cell[std::size_t(axis)] -= side;
+        Point lo, hi;
+        for (int a = 0; a < 3; ++a) {
+            lo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) << level;
+            hi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) << level;
+        }
+        const int around = levelAround(lo, hi);
+        if (around > level) return true; // a coarser brick's cell holds it: a transition cell
+        if (around == level && transitionCell(level, cell)) return true;
+    }
+    return false;
+}
+
+int LodCut::leafMaxCellWidth(int level, const std::array<int32_t, 3>& origin, int widest) const
+{
+    Point lo, hi;
+    for (int a = 0; a < 3; ++a) {
+        lo[std::size_t(a)] = int64_t(origin[std::size_t(a)]) << level;
+        hi[std::size_t(a)] = (int64_t(origin[std::size_t(a)]) + 8) << level;
+    }
+    if (levelAround(lo, hi) != level) return 1;
+    // Any other level touching the leaf: its cells meet transition cells or plain faces.
+    if (finerTouches(lo, hi, level)) return 1;
+    for (int l = level + 1; l <= coarsest_; ++l) {
+        const int64_t span = brickSpan(l);
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz) {
+                    const int64_t p[3] = {dx < 0 ? lo[0] - 1 : dx > 0 ? hi[0] + 1 : (lo[0] + hi[0]) / 2,
+                                          dy < 0 ? lo[1] - 1 : dy > 0 ? hi[1] + 1 : (lo[1] + hi[1]) / 2,
+                                          dz < 0 ? lo[2] - 1 : dz > 0 ? hi[2] + 1 : (lo[2] + hi[2]) / 2};
+                    if (shows({l, {int32_t(floorDiv(p[0], span)), int32_t(floorDiv(p[1], span)), int32_t(floorDiv(p[2], span))}}))
+                        return 1;
+                }
+    }
+    return widest;
+}
+
+uint64_t LodCut::neighbourhoodSignature(const LodBrick& b) const
+{
+    const int64_t span = brickSpan(b.level);
+    Point lo, hi;
+    for (int a = 0; a < 3; ++a) {
+        lo[std::size_t(a)] = int64_t(b.brick[std::size_t(a)]) * span;
+        hi[std::size_t(a)] = lo[std::size_t(a)] + span;
+    }
+    uint64_t signature = 0x51ED27ull;
+    LodBrickHash hash;
+    for (const LodBrick& other : list_) {
+        const int64_t s = brickSpan(other.level);
+        bool touches = true;
+        for (int a = 0; a < 3 && touches; ++a)
+            touches = int64_t(other.brick[std::size_t(a)]) * s <= hi[std::size_t(a)] &&
+                      lo[std::size_t(a)] <= (int64_t(other.brick[std::size_t(a)]) + 1) * s;
+        if (touches) signature += hash(other) * 0x9E3779B97F4A7C15ull; // order-independent
+    }
+    return signature;
+}
+
+} // namespace vdbclay

@@ -1,0 +1,78 @@
+// Which bricks a view shows at which level (a cut through the bricks' octree: no brick overlaps
+// another), and the questions meshing them side by side asks of it. Levels are vertex-aligned here:
+// level k's lattice point i sits at level-0 point 2^k i, so every level's lattice points, edges and
+// faces lie on the finer levels' lattices, and a coarse brick's cells can take the finer side's data
+// where it meets a finer brick (seed 000 §5: the finer side's segments decide the shared face).
+//
+// Light header: no OpenVDB.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <unordered_set>
+#include <vector>
+
+namespace vdbclay {
+
+/// A brick of the cut: level k, covering level-0 points [64 * 2^k * brick, 64 * 2^k * (brick + 1)].
+struct LodBrick {
+    int level = 0;
+    std::array<int32_t, 3> brick{0, 0, 0};
+    friend bool operator==(const LodBrick& a, const LodBrick& b) { return a.level == b.level && a.brick == b.brick; }
+};
+
+struct LodBrickHash {
+    std::size_t operator()(const LodBrick& b) const
+    {
+        uint64_t h = uint64_t(uint32_t(b.level)) * 0x9E3779B97F4A7C15ull;
+        for (const int32_t c : b.brick) h = (h ^ uint32_t(c)) * 0x100000001B3ull + (h >> 29);
+        return std::size_t(h ^ (h >> 32));
+    }
+};
+
+constexpr int32_t kLodBrickVoxels = 64;
+
+class LodCut {
+public:
+    using Point = std::array<int64_t, 3>; // level-0 lattice
+
+    LodCut() = default;
+    explicit LodCut(const std::vector<LodBrick>& shown);
+
+    bool shows(const LodBrick& b) const { return shown_.count(b) > 0; }
+    const std::vector<LodBrick>& bricks() const { return list_; }
+    int finestLevel() const { return finest_; }
+    int coarsestLevel() const { return coarsest_; }
+
+    /// The finest level of a shown brick whose closed box holds the whole closed box [lo, hi], or -1.
+    int finestHolding(const Point& lo, const Point& hi) const;
+    /// Whether a shown brick of a level finer than `level` touches the closed box [lo, hi].
+    bool finerTouches(const Point& lo, const Point& hi, int level) const;
+    /// The level of the shown brick whose open box holds the point strictly inside [lo, hi] (a cell's
+    /// middle), or -1 where no brick is shown.
+    int levelAround(const Point& lo, const Point& hi) const;
+
+    /// Whether the unit cell of `level` at level-`level` index `cell` touches a finer shown brick: the
+    /// coarse side of a level boundary, meshed by the transition mesher (LodMesh.h).
+    bool transitionCell(int level, const std::array<int32_t, 3>& cell) const;
+    /// Whether the unit face of `level` with minimum corner `corner` (level-`level` index) and normal
+    /// `axis` borders a transition cell on either side: both sides then mesh it plainly (its crossings
+    /// joined straight, no sharp point or material transition inside), as the transition mesher does.
+    bool plainFace(int level, const std::array<int32_t, 3>& corner, int axis) const;
+    /// The widest adaptive cell for a level-`level` leaf at `origin`: voxel cells where the leaf touches a
+    /// brick of another level or lies in no brick of this level, else `widest`.
+    int leafMaxCellWidth(int level, const std::array<int32_t, 3>& origin, int widest) const;
+
+    /// A number that changes when the shown bricks touching `b` (any level) change: its mesh depends on
+    /// them.
+    uint64_t neighbourhoodSignature(const LodBrick& b) const;
+
+private:
+    static int64_t brickSpan(int level) { return int64_t(kLodBrickVoxels) << level; }
+    std::unordered_set<LodBrick, LodBrickHash> shown_;
+    std::vector<LodBrick> list_;
+    int finest_ = 0, coarsest_ = -1;
+};
+
+} // namespace vdbclay
