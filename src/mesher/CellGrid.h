@@ -345,10 +345,17 @@ struct LodBoundary {
 
     /// Whether a cell or face at `c` lies within `margin` cells of the brick's box (only those can touch
     /// another brick or a transition cell).
-    bool holds(const Coord& c) const
+    /// Whether this brick meshes the cell at `base` (LodCut::cellOwner): its own cells, and the cells
+    /// of an empty region beside it whose first corner in a shown brick is in this one.
+    bool owns(const Coord& base) const
     {
+        bool inside = true;
+        for (int a = 0; a < 3; ++a) inside = inside && base[a] >= brickMin[a] && base[a] < brickMax[a];
+        if (inside) return true;
+        const std::optional<LodBrick> owner = cut->cellOwner(level, {base.x(), base.y(), base.z()});
+        if (!owner || owner->level != level) return false;
         for (int a = 0; a < 3; ++a)
-            if (c[a] < brickMin[a] || c[a] >= brickMax[a]) return false;
+            if (int64_t(owner->brick[std::size_t(a)]) * kLodBrickVoxels != brickMin[a]) return false;
         return true;
     }
     bool nearBoundary(const Coord& c, int margin) const

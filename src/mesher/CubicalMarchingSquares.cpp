@@ -1400,7 +1400,7 @@ void CubicalMarchingSquaresMesher::meshInto(const HermiteLeaf& leaf, ConstAccess
     };
     auto meshVoxelCell = [&](const Coord& base, const MaterialValue mats[8], unsigned solid) {
         if (ctx.lod && ctx.lod->nearBoundary(base, 1)) {
-            if (!ctx.lod->holds(base)) return; // another brick's cell
+            if (!ctx.lod->owns(base)) return; // another brick's cell
             if (ctx.lod->cut->transitionCell(ctx.lod->level, {base.x(), base.y(), base.z()})) return; // the transition mesher's
         }
         ++cellsMeshed_;
@@ -1428,7 +1428,7 @@ void CubicalMarchingSquaresMesher::meshInto(const HermiteLeaf& leaf, ConstAccess
                 }
                 if (solid == 0 || solid == 0xFF) continue;
                 const Coord base = grid.origin.offsetBy(x, y, z);
-                if (lod_ && !lod_->holds(base)) continue; // another brick's cell
+                if (lod_ && lod_->nearBoundary(base, 1) && !lod_->owns(base)) continue; // another brick's cell
                 if (width == 1) {
                     meshVoxelCell(base, mats, solid);
                 } else {

@@ -20,9 +20,9 @@ LodCut::LodCut(const std::vector<LodBrick>& shown) : shown_(shown.begin(), shown
     if (shown.empty()) finest_ = 0;
 }
 
-int LodCut::finestHolding(const Point& lo, const Point& hi) const
+int LodCut::finestHolding(const Point& lo, const Point& hi, int maxLevel) const
 {
-    for (int level = finest_; level <= coarsest_; ++level) {
+    for (int level = finest_; level <= std::min(coarsest_, maxLevel); ++level) {
         const int64_t span = brickSpan(level);
         // The bricks whose closed box holds the box: those whose box holds lo, of which the one with
         // a face on lo's plane may be either side.
@@ -73,6 +73,23 @@ bool LodCut::finerTouches(const Point& lo, const Point& hi, int level) const
     return false;
 }
 
+bool LodCut::touches(const LodBrick& b, const Point& lo, const Point& hi)
+{
+    const int64_t span = brickSpan(b.level);
+    for (int a = 0; a < 3; ++a)
+        if (int64_t(b.brick[std::size_t(a)]) * span > hi[std::size_t(a)] || lo[std::size_t(a)] > (int64_t(b.brick[std::size_t(a)]) + 1) * span)
+            return false;
+    return true;
+}
+
+std::vector<LodBrick> LodCut::finerTouching(const Point& lo, const Point& hi, int level) const
+{
+    std::vector<LodBrick> out;
+    for (const LodBrick& b : list_)
+        if (b.level < level && touches(b, lo, hi)) out.push_back(b);
+    return out;
+}
+
 int LodCut::levelAround(const Point& lo, const Point& hi) const
 {
     for (int level = finest_; level <= coarsest_; ++level) {
@@ -84,6 +101,34 @@ int LodCut::levelAround(const Point& lo, const Point& hi) const
         if (shows({level, b})) return level;
     }
     return -1;
+}
+
+std::optional<LodBrick> LodCut::cellOwner(int level, const std::array<int32_t, 3>& cell) const
+{
+    Point lo, hi;
+    for (int a = 0; a < 3; ++a) {
+        lo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) << level;
+        hi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) << level;
+    }
+    const int around = levelAround(lo, hi);
+    if (around >= 0) {
+        const int64_t span = brickSpan(around);
+        LodBrick b{around, {}};
+        for (int a = 0; a < 3; ++a) b.brick[std::size_t(a)] = int32_t(floorDiv(lo[std::size_t(a)] + hi[std::size_t(a)], 2 * span));
+        return b;
+    }
+    // Space outside the cut is the coarsest level's: only its cells there have an owner.
+    if (level != coarsest_) return std::nullopt;
+    for (int c = 0; c < 8; ++c) {
+        Point p;
+        for (int a = 0; a < 3; ++a) p[std::size_t(a)] = (c >> a) & 1 ? hi[std::size_t(a)] : lo[std::size_t(a)];
+        for (int l = finest_; l <= coarsest_; ++l) {
+            const int64_t span = brickSpan(l);
+            const LodBrick b{l, {int32_t(floorDiv(p[0], span)), int32_t(floorDiv(p[1], span)), int32_t(floorDiv(p[2], span))}};
+            if (shows(b)) return b;
+        }
+    }
+    return std::nullopt;
 }
 
 bool LodCut::transitionCell(int level, const std::array<int32_t, 3>& cell) const
@@ -107,8 +152,9 @@ bool LodCut::plainFace(int level, const std::array<int32_t, 3>& corner, int axis
             lo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) << level;
             hi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) << level;
         }
-        const int around = levelAround(lo, hi);
-        if (around > level) return true; // a coarser brick's cell holds it: a transition cell
+        int around = levelAround(lo, hi);
+        if (around < 0) around = coarsest_; // outside the cut: the coarsest level's space
+        if (around > level) return true;    // a coarser cell holds the face, and it touches this finer one
         if (around == level && transitionCell(level, cell)) return true;
     }
     return false;

@@ -10,6 +10,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <unordered_set>
 #include <vector>
 
@@ -45,13 +46,26 @@ public:
     int finestLevel() const { return finest_; }
     int coarsestLevel() const { return coarsest_; }
 
-    /// The finest level of a shown brick whose closed box holds the whole closed box [lo, hi], or -1.
-    int finestHolding(const Point& lo, const Point& hi) const;
+    /// The finest level (up to `maxLevel`) of a shown brick whose closed box holds the whole closed box
+    /// [lo, hi], or -1.
+    int finestHolding(const Point& lo, const Point& hi, int maxLevel = 1 << 30) const;
     /// Whether a shown brick of a level finer than `level` touches the closed box [lo, hi].
     bool finerTouches(const Point& lo, const Point& hi, int level) const;
+    /// The shown bricks finer than `level` that touch the closed box [lo, hi].
+    std::vector<LodBrick> finerTouching(const Point& lo, const Point& hi, int level) const;
+    /// Whether brick b's closed box touches the closed box [lo, hi].
+    static bool touches(const LodBrick& b, const Point& lo, const Point& hi);
     /// The level of the shown brick whose open box holds the point strictly inside [lo, hi] (a cell's
     /// middle), or -1 where no brick is shown.
     int levelAround(const Point& lo, const Point& hi) const;
+
+    /// The brick that meshes the unit cell of `level` at level-`level` index `cell`: the shown brick
+    /// holding its middle. Space outside the cut counts as the coarsest level's: a cell of that level
+    /// there belongs to the shown brick holding the first of its corners (in corner order, each in
+    /// the half-open box of a brick) that one holds. Nullopt: no brick meshes it. A cut should hold
+    /// every child of a brick it splits, the empty ones too, so that only space around the whole
+    /// cut lies outside it.
+    std::optional<LodBrick> cellOwner(int level, const std::array<int32_t, 3>& cell) const;
 
     /// Whether the unit cell of `level` at level-`level` index `cell` touches a finer shown brick: the
     /// coarse side of a level boundary, meshed by the transition mesher (LodMesh.h).

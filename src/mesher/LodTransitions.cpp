@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -133,8 +134,7 @@ private:
     /// A point's material, from the finest shown brick whose closed box holds it.
     MaterialValue pointMaterial(const Point& p, int ownLevel)
     {
-        int level = cut_.finestHolding(p, p);
-        if (level < 0 || level > ownLevel) level = ownLevel;
+        const int level = finerHolding(p, p, ownLevel);
         return reader(level).material(at(p, level));
     }
 
@@ -143,7 +143,7 @@ private:
     {
         Point lo, hi;
         for (int k = 0; k < 3; ++k) lo[std::size_t(k)] = std::min(a[std::size_t(k)], b[std::size_t(k)]), hi[std::size_t(k)] = std::max(a[std::size_t(k)], b[std::size_t(k)]);
-        const int m = cut_.finestHolding(lo, hi);
+        const int m = cut_.finestHolding(lo, hi, level - 1);
         return m >= 0 && m < level ? m : level;
     }
 
@@ -353,23 +353,86 @@ Mesh meshLodBrick(const std::vector<const Volume*>& levels, const LodCut& cut, c
     const int widest = options.maxCellWidth;
     o.leafMaxCellWidth = [&cut, level, widest](const std::array<int32_t, 3>& origin) { return cut.leafMaxCellWidth(level, origin, widest); };
     Mesh mesh = weldChunks(meshRegionChunks(*levels[std::size_t(level)], o.lodBrickMin, kLodBrickVoxels, o));
-    if (level == cut.finestLevel()) return mesh; // nothing finer: no transition cells
     TransitionMesher transitions(levels, cut);
     transitions.setVoxelSizes(levels);
+    std::set<std::array<int32_t, 3>> meshed;
     const std::array<int32_t, 3>& b = o.lodBrickMin;
-    // Only cells on the brick's surface can touch another brick.
-    for (int32_t x = 0; x < kLodBrickVoxels; ++x)
-        for (int32_t y = 0; y < kLodBrickVoxels; ++y)
-            for (int32_t z = 0; z < kLodBrickVoxels; ++z) {
-                const bool surface = x == 0 || y == 0 || z == 0 || x == kLodBrickVoxels - 1 || y == kLodBrickVoxels - 1 ||
-                                     z == kLodBrickVoxels - 1;
-                if (!surface) {
-                    z = kLodBrickVoxels - 2; // skip to the far face
-                    continue;
-                }
-                const std::array<int32_t, 3> cell{b[0] + x, b[1] + y, b[2] + z};
-                if (cut.transitionCell(level, cell)) transitions.meshCell(level, cell, mesh);
+    if (level > cut.finestLevel()) {
+        // Only cells on a face of the brick that a finer brick touches can touch one, and the cells of
+        // an empty region just below its low faces that it meshes (LodCut::cellOwner).
+        const int32_t n = kLodBrickVoxels;
+        for (int face = 0; face < 6; ++face) {
+            const int axis = face / 2, high = face % 2;
+            LodCut::Point lo, hi;
+            for (int a = 0; a < 3; ++a) {
+                lo[std::size_t(a)] = int64_t(b[std::size_t(a)]) << level;
+                hi[std::size_t(a)] = (int64_t(b[std::size_t(a)]) + n) << level;
             }
+            (high ? lo : hi)[std::size_t(axis)] = (high ? hi : lo)[std::size_t(axis)];
+            const std::vector<LodBrick> finer = cut.finerTouching(lo, hi, level);
+            if (finer.empty()) continue;
+            const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+            const int32_t depths[2] = {high ? n - 1 : -1, 0};
+            for (int d = 0; d < (high ? 1 : 2); ++d)
+                for (int32_t i = -1; i < n; ++i)
+                    for (int32_t j = -1; j < n; ++j) {
+                        std::array<int32_t, 3> cell;
+                        const int32_t depth = depths[d];
+                        cell[std::size_t(axis)] = b[std::size_t(axis)] + depth;
+                        cell[std::size_t(u)] = b[std::size_t(u)] + i;
+                        cell[std::size_t(v)] = b[std::size_t(v)] + j;
+                        const bool outside = depth < 0 || i < 0 || j < 0;
+                        LodCut::Point clo, chi;
+                        for (int a = 0; a < 3; ++a) {
+                            clo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) << level;
+                            chi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) << level;
+                        }
+                        // LodCut::transitionCell, against the few bricks that touch this face.
+                        if (std::none_of(finer.begin(), finer.end(), [&](const LodBrick& f) { return LodCut::touches(f, clo, chi); }))
+                            continue;
+                        if (outside) {
+                            const std::optional<LodBrick> owner = cut.cellOwner(level, cell);
+                            if (!owner || !(*owner == brick)) continue;
+                        }
+                        if (!meshed.insert(cell).second) continue; // on two faces: once
+                        transitions.meshCell(level, cell, mesh);
+                    }
+        }
+    }
+    // Space outside the cut is the coarsest level's: its cells beside this finer brick that this
+    // brick owns are transition cells of that level.
+    const int top = cut.coarsestLevel();
+    if (level < top) {
+        std::array<int32_t, 2> range[3];
+        for (int a = 0; a < 3; ++a) {
+            const int64_t lo0 = int64_t(b[std::size_t(a)]) << level, hi0 = (int64_t(b[std::size_t(a)]) + kLodBrickVoxels) << level;
+            const int64_t size = int64_t(1) << top;
+            const int64_t first = (lo0 >= 0 ? lo0 / size : -((-lo0 + size - 1) / size)) - 1;
+            const int64_t last = hi0 >= 0 ? hi0 / size : -((-hi0 + size - 1) / size);
+            range[a] = {int32_t(first), int32_t(last)};
+        }
+        for (int32_t x = range[0][0]; x <= range[0][1]; ++x)
+            for (int32_t y = range[1][0]; y <= range[1][1]; ++y)
+                for (int32_t z = range[2][0]; z <= range[2][1]; ++z) {
+                    // Only the shell around the brick lies outside it.
+                    const bool shell = x == range[0][0] || x == range[0][1] || y == range[1][0] || y == range[1][1] ||
+                                       z == range[2][0] || z == range[2][1];
+                    if (!shell) {
+                        z = range[2][1] - 1;
+                        continue;
+                    }
+                    const std::array<int32_t, 3> cell{x, y, z};
+                    const std::optional<LodBrick> owner = cut.cellOwner(top, cell);
+                    if (!owner || !(*owner == brick)) continue;
+                    LodCut::Point lo, hi;
+                    for (int a = 0; a < 3; ++a) {
+                        lo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) << top;
+                        hi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) << top;
+                    }
+                    if (cut.levelAround(lo, hi) >= 0 || !cut.transitionCell(top, cell)) continue;
+                    transitions.meshCell(top, cell, mesh);
+                }
+    }
     return mesh;
 }
 

@@ -124,6 +124,8 @@ std::vector<MeshChunk> meshRegionChunks(const Volume& volume, const std::array<i
     // A brick of a level-of-detail cut meshes the cells whose minimum corner it holds, whoever owns them:
     // a cell at its far faces whose other corners lie in the next brick's leaves (its own corners in
     // tile blocks) belongs to one of those leaves, which are visited too, for those cells only.
+    // An empty region beside the cut holds no leaf, so the cells there that this brick meshes
+    // (LodCut::cellOwner) belong to its own leaves.
     const int32_t reach = options.lodCut ? edge + kLeafDim : edge;
     for (int32_t x = min[0]; x < min[0] + reach; x += kLeafDim)
         for (int32_t y = min[1]; y < min[1] + reach; y += kLeafDim)
