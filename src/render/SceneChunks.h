@@ -30,12 +30,14 @@ public:
     explicit StreamedSceneChunks(const MeshOptions& options) : options_(options) {}
 
     struct SyncReport {
-        uint64_t meshed = 0;   // bricks meshed and queued for upload
+        uint64_t meshed = 0;   // bricks meshed again (their content or their neighbourhood changed)
+        uint64_t uploaded = 0; // of those, the ones whose mesh changed: queued for upload
         uint64_t removed = 0;  // chunks of bricks no longer shown
         uint64_t shown = 0;
         double meshSeconds = 0.0;
     };
-    /// After scene.frame(): meshes the shown bricks that are new or changed, drops the ones not shown.
+    /// After scene.frame(): meshes the shown bricks that are new or whose version changed, uploads the
+    /// meshes that changed, drops the bricks not shown.
     SyncReport sync(const StreamingScene& scene, Renderer& renderer);
 
     /// The chunk a shown brick is drawn as, if it has one.
@@ -44,7 +46,8 @@ public:
 private:
     struct Uploaded {
         ChunkId id;
-        uint64_t version; // of the content the chunk was made from
+        uint64_t version;  // StreamingScene::brickVersion the chunk was made at
+        uint64_t meshHash; // of its mesh: a brick meshed again to the same mesh is not uploaded again
     };
     MeshOptions options_;
     std::map<BrickKey, Uploaded> uploaded_;

@@ -1,5 +1,6 @@
 #include "scene/StreamingScene.h"
 
+#include "mesher/LodCut.h"
 #include "mesher/LodMesh.h"
 #include "mesher/VertexOcclusion.h"
 #include "scene/StoreLod.h"
@@ -62,6 +63,7 @@ struct StreamingScene::Impl {
     uint64_t lodBricksWritten = 0;
     uint64_t versions = 0; // the last content version handed out
     std::vector<BrickKey> shown;
+    LodCut cut; // the shown bricks and the rest of the split bricks' children
     MaterialTable materials; // the scene's, with what edits defined since the last autosave
     bool stopping = false;
     std::vector<std::unique_ptr<BrickStore>> readers; // one per worker
@@ -105,6 +107,26 @@ struct StreamingScene::Impl {
         }
         wake.notify_all();
         for (std::thread& t : workers) t.join();
+    }
+
+    /// Changes when the brick's content, or the bricks its mesh reads (those of the cut touching it,
+    /// and their content), change. 0 when it is not resident. Lock held.
+    uint64_t meshVersionLocked(const BrickKey& key) const
+    {
+        const auto it = resident.find(key);
+        if (it == resident.end()) return 0;
+        uint64_t v = it->second.version * 0x9E3779B97F4A7C15ull + cut.neighbourhoodSignature({key.level, key.brick});
+        for (const LodBrick& other : cut.bricks()) {
+            const int64_t span = int64_t(kLodBrickVoxels) << other.level, own = int64_t(kLodBrickVoxels) << key.level;
+            bool touches = true;
+            for (int a = 0; a < 3 && touches; ++a)
+                touches = int64_t(other.brick[std::size_t(a)]) * span <= (int64_t(key.brick[std::size_t(a)]) + 1) * own &&
+                          int64_t(key.brick[std::size_t(a)]) * own <= (int64_t(other.brick[std::size_t(a)]) + 1) * span;
+            if (!touches) continue;
+            const auto r = resident.find({other.level, other.brick});
+            if (r != resident.end()) v += r->second.version * 0xC2B2AE3D27D4EB4Full;
+        }
+        return v;
     }
 
     uint64_t estimateOf(const BrickKey& key) const
@@ -241,9 +263,12 @@ struct StreamingScene::Impl {
 
 namespace {
 
-/// The bricks to draw for a selection: see StreamingScene::shownBricks.
-std::vector<BrickKey> shownCut(const ViewNeeds& needs, const std::vector<char>& isResident)
+/// The bricks to draw for a selection: see StreamingScene::shownBricks. `unshown` receives the other
+/// children of the bricks split into their children (empty ones, or out of view): with the shown ones
+/// they make the cut the meshes are made for (LodCut).
+std::vector<BrickKey> shownCut(const ViewNeeds& needs, const std::vector<char>& isResident, std::vector<BrickKey>& unshown)
 {
+    unshown.clear();
     const std::size_t n = needs.bricks.size();
     std::vector<std::vector<uint32_t>> children(n);
     std::vector<char> selected(n, 0);
@@ -278,6 +303,13 @@ std::vector<BrickKey> shownCut(const ViewNeeds& needs, const std::vector<char>& 
             continue;
         }
         for (uint32_t c : children[i]) stack.push_back(c);
+        const BrickKey& parent = needs.bricks[i];
+        for (int c = 0; c < 8; ++c) {
+            const BrickKey child{parent.level - 1, {2 * parent.brick[0] + (c & 1), 2 * parent.brick[1] + ((c >> 1) & 1),
+                                                    2 * parent.brick[2] + ((c >> 2) & 1)}};
+            if (std::none_of(children[i].begin(), children[i].end(), [&](uint32_t k) { return needs.bricks[k] == child; }))
+                unshown.push_back(child);
+        }
     }
     std::sort(out.begin(), out.end());
     return out;
@@ -367,7 +399,12 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
         else report.complete = false;
         report.screenError = std::max(report.screenError, b.screenError * double(1 << (shown - b.key.level)));
     }
-    s.shown = shownCut(needs, isResident);
+    std::vector<BrickKey> unshown;
+    s.shown = shownCut(needs, isResident, unshown);
+    std::vector<LodBrick> cut;
+    for (const BrickKey& k : s.shown) cut.push_back({k.level, k.brick});
+    for (const BrickKey& k : unshown) cut.push_back({k.level, k.brick});
+    s.cut = LodCut(cut);
     report.settled = std::all_of(order.begin(), order.begin() + std::ptrdiff_t(accepted), [&](uint32_t n) { return isResident[n] != 0; });
     report.residentPerLevel.assign(std::size_t(s.levels) + 1, 0);
     for (const auto& [key, r] : s.resident) ++report.residentPerLevel[std::size_t(key.level)];
@@ -496,26 +533,27 @@ std::vector<BrickKey> StreamingScene::shownBricks() const
 uint64_t StreamingScene::brickVersion(const BrickKey& key) const
 {
     std::lock_guard<std::mutex> lock(impl_->mutex);
-    const auto it = impl_->resident.find(key);
-    return it == impl_->resident.end() ? 0 : it->second.version;
+    return impl_->meshVersionLocked(key);
 }
 
 std::optional<StreamingScene::BrickMesh> StreamingScene::meshBrick(const BrickKey& key, const MeshOptions& options) const
 {
-    // Under the lock: loaders paste bricks into the same level tree.
+    // Under the lock: loaders paste bricks into the same level trees.
     std::lock_guard<std::mutex> lock(impl_->mutex);
     const auto it = impl_->resident.find(key);
     if (it == impl_->resident.end()) return std::nullopt;
-    const Volume& level = impl_->levelVolumes[std::size_t(key.level)];
-    const LeafAlignedBox box = brickBox(key.brick);
+    std::vector<const Volume*> levels;
+    for (const Volume& v : impl_->levelVolumes) levels.push_back(&v);
     BrickMesh out;
-    out.mesh = weldChunks(meshRegionChunks(level, box.min, box.edge, options));
-    out.occlusion = vertexOcclusion(level, out.mesh);
-    if (key.level > 0) {
-        const double shift = wavelet::LodPyramid::levelOffset(key.level) * impl_->scene.voxelSize();
-        translateMesh(out.mesh, {shift, shift, shift});
+    const LodBrick brick{key.level, key.brick};
+    if (impl_->cut.shows(brick)) {
+        out.mesh = meshLodBrick(levels, impl_->cut, brick, options);
+    } else {
+        // Not in the last frame's cut (asked for directly): the brick alone at its level.
+        out.mesh = meshLodBrick(levels, LodCut({brick}), brick, options);
     }
-    out.version = it->second.version;
+    out.occlusion = vertexOcclusion(*levels[std::size_t(key.level)], out.mesh);
+    out.version = impl_->meshVersionLocked(key);
     return out;
 }
 

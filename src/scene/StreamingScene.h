@@ -90,11 +90,13 @@ public:
     /// selected brick is not, the finest resident ancestor that stands for all of its selected
     /// descendants (a brick is shown split into its children only once all of them can be shown).
     std::vector<BrickKey> shownBricks() const;
-    /// A number that changes whenever a resident brick's content does (loaded again, sculpted); 0 when
-    /// the brick is not resident.
+    /// A number that changes whenever what a resident brick's mesh is made from changes: its content
+    /// (loaded again, sculpted), the bricks of the view's cut that touch it, or theirs; 0 when the brick
+    /// is not resident.
     uint64_t brickVersion(const BrickKey& key) const;
-    /// The mesh of a resident brick on its own level's lattice, in world units, with the version of the
-    /// content it was made from; nullopt when the brick is not resident.
+    /// The mesh of a resident brick on its own level's lattice (meshLodBrick: vertex-aligned, with
+    /// transition cells where the last frame's cut shows a finer brick beside it), in world units, with
+    /// the version (brickVersion) it was made at; nullopt when the brick is not resident.
     struct BrickMesh {
         Mesh mesh;
         std::vector<uint8_t> occlusion; // per vertex (vertexOcclusion)
