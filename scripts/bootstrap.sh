@@ -102,10 +102,12 @@ case "$action" in
             fi
             step "build: ninja -C build-asan -j${jobs}"
             ninja -C build-asan -j"${jobs}"
-            step "test: the suite under AddressSanitizer and UBSan"
+            # The renderer's tests run on lavapipe in step 1 with the validation layer; under ASan, Mesa's
+            # CPU rasterizer is slow and its own allocations are not ours to check, so they are left out.
+            step "test: the suite under AddressSanitizer and UBSan (all but the renderer's tests)"
             ASAN_OPTIONS=detect_leaks=1 VDBCLAY_SWEEP_STEP=1 VDBCLAY_KILL_TRIALS=12 LSAN_OPTIONS="suppressions=${repo}/tests/sanitizer/lsan.supp" \
                 UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=${repo}/tests/sanitizer/ubsan.supp" \
-                ctest --test-dir build-asan --output-on-failure -j"${jobs}"
+                ctest --test-dir build-asan --output-on-failure -j"${jobs}" -E 'render'
             step "test: fuzzers, ${FUZZ_SECONDS:-60} s each"
             bash scripts/run-fuzzers.sh build-asan "${FUZZ_SECONDS:-60}"
         fi
