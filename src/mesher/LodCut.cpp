@@ -168,20 +168,10 @@ int LodCut::leafMaxCellWidth(int level, const std::array<int32_t, 3>& origin, in
         hi[std::size_t(a)] = (int64_t(origin[std::size_t(a)]) + 8) << level;
     }
     if (levelAround(lo, hi) != level) return 1;
-    // Any other level touching the leaf: its cells meet transition cells or plain faces.
+    // A finer brick touching the leaf: its transition cells are voxel cells. (A coarser one needs
+    // nothing here: the leaves across, in no brick of this level, hold voxel cells, so the faces
+    // towards it are split into unit squares, which are meshed plainly.)
     if (finerTouches(lo, hi, level)) return 1;
-    for (int l = level + 1; l <= coarsest_; ++l) {
-        const int64_t span = brickSpan(l);
-        for (int dx = -1; dx <= 1; ++dx)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dz = -1; dz <= 1; ++dz) {
-                    const int64_t p[3] = {dx < 0 ? lo[0] - 1 : dx > 0 ? hi[0] + 1 : (lo[0] + hi[0]) / 2,
-                                          dy < 0 ? lo[1] - 1 : dy > 0 ? hi[1] + 1 : (lo[1] + hi[1]) / 2,
-                                          dz < 0 ? lo[2] - 1 : dz > 0 ? hi[2] + 1 : (lo[2] + hi[2]) / 2};
-                    if (shows({l, {int32_t(floorDiv(p[0], span)), int32_t(floorDiv(p[1], span)), int32_t(floorDiv(p[2], span))}}))
-                        return 1;
-                }
-    }
     return widest;
 }
 

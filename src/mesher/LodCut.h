@@ -75,7 +75,7 @@ public:
     /// joined straight, no sharp point or material transition inside), as the transition mesher does.
     bool plainFace(int level, const std::array<int32_t, 3>& corner, int axis) const;
     /// The widest adaptive cell for a level-`level` leaf at `origin`: voxel cells where the leaf touches a
-    /// brick of another level or lies in no brick of this level, else `widest`.
+    /// finer brick (its transition cells) or lies in no brick of this level, else `widest`.
     int leafMaxCellWidth(int level, const std::array<int32_t, 3>& origin, int widest) const;
 
     /// A number that changes when the shown bricks touching `b` (any level) change: its mesh depends on
