@@ -4,6 +4,7 @@
 #include "mesher/MeshMetrics.h"
 #include "mesher/Mesher.h"
 #include "sculpt/StrokeScript.h"
+#include "render/ImageFile.h"
 #include "support/CliRun.h"
 #include "support/ExampleScript.h"
 #include "support/TestUtil.h"
@@ -207,6 +208,20 @@ TEST_CASE("cli: demo writes a volume, meshes and the script it ran", "[cli]")
                              "scene-lod2.obj", "scene-lod2.mtl"}) {
         INFO(name);
         CHECK(std::filesystem::file_size(dir.path() / "demo-out" / name) > 0);
+    }
+    // The picture, drawn where there is a Vulkan device (the sanitizer run hides the driver): a
+    // 1280x720 PNG whose middle shows the scene, not the background of its corner.
+    if (j["picture"].is_null()) {
+        CHECK(j["picture_skipped"].get<std::string>().find("Vulkan") != std::string::npos);
+        CHECK_FALSE(std::filesystem::exists(dir.path() / "demo-out" / "scene.png"));
+    } else {
+        const render::Image picture = render::readImage((dir.path() / "demo-out" / "scene.png").string());
+        CHECK(picture.width == 1280);
+        CHECK(picture.height == 720);
+        const uint8_t* corner = picture.pixel(0, 0);
+        const uint8_t* middle = picture.pixel(640, 360);
+        CHECK(std::abs(int(corner[0]) - int(middle[0])) + std::abs(int(corner[1]) - int(middle[1])) +
+                  std::abs(int(corner[2]) - int(middle[2])) > 60);
     }
     // Replaying the written scripts (the second with the tool it wrote) on a fresh volume of the demo's
     // voxel size gives the written volume.

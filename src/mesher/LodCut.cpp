@@ -107,8 +107,8 @@ std::optional<LodBrick> LodCut::cellOwner(int level, const std::array<int32_t, 3
 {
     Point lo, hi;
     for (int a = 0; a < 3; ++a) {
-        lo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) << level;
-        hi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) << level;
+        lo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) * (int64_t(1) << level);
+        hi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) * (int64_t(1) << level);
     }
     const int around = levelAround(lo, hi);
     if (around >= 0) {
@@ -136,8 +136,8 @@ bool LodCut::transitionCell(int level, const std::array<int32_t, 3>& cell) const
     if (level <= finest_) return false;
     Point lo, hi;
     for (int a = 0; a < 3; ++a) {
-        lo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) << level;
-        hi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) << level;
+        lo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) * (int64_t(1) << level);
+        hi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) * (int64_t(1) << level);
     }
     return finerTouches(lo, hi, level);
 }
@@ -149,8 +149,8 @@ bool LodCut::plainFace(int level, const std::array<int32_t, 3>& corner, int axis
         cell[std::size_t(axis)] -= side;
         Point lo, hi;
         for (int a = 0; a < 3; ++a) {
-            lo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) << level;
-            hi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) << level;
+            lo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) * (int64_t(1) << level);
+            hi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) * (int64_t(1) << level);
         }
         int around = levelAround(lo, hi);
         if (around < 0) around = coarsest_; // outside the cut: the coarsest level's space
@@ -164,8 +164,8 @@ int LodCut::leafMaxCellWidth(int level, const std::array<int32_t, 3>& origin, in
 {
     Point lo, hi;
     for (int a = 0; a < 3; ++a) {
-        lo[std::size_t(a)] = int64_t(origin[std::size_t(a)]) << level;
-        hi[std::size_t(a)] = (int64_t(origin[std::size_t(a)]) + 8) << level;
+        lo[std::size_t(a)] = int64_t(origin[std::size_t(a)]) * (int64_t(1) << level);
+        hi[std::size_t(a)] = (int64_t(origin[std::size_t(a)]) + 8) * (int64_t(1) << level);
     }
     if (levelAround(lo, hi) != level) return 1;
     // A finer brick touching the leaf: its transition cells are voxel cells. (A coarser one needs

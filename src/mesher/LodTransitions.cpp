@@ -365,8 +365,8 @@ Mesh meshLodBrick(const std::vector<const Volume*>& levels, const LodCut& cut, c
             const int axis = face / 2, high = face % 2;
             LodCut::Point lo, hi;
             for (int a = 0; a < 3; ++a) {
-                lo[std::size_t(a)] = int64_t(b[std::size_t(a)]) << level;
-                hi[std::size_t(a)] = (int64_t(b[std::size_t(a)]) + n) << level;
+                lo[std::size_t(a)] = int64_t(b[std::size_t(a)]) * (int64_t(1) << level);
+                hi[std::size_t(a)] = (int64_t(b[std::size_t(a)]) + n) * (int64_t(1) << level);
             }
             (high ? lo : hi)[std::size_t(axis)] = (high ? hi : lo)[std::size_t(axis)];
             const std::vector<LodBrick> finer = cut.finerTouching(lo, hi, level);
@@ -384,8 +384,8 @@ Mesh meshLodBrick(const std::vector<const Volume*>& levels, const LodCut& cut, c
                         const bool outside = depth < 0 || i < 0 || j < 0;
                         LodCut::Point clo, chi;
                         for (int a = 0; a < 3; ++a) {
-                            clo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) << level;
-                            chi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) << level;
+                            clo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) * (int64_t(1) << level);
+                            chi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) * (int64_t(1) << level);
                         }
                         // LodCut::transitionCell, against the few bricks that touch this face.
                         if (std::none_of(finer.begin(), finer.end(), [&](const LodBrick& f) { return LodCut::touches(f, clo, chi); }))
@@ -405,7 +405,7 @@ Mesh meshLodBrick(const std::vector<const Volume*>& levels, const LodCut& cut, c
     if (level < top) {
         std::array<int32_t, 2> range[3];
         for (int a = 0; a < 3; ++a) {
-            const int64_t lo0 = int64_t(b[std::size_t(a)]) << level, hi0 = (int64_t(b[std::size_t(a)]) + kLodBrickVoxels) << level;
+            const int64_t lo0 = int64_t(b[std::size_t(a)]) * (int64_t(1) << level), hi0 = (int64_t(b[std::size_t(a)]) + kLodBrickVoxels) * (int64_t(1) << level);
             const int64_t size = int64_t(1) << top;
             const int64_t first = (lo0 >= 0 ? lo0 / size : -((-lo0 + size - 1) / size)) - 1;
             const int64_t last = hi0 >= 0 ? hi0 / size : -((-hi0 + size - 1) / size);
@@ -426,8 +426,8 @@ Mesh meshLodBrick(const std::vector<const Volume*>& levels, const LodCut& cut, c
                     if (!owner || !(*owner == brick)) continue;
                     LodCut::Point lo, hi;
                     for (int a = 0; a < 3; ++a) {
-                        lo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) << top;
-                        hi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) << top;
+                        lo[std::size_t(a)] = int64_t(cell[std::size_t(a)]) * (int64_t(1) << top);
+                        hi[std::size_t(a)] = (int64_t(cell[std::size_t(a)]) + 1) * (int64_t(1) << top);
                     }
                     if (cut.levelAround(lo, hi) >= 0 || !cut.transitionCell(top, cell)) continue;
                     transitions.meshCell(top, cell, mesh);
