@@ -27,6 +27,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <set>
 
 using namespace vdbclay;
 using namespace vdbclay::test;
@@ -524,4 +525,34 @@ TEST_CASE("render: a store shown at several levels at once has no crack pixels i
     CHECK(interior > size * size / 4);
     CHECK(cracks == 0);
     requireNoValidationMessages(*context);
+}
+
+TEST_CASE("cli: render pictures of a flight with lod inspect --frames", "[render][cli]")
+{
+    TempDir dir;
+    REQUIRE(runCli(dir, "synth csg-stack --extent 96 --seed 3 -o c.vdbclay").exitCode == 0);
+    REQUIRE(runCli(dir, "lod build c.vdbclay").exitCode == 0);
+    nlohmann::json frames = nlohmann::json::array();
+    for (int i = 0; i < 10; ++i) frames.push_back({{"position", {-60.0 + 4.0 * i, 40.0, -60.0}}, {"target", {48.0, 8.0, 48.0}}});
+    writeText(dir.file("path.json"), nlohmann::json{{"fov_degrees", 60}, {"viewport", {320, 180}}, {"frames", frames}}.dump());
+    const CommandResult r = runCli(dir, "lod inspect c.vdbclay --camera-path path.json --memory-budget 64 --frames shots --every 4 --view lod");
+    INFO(r.err);
+    REQUIRE(r.exitCode == 0);
+    // Frames 0, 4 and 8, and the view once settled: pictures of the viewport's size.
+    for (const char* name : {"frame-00000.png", "frame-00004.png", "frame-00008.png", "settled.png"}) {
+        INFO(name);
+        const Image image = readImage(dir.file(std::string("shots/") + name));
+        CHECK(image.width == 320);
+        CHECK(image.height == 180);
+    }
+    CHECK_FALSE(std::filesystem::exists(dir.file("shots/frame-00001.png")));
+    const Image settled = readImage(dir.file("shots/settled.png"));
+    std::set<uint32_t> colours;
+    for (std::size_t i = 0; i < settled.rgba.size(); i += 4)
+        colours.insert(uint32_t(settled.rgba[i]) << 16 | uint32_t(settled.rgba[i + 1]) << 8 | settled.rgba[i + 2]);
+    CHECK(colours.size() > 20); // the scene, lit, over the background
+    // Options that need --frames, and a folder that is a file.
+    CHECK(runCli(dir, "lod inspect c.vdbclay --camera-path path.json --memory-budget 64 --every 2").exitCode == 2);
+    writeText(dir.file("afile"), "x");
+    CHECK(runCli(dir, "lod inspect c.vdbclay --camera-path path.json --memory-budget 64 --frames afile").exitCode == 2);
 }
