@@ -556,3 +556,31 @@ TEST_CASE("cli: render pictures of a flight with lod inspect --frames", "[render
     writeText(dir.file("afile"), "x");
     CHECK(runCli(dir, "lod inspect c.vdbclay --camera-path path.json --memory-budget 64 --frames afile").exitCode == 2);
 }
+
+TEST_CASE("render: a triangle shows its own material, whatever its corners carry", "[render]")
+{
+    auto context = validatedContext();
+    MaterialTable table;
+    Material red;
+    red.name = "red";
+    red.color = {0.9f, 0.05f, 0.05f, 1.0f};
+    const MaterialId redId = table.define(red);
+    // Two triangles facing +z over the view; every corner says "default", the second triangle says red.
+    Mesh mesh;
+    mesh.positions = {{-10, -10, 0}, {10, -10, 0}, {10, 10, 0}, {-10, 10, 0}};
+    mesh.normals.assign(4, {0, 0, 1});
+    mesh.materials.assign(4, 1);
+    mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
+    mesh.triangleMaterials = {1, redId};
+    Renderer renderer(*context);
+    renderer.setMaterials(table);
+    renderer.setChunk(1, mesh);
+    OffscreenTarget target(*context, 32, 32);
+    renderer.render({RenderView{frontCamera(20.0, 60.0), &target, {}}});
+    const Image image = target.colour();
+    const uint8_t* lowerRight = image.pixel(26, 26); // first triangle: below the diagonal
+    const uint8_t* upperLeft = image.pixel(5, 5);    // second triangle
+    CHECK(upperLeft[0] > 3 * int(upperLeft[1]));
+    CHECK(std::abs(int(lowerRight[0]) - int(lowerRight[1])) < 12);
+    requireNoValidationMessages(*context);
+}

@@ -175,25 +175,4 @@ int LodCut::leafMaxCellWidth(int level, const std::array<int32_t, 3>& origin, in
     return widest;
 }
 
-uint64_t LodCut::neighbourhoodSignature(const LodBrick& b) const
-{
-    const int64_t span = brickSpan(b.level);
-    Point lo, hi;
-    for (int a = 0; a < 3; ++a) {
-        lo[std::size_t(a)] = int64_t(b.brick[std::size_t(a)]) * span;
-        hi[std::size_t(a)] = lo[std::size_t(a)] + span;
-    }
-    uint64_t signature = 0x51ED27ull;
-    LodBrickHash hash;
-    for (const LodBrick& other : list_) {
-        const int64_t s = brickSpan(other.level);
-        bool touches = true;
-        for (int a = 0; a < 3 && touches; ++a)
-            touches = int64_t(other.brick[std::size_t(a)]) * s <= hi[std::size_t(a)] &&
-                      lo[std::size_t(a)] <= (int64_t(other.brick[std::size_t(a)]) + 1) * s;
-        if (touches) signature += hash(other) * 0x9E3779B97F4A7C15ull; // order-independent
-    }
-    return signature;
-}
-
 } // namespace vdbclay

@@ -78,9 +78,6 @@ public:
     /// finer brick (its transition cells) or lies in no brick of this level, else `widest`.
     int leafMaxCellWidth(int level, const std::array<int32_t, 3>& origin, int widest) const;
 
-    /// A number that changes when the shown bricks touching `b` (any level) change: its mesh depends on
-    /// them.
-    uint64_t neighbourhoodSignature(const LodBrick& b) const;
 
 private:
     static int64_t brickSpan(int level) { return int64_t(kLodBrickVoxels) << level; }

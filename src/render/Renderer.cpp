@@ -465,35 +465,54 @@ void Renderer::setChunk(ChunkId id, const Mesh& mesh, int level, const std::vect
     Impl::PendingChunk p;
     p.level = level;
     const std::size_t nv = mesh.positions.size();
-    const VkDeviceSize vertexBytes = nv * sizeof(GpuVertex);
-    p.indexOffset = vertexBytes;
-    p.indexCount = uint32_t(mesh.triangles.size() * 3);
-    p.bytes.resize(vertexBytes + std::size_t(p.indexCount) * sizeof(uint32_t));
-    auto* v = reinterpret_cast<GpuVertex*>(p.bytes.data());
+    std::vector<GpuVertex> vertices(nv);
     for (int a = 0; a < 3; ++a) {
         p.lo[a] = std::numeric_limits<float>::max();
         p.hi[a] = std::numeric_limits<float>::lowest();
     }
     const uint32_t levelBits = uint32_t(std::clamp(level, 0, 255)) << 16;
     for (std::size_t i = 0; i < nv; ++i) {
+        GpuVertex& v = vertices[i];
         for (int a = 0; a < 3; ++a) {
-            v[i].position[a] = mesh.positions[i][std::size_t(a)];
-            v[i].normal[a] = i < mesh.normals.size() ? mesh.normals[i][std::size_t(a)] : 0.0f;
-            p.lo[a] = std::min(p.lo[a], v[i].position[a]);
-            p.hi[a] = std::max(p.hi[a], v[i].position[a]);
+            v.position[a] = mesh.positions[i][std::size_t(a)];
+            v.normal[a] = i < mesh.normals.size() ? mesh.normals[i][std::size_t(a)] : 0.0f;
+            p.lo[a] = std::min(p.lo[a], v.position[a]);
+            p.hi[a] = std::max(p.hi[a], v.position[a]);
         }
         const uint32_t material = i < mesh.materials.size() ? mesh.materials[i] : 1u;
         const uint32_t open = occlusion && i < occlusion->size() ? (*occlusion)[i] : 255u;
-        v[i].packed = material | levelBits | (open << 24);
+        v.packed = material | levelBits | (open << 24);
     }
-    auto* indices = reinterpret_cast<uint32_t*>(p.bytes.data() + vertexBytes);
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-        for (int k = 0; k < 3; ++k) {
-            if (mesh.triangles[t][std::size_t(k)] >= nv)
-                throw std::invalid_argument("a mesh triangle names vertex " + std::to_string(mesh.triangles[t][std::size_t(k)]) +
-                                            " of " + std::to_string(nv));
-            indices[t * 3 + std::size_t(k)] = mesh.triangles[t][std::size_t(k)];
+    // The shaders take a triangle's material from its first (provoking) vertex: each triangle starts at
+    // a corner of its own material (the meshers' triangleMaterials follow material transitions inside a
+    // cell, the vertices' do not), else at a copy of its first corner carrying it.
+    std::vector<uint32_t> indices;
+    indices.reserve(mesh.triangles.size() * 3);
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        std::array<uint32_t, 3> tri = mesh.triangles[t];
+        for (const uint32_t k : tri)
+            if (k >= nv) throw std::invalid_argument("a mesh triangle names vertex " + std::to_string(k) + " of " + std::to_string(nv));
+        if (t < mesh.triangleMaterials.size()) {
+            const uint32_t want = mesh.triangleMaterials[t];
+            int first = 0;
+            while (first < 3 && (vertices[tri[std::size_t(first)]].packed & 0xffffu) != want) ++first;
+            if (first < 3) {
+                std::rotate(tri.begin(), tri.begin() + first, tri.end()); // keeps the winding
+            } else {
+                GpuVertex copy = vertices[tri[0]];
+                copy.packed = (copy.packed & ~0xffffu) | want;
+                tri[0] = uint32_t(vertices.size());
+                vertices.push_back(copy);
+            }
         }
+        indices.insert(indices.end(), tri.begin(), tri.end());
+    }
+    const VkDeviceSize vertexBytes = vertices.size() * sizeof(GpuVertex);
+    p.indexOffset = vertexBytes;
+    p.indexCount = uint32_t(indices.size());
+    p.bytes.resize(vertexBytes + indices.size() * sizeof(uint32_t));
+    std::memcpy(p.bytes.data(), vertices.data(), vertexBytes);
+    std::memcpy(p.bytes.data() + vertexBytes, indices.data(), indices.size() * sizeof(uint32_t));
     impl_->pending[id] = std::move(p);
 }
 

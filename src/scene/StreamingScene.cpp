@@ -115,14 +115,18 @@ struct StreamingScene::Impl {
     {
         const auto it = resident.find(key);
         if (it == resident.end()) return 0;
-        uint64_t v = it->second.version * 0x9E3779B97F4A7C15ull + cut.neighbourhoodSignature({key.level, key.brick});
+        // Order-independent sums over the cut's bricks touching this one: which they are, and their content.
+        uint64_t v = it->second.version * 0x9E3779B97F4A7C15ull;
+        const LodBrickHash hash;
+        const int64_t own = int64_t(kLodBrickVoxels) << key.level;
+        LodCut::Point lo, hi;
+        for (int a = 0; a < 3; ++a) {
+            lo[std::size_t(a)] = int64_t(key.brick[std::size_t(a)]) * own;
+            hi[std::size_t(a)] = lo[std::size_t(a)] + own;
+        }
         for (const LodBrick& other : cut.bricks()) {
-            const int64_t span = int64_t(kLodBrickVoxels) << other.level, own = int64_t(kLodBrickVoxels) << key.level;
-            bool touches = true;
-            for (int a = 0; a < 3 && touches; ++a)
-                touches = int64_t(other.brick[std::size_t(a)]) * span <= (int64_t(key.brick[std::size_t(a)]) + 1) * own &&
-                          int64_t(key.brick[std::size_t(a)]) * own <= (int64_t(other.brick[std::size_t(a)]) + 1) * span;
-            if (!touches) continue;
+            if (!LodCut::touches(other, lo, hi)) continue;
+            v += hash(other) * 0x100000001B3ull;
             const auto r = resident.find({other.level, other.brick});
             if (r != resident.end()) v += r->second.version * 0xC2B2AE3D27D4EB4Full;
         }
