@@ -249,14 +249,7 @@ private:
     std::unique_ptr<render::VulkanContext> context_;
     std::unique_ptr<render::Renderer> renderer_;
     std::unique_ptr<render::OffscreenTarget> target_;
-    render::StreamedSceneChunks chunks_{meshOptionsForPictures()};
-
-    static MeshOptions meshOptionsForPictures()
-    {
-        MeshOptions m;
-        m.kind = MesherKind::CubicalMarchingSquares;
-        return m;
-    }
+    render::StreamedSceneChunks chunks_;
 };
 
 } // namespace

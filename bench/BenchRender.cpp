@@ -38,13 +38,6 @@ namespace fs = std::filesystem;
 
 constexpr int kWidth = 1920, kHeight = 1080;
 
-MeshOptions cms()
-{
-    MeshOptions o;
-    o.kind = MesherKind::CubicalMarchingSquares;
-    return o;
-}
-
 Viewer viewerAt(double x, double z, double height, double lookAhead)
 {
     Viewer v;
@@ -146,7 +139,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     StreamingScene scene(store, options);
     render::Renderer renderer(context);
     renderer.setMaterials(scene.store().materials());
-    render::StreamedSceneChunks chunks(cms());
+    render::StreamedSceneChunks chunks;
     // Fill costs on lavapipe grow with the pixels; the selection is the 1080p view's whatever the target.
     render::OffscreenTarget small(context, 480, 270);
     const double height = 80.0, lookAhead = 200.0, far = 4.0 * extent;
@@ -224,7 +217,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
         const auto box = brickBox(key.brick);
         const double cx = (box.min[0] + 32) * voxel, cz = (box.min[2] + 32) * voxel;
         if (std::fabs(cx - sx * voxel) > 32 + 48 || std::fabs(cz - sz * voxel) > 32 + 48) continue;
-        const auto m = scene.meshBrick(key, cms());
+        const auto m = scene.meshBrick(key);
         if (!m) continue;
         const uint32_t base = uint32_t(changed.positions.size());
         changed.positions.insert(changed.positions.end(), m->mesh.positions.begin(), m->mesh.positions.end());

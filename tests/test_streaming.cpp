@@ -20,6 +20,8 @@
 #include <cmath>
 #include <csignal>
 #include <filesystem>
+#include <map>
+#include <memory>
 #include <optional>
 #include <random>
 #include <thread>
@@ -398,4 +400,50 @@ TEST_CASE("SIGKILL at any moment loses at most the edits since the last autosave
     }
     CHECK(killed >= trials / 2);
     CHECK(seenCommitted.size() >= 3); // the kills landed at different moments
+}
+
+TEST_CASE("the scene keeps the shown bricks' meshes within the memory budget and drops them with the brick", "[streaming]")
+{
+    TempDir dir;
+    const std::string path = makeTerrain(dir);
+    for (const uint64_t budgetMB : {3ull, 64ull}) {
+        StreamingOptions options;
+        options.memoryBudgetBytes = budgetMB << 20;
+        StreamingScene scene(path, options);
+        std::map<BrickKey, std::shared_ptr<const StreamingScene::BrickMesh>> kept;
+        uint64_t keptOverall = 0, shownOverall = 0;
+        for (int i = 0; i < 10; ++i) {
+            const double a = i / 10.0 * 3.14159;
+            const Viewer view = lookingAt({128 + 150 * std::cos(a), 90, 128 + 150 * std::sin(a)}, {128, 30, 128});
+            scene.frame(view);
+            scene.waitForLoads();
+            const FrameReport report = scene.frame(view);
+            INFO("budget " << budgetMB << " MB, frame " << i);
+            const std::vector<BrickKey> shown = scene.shownBricks();
+            // Meshes of bricks that left the view, or were evicted, are gone from the count.
+            uint64_t stillShown = 0;
+            for (const auto& [key, mesh] : kept)
+                if (std::binary_search(shown.begin(), shown.end(), key)) stillShown += mesh->bytes;
+            CHECK(report.meshBytes == stillShown);
+            CHECK(scene.residentMeshBytes() == stillShown);
+            kept.clear();
+            for (const BrickKey& key : shown) {
+                const auto mesh = scene.meshBrick(key);
+                REQUIRE(mesh);
+                CHECK(mesh->bytes >= mesh->mesh.triangles.size() * sizeof(mesh->mesh.triangles[0]));
+                CHECK(mesh->version == scene.brickVersion(key));
+                CHECK(scene.residentBytes() <= options.memoryBudgetBytes);
+                if (scene.meshBrick(key) == mesh) kept[key] = mesh; // kept: asked again, the same mesh
+            }
+            uint64_t keptBytes = 0;
+            for (const auto& [key, mesh] : kept) keptBytes += mesh->bytes;
+            CHECK(scene.residentMeshBytes() == keptBytes);
+            CHECK(scene.residentBytes() <= options.memoryBudgetBytes);
+            keptOverall += kept.size();
+            shownOverall += shown.size();
+        }
+        REQUIRE(shownOverall > 0);
+        if (budgetMB == 64) CHECK(keptOverall == shownOverall); // a roomy budget keeps every shown mesh
+        else CHECK(keptOverall > 0);
+    }
 }

@@ -10,6 +10,29 @@
 
 namespace vdbclay {
 
+uint64_t Mesh::memoryBytes() const
+{
+    return sizeof(Mesh) + positions.capacity() * sizeof(positions[0]) + normals.capacity() * sizeof(normals[0]) +
+           materials.capacity() * sizeof(materials[0]) + triangles.capacity() * sizeof(triangles[0]) +
+           triangleMaterials.capacity() * sizeof(triangleMaterials[0]);
+}
+
+uint64_t contentHash(const Mesh& m)
+{
+    uint64_t h = 1469598103934665603ull;
+    const auto mix = [&](const void* data, std::size_t bytes) {
+        const auto* p = static_cast<const uint8_t*>(data);
+        for (std::size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 1099511628211ull;
+        h = (h ^ bytes) * 1099511628211ull; // array boundaries count: [a][bc] differs from [ab][c]
+    };
+    mix(m.positions.data(), m.positions.size() * sizeof(m.positions[0]));
+    mix(m.normals.data(), m.normals.size() * sizeof(m.normals[0]));
+    mix(m.materials.data(), m.materials.size() * sizeof(m.materials[0]));
+    mix(m.triangles.data(), m.triangles.size() * sizeof(m.triangles[0]));
+    mix(m.triangleMaterials.data(), m.triangleMaterials.size() * sizeof(m.triangleMaterials[0]));
+    return h;
+}
+
 bool identical(const MeshChunk& a, const MeshChunk& b)
 {
     const Mesh &m = a.mesh, &n = b.mesh;

@@ -21,21 +21,6 @@ uint64_t packCoordinates(const std::array<int32_t, 3>& c)
     for (int a = 0; a < 3; ++a) out = (out << 20) | (uint64_t(int64_t(c[std::size_t(a)]) + (1 << 19)) & 0xFFFFF);
     return out;
 }
-uint64_t hashMesh(const Mesh& m, const std::vector<uint8_t>& occlusion)
-{
-    uint64_t h = 1469598103934665603ull;
-    auto mix = [&](const void* data, std::size_t bytes) {
-        const auto* p = static_cast<const uint8_t*>(data);
-        for (std::size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 1099511628211ull;
-    };
-    mix(m.positions.data(), m.positions.size() * sizeof(m.positions[0]));
-    mix(m.normals.data(), m.normals.size() * sizeof(m.normals[0]));
-    mix(m.materials.data(), m.materials.size() * sizeof(m.materials[0]));
-    mix(m.triangles.data(), m.triangles.size() * sizeof(m.triangles[0]));
-    mix(occlusion.data(), occlusion.size());
-    return h;
-}
-
 } // namespace
 
 ChunkId leafChunkId(const std::array<int32_t, 3>& o)
@@ -99,17 +84,16 @@ StreamedSceneChunks::SyncReport StreamedSceneChunks::sync(const StreamingScene& 
         const uint64_t version = scene.brickVersion(key);
         const auto it = uploaded_.find(key);
         if (it != uploaded_.end() && it->second.version == version) continue;
-        std::optional<StreamingScene::BrickMesh> m = scene.meshBrick(key, options_);
+        const std::shared_ptr<const StreamingScene::BrickMesh> m = scene.meshBrick(key);
         if (!m) continue;
         ++report.meshed;
-        const uint64_t hash = hashMesh(m->mesh, m->occlusion);
-        if (it != uploaded_.end() && it->second.meshHash == hash) {
+        if (it != uploaded_.end() && it->second.meshHash == m->hash) {
             it->second.version = m->version;
             continue;
         }
         const ChunkId id = it != uploaded_.end() ? it->second.id : nextId_++;
         renderer.setChunk(id, m->mesh, key.level, &m->occlusion);
-        uploaded_[key] = {id, m->version, hash};
+        uploaded_[key] = {id, m->version, m->hash};
         ++report.uploaded;
     }
     report.meshSeconds = secondsSince(start);

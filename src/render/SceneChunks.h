@@ -27,17 +27,15 @@ VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOp
 /// Keeps the renderer's chunks equal to a streaming scene's shown bricks.
 class StreamedSceneChunks {
 public:
-    explicit StreamedSceneChunks(const MeshOptions& options) : options_(options) {}
-
     struct SyncReport {
-        uint64_t meshed = 0;   // bricks meshed again (their content or their neighbourhood changed)
+        uint64_t meshed = 0;   // bricks whose mesh was taken again (their content or their neighbourhood changed)
         uint64_t uploaded = 0; // of those, the ones whose mesh changed: queued for upload
         uint64_t removed = 0;  // chunks of bricks no longer shown
         uint64_t shown = 0;
         double meshSeconds = 0.0;
     };
-    /// After scene.frame(): meshes the shown bricks that are new or whose version changed, uploads the
-    /// meshes that changed, drops the bricks not shown.
+    /// After scene.frame(): takes the meshes of the shown bricks that are new or whose version changed
+    /// (StreamingScene::meshBrick makes them), uploads the meshes that changed, drops the bricks not shown.
     SyncReport sync(const StreamingScene& scene, Renderer& renderer);
 
     /// The chunk a shown brick is drawn as, if it has one.
@@ -49,7 +47,6 @@ private:
         uint64_t version;  // StreamingScene::brickVersion the chunk was made at
         uint64_t meshHash; // of its mesh: a brick meshed again to the same mesh is not uploaded again
     };
-    MeshOptions options_;
     std::map<BrickKey, Uploaded> uploaded_;
     ChunkId nextId_ = ChunkId(1) << 62; // apart from leaf ids
 };

@@ -75,7 +75,7 @@ Picture renderStreamed(VulkanContext& context, const StreamingScene& scene, cons
 {
     Renderer renderer(context);
     renderer.setMaterials(scene.store().materials());
-    StreamedSceneChunks chunks(pictureMeshOptions());
+    StreamedSceneChunks chunks;
     const StreamedSceneChunks::SyncReport sync = chunks.sync(scene, renderer);
     Picture p = draw(context, renderer, camera, request);
     p.meshMs = sync.meshSeconds * 1000.0;

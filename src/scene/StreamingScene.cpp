@@ -37,6 +37,7 @@ struct StreamingScene::Impl {
         uint64_t lastUsed = 0;
         bool dirty = false;
         uint64_t version = 0;
+        std::shared_ptr<const BrickMesh> mesh; // the last made, while the brick is shown
     };
 
     StreamingOptions options;
@@ -56,7 +57,10 @@ struct StreamingScene::Impl {
     BrickSet staleInFlight; // loads an autosave's LOD update overtook: discarded on arrival
     BrickSet damaged;       // bricks the store could not give: shown by their ancestors, not loaded again
     BrickSet wanted;        // the current frame's accepted selection and fallbacks
-    uint64_t residentBytes = 0, inFlightBytes = 0;
+    uint64_t residentBytes = 0, inFlightBytes = 0; // resident: bricks and meshes
+    uint64_t meshBytes = 0;
+    double meshShare = 0.0; // a mesh's bytes over its brick's, lately: estimates what a brick's mesh will take
+    BrickSet meshed;        // resident bricks holding a mesh
     uint64_t frameNumber = 0;
     uint64_t bytesRead = 0, loads = 0, evictions = 0;
     uint64_t edits = 0;
@@ -139,11 +143,48 @@ struct StreamingScene::Impl {
         return it == estimates.end() ? kEstimatedBytesPerBrick : it->second;
     }
 
+    /// What a brick takes with its mesh: resident ones as they are (a shown brick's mesh estimated until
+    /// it is made), others estimated.
+    uint64_t budgetedBytes(const BrickKey& key, const Resident* r) const
+    {
+        const uint64_t brick = r ? r->bytes : estimateOf(key);
+        const uint64_t mesh = r && r->mesh ? r->mesh->bytes : uint64_t(double(brick) * meshShare);
+        return brick + mesh;
+    }
+
+    void dropMesh(const BrickKey& key, Resident& r)
+    {
+        if (!r.mesh) return;
+        residentBytes -= r.mesh->bytes;
+        meshBytes -= r.mesh->bytes;
+        r.mesh.reset();
+        meshed.erase(key);
+    }
+
+    void keepMesh(const BrickKey& key, Resident& r, std::shared_ptr<const BrickMesh> mesh)
+    {
+        const double share = r.bytes ? double(mesh->bytes) / double(r.bytes) : 0.0;
+        meshShare = meshed.empty() && meshShare == 0.0 ? share : 0.9 * meshShare + 0.1 * share;
+        residentBytes += mesh->bytes;
+        meshBytes += mesh->bytes;
+        r.mesh = std::move(mesh);
+        meshed.insert(key);
+    }
+
+    /// Removes a resident brick (and its mesh) from memory. Lock held.
+    void evict(std::unordered_map<BrickKey, Resident, BrickKeyHash>::iterator it)
+    {
+        dropMesh(it->first, it->second);
+        residentBytes -= it->second.bytes;
+        fillRegion(levelVolumes[std::size_t(it->first.level)], brickBox(it->first.brick), kEmptyMaterial);
+        resident.erase(it);
+    }
+
     /// Puts a loaded brick into its level's tree and accounts for it. Lock held.
     void install(const BrickKey& key, DecodedRegion&& brick, uint64_t bytes, uint64_t bytesReadFromStore)
     {
         pasteRegion(levelVolumes[std::size_t(key.level)], std::move(brick));
-        resident[key] = Resident{bytes, frameNumber, false, ++versions};
+        resident[key] = Resident{bytes, frameNumber, false, ++versions, nullptr};
         residentBytes += bytes;
         bytesRead += bytesReadFromStore;
         ++loads;
@@ -164,9 +205,7 @@ struct StreamingScene::Impl {
                 autosaveLocked();
                 continue;
             }
-            residentBytes -= victim->second.bytes;
-            fillRegion(levelVolumes[std::size_t(victim->first.level)], brickBox(victim->first.brick), kEmptyMaterial);
-            resident.erase(victim);
+            evict(victim);
             ++evictions;
         }
         (void)lock;
@@ -257,10 +296,7 @@ struct StreamingScene::Impl {
                 if (inFlight.count(key)) staleInFlight.insert(key);
                 damaged.erase(key);
                 const auto it = resident.find(key);
-                if (it == resident.end()) continue;
-                residentBytes -= it->second.bytes;
-                fillRegion(levelVolumes[std::size_t(key.level)], brickBox(b), kEmptyMaterial);
-                resident.erase(it);
+                if (it != resident.end()) evict(it);
             }
     }
 };
@@ -360,7 +396,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     for (; accepted < order.size(); ++accepted) {
         const BrickKey& key = needed[order[accepted]];
         const auto it = s.resident.find(key);
-        const uint64_t bytes = it != s.resident.end() ? it->second.bytes : s.estimateOf(key);
+        const uint64_t bytes = s.budgetedBytes(key, it != s.resident.end() ? &it->second : nullptr);
         if (cost + bytes > s.options.memoryBudgetBytes) {
             report.budgetLimited = true;
             break;
@@ -409,10 +445,16 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     for (const BrickKey& k : s.shown) cut.push_back({k.level, k.brick});
     for (const BrickKey& k : unshown) cut.push_back({k.level, k.brick});
     s.cut = LodCut(cut);
+    // Meshes are kept for the shown bricks only: a brick that left the view is meshed again if it returns.
+    for (auto it = s.meshed.begin(); it != s.meshed.end();) {
+        const BrickKey key = *it++;
+        if (!std::binary_search(s.shown.begin(), s.shown.end(), key)) s.dropMesh(key, s.resident.at(key));
+    }
     report.settled = std::all_of(order.begin(), order.begin() + std::ptrdiff_t(accepted), [&](uint32_t n) { return isResident[n] != 0; });
     report.residentPerLevel.assign(std::size_t(s.levels) + 1, 0);
     for (const auto& [key, r] : s.resident) ++report.residentPerLevel[std::size_t(key.level)];
     report.residentBytes = s.residentBytes;
+    report.meshBytes = s.meshBytes;
     report.bytesRead = std::exchange(s.bytesRead, 0);
     report.loads = std::exchange(s.loads, 0);
     report.evictions = std::exchange(s.evictions, 0);
@@ -516,6 +558,12 @@ uint64_t StreamingScene::residentBytes() const
     return impl_->residentBytes;
 }
 
+uint64_t StreamingScene::residentMeshBytes() const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    return impl_->meshBytes;
+}
+
 uint64_t StreamingScene::residentActiveVoxels() const
 {
     std::lock_guard<std::mutex> lock(impl_->mutex);
@@ -540,24 +588,32 @@ uint64_t StreamingScene::brickVersion(const BrickKey& key) const
     return impl_->meshVersionLocked(key);
 }
 
-std::optional<StreamingScene::BrickMesh> StreamingScene::meshBrick(const BrickKey& key, const MeshOptions& options) const
+std::shared_ptr<const StreamingScene::BrickMesh> StreamingScene::meshBrick(const BrickKey& key) const
 {
+    Impl& s = *impl_;
     // Under the lock: loaders paste bricks into the same level trees.
-    std::lock_guard<std::mutex> lock(impl_->mutex);
-    const auto it = impl_->resident.find(key);
-    if (it == impl_->resident.end()) return std::nullopt;
+    std::unique_lock<std::mutex> lock(s.mutex);
+    const auto it = s.resident.find(key);
+    if (it == s.resident.end()) return nullptr;
+    const uint64_t version = s.meshVersionLocked(key);
+    if (it->second.mesh && it->second.mesh->version == version) return it->second.mesh;
     std::vector<const Volume*> levels;
-    for (const Volume& v : impl_->levelVolumes) levels.push_back(&v);
-    BrickMesh out;
+    for (const Volume& v : s.levelVolumes) levels.push_back(&v);
+    auto out = std::make_shared<BrickMesh>();
     const LodBrick brick{key.level, key.brick};
-    if (impl_->cut.shows(brick)) {
-        out.mesh = meshLodBrick(levels, impl_->cut, brick, options);
-    } else {
-        // Not in the last frame's cut (asked for directly): the brick alone at its level.
-        out.mesh = meshLodBrick(levels, LodCut({brick}), brick, options);
+    // A brick outside the last frame's cut (asked for directly) is meshed alone at its level.
+    out->mesh = meshLodBrick(levels, s.cut.shows(brick) ? s.cut : LodCut({brick}), brick, s.options.meshing);
+    out->occlusion = vertexOcclusion(*levels[std::size_t(key.level)], out->mesh);
+    out->version = version;
+    out->hash = contentHash(out->mesh);
+    for (uint8_t o : out->occlusion) out->hash = (out->hash ^ o) * 1099511628211ull;
+    out->bytes = sizeof(BrickMesh) + out->mesh.memoryBytes() + out->occlusion.capacity();
+    // Kept if the budget holds it (other bricks may make room); else made again when asked for.
+    s.dropMesh(key, it->second);
+    if (s.makeRoom(out->bytes, lock)) {
+        const auto kept = s.resident.find(key); // makeRoom may have evicted it, if it was not wanted
+        if (kept != s.resident.end()) s.keepMesh(key, kept->second, out);
     }
-    out.occlusion = vertexOcclusion(*levels[std::size_t(key.level)], out.mesh);
-    out.version = impl_->meshVersionLocked(key);
     return out;
 }
 

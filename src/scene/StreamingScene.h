@@ -18,15 +18,22 @@
 namespace vdbclay {
 
 struct StreamingOptions {
-    uint64_t memoryBudgetBytes = 512ull << 20; // resident bricks (volume data)
+    uint64_t memoryBudgetBytes = 512ull << 20; // resident bricks (volume data) and their meshes
     double pixelTolerance = 1.0;
     int loaderThreads = 2;
     StoreAccess access = StoreAccess::ReadOnly; // ReadWrite to edit and autosave
+    /// How meshBrick() meshes the shown bricks (CMS, adaptive by default).
+    MeshOptions meshing = [] {
+        MeshOptions o;
+        o.kind = MesherKind::CubicalMarchingSquares;
+        return o;
+    }();
 };
 
 struct FrameReport {
     std::vector<uint64_t> residentPerLevel; // bricks resident, per level
-    uint64_t residentBytes = 0;
+    uint64_t residentBytes = 0; // bricks and their meshes
+    uint64_t meshBytes = 0;     // of which meshes (the shown bricks' made so far)
     uint64_t bytesRead = 0;    // payload bytes read from the store since the last frame
     uint64_t loads = 0;        // bricks loaded since the last frame
     uint64_t evictions = 0;    // since the last frame
@@ -78,7 +85,9 @@ public:
     /// Edits (script ops) applied since the store was made, as of the last autosave.
     static uint64_t committedEdits(const SceneStore& scene);
 
+    /// Resident bricks and their meshes: what the memory budget bounds.
     uint64_t residentBytes() const;
+    uint64_t residentMeshBytes() const;
     /// Active voxels of the resident bricks summed over every level, each on its own lattice: the
     /// surface (in voxel^2 of its level) that residentBytes() holds.
     uint64_t residentActiveVoxels() const;
@@ -94,15 +103,20 @@ public:
     /// (loaded again, sculpted), the bricks of the view's cut that touch it, or theirs; 0 when the brick
     /// is not resident.
     uint64_t brickVersion(const BrickKey& key) const;
-    /// The mesh of a resident brick on its own level's lattice (meshLodBrick: vertex-aligned, with
-    /// transition cells where the last frame's cut shows a finer brick beside it), in world units, with
-    /// the version (brickVersion) it was made at; nullopt when the brick is not resident.
+    /// The mesh of a resident brick on its own level's lattice (meshLodBrick with the scene's
+    /// StreamingOptions::meshing: vertex-aligned, with transition cells where the last frame's cut shows
+    /// a finer brick beside it), in world units, with the version (brickVersion) it was made at; nullptr
+    /// when the brick is not resident. The scene keeps it beside the brick, counted in the memory
+    /// budget, until the brick's version changes, the brick leaves the view or is evicted: asking again
+    /// costs nothing. A mesh the budget cannot hold (other bricks being needed) is not kept.
     struct BrickMesh {
         Mesh mesh;
         std::vector<uint8_t> occlusion; // per vertex (vertexOcclusion)
         uint64_t version = 0;
+        uint64_t hash = 0;  // of the mesh and its occlusion: equal meshes need no new upload
+        uint64_t bytes = 0; // what it takes in memory
     };
-    std::optional<BrickMesh> meshBrick(const BrickKey& key, const MeshOptions& options) const;
+    std::shared_ptr<const BrickMesh> meshBrick(const BrickKey& key) const;
     int levels() const;
 
 private:
