@@ -4,6 +4,7 @@
 #include "render/Framing.h"
 #include "render/ImageFile.h"
 #include "render/Renderer.h"
+#include "render/ScenePicture.h"
 #include "render/SceneChunks.h"
 #include "render/VulkanContext.h"
 #include "scene/CameraPath.h"
@@ -200,7 +201,9 @@ public:
             throw std::runtime_error(std::string("cannot draw the frames: ") + e.what());
         }
         renderer_ = std::make_unique<render::Renderer>(*context_);
-        renderer_->setMaterials(scene.store().materials());
+        const std::string folder = std::filesystem::path(scene.store().path()).parent_path().string();
+        for (const std::string& w : renderer_->setMaterials(scene.store().materials(), render::materialLook(scene.store().voxelSize(), folder)))
+            std::cerr << "vdbclay: warning: " << w << "\n";
         render::ShadingOptions shading;
         shading.mode = render::parseViewMode(o.frameView);
         renderer_->setShading(shading);

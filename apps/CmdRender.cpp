@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <iostream>
 
 namespace vdbclay::cli {
@@ -105,6 +106,7 @@ int runRender(const RenderOptions& o)
     request.shading.wireframe = o.wireframe;
     request.memoryBudgetBytes = uint64_t(o.memoryBudgetMB * 1048576.0);
     request.pixelTolerance = o.pixelError;
+    request.textureFolder = std::filesystem::path(o.scene).parent_path().string();
     if (!o.camera.empty()) request.camera = parseCamera(o.camera);
     if (!o.cameraPath.empty()) {
         const std::vector<CameraFrame> flight = loadCameraPath(o.cameraPath);
@@ -138,6 +140,7 @@ int runRender(const RenderOptions& o)
         picture = render::renderVolume(*context, loadVolume(o.scene), request);
     }
     render::writePng(picture.image, o.output);
+    for (const std::string& w : picture.warnings) std::cerr << "vdbclay: warning: " << w << "\n";
     const double seconds = secondsSince(start);
     const render::FrameStats& s = picture.stats;
     if (o.json) {

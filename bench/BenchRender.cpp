@@ -91,6 +91,9 @@ struct TerrainFigures {
     // Complete views at 1080p, 1 px of error, over several stations.
     std::vector<double> viewTriangles;
     uint64_t maxChunks = 0, maxGpuBytes = 0;
+    // At the first station: resident bytes (bricks and the shown bricks' meshes) per voxel^2 of resident
+    // surface, and the meshes' share of them.
+    double residentPerSurfaceVoxel = 0.0, meshShare = 0.0;
     double gpuMs1080 = 0.0; // one complete view drawn at full size
     // The flight.
     std::vector<double> cpuMs, selectMs, recordMs, meshMs, uploadBytes, triangles;
@@ -156,6 +159,8 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
         f.maxChunks = std::max(f.maxChunks, s.chunksDrawn);
         f.maxGpuBytes = std::max(f.maxGpuBytes, s.gpuMemoryBytes);
         if (i == 0) {
+            f.residentPerSurfaceVoxel = double(scene.residentBytes()) / double(std::max<uint64_t>(1, scene.residentActiveVoxels()));
+            f.meshShare = double(scene.residentMeshBytes()) / double(std::max<uint64_t>(1, scene.residentBytes()));
             render::OffscreenTarget full(context, kWidth, kHeight);
             f.gpuMs1080 = renderer.render({{cameraOf(v, far), &full, {}}}).gpuMs;
         }
@@ -263,6 +268,8 @@ int benchRender(bool json, bool quick, double memoryBudgetMb)
                             {"complete_view_triangles_mean", mean(f.viewTriangles)},
                             {"complete_view_chunks_max", f.maxChunks},
                             {"gpu_memory_bytes_max", f.maxGpuBytes},
+                            {"resident_bytes_per_surface_voxel", f.residentPerSurfaceVoxel},
+                            {"resident_mesh_share", f.meshShare},
                             {"gpu_ms_1080p", f.gpuMs1080},
                             {"flight_frames", f.cpuMs.size()},
                             {"cpu_ms_p50", percentile(f.cpuMs, 0.5)},
@@ -301,6 +308,7 @@ int benchRender(bool json, bool quick, double memoryBudgetMb)
     };
     row("triangles of a complete view (max)", [](const TerrainFigures& f) { return fixed(maximum(f.viewTriangles) / 1e6, 2) + " M"; }, "<= 2 M");
     row("chunks drawn (max) / GPU memory", [](const TerrainFigures& f) { return std::to_string(f.maxChunks) + " / " + megabytes(double(f.maxGpuBytes)); }, "");
+    row("resident bytes per voxel^2 of surface (meshes' share)", [](const TerrainFigures& f) { return fixed(f.residentPerSurfaceVoxel, 1) + " (" + fixed(100.0 * f.meshShare, 0) + " %)"; }, "<= 25");
     row("CPU per frame p50 / p99 (select + record)", [](const TerrainFigures& f) { return fixed(percentile(f.cpuMs, 0.5), 2) + " / " + fixed(percentile(f.cpuMs, 0.99), 2) + " ms"; }, "p99 <= 2 ms");
     row("meshing per frame mean / p99 (workers' share)", [](const TerrainFigures& f) { return fixed(mean(f.meshMs), 1) + " / " + fixed(percentile(f.meshMs, 0.99), 1) + " ms"; }, "");
     row("upload per frame mean / max", [](const TerrainFigures& f) { return megabytes(mean(f.uploadBytes)) + " / " + megabytes(maximum(f.uploadBytes)); }, "");

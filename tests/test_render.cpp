@@ -584,3 +584,70 @@ TEST_CASE("render: a triangle shows its own material, whatever its corners carry
     CHECK(std::abs(int(lowerRight[0]) - int(lowerRight[1])) < 12);
     requireNoValidationMessages(*context);
 }
+
+TEST_CASE("render: a material's picture lands where the tri-planar projection puts it; an unreadable one is reported", "[render]")
+{
+    TempDir dir;
+    // A checker of 8 x 8 squares, red and blue: one repetition covers 32 voxels, a square 4.
+    Image checker;
+    checker.width = checker.height = 64;
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x) {
+            const bool red = ((x / 8) + (y / 8)) % 2 == 0;
+            checker.rgba.insert(checker.rgba.end(), {uint8_t(red ? 230 : 30), 30, uint8_t(red ? 30 : 230), 255});
+        }
+    writePng(checker, dir.file("checker.png"));
+
+    auto context = validatedContext();
+    Volume volume = slab();
+    Material tiled;
+    tiled.name = "tiled";
+    tiled.color = {1.0f, 1.0f, 1.0f, 1.0f};
+    tiled.texture = "checker.png"; // relative: from the scene's folder
+    const MaterialId id = volume.materials().define(tiled);
+    apply(volume, CsgMode::Paint, box(Vec3d(50.0, 50.0, 20.0)), at(Vec3d(0.0)), id);
+    CHECK(MaterialTable::fromJson(volume.materials().toJson()) == volume.materials()); // saved with the scene
+
+    Renderer renderer(*context);
+    const VolumeUpload upload = uploadVolume(renderer, volume, cmsOptions(), materialLook(1.0, dir.path().string()));
+    CHECK(upload.warnings.empty());
+    const int size = 256;
+    OffscreenTarget target(*context, size, size);
+    const RenderView view{frontCamera(120.0), &target, {}};
+    renderer.render({view});
+    const Image image = target.colour();
+    int checked = 0, reds = 0;
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const auto p = onPlane(view.camera, x, y, size, 8.0);
+            if (std::fabs(p[0]) > 36.0 || std::fabs(p[1]) > 36.0) continue;
+            // The face looks along +z: the picture is projected on xy, texel (x, y) / 32 of a repetition.
+            const double sx = p[0] / 4.0, sy = p[1] / 4.0;
+            const double border = std::min(std::fabs(sx - std::round(sx)), std::fabs(sy - std::round(sy)));
+            if (border < 0.3) continue; // filtering (trilinear, between mipmaps) blends across a square's border
+            const bool red = (int64_t(std::floor(sx)) + int64_t(std::floor(sy))) % 2 == 0;
+            const uint8_t* px = image.pixel(x, y);
+            INFO("pixel " << x << "," << y << " at " << p[0] << "," << p[1] << " rgb " << int(px[0]) << " " << int(px[1]) << " " << int(px[2]));
+            if (red) CHECK(px[0] > 2 * px[2]);
+            else CHECK(px[2] > 2 * px[0]);
+            ++checked;
+            reds += red;
+        }
+    CHECK(checked > 4000);
+    CHECK(reds > checked / 3);
+    CHECK(reds < 2 * checked / 3);
+
+    // A picture that cannot be read: one message naming it; the material keeps its procedural pattern.
+    Material missing = tiled;
+    missing.texture = "no-such-picture.png";
+    volume.materials().define(missing);
+    Renderer second(*context);
+    const VolumeUpload without = uploadVolume(second, volume, cmsOptions(), materialLook(1.0, dir.path().string()));
+    REQUIRE(without.warnings.size() == 1);
+    CHECK(without.warnings[0].find("no-such-picture.png") != std::string::npos);
+    second.render({view});
+    const Image plain = target.colour();
+    const uint8_t* centre = plain.pixel(size / 2, size / 2);
+    CHECK(std::abs(int(centre[0]) - int(centre[2])) < 8); // white, not red or blue
+    requireNoValidationMessages(*context);
+}

@@ -328,3 +328,14 @@ TEST_CASE("numbers too large for a double and raw bytes in a script are clean sc
         CHECK(std::all_of(what.begin(), what.end(), [](char c) { return c >= 32 && c < 127; }));
     }
 }
+
+TEST_CASE("scripts name material textures; empty or unprintable paths are refused", "[script]")
+{
+    const StrokeScript script = parseStrokeScript(
+        R"({"materials": [{"name": "brick", "texture": "textures/brick.png"}], "ops": []})");
+    REQUIRE(script.materials.size() == 1);
+    CHECK(script.materials[0].texture == "textures/brick.png");
+    CHECK_THROWS_AS(parseStrokeScript(R"({"materials": [{"name": "brick", "texture": ""}], "ops": []})"), ScriptError);
+    CHECK_THROWS_AS(parseStrokeScript(R"({"materials": [{"name": "brick", "texture": "a\u001bb"}], "ops": []})"), ScriptError);
+    CHECK_THROWS_AS(parseStrokeScript(R"({"materials": [{"name": "brick", "texture": 3}], "ops": []})"), ScriptError);
+}

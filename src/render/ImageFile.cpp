@@ -32,6 +32,10 @@ void writePng(const Image& image, const std::string& path)
 Image readImage(const std::string& path)
 {
     int w = 0, h = 0, channels = 0;
+    // Sizes first: a forged header must not make stb allocate gigabytes.
+    if (stbi_info(path.c_str(), &w, &h, &channels) && (w > kMaxPictureSide || h > kMaxPictureSide))
+        throw std::runtime_error("the picture " + path + " is " + std::to_string(w) + "x" + std::to_string(h) +
+                                 ": larger than " + std::to_string(kMaxPictureSide) + " pixels a side");
     std::unique_ptr<stbi_uc, void (*)(void*)> pixels(stbi_load(path.c_str(), &w, &h, &channels, 4), stbi_image_free);
     if (!pixels) throw std::runtime_error("cannot read the picture " + path + ": " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown error"));
     Image image;

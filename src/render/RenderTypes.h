@@ -34,6 +34,12 @@ ViewMode parseViewMode(const std::string& name);
 
 /// The brush's field as the shaders evaluate it: a primitive in its local frame (same shapes and
 /// parameters as sculpt's Primitive) and the world-to-local transform of its placement.
+/// Where material textures come from and how large they are drawn.
+struct MaterialLook {
+    std::string textureFolder;  // relative texture paths start here (the scene file's folder)
+    double textureTile = 32.0;  // world units one repetition of a texture covers
+};
+
 struct BrushOverlay {
     enum class Shape : uint32_t { Sphere = 0, Box = 1, Cylinder = 2, Capsule = 3, Torus = 4, Cone = 5 };
     Shape shape = Shape::Sphere;

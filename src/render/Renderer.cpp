@@ -1,6 +1,7 @@
 #include "render/Renderer.h"
 
 #include "render/GpuMemory.h"
+#include "render/MaterialTextures.h"
 #include "render/OffscreenTarget.h"
 #include "render/Pipelines.h"
 #include "render/VulkanContext.h"
@@ -119,6 +120,10 @@ struct Renderer::Impl {
     std::unique_ptr<Pipelines> pipelines;
     GpuHeap heap;
     std::unique_ptr<HostBuffer> staging, uniforms, materialBuffer;
+    std::unique_ptr<TextureArray> textures;
+    std::string textureKey;               // what the textures were loaded for
+    std::vector<uint32_t> textureLayers;  // per material id: layer + 1, 0 = none
+    std::vector<std::string> textureErrors;
     VkDeviceSize uniformStride = 0;
     VkDescriptorPool descriptorPool = VK_NULL_HANDLE;
     VkDescriptorSet descriptorSet = VK_NULL_HANDLE;
@@ -145,10 +150,12 @@ struct Renderer::Impl {
         uniformStride = (sizeof(ViewUniforms) + align - 1) / align * align;
         uniforms = std::make_unique<HostBuffer>(c, uniformStride * kMaxViews, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT);
 
-        VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, 1}, {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1}};
+        VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, 1},
+                                         {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1},
+                                         {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1}};
         VkDescriptorPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
         poolInfo.maxSets = 1;
-        poolInfo.poolSizeCount = 2;
+        poolInfo.poolSizeCount = 3;
         poolInfo.pPoolSizes = sizes;
         check(vkCreateDescriptorPool(device, &poolInfo, nullptr, &descriptorPool), "vkCreateDescriptorPool");
         VkDescriptorSetLayout layout = pipelines->setLayout();
@@ -157,7 +164,7 @@ struct Renderer::Impl {
         setAlloc.descriptorSetCount = 1;
         setAlloc.pSetLayouts = &layout;
         check(vkAllocateDescriptorSets(device, &setAlloc, &descriptorSet), "vkAllocateDescriptorSets");
-        setMaterials(MaterialTable());
+        setMaterials(MaterialTable(), {});
 
         VkCommandBufferAllocateInfo cmdAlloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
         cmdAlloc.commandPool = c.commandPool();
@@ -187,40 +194,62 @@ struct Renderer::Impl {
         if (compatiblePass) vkDestroyRenderPass(device, compatiblePass, nullptr);
     }
 
-    void setMaterials(const MaterialTable& table)
+    std::vector<std::string> setMaterials(const MaterialTable& table, const MaterialLook& look)
     {
         // Entry 0 (empty) is never drawn; it gets the default colour so a stray id still shows.
         const std::size_t count = table.size() + 1;
         const VkDeviceSize bytes = count * 2 * 4 * sizeof(float);
+        vkDeviceWaitIdle(context.device()); // the last frame may still read the table and the textures
+        std::vector<VkWriteDescriptorSet> writes;
+        VkDescriptorBufferInfo uniformInfo{}, materialInfo{};
         if (!materialBuffer || materialBuffer->size() < bytes) {
-            vkDeviceWaitIdle(context.device());
             materialBuffer = std::make_unique<HostBuffer>(context, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
-            VkDescriptorBufferInfo uniformInfo{uniforms->buffer(), 0, sizeof(ViewUniforms)};
-            VkDescriptorBufferInfo materialInfo{materialBuffer->buffer(), 0, VK_WHOLE_SIZE};
-            VkWriteDescriptorSet writes[2]{};
-            writes[0] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-            writes[0].dstSet = descriptorSet;
-            writes[0].dstBinding = 0;
-            writes[0].descriptorCount = 1;
-            writes[0].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC;
-            writes[0].pBufferInfo = &uniformInfo;
-            writes[1] = writes[0];
-            writes[1].dstBinding = 1;
-            writes[1].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-            writes[1].pBufferInfo = &materialInfo;
-            vkUpdateDescriptorSets(context.device(), 2, writes, 0, nullptr);
-        } else {
-            vkDeviceWaitIdle(context.device()); // the last frame may still read the table
+            uniformInfo = {uniforms->buffer(), 0, sizeof(ViewUniforms)};
+            materialInfo = {materialBuffer->buffer(), 0, VK_WHOLE_SIZE};
+            VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+            w.dstSet = descriptorSet;
+            w.descriptorCount = 1;
+            w.dstBinding = 0;
+            w.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC;
+            w.pBufferInfo = &uniformInfo;
+            writes.push_back(w);
+            w.dstBinding = 1;
+            w.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+            w.pBufferInfo = &materialInfo;
+            writes.push_back(w);
         }
+        // Pictures are read again only when the textures named (or their folder) change.
+        std::string key = look.textureFolder;
+        for (std::size_t id = 1; id <= table.size(); ++id) key += '\n' + table.at(MaterialId(id)).texture;
+        VkDescriptorImageInfo imageInfo{};
+        if (!textures || key != textureKey) {
+            MaterialTextureSet set = loadMaterialTextures(table, look.textureFolder);
+            textures = std::make_unique<TextureArray>(context, set);
+            textureKey = key;
+            textureLayers = std::move(set.layerOfMaterial);
+            textureErrors = std::move(set.errors);
+            imageInfo = {textures->sampler(), textures->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+            VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+            w.dstSet = descriptorSet;
+            w.dstBinding = 2;
+            w.descriptorCount = 1;
+            w.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+            w.pImageInfo = &imageInfo;
+            writes.push_back(w);
+        }
+        if (!writes.empty()) vkUpdateDescriptorSets(context.device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
         float* out = reinterpret_cast<float*>(materialBuffer->data());
         for (std::size_t id = 0; id < count; ++id) {
             const Material m = id == 0 ? Material{} : table.at(MaterialId(id));
             std::memcpy(out + id * 8, m.color.data(), 4 * sizeof(float));
             out[id * 8 + 4] = m.toughness;
-            out[id * 8 + 5] = float((id * 37) % 101); // texture pattern seed
-            out[id * 8 + 6] = 0.35f;                    // pattern frequency per world unit
-            out[id * 8 + 7] = 0.0f;
+            out[id * 8 + 5] = float((id * 37) % 101); // procedural pattern seed
+            const bool pictured = id < textureLayers.size() && textureLayers[id] > 0;
+            // Repetitions per world unit: the procedural grain is fine, a picture covers a tile.
+            out[id * 8 + 6] = pictured ? float(1.0 / std::max(look.textureTile, 1e-9)) : 0.35f;
+            out[id * 8 + 7] = pictured ? float(textureLayers[id]) : 0.0f; // picture layer + 1, 0 = none
         }
+        return textureErrors;
     }
 
     void destroyChunk(ChunkId id, FrameStats& stats)
@@ -299,16 +328,17 @@ struct Renderer::Impl {
                              nullptr, 0, nullptr);
     }
 
-    void fillUniforms(ViewUniforms& u, const Camera& camera, double aspect) const
+    void fillUniforms(ViewUniforms& u, const Camera& camera, int viewportWidth, int viewportHeight) const
     {
-        const glm::dmat4 vp = viewProjectionMatrix(camera, aspect);
+        const glm::dmat4 vp = viewProjectionMatrix(camera, double(viewportWidth) / double(viewportHeight));
         copyMatrix(u.viewProj, vp);
         copyMatrix(u.invViewProj, glm::inverse(vp));
         for (int i = 0; i < 3; ++i) {
             u.eye[i] = float(camera.eye[std::size_t(i)]);
             u.lightDir[i] = shading.lightDirection[std::size_t(i)];
         }
-        u.eye[3] = 1.0f;
+        // A pixel's size per unit of distance: textures pick their mipmap from it (see mesh.frag).
+        u.eye[3] = float(2.0 * std::tan(camera.fovYDegrees * M_PI / 360.0) / double(viewportHeight));
         u.lightDir[3] = shading.ambientOcclusion ? 1.0f : 0.0f;
         u.mode[0] = uint32_t(shading.mode);
         u.mode[1] = brush ? (brush->preview ? 1u : 0u) | (brush->highlight ? 2u : 0u) : 0u;
@@ -365,9 +395,8 @@ struct Renderer::Impl {
                 if (v.target != target) continue;
                 std::array<int, 4> vp = v.viewport;
                 if (vp[2] <= 0 || vp[3] <= 0) vp = {0, 0, target->width(), target->height()};
-                const double aspect = double(vp[2]) / double(vp[3]);
                 auto* u = reinterpret_cast<ViewUniforms*>(uniforms->data() + uniformStride * vi);
-                fillUniforms(*u, v.camera, aspect);
+                fillUniforms(*u, v.camera, vp[2], vp[3]);
                 VkViewport viewport{float(vp[0]), float(vp[1]), float(vp[2]), float(vp[3]), 0.0f, 1.0f};
                 VkRect2D scissor{{vp[0], vp[1]}, {uint32_t(vp[2]), uint32_t(vp[3])}};
                 vkCmdSetViewport(cmd, 0, 1, &viewport);
@@ -375,7 +404,7 @@ struct Renderer::Impl {
                 const uint32_t dynamicOffset = uint32_t(uniformStride * vi);
                 vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelines->layout(), 0, 1, &descriptorSet, 1,
                                         &dynamicOffset);
-                const Frustum frustum = frustumOf(viewProjectionMatrix(v.camera, aspect));
+                const Frustum frustum = frustumOf(viewProjectionMatrix(v.camera, double(vp[2]) / double(vp[3])));
                 std::vector<const GpuChunk*> visible;
                 for (auto& [id, c] : chunks) {
                     if (frustum.outside(c.lo, c.hi)) {
@@ -452,7 +481,10 @@ Renderer::Renderer(VulkanContext& context, const RendererOptions& options)
 
 Renderer::~Renderer() = default;
 
-void Renderer::setMaterials(const MaterialTable& materials) { impl_->setMaterials(materials); }
+std::vector<std::string> Renderer::setMaterials(const MaterialTable& materials, const MaterialLook& look)
+{
+    return impl_->setMaterials(materials, look);
+}
 
 void Renderer::setChunk(ChunkId id, const Mesh& mesh, int level, const std::vector<uint8_t>* occlusion)
 {

@@ -39,8 +39,9 @@ public:
     Renderer(const Renderer&) = delete;
     Renderer& operator=(const Renderer&) = delete;
 
-    /// Colours, toughness and texture patterns of the materials the meshes name.
-    void setMaterials(const MaterialTable& materials);
+    /// Colours, toughness, texture patterns and pictures of the materials the meshes name. Returns one
+    /// message per texture that could not be read (those materials are drawn with the procedural pattern).
+    std::vector<std::string> setMaterials(const MaterialTable& materials, const MaterialLook& look = {});
     /// Queues `mesh` as chunk `id` (a new chunk, or a new version of one); uploaded by the next frame.
     /// `level` is what the lod view shows; `occlusion` (optional, one per vertex, 0 = fully occluded,
     /// 255 = open) darkens creases in the shaded view.

@@ -35,13 +35,13 @@ std::optional<ChunkId> StreamedSceneChunks::chunkOf(const BrickKey& key) const
     return it->second.id;
 }
 
-VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOptions& options)
+VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOptions& options, const MaterialLook& look)
 {
     const auto start = Clock::now();
     VolumeUpload out;
     out.lo.fill(std::numeric_limits<double>::max());
     out.hi.fill(std::numeric_limits<double>::lowest());
-    renderer.setMaterials(volume.materials());
+    out.warnings = renderer.setMaterials(volume.materials(), look);
     for (const MeshChunk& chunk : meshVolumeChunks(volume, options)) {
         if (chunk.mesh.triangles.empty()) continue;
         for (std::size_t i = 0; i < chunk.mesh.positions.size(); i += 8) out.outline.push_back(chunk.mesh.positions[i]);

@@ -20,9 +20,11 @@ struct VolumeUpload {
     uint64_t chunks = 0;
     uint64_t triangles = 0;
     double meshSeconds = 0.0;
+    std::vector<std::string> warnings; // material textures that could not be read
 };
-/// Meshes `volume` (per leaf, with per-vertex occlusion) and queues every chunk on the renderer.
-VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOptions& options);
+/// Gives the renderer the volume's materials, meshes `volume` (per leaf, with per-vertex occlusion) and
+/// queues every chunk.
+VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOptions& options, const MaterialLook& look = {});
 
 /// Keeps the renderer's chunks equal to a streaming scene's shown bricks.
 class StreamedSceneChunks {

@@ -7,6 +7,7 @@
 #include "scene/StreamingScene.h"
 
 #include <chrono>
+#include <filesystem>
 
 namespace vdbclay::render {
 
@@ -54,6 +55,14 @@ std::array<double, 3> worldOf(const IndexCoord& c, double voxel)
 
 } // namespace
 
+MaterialLook materialLook(double voxelSize, const std::string& textureFolder)
+{
+    MaterialLook look;
+    look.textureFolder = textureFolder;
+    look.textureTile = 32.0 * voxelSize;
+    return look;
+}
+
 Camera defaultCamera(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int width, int height)
 {
     return framingCamera(lo, hi, double(width) / double(height));
@@ -62,24 +71,29 @@ Camera defaultCamera(const std::array<double, 3>& lo, const std::array<double, 3
 Picture renderVolume(VulkanContext& context, const Volume& volume, const PictureRequest& request)
 {
     Renderer renderer(context);
-    const VolumeUpload upload = uploadVolume(renderer, volume, pictureMeshOptions());
+    const VolumeUpload upload =
+        uploadVolume(renderer, volume, pictureMeshOptions(), materialLook(volume.voxelSize(), request.textureFolder));
     Camera camera = request.camera.value_or(
         framingCamera(upload.outline, upload.lo, upload.hi, double(request.width) / double(request.height)));
     fitDepthRange(camera, upload.lo, upload.hi);
     Picture p = draw(context, renderer, camera, request);
     p.meshMs = upload.meshSeconds * 1000.0;
+    p.warnings = upload.warnings;
     return p;
 }
 
 Picture renderStreamed(VulkanContext& context, const StreamingScene& scene, const Camera& camera, const PictureRequest& request)
 {
     Renderer renderer(context);
-    renderer.setMaterials(scene.store().materials());
+    const std::string folder = std::filesystem::path(scene.store().path()).parent_path().string();
+    const std::vector<std::string> warnings =
+        renderer.setMaterials(scene.store().materials(), materialLook(scene.store().voxelSize(), folder));
     StreamedSceneChunks chunks;
     const StreamedSceneChunks::SyncReport sync = chunks.sync(scene, renderer);
     Picture p = draw(context, renderer, camera, request);
     p.meshMs = sync.meshSeconds * 1000.0;
     p.bricksShown = sync.shown;
+    p.warnings = warnings;
     return p;
 }
 

@@ -25,6 +25,7 @@ struct PictureRequest {
     uint64_t memoryBudgetBytes = 512ull << 20; // stores: resident bricks
     double pixelTolerance = 1.0;               // stores: screen-space error a brick may show
     double settleSeconds = 60.0;               // stores: the longest wait for the view to refine
+    std::string textureFolder;                 // where relative texture paths start (a .vdb's folder; stores: their own)
 };
 
 struct Picture {
@@ -36,7 +37,12 @@ struct Picture {
     double pipelineMs = 0.0;      // shader and pipeline creation (the first frame's compilation)
     uint64_t bricksShown = 0;     // stores
     bool refined = true;          // stores: every brick of the view at its level (false: the budget ran out)
+    std::vector<std::string> warnings; // material textures that could not be read (drawn without them)
 };
+
+/// How the materials of a scene with this voxel size and texture folder are drawn: a texture repeats
+/// every 32 voxels.
+MaterialLook materialLook(double voxelSize, const std::string& textureFolder);
 
 /// The camera that frames the box (world units) for an image of that size.
 Camera defaultCamera(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int width, int height);

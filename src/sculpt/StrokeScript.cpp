@@ -243,7 +243,7 @@ StrokeScript parseStrokeScript(const std::string& jsonText)
         std::set<std::string> seen;
         for (std::size_t i = 0; i < ms.size(); ++i) {
             const std::string where = "materials[" + std::to_string(i) + "]";
-            checkKeys(ms[i], where, {"name", "color", "toughness"});
+            checkKeys(ms[i], where, {"name", "color", "toughness", "texture"});
             Material m;
             m.name = text(ms[i], "name", where);
             if (m.name.empty()) fail(where + ".name", "must not be empty");
@@ -259,6 +259,11 @@ StrokeScript parseStrokeScript(const std::string& jsonText)
             }
             m.toughness = float(number(ms[i], "toughness", where, 0.5));
             if (m.toughness < 0.0f || m.toughness > 1.0f) fail(where + ".toughness", "must lie in [0,1]");
+            if (ms[i].contains("texture")) {
+                m.texture = text(ms[i], "texture", where);
+                if (m.texture.empty() || !isPrintableName(m.texture, kMaxTexturePathBytes))
+                    fail(where + ".texture", "must be a path: printable text of 1 to 4096 bytes");
+            }
             script.materials.push_back(m);
         }
     }

@@ -22,11 +22,14 @@ void validate(const Material& m)
     }
     if (!(m.toughness >= 0.0f && m.toughness <= 1.0f))
         throw std::invalid_argument("material '" + m.name + "': toughness must lie in [0,1]");
+    if (!isPrintableName(m.texture, kMaxTexturePathBytes))
+        throw std::invalid_argument("material '" + m.name + "': the texture path '" + printableText(m.texture, 80) +
+                                    "' is not printable text of at most 4096 bytes");
 }
 
 } // namespace
 
-MaterialTable::MaterialTable() { materials_.push_back(Material{"default", {0.8f, 0.8f, 0.8f, 1.0f}, 0.5f}); }
+MaterialTable::MaterialTable() { materials_.push_back(Material{"default", {0.8f, 0.8f, 0.8f, 1.0f}, 0.5f, {}}); }
 
 const Material& MaterialTable::at(MaterialId id) const
 {
@@ -67,7 +70,9 @@ std::string MaterialTable::toJson() const
 {
     nlohmann::json arr = nlohmann::json::array();
     for (const auto& m : materials_) {
-        arr.push_back({{"name", m.name}, {"color", m.color}, {"toughness", m.toughness}});
+        nlohmann::json item{{"name", m.name}, {"color", m.color}, {"toughness", m.toughness}};
+        if (!m.texture.empty()) item["texture"] = m.texture; // tables without textures read as before
+        arr.push_back(std::move(item));
     }
     return arr.dump();
 }
@@ -90,6 +95,7 @@ MaterialTable MaterialTable::fromJson(const std::string& text)
             m.name = item.at("name").get<std::string>();
             m.color = item.at("color").get<std::array<float, 4>>();
             m.toughness = item.at("toughness").get<float>();
+            if (item.contains("texture")) m.texture = item.at("texture").get<std::string>();
             validate(m);
             if (table.find(m.name)) throw std::runtime_error("duplicate material name '" + m.name + "'");
             table.materials_.push_back(m);
@@ -108,7 +114,7 @@ bool operator==(const MaterialTable& a, const MaterialTable& b)
     for (std::size_t i = 0; i < a.materials_.size(); ++i) {
         const auto& x = a.materials_[i];
         const auto& y = b.materials_[i];
-        if (x.name != y.name || x.color != y.color || x.toughness != y.toughness) return false;
+        if (x.name != y.name || x.color != y.color || x.toughness != y.toughness || x.texture != y.texture) return false;
     }
     return true;
 }

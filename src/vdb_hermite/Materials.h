@@ -17,7 +17,11 @@ struct Material {
     std::string name;
     std::array<float, 4> color{0.8f, 0.8f, 0.8f, 1.0f}; // linear RGBA in [0,1]
     float toughness = 0.5f;                              // 0 = soft (erodes fully), 1 = unerodable
+    /// Optional: a picture (PNG, JPEG, ...) the renderer maps tri-planarly over the material, tinted by
+    /// its colour. A relative path is taken from the scene file's folder.
+    std::string texture;
 };
+constexpr std::size_t kMaxTexturePathBytes = 4096;
 
 class MaterialTable {
 public:
@@ -29,7 +33,7 @@ public:
     const Material& at(MaterialId id) const; // throws std::out_of_range for 0 or unknown ids
     std::optional<MaterialId> find(const std::string& name) const;
 
-    /// Adds a material, or updates colour and toughness of the one with the same name. Returns its id.
+    /// Adds a material, or updates colour, toughness and texture of the one with the same name. Returns its id.
     /// Throws std::invalid_argument on an empty name, out-of-range values or a full table.
     MaterialId define(const Material& material);
 

@@ -2,7 +2,7 @@
 layout(set = 0, binding = 0) uniform ViewData {
     mat4 viewProj;
     mat4 invViewProj;
-    vec4 eye;            // xyz: camera position
+    vec4 eye;            // xyz: camera position; w: a pixel's size per unit of distance
     vec4 lightDir;       // xyz: direction the key light travels; w: 1 = ambient occlusion on
     uvec4 mode;          // x: view mode, y: brush flags (1 preview, 2 highlight), z: brush shape
     mat4 brushWorldToLocal;
@@ -15,5 +15,8 @@ layout(set = 0, binding = 0) uniform ViewData {
 } view;
 
 layout(std430, set = 0, binding = 1) readonly buffer MaterialTable {
-    vec4 entries[]; // two per material: linear RGBA; x toughness, y pattern seed, z pattern frequency (1 / world unit)
+    vec4 entries[]; // two per material: linear RGBA; x toughness, y pattern seed, z pattern frequency
+                    // (1 / world unit), w picture layer + 1 (0: the procedural pattern)
 } materials;
+
+layout(set = 0, binding = 2) uniform sampler2DArray pictures; // the materials' textures, sRGB

@@ -45,6 +45,19 @@ float triplanar(vec3 p, vec3 n, float seed)
     return w.x * fbm2(p.yz, seed) + w.y * fbm2(p.zx, seed) + w.z * fbm2(p.xy, seed);
 }
 
+// The same projection for a material's picture: three samples blended by the normal. The mipmap comes
+// from the pixel's footprint (distance times a pixel's angle, `scale` texture repetitions per world unit),
+// not from screen derivatives: a mesh's slivers make helper invocations extrapolate far off the surface.
+vec3 triplanarPicture(vec3 p, vec3 n, float layer, float footprint)
+{
+    vec3 w = pow(abs(n), vec3(4.0));
+    w /= (w.x + w.y + w.z);
+    vec2 dx = vec2(footprint, 0.0), dy = vec2(0.0, footprint);
+    return w.x * textureGrad(pictures, vec3(p.yz, layer), dx, dy).rgb +
+           w.y * textureGrad(pictures, vec3(p.zx, layer), dx, dy).rgb +
+           w.z * textureGrad(pictures, vec3(p.xy, layer), dx, dy).rgb;
+}
+
 const vec3 kLevelColours[8] = vec3[8](vec3(0.90, 0.30, 0.25), vec3(0.95, 0.65, 0.20), vec3(0.85, 0.85, 0.25),
                                        vec3(0.35, 0.80, 0.35), vec3(0.25, 0.75, 0.80), vec3(0.30, 0.45, 0.90),
                                        vec3(0.60, 0.35, 0.85), vec3(0.85, 0.40, 0.70));
@@ -73,6 +86,9 @@ void main()
     } else if (mode == 2u) {
         float t = clamp(m1.x, 0.0, 1.0);
         base = mix(vec3(0.15, 0.35, 0.95), vec3(0.95, 0.2, 0.15), t);
+    } else if (m1.w > 0.5) {
+        float footprint = view.eye.w * distance(view.eye.xyz, worldPosition) * m1.z;
+        base = m0.rgb * triplanarPicture(worldPosition * m1.z, n, m1.w - 1.0, footprint);
     } else {
         float grain = triplanar(worldPosition * m1.z, n, m1.y);
         base = m0.rgb * (0.82 + 0.36 * grain);
