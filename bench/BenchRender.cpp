@@ -99,7 +99,8 @@ struct TerrainFigures {
     std::vector<double> cpuMs, selectMs, recordMs, meshMs, uploadBytes, triangles;
     // The stamp.
     double stampSculptMs = 0.0, stampMeshMs = 0.0, stampUploadMs = 0.0, stampTotalMs = 0.0;
-    uint64_t stampBricks = 0, stampChunksUploaded = 0;
+    double stampGpuMs = 0.0;
+    uint64_t stampBricks = 0, stampBricksMeshed = 0, stampChunksUploaded = 0;
     double openvdbMeshMs = 0.0;
 };
 
@@ -210,9 +211,14 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     scene.frame(v);
     render::StreamedSceneChunks::SyncReport sync;
     f.stampMeshMs = timeMs([&] { sync = chunks.sync(scene, renderer); });
-    render::FrameStats after;
-    f.stampUploadMs = timeMs([&] { after = renderer.render({{cameraOf(v, far), &small, {}}}); });
     f.stampTotalMs = millisecondsSince(stampStart);
+    // Then the frame that uploads them: its recording (staging copies included) counts to the upload;
+    // the device's copy and draw are apart (lavapipe's draw is all CPU).
+    const render::FrameStats after = renderer.render({{cameraOf(v, far), &small, {}}});
+    f.stampUploadMs = after.cpuMs;
+    f.stampGpuMs = after.gpuMs;
+    f.stampTotalMs += f.stampUploadMs;
+    f.stampBricksMeshed = sync.meshed;
     f.stampBricks = edit.bricksChanged;
     f.stampChunksUploaded = after.chunksUploaded;
     // OpenVDB on the same bricks: the union of their meshes as one surface.
@@ -283,7 +289,9 @@ int benchRender(bool json, bool quick, double memoryBudgetMb)
                             {"triangles_per_frame_mean", mean(f.triangles)},
                             {"triangles_per_frame_max", maximum(f.triangles)},
                             {"stamp_bricks", f.stampBricks},
+                            {"stamp_bricks_meshed", f.stampBricksMeshed},
                             {"stamp_chunks_uploaded", f.stampChunksUploaded},
+                            {"stamp_gpu_ms", f.stampGpuMs},
                             {"stamp_sculpt_ms", f.stampSculptMs},
                             {"stamp_mesh_ms", f.stampMeshMs},
                             {"stamp_upload_ms", f.stampUploadMs},
@@ -314,7 +322,9 @@ int benchRender(bool json, bool quick, double memoryBudgetMb)
     row("upload per frame mean / max", [](const TerrainFigures& f) { return megabytes(mean(f.uploadBytes)) + " / " + megabytes(maximum(f.uploadBytes)); }, "");
     row("triangles per flight frame mean / max", [](const TerrainFigures& f) { return fixed(mean(f.triangles) / 1e6, 2) + " / " + fixed(maximum(f.triangles) / 1e6, 2) + " M"; }, "");
     row("r=32 stamp to chunks uploaded", [](const TerrainFigures& f) { return fixed(f.stampTotalMs, 1) + " ms (" + std::to_string(f.stampBricks) + " bricks)"; }, "<= 3 ms");
-    row("  sculpt / re-mesh / upload", [](const TerrainFigures& f) { return fixed(f.stampSculptMs, 1) + " / " + fixed(f.stampMeshMs, 1) + " / " + fixed(f.stampUploadMs, 1) + " ms"; }, "");
+    row("  sculpt / re-mesh / upload recorded", [](const TerrainFigures& f) { return fixed(f.stampSculptMs, 1) + " / " + fixed(f.stampMeshMs, 1) + " / " + fixed(f.stampUploadMs, 1) + " ms"; }, "");
+    row("  bricks meshed again / chunks uploaded", [](const TerrainFigures& f) { return std::to_string(f.stampBricksMeshed) + " / " + std::to_string(f.stampChunksUploaded); }, "");
+    row("  that frame on the device (copy + draw)", [](const TerrainFigures& f) { return fixed(f.stampGpuMs, 1) + " ms"; }, "informational");
     row("  OpenVDB volumeToMesh of those bricks", [](const TerrainFigures& f) { return fixed(f.openvdbMeshMs, 1) + " ms"; }, "baseline");
     row("GPU, one complete view at 1080p", [](const TerrainFigures& f) { return fixed(f.gpuMs1080, 1) + " ms"; }, "<= 5 ms on a GPU");
     t.print(std::cout);

@@ -24,6 +24,7 @@
 #include <memory>
 #include <optional>
 #include <random>
+#include <set>
 #include <thread>
 
 #include <fcntl.h>
@@ -446,4 +447,95 @@ TEST_CASE("the scene keeps the shown bricks' meshes within the memory budget and
         if (budgetMB == 64) CHECK(keptOverall == shownOverall); // a roomy budget keeps every shown mesh
         else CHECK(keptOverall > 0);
     }
+}
+
+TEST_CASE("after stamps anywhere (across brick faces too), every kept mesh is the one its brick makes now; a stamp inside one brick leaves the others' meshes", "[streaming]")
+{
+    TempDir dir;
+    const std::string path = makeTerrain(dir);
+    StreamingOptions options = roomyOptions();
+    options.access = StoreAccess::ReadWrite;
+    StreamingScene scene(path, options);
+    const Viewer view = lookingAt({30, 70, 30}, {128, 30, 128}); // near bricks at level 0, far ones coarser
+    FrameReport report;
+    for (int i = 0; i < 50 && !(report.settled && report.pending == 0); ++i) {
+        report = scene.frame(view);
+        scene.waitForLoads();
+    }
+    std::vector<BrickKey> shown = scene.shownBricks();
+    std::set<int> levels;
+    for (const BrickKey& key : shown) levels.insert(key.level);
+    REQUIRE(levels.size() >= 2);
+    REQUIRE(levels.count(0));
+    const auto meshAll = [&] {
+        for (const BrickKey& key : scene.shownBricks()) REQUIRE(scene.meshBrick(key));
+    };
+    const auto checkKeptMeshes = [&](const std::string& after) {
+        for (const BrickKey& key : scene.shownBricks()) {
+            const auto kept = scene.meshBrick(key), fresh = scene.meshBrickAfresh(key);
+            INFO(after << ": brick " << key.level << " " << key.brick[0] << "," << key.brick[1] << "," << key.brick[2]);
+            REQUIRE(kept);
+            CHECK(kept->mesh.positions == fresh->mesh.positions);
+            CHECK(kept->mesh.triangles == fresh->mesh.triangles);
+            CHECK(kept->mesh.triangleMaterials == fresh->mesh.triangleMaterials);
+            CHECK(kept->occlusion == fresh->occlusion);
+        }
+    };
+    meshAll();
+
+    // Random stamps at integer positions, two in three of them beside a brick face: crossing it, or
+    // touching the voxels next to it, on either side.
+    std::mt19937 rng{17};
+    const char* modes[] = {"add", "remove", "paint"};
+    for (int i = 0; i < 18; ++i) {
+        const int radius = std::uniform_int_distribution<int>(2, 6)(rng);
+        std::array<double, 3> at{std::uniform_int_distribution<int>(8, 120)(rng) * 1.0, std::uniform_int_distribution<int>(20, 50)(rng) * 1.0,
+                                 std::uniform_int_distribution<int>(8, 120)(rng) * 1.0};
+        if (i % 3 != 0) {
+            const int axis = i % 2 == 0 ? 0 : 2, side = std::uniform_int_distribution<int>(0, 1)(rng) * 2 - 1;
+            const int gap = std::uniform_int_distribution<int>(-3, 4)(rng); // <= 0: the brush crosses the face
+            at[std::size_t(axis)] = 64.0 + side * (radius + gap);
+        }
+        // On the surface, where the meshes are.
+        const Volume now = scene.residentLevel0();
+        for (int32_t y = 120; y > 0; --y)
+            if (now.materialAt({int32_t(at[0]), y, int32_t(at[2])}) != kEmptyMaterial) {
+                at[1] = y;
+                break;
+            }
+        nlohmann::json op{{"mode", modes[i % 3]}, {"brush", {{"shape", "sphere"}, {"radius", radius}}}, {"at", at}};
+        if (i % 3 == 2) op["material"] = "red";
+        const nlohmann::json materials = nlohmann::json::array({{{"name", "red"}, {"color", {0.8, 0.1, 0.1}}}});
+        scene.sculpt(parseStrokeScript(nlohmann::json{{"materials", materials}, {"ops", {op}}}.dump()));
+        scene.frame(view);
+        checkKeptMeshes("stamp " + std::to_string(i) + " " + op.dump());
+    }
+
+    // A small stamp in the middle of a level-0 brick, on its surface: only that brick's mesh is made again.
+    const Volume resident = scene.residentLevel0();
+    std::optional<std::array<double, 3>> centre;
+    BrickKey target;
+    for (const BrickKey& key : scene.shownBricks()) {
+        if (key.level != 0 || centre) continue;
+        const LeafAlignedBox box = brickBox(key.brick);
+        const int32_t x = box.min[0] + 32, z = box.min[2] + 32;
+        for (int32_t y = box.min[1] + 52; y >= box.min[1] + 12; --y)
+            if (resident.materialAt({x, y, z}) != kEmptyMaterial) {
+                centre = std::array<double, 3>{double(x), double(y), double(z)};
+                target = key;
+                break;
+            }
+    }
+    REQUIRE(centre);
+    std::map<BrickKey, uint64_t> before;
+    for (const BrickKey& key : scene.shownBricks()) before[key] = scene.brickVersion(key);
+    const nlohmann::json op{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 3}}}, {"at", *centre}};
+    REQUIRE(scene.sculpt(parseStrokeScript(nlohmann::json{{"ops", {op}}}.dump())).bricksChanged == 1);
+    scene.frame(view);
+    for (const BrickKey& key : scene.shownBricks()) {
+        INFO("brick " << key.level << " " << key.brick[0] << "," << key.brick[1] << "," << key.brick[2]);
+        if (key == target) CHECK(scene.brickVersion(key) != before.at(key));
+        else CHECK(scene.brickVersion(key) == before.at(key));
+    }
+    checkKeptMeshes("the stamp inside one brick");
 }

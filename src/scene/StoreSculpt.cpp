@@ -13,10 +13,21 @@ namespace {
 
 int32_t floorDiv(int64_t v, int64_t d) { return int32_t(v >= 0 ? v / d : -((-v + d - 1) / d)); }
 
-/// The bricks an op can read or change: its brush's bounds in index space, grown by two voxels below
-/// (edges that start below reach into the brush) and by a leaf and two voxels above (the CSG kernel
-/// reads the first layer of the +x, +y, +z neighbours). Nullopt when the op reaches everything.
+/// The bricks an op can read or change (voxelsReachedBy). Nullopt when the op reaches everything.
 std::optional<std::pair<IndexCoord, IndexCoord>> brickRange(const ScriptOp& op, double voxelSize)
+{
+    auto range = voxelsReachedBy(op, voxelSize);
+    if (!range) return std::nullopt;
+    for (int i = 0; i < 3; ++i) {
+        range->first[std::size_t(i)] = floorDiv(range->first[std::size_t(i)], kBrickEdge);
+        range->second[std::size_t(i)] = floorDiv(range->second[std::size_t(i)], kBrickEdge);
+    }
+    return range;
+}
+
+} // namespace
+
+std::optional<std::pair<IndexCoord, IndexCoord>> voxelsReachedBy(const ScriptOp& op, double voxelSize)
 {
     if (op.mode == CsgMode::Intersect) return std::nullopt;
     const WorldBounds b = opBounds(op);
@@ -24,13 +35,11 @@ std::optional<std::pair<IndexCoord, IndexCoord>> brickRange(const ScriptOp& op, 
     IndexCoord lo, hi;
     for (int i = 0; i < 3; ++i) {
         const double min = std::floor(b.min[i] / voxelSize) - 2.0, max = std::ceil(b.max[i] / voxelSize) + kLeafDim + 2.0;
-        lo[std::size_t(i)] = floorDiv(int64_t(std::max(min, -1e9)), kBrickEdge);
-        hi[std::size_t(i)] = floorDiv(int64_t(std::min(max, 1e9)), kBrickEdge);
+        lo[std::size_t(i)] = int32_t(std::max(min, -1e9));
+        hi[std::size_t(i)] = int32_t(std::min(max, 1e9));
     }
     return std::pair{lo, hi};
 }
-
-} // namespace
 
 std::vector<IndexCoord> bricksReachedBy(const StrokeScript& script, double voxelSize,
                                         const std::function<std::vector<IndexCoord>()>& allBricks)

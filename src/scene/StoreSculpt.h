@@ -7,6 +7,8 @@
 #include "sculpt/StrokeScript.h"
 
 #include <functional>
+#include <optional>
+#include <utility>
 #include <vector>
 
 namespace vdbclay {
@@ -17,6 +19,12 @@ struct StoreSculptReport {
     uint64_t bricksWritten = 0;
     uint64_t lodBricksWritten = 0; // coarse bricks the edit changed (none when no pyramid follows edits)
 };
+
+/// The level-0 voxels an op can read or change, min and max inclusive: its brush's bounds grown by two
+/// voxels below (edges that start below reach into the brush) and by a leaf and two voxels above (the
+/// CSG kernel reads the first layer of the +x, +y, +z neighbours), clamped to +-1e9. Nullopt when the
+/// op reaches everything (intersect, unbounded brushes).
+std::optional<std::pair<IndexCoord, IndexCoord>> voxelsReachedBy(const ScriptOp& op, double voxelSize);
 
 /// The level-0 bricks a script's ops can read or change (sorted): every brush's bounds, grown as the
 /// CSG kernel reads; `allBricks` is asked for the stored bricks when an op reaches everything

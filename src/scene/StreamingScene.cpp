@@ -28,6 +28,16 @@ constexpr const char* kEditCountKey = "edit_count";
 /// used to estimate a brick before it is loaded, from the leaf count the store keeps per brick.
 constexpr uint64_t kEstimatedBytesPerLeaf = 2600;
 constexpr uint64_t kEstimatedBytesPerBrick = 4 << 10; // its share of the 128^3 nodes above its leaves
+/// How far into a neighbour of its level a brick's mesh reads, in voxels: CMS probes one leaf beyond
+/// its cells, plus the corners of the cells on its faces; occlusion samples 3.5 voxels out.
+constexpr int32_t kMeshReach = kLeafDim + 2;
+/// A brick `c` levels coarser than its neighbour also reads one of its own cells (2^c of the
+/// neighbour's voxels) into it: the transition cells below its low faces. Classes 0..7 (7: 7 or more).
+constexpr int kReachClasses = 8;
+int64_t reachOfClass(int c) { return kMeshReach + (c > 0 ? (int64_t(1) << c) : 0); }
+
+/// The 27 directions from a brick to the bricks around it (13: itself), each axis -1, 0 or +1.
+int directionIndex(const std::array<int, 3>& d) { return (d[0] + 1) + 3 * (d[1] + 1) + 9 * (d[2] + 1); }
 
 } // namespace
 
@@ -36,7 +46,11 @@ struct StreamingScene::Impl {
         uint64_t bytes = 0;
         uint64_t lastUsed = 0;
         bool dirty = false;
-        uint64_t version = 0;
+        uint64_t version = 0; // its content: any change
+        // Per reach class (the reader's level above this one's) and direction (directionIndex): the
+        // content a brick on that side reads (reachOfClass voxels next to it). Changes farther from
+        // that side leave the neighbour's mesh as it was.
+        std::array<std::array<uint64_t, 27>, kReachClasses> sides{};
         std::shared_ptr<const BrickMesh> mesh; // the last made, while the brick is shown
     };
 
@@ -132,7 +146,16 @@ struct StreamingScene::Impl {
             if (!LodCut::touches(other, lo, hi)) continue;
             v += hash(other) * 0x100000001B3ull;
             const auto r = resident.find({other.level, other.brick});
-            if (r != resident.end()) v += r->second.version * 0xC2B2AE3D27D4EB4Full;
+            if (r == resident.end()) continue;
+            // Which side of `other` this brick lies on, and how far into it this brick's mesh reads.
+            std::array<int, 3> towards{};
+            const int64_t otherSize = int64_t(kLodBrickVoxels) << other.level;
+            for (int a = 0; a < 3; ++a) {
+                const int64_t olo = int64_t(other.brick[std::size_t(a)]) * otherSize, ohi = olo + otherSize;
+                towards[std::size_t(a)] = hi[std::size_t(a)] <= olo ? -1 : lo[std::size_t(a)] >= ohi ? 1 : 0;
+            }
+            const int reachClass = std::clamp(key.level - other.level, 0, kReachClasses - 1);
+            v += r->second.sides[std::size_t(reachClass)][std::size_t(directionIndex(towards))] * 0xC2B2AE3D27D4EB4Full;
         }
         return v;
     }
@@ -171,6 +194,23 @@ struct StreamingScene::Impl {
         meshed.insert(key);
     }
 
+    /// The mesh of a resident brick as its data and the cut make it now. Lock held.
+    std::shared_ptr<const BrickMesh> makeMesh(const BrickKey& key) const
+    {
+        std::vector<const Volume*> levelsOf;
+        for (const Volume& v : levelVolumes) levelsOf.push_back(&v);
+        auto out = std::make_shared<BrickMesh>();
+        const LodBrick brick{key.level, key.brick};
+        // A brick outside the last frame's cut (asked for directly) is meshed alone at its level.
+        out->mesh = meshLodBrick(levelsOf, cut.shows(brick) ? cut : LodCut({brick}), brick, options.meshing);
+        out->occlusion = vertexOcclusion(*levelsOf[std::size_t(key.level)], out->mesh);
+        out->version = meshVersionLocked(key);
+        out->hash = contentHash(out->mesh);
+        for (uint8_t o : out->occlusion) out->hash = (out->hash ^ o) * 1099511628211ull;
+        out->bytes = sizeof(BrickMesh) + out->mesh.memoryBytes() + out->occlusion.capacity();
+        return out;
+    }
+
     /// Removes a resident brick (and its mesh) from memory. Lock held.
     void evict(std::unordered_map<BrickKey, Resident, BrickKeyHash>::iterator it)
     {
@@ -184,7 +224,9 @@ struct StreamingScene::Impl {
     void install(const BrickKey& key, DecodedRegion&& brick, uint64_t bytes, uint64_t bytesReadFromStore)
     {
         pasteRegion(levelVolumes[std::size_t(key.level)], std::move(brick));
-        resident[key] = Resident{bytes, frameNumber, false, ++versions, nullptr};
+        Resident r{bytes, frameNumber, false, ++versions, {}, nullptr};
+        for (auto& c : r.sides) c.fill(r.version);
+        resident[key] = std::move(r);
         residentBytes += bytes;
         bytesRead += bytesReadFromStore;
         ++loads;
@@ -506,6 +548,8 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script)
     Volume& fine = s.levelVolumes[0];
     for (const IndexCoord& b : bricks) pasteRegion(work, fine, brickBox(b));
     report.ops = runStrokeScript(work, script);
+    std::vector<std::optional<std::pair<IndexCoord, IndexCoord>>> reached; // per op; nullopt: everywhere
+    for (const ScriptOp& op : script.ops) reached.push_back(voxelsReachedBy(op, s.scene.voxelSize()));
     for (const IndexCoord& b : bricks) {
         Impl::Resident& r = s.resident.at({0, b});
         const LeafAlignedBox box = brickBox(b);
@@ -516,6 +560,23 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script)
         r.bytes = bytes;
         r.dirty = true;
         r.version = ++s.versions;
+        // The sides whose neighbours read what changed: those the ops came within reach of.
+        for (int c = 0; c < kReachClasses; ++c) {
+            std::array<bool, 3> nearLow{}, nearHigh{};
+            for (const auto& range : reached)
+                for (int a = 0; a < 3; ++a) {
+                    const int64_t lo = box.min[std::size_t(a)], hi = lo + box.edge;
+                    nearLow[std::size_t(a)] = nearLow[std::size_t(a)] || !range || range->first[std::size_t(a)] < lo + reachOfClass(c);
+                    nearHigh[std::size_t(a)] = nearHigh[std::size_t(a)] || !range || range->second[std::size_t(a)] >= hi - reachOfClass(c);
+                }
+            for (int d = 0; d < 27; ++d) {
+                const std::array<int, 3> dir{d % 3 - 1, (d / 3) % 3 - 1, d / 9 - 1};
+                bool reads = true;
+                for (int a = 0; a < 3; ++a)
+                    reads = reads && (dir[std::size_t(a)] == 0 || (dir[std::size_t(a)] < 0 ? nearLow : nearHigh)[std::size_t(a)]);
+                if (reads) r.sides[std::size_t(c)][std::size_t(d)] = r.version;
+            }
+        }
         ++report.bricksChanged;
     }
     s.materials = work.materials();
@@ -595,19 +656,8 @@ std::shared_ptr<const StreamingScene::BrickMesh> StreamingScene::meshBrick(const
     std::unique_lock<std::mutex> lock(s.mutex);
     const auto it = s.resident.find(key);
     if (it == s.resident.end()) return nullptr;
-    const uint64_t version = s.meshVersionLocked(key);
-    if (it->second.mesh && it->second.mesh->version == version) return it->second.mesh;
-    std::vector<const Volume*> levels;
-    for (const Volume& v : s.levelVolumes) levels.push_back(&v);
-    auto out = std::make_shared<BrickMesh>();
-    const LodBrick brick{key.level, key.brick};
-    // A brick outside the last frame's cut (asked for directly) is meshed alone at its level.
-    out->mesh = meshLodBrick(levels, s.cut.shows(brick) ? s.cut : LodCut({brick}), brick, s.options.meshing);
-    out->occlusion = vertexOcclusion(*levels[std::size_t(key.level)], out->mesh);
-    out->version = version;
-    out->hash = contentHash(out->mesh);
-    for (uint8_t o : out->occlusion) out->hash = (out->hash ^ o) * 1099511628211ull;
-    out->bytes = sizeof(BrickMesh) + out->mesh.memoryBytes() + out->occlusion.capacity();
+    if (it->second.mesh && it->second.mesh->version == s.meshVersionLocked(key)) return it->second.mesh;
+    std::shared_ptr<const BrickMesh> out = s.makeMesh(key);
     // Kept if the budget holds it (other bricks may make room); else made again when asked for.
     s.dropMesh(key, it->second);
     if (s.makeRoom(out->bytes, lock)) {
@@ -615,6 +665,13 @@ std::shared_ptr<const StreamingScene::BrickMesh> StreamingScene::meshBrick(const
         if (kept != s.resident.end()) s.keepMesh(key, kept->second, out);
     }
     return out;
+}
+
+std::shared_ptr<const StreamingScene::BrickMesh> StreamingScene::meshBrickAfresh(const BrickKey& key) const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    if (!impl_->resident.count(key)) return nullptr;
+    return impl_->makeMesh(key);
 }
 
 Volume StreamingScene::residentLevel0() const

@@ -117,6 +117,9 @@ public:
         uint64_t bytes = 0; // what it takes in memory
     };
     std::shared_ptr<const BrickMesh> meshBrick(const BrickKey& key) const;
+    /// The same mesh made now from the resident data and the last cut, neither taken from the scene's
+    /// meshes nor kept (checks that a kept mesh is still what its brick makes).
+    std::shared_ptr<const BrickMesh> meshBrickAfresh(const BrickKey& key) const;
     int levels() const;
 
 private:
