@@ -209,7 +209,7 @@ TEST_CASE("OBJ and PLY export still work", "[meshio]")
 {
     TempDir dir;
     MaterialTable materials;
-    const Mesh mesh = twoMaterialMesh(materials.define(Material{"clay", {0.7f, 0.3f, 0.2f, 1.0f}, 0.5f}));
+    const Mesh mesh = twoMaterialMesh(materials.define(Material{"clay", {0.7f, 0.3f, 0.2f, 1.0f}, 0.5f, {}}));
     writeMesh(mesh, materials, dir.file("m.obj"));
     writeMesh(mesh, materials, dir.file("m.ply"));
     CHECK(dir.entries() == std::vector<std::string>{"m.mtl", "m.obj", "m.ply"});

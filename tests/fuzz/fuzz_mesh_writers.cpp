@@ -45,7 +45,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
         if (shape & 4) mesh.triangleMaterials.push_back(in.take<uint16_t>());
     }
     vdbclay::MaterialTable materials;
-    if (shape & 8) materials.define(vdbclay::Material{"stone", {0.5f, 0.4f, 0.3f, 1.0f}, 0.5f});
+    if (shape & 8) materials.define(vdbclay::Material{"stone", {0.5f, 0.4f, 0.3f, 1.0f}, 0.5f, {}});
     for (vdbclay::MeshFormat format : {vdbclay::MeshFormat::Obj, vdbclay::MeshFormat::Ply, vdbclay::MeshFormat::Glb}) {
         std::ostringstream out;
         try {
