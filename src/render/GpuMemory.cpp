@@ -102,4 +102,16 @@ HostBuffer::~HostBuffer()
     if (buffer_) vkDestroyBuffer(context_.device(), buffer_, nullptr);
 }
 
+void createDeviceImage(const VulkanContext& context, const VkImageCreateInfo& info, VkImage& image, VkDeviceMemory& memory)
+{
+    check(vkCreateImage(context.device(), &info, nullptr, &image), "vkCreateImage");
+    VkMemoryRequirements req;
+    vkGetImageMemoryRequirements(context.device(), image, &req);
+    VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    alloc.allocationSize = req.size;
+    alloc.memoryTypeIndex = context.memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    check(vkAllocateMemory(context.device(), &alloc, nullptr, &memory), "vkAllocateMemory");
+    check(vkBindImageMemory(context.device(), image, memory, 0), "vkBindImageMemory");
+}
+
 } // namespace vdbclay::render

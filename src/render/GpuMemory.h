@@ -48,6 +48,9 @@ private:
     VkDeviceSize used_ = 0, reserved_ = 0;
 };
 
+/// Creates the image `info` describes in device-local memory of its own, bound to it.
+void createDeviceImage(const VulkanContext& context, const VkImageCreateInfo& info, VkImage& image, VkDeviceMemory& memory);
+
 /// A buffer in host-visible, coherent memory, mapped for its whole life.
 class HostBuffer {
 public:

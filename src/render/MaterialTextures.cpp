@@ -86,14 +86,7 @@ TextureArray::TextureArray(const VulkanContext& context, const MaterialTextureSe
         info.tiling = VK_IMAGE_TILING_OPTIMAL;
         info.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
         info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-        check(vkCreateImage(device, &info, nullptr, &image_), "vkCreateImage");
-        VkMemoryRequirements req;
-        vkGetImageMemoryRequirements(device, image_, &req);
-        VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-        alloc.allocationSize = req.size;
-        alloc.memoryTypeIndex = context.memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-        check(vkAllocateMemory(device, &alloc, nullptr, &memory_), "vkAllocateMemory");
-        check(vkBindImageMemory(device, image_, memory_, 0), "vkBindImageMemory");
+        createDeviceImage(context, info, image_, memory_);
 
         VkDeviceSize bytes = 0;
         for (const auto& chain : use.layers)

@@ -73,14 +73,7 @@ void createImage(const VulkanContext& context, int w, int h, VkFormat format, Vk
     info.tiling = VK_IMAGE_TILING_OPTIMAL;
     info.usage = usage;
     info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-    check(vkCreateImage(context.device(), &info, nullptr, &image), "vkCreateImage");
-    VkMemoryRequirements req;
-    vkGetImageMemoryRequirements(context.device(), image, &req);
-    VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-    alloc.allocationSize = req.size;
-    alloc.memoryTypeIndex = context.memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-    check(vkAllocateMemory(context.device(), &alloc, nullptr, &memory), "vkAllocateMemory");
-    check(vkBindImageMemory(context.device(), image, memory, 0), "vkBindImageMemory");
+    createDeviceImage(context, info, image, memory);
     VkImageViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
     viewInfo.image = image;
     viewInfo.viewType = VK_IMAGE_VIEW_TYPE_2D;

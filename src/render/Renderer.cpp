@@ -201,22 +201,23 @@ struct Renderer::Impl {
         const VkDeviceSize bytes = count * 2 * 4 * sizeof(float);
         vkDeviceWaitIdle(context.device()); // the last frame may still read the table and the textures
         std::vector<VkWriteDescriptorSet> writes;
+        const auto write = [&](uint32_t binding, VkDescriptorType type) -> VkWriteDescriptorSet& {
+            VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+            w.dstSet = descriptorSet;
+            w.dstBinding = binding;
+            w.descriptorCount = 1;
+            w.descriptorType = type;
+            writes.push_back(w);
+            return writes.back();
+        };
+        writes.reserve(3); // the references write() returns stay valid
         VkDescriptorBufferInfo uniformInfo{}, materialInfo{};
         if (!materialBuffer || materialBuffer->size() < bytes) {
             materialBuffer = std::make_unique<HostBuffer>(context, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
             uniformInfo = {uniforms->buffer(), 0, sizeof(ViewUniforms)};
             materialInfo = {materialBuffer->buffer(), 0, VK_WHOLE_SIZE};
-            VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-            w.dstSet = descriptorSet;
-            w.descriptorCount = 1;
-            w.dstBinding = 0;
-            w.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC;
-            w.pBufferInfo = &uniformInfo;
-            writes.push_back(w);
-            w.dstBinding = 1;
-            w.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-            w.pBufferInfo = &materialInfo;
-            writes.push_back(w);
+            write(0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC).pBufferInfo = &uniformInfo;
+            write(1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER).pBufferInfo = &materialInfo;
         }
         // Pictures are read again only when the textures named (or their folder) change.
         std::string key = look.textureFolder;
@@ -229,13 +230,7 @@ struct Renderer::Impl {
             textureLayers = std::move(set.layerOfMaterial);
             textureErrors = std::move(set.errors);
             imageInfo = {textures->sampler(), textures->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-            VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-            w.dstSet = descriptorSet;
-            w.dstBinding = 2;
-            w.descriptorCount = 1;
-            w.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-            w.pImageInfo = &imageInfo;
-            writes.push_back(w);
+            write(2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER).pImageInfo = &imageInfo;
         }
         if (!writes.empty()) vkUpdateDescriptorSets(context.device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
         float* out = reinterpret_cast<float*>(materialBuffer->data());

@@ -74,6 +74,7 @@ struct StreamingScene::Impl {
     uint64_t residentBytes = 0, inFlightBytes = 0; // resident: bricks and meshes
     uint64_t meshBytes = 0;
     double meshShare = 0.0; // a mesh's bytes over its brick's, lately: estimates what a brick's mesh will take
+    uint64_t meshSamples = 0;
     BrickSet meshed;        // resident bricks holding a mesh
     uint64_t frameNumber = 0;
     uint64_t bytesRead = 0, loads = 0, evictions = 0;
@@ -184,10 +185,16 @@ struct StreamingScene::Impl {
         meshed.erase(key);
     }
 
+    /// Follows what meshes take against their bricks (each mesh made, kept or not: a budget that keeps
+    /// none must still learn to leave room for them).
+    void learnMeshShare(const Resident& r, const BrickMesh& mesh)
+    {
+        const double share = r.bytes ? double(mesh.bytes) / double(r.bytes) : 0.0;
+        meshShare = meshSamples++ == 0 ? share : 0.9 * meshShare + 0.1 * share;
+    }
+
     void keepMesh(const BrickKey& key, Resident& r, std::shared_ptr<const BrickMesh> mesh)
     {
-        const double share = r.bytes ? double(mesh->bytes) / double(r.bytes) : 0.0;
-        meshShare = meshed.empty() && meshShare == 0.0 ? share : 0.9 * meshShare + 0.1 * share;
         residentBytes += mesh->bytes;
         meshBytes += mesh->bytes;
         r.mesh = std::move(mesh);
@@ -483,6 +490,8 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     }
     std::vector<BrickKey> unshown;
     s.shown = shownCut(needs, isResident, unshown);
+    // What is shown stays until the next frame: making room for a mesh must not punch holes in the view.
+    s.wanted.insert(s.shown.begin(), s.shown.end());
     std::vector<LodBrick> cut;
     for (const BrickKey& k : s.shown) cut.push_back({k.level, k.brick});
     for (const BrickKey& k : unshown) cut.push_back({k.level, k.brick});
@@ -523,10 +532,17 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script)
     });
     EditReport report;
     std::unique_lock<std::mutex> lock(s.mutex);
-    // Page in what the edit touches: while it runs only its bricks are wanted, so the view's may make
-    // room (the next frame asks for them again).
+    // Page in what the edit touches: the bricks shown stay if the budget allows, else only the edit's
+    // bricks are wanted and the view's make room (the next frame asks for them again).
     s.wanted.clear();
+    s.wanted.insert(s.shown.begin(), s.shown.end());
     for (const IndexCoord& b : bricks) s.wanted.insert({0, b});
+    const auto makeRoomForEdit = [&](uint64_t bytes) {
+        if (s.makeRoom(bytes, lock)) return true;
+        s.wanted.clear();
+        for (const IndexCoord& b : bricks) s.wanted.insert({0, b});
+        return s.makeRoom(bytes, lock);
+    };
     for (const IndexCoord& b : bricks) {
         const BrickKey key{0, b};
         if (s.resident.count(key)) continue;
@@ -537,8 +553,7 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script)
         lock.lock();
         if (s.resident.count(key)) continue; // a loader got there first
         const uint64_t bytes = brick.memoryBytes();
-        if (!s.makeRoom(bytes, lock))
-            throw std::runtime_error("the edit reaches more bricks than the memory budget holds");
+        if (!makeRoomForEdit(bytes)) throw std::runtime_error("the edit reaches more bricks than the memory budget holds");
         s.install(key, std::move(brick), bytes, payloadBytes);
         ++report.bricksPagedIn;
     }
@@ -658,6 +673,7 @@ std::shared_ptr<const StreamingScene::BrickMesh> StreamingScene::meshBrick(const
     if (it == s.resident.end()) return nullptr;
     if (it->second.mesh && it->second.mesh->version == s.meshVersionLocked(key)) return it->second.mesh;
     std::shared_ptr<const BrickMesh> out = s.makeMesh(key);
+    s.learnMeshShare(it->second, *out);
     // Kept if the budget holds it (other bricks may make room); else made again when asked for.
     s.dropMesh(key, it->second);
     if (s.makeRoom(out->bytes, lock)) {
