@@ -1,0 +1,435 @@
+#include "sculpt/FieldBrushes.h"
+
+#include "sculpt/GridTool.h"
+#include "vdb_hermite/VolumeRegions.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <stdexcept>
+#include <vector>
+
+namespace vdbclay {
+
+namespace {
+
+int32_t floorDiv(int64_t v, int64_t d) { return int32_t(v >= 0 ? v / d : -((-v + d - 1) / d)); }
+
+/// A dense field on a box of the volume's lattice (world units), trilinear between its points.
+struct LatticeGrid {
+    std::array<int32_t, 3> origin{}, dims{};
+    double voxelSize = 1.0;
+    std::vector<float> values;
+
+    std::size_t index(int32_t i, int32_t j, int32_t k) const
+    {
+        return (std::size_t(i) * std::size_t(dims[1]) + std::size_t(j)) * std::size_t(dims[2]) + std::size_t(k);
+    }
+    float at(int32_t i, int32_t j, int32_t k) const
+    {
+        i = std::clamp(i, 0, dims[0] - 1);
+        j = std::clamp(j, 0, dims[1] - 1);
+        k = std::clamp(k, 0, dims[2] - 1);
+        return values[index(i, j, k)];
+    }
+    Vec3d pointOf(int32_t i, int32_t j, int32_t k) const
+    {
+        return Vec3d(origin[0] + i, origin[1] + j, origin[2] + k) * voxelSize;
+    }
+    /// Trilinear at a world point (clamped to the box).
+    double sample(const Vec3d& world) const
+    {
+        double f[3];
+        int32_t c[3];
+        for (int a = 0; a < 3; ++a) {
+            const double q = std::clamp(world[a] / voxelSize - origin[std::size_t(a)], 0.0, double(dims[std::size_t(a)] - 1));
+            c[a] = std::min(int32_t(q), dims[std::size_t(a)] - 2 < 0 ? 0 : dims[std::size_t(a)] - 2);
+            f[a] = q - c[a];
+        }
+        double out = 0.0;
+        for (int corner = 0; corner < 8; ++corner) {
+            const int dx = corner & 1, dy = (corner >> 1) & 1, dz = corner >> 2;
+            const double w = (dx ? f[0] : 1 - f[0]) * (dy ? f[1] : 1 - f[1]) * (dz ? f[2] : 1 - f[2]);
+            if (w != 0.0) out += w * at(c[0] + dx, c[1] + dy, c[2] + dz);
+        }
+        return out;
+    }
+    Vec3d gradient(int32_t i, int32_t j, int32_t k) const
+    {
+        return Vec3d(at(i + 1, j, k) - at(i - 1, j, k), at(i, j + 1, k) - at(i, j - 1, k), at(i, j, k + 1) - at(i, j, k - 1)) /
+               (2.0 * voxelSize);
+    }
+    /// The largest change per world unit between neighbouring points (bounds the interpolant's gradient).
+    double lipschitz() const
+    {
+        double worst = 0.0;
+        for (int32_t i = 0; i < dims[0]; ++i)
+            for (int32_t j = 0; j < dims[1]; ++j)
+                for (int32_t k = 0; k < dims[2]; ++k) {
+                    const float v = values[index(i, j, k)];
+                    double g2 = 0.0;
+                    for (const float n : {at(i + 1, j, k), at(i, j + 1, k), at(i, j, k + 1)}) g2 += double(n - v) * double(n - v);
+                    worst = std::max(worst, g2);
+                }
+        return std::sqrt(worst) / voxelSize;
+    }
+};
+
+/// max(a, b, ...) of a grid field and the brush (and optionally minus another grid): the CSG kernel's
+/// view of "the new solid, inside the brush".
+class ClippedGridField : public SdfField {
+public:
+    ClippedGridField(const LatticeGrid& grid, double sign, const SdfField& brush, const LatticeGrid* notInside, double lipschitz)
+        : grid_(grid), sign_(sign), brush_(brush), notInside_(notInside), lipschitz_(lipschitz)
+    {
+    }
+    double distance(const Vec3d& world) const override
+    {
+        double d = std::max(sign_ * grid_.sample(world), brush_.distance(world));
+        if (notInside_) d = std::max(d, -notInside_->sample(world));
+        return d;
+    }
+    WorldBounds bounds() const override { return brush_.bounds(); }
+    double innerRadius() const override { return brush_.innerRadius(); }
+    double surfaceAreaBound() const override { return brush_.surfaceAreaBound(); }
+    double lipschitz() const override { return lipschitz_; }
+    double evaluationCost() const override { return brush_.evaluationCost() + 2.0; }
+
+private:
+    const LatticeGrid& grid_;
+    double sign_;
+    const SdfField& brush_;
+    const LatticeGrid* notInside_;
+    double lipschitz_;
+};
+
+/// A separable box filter of radius r along one axis (running sums; the ends clamp).
+void boxBlurAxis(LatticeGrid& g, int axis, int r)
+{
+    const int32_t n = g.dims[std::size_t(axis)];
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const LatticeGrid source = g;
+    tbb::parallel_for(tbb::blocked_range<int32_t>(0, g.dims[std::size_t(u)]), [&](const tbb::blocked_range<int32_t>& range) {
+        std::array<int32_t, 3> c{};
+        for (int32_t a = range.begin(); a < range.end(); ++a)
+            for (int32_t b = 0; b < g.dims[std::size_t(v)]; ++b) {
+                c[std::size_t(u)] = a;
+                c[std::size_t(v)] = b;
+                const auto value = [&](int32_t t) {
+                    c[std::size_t(axis)] = std::clamp(t, 0, n - 1);
+                    return double(source.values[source.index(c[0], c[1], c[2])]);
+                };
+                double sum = 0.0;
+                for (int32_t t = -r; t <= r; ++t) sum += value(t);
+                for (int32_t t = 0; t < n; ++t) {
+                    c[std::size_t(axis)] = t;
+                    g.values[g.index(c[0], c[1], c[2])] = float(sum / double(2 * r + 1));
+                    sum += value(t + r + 1) - value(t - r);
+                }
+            }
+    });
+}
+
+/// Signed distances (world units) over a box of the lattice, Euclidean out to any depth: the tool's
+/// field is exact only near the surface, so the points within a voxel of it seed their closest surface
+/// points (the point less its distance along the field's gradient), and raster passes carry the nearest
+/// of those through the box (each point offered its neighbours' closest points); signs from materials.
+LatticeGrid signedDistances(const GridTool& tool, const std::array<int32_t, 3>& origin, const std::array<int32_t, 3>& dims, double h)
+{
+    const ToolField& solid = tool.fields().front();
+    const std::array<int32_t, 3> toolLo = tool.origin(), toolDims = tool.dims();
+    const auto toolValue = [&](int32_t x, int32_t y, int32_t z) -> double {
+        const std::array<int32_t, 3> c{x - toolLo[0], y - toolLo[1], z - toolLo[2]};
+        for (std::size_t a = 0; a < 3; ++a)
+            if (c[a] < 0 || c[a] >= toolDims[a]) return solid.outerValue;
+        return solid.distance[(std::size_t(c[0]) * std::size_t(toolDims[1]) + std::size_t(c[1])) * std::size_t(toolDims[2]) + std::size_t(c[2])];
+    };
+    LatticeGrid out;
+    out.origin = origin;
+    out.dims = dims;
+    out.voxelSize = h;
+    const std::size_t count = std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]);
+    constexpr float kNone = std::numeric_limits<float>::infinity();
+    std::vector<std::array<float, 3>> closest(count, {kNone, kNone, kNone}); // lattice units, absolute
+    std::vector<float> best(count, kNone);
+    for (int32_t i = 0; i < dims[0]; ++i)
+        for (int32_t j = 0; j < dims[1]; ++j)
+            for (int32_t k = 0; k < dims[2]; ++k) {
+                const int32_t x = origin[0] + i, y = origin[1] + j, z = origin[2] + k;
+                const double v = toolValue(x, y, z);
+                if (std::fabs(v) > 1.0) continue;
+                Vec3d g(toolValue(x + 1, y, z) - toolValue(x - 1, y, z), toolValue(x, y + 1, z) - toolValue(x, y - 1, z),
+                        toolValue(x, y, z + 1) - toolValue(x, y, z - 1));
+                const double len = g.length();
+                if (len < 1e-9) continue;
+                g /= len;
+                const std::size_t n = out.index(i, j, k);
+                closest[n] = {float(x - v * g[0]), float(y - v * g[1]), float(z - v * g[2])};
+                best[n] = float(std::fabs(v));
+            }
+    const auto offer = [&](std::size_t n, int32_t x, int32_t y, int32_t z, std::size_t from) {
+        const auto& c = closest[from];
+        if (c[0] == kNone) return;
+        const float dx = c[0] - float(x), dy = c[1] - float(y), dz = c[2] - float(z);
+        const float d = std::sqrt(dx * dx + dy * dy + dz * dz);
+        if (d < best[n]) {
+            best[n] = d;
+            closest[n] = c;
+        }
+    };
+    for (int round = 0; round < 2; ++round)
+        for (int direction = 0; direction < 2; ++direction) {
+            const int step = direction == 0 ? 1 : -1;
+            const int32_t i0 = direction == 0 ? 0 : dims[0] - 1, j0 = direction == 0 ? 0 : dims[1] - 1, k0 = direction == 0 ? 0 : dims[2] - 1;
+            for (int32_t i = i0; i >= 0 && i < dims[0]; i += step)
+                for (int32_t j = j0; j >= 0 && j < dims[1]; j += step)
+                    for (int32_t k = k0; k >= 0 && k < dims[2]; k += step) {
+                        const std::size_t n = out.index(i, j, k);
+                        // The 13 neighbours this raster order has visited.
+                        for (int di = -1; di <= 0; ++di)
+                            for (int dj = -1; dj <= 1; ++dj)
+                                for (int dk = -1; dk <= 1; ++dk) {
+                                    if (di == 0 && (dj > 0 || (dj == 0 && dk >= 0))) continue;
+                                    const int32_t ni = i + di * step, nj = j + dj * step, nk = k + dk * step;
+                                    if (ni < 0 || nj < 0 || nk < 0 || ni >= dims[0] || nj >= dims[1] || nk >= dims[2]) continue;
+                                    offer(n, origin[0] + i, origin[1] + j, origin[2] + k, out.index(ni, nj, nk));
+                                }
+                    }
+        }
+    out.values.resize(count);
+    for (int32_t i = 0; i < dims[0]; ++i)
+        for (int32_t j = 0; j < dims[1]; ++j)
+            for (int32_t k = 0; k < dims[2]; ++k) {
+                const std::size_t n = out.index(i, j, k);
+                const bool inside = tool.materialAt({origin[0] + i, origin[1] + j, origin[2] + k}) != kEmptyMaterial;
+                const double d = std::isfinite(best[n]) ? double(best[n]) : 1e6;
+                out.values[n] = float((inside ? -d : d) * h);
+            }
+    return out;
+}
+
+} // namespace
+
+const char* fieldModeName(FieldMode mode)
+{
+    switch (mode) {
+    case FieldMode::Smooth: return "smooth";
+    case FieldMode::Flatten: return "flatten";
+    case FieldMode::Inflate: return "inflate";
+    case FieldMode::Deflate: return "deflate";
+    case FieldMode::Move: return "move";
+    }
+    return "?";
+}
+
+std::optional<FieldMode> parseFieldMode(const std::string& name)
+{
+    for (FieldMode m : {FieldMode::Smooth, FieldMode::Flatten, FieldMode::Inflate, FieldMode::Deflate, FieldMode::Move})
+        if (name == fieldModeName(m)) return m;
+    return std::nullopt;
+}
+
+const char* falloffName(Falloff falloff)
+{
+    switch (falloff) {
+    case Falloff::Smooth: return "smooth";
+    case Falloff::Linear: return "linear";
+    case Falloff::Constant: return "constant";
+    }
+    return "?";
+}
+
+Falloff parseFalloff(const std::string& name)
+{
+    for (Falloff f : {Falloff::Smooth, Falloff::Linear, Falloff::Constant})
+        if (name == falloffName(f)) return f;
+    throw std::invalid_argument("unknown falloff '" + name + "' (smooth, linear or constant)");
+}
+
+double falloffWeight(Falloff falloff, double depth, double innerRadius)
+{
+    if (!(depth >= 0.0)) return 0.0;
+    if (falloff == Falloff::Constant) return 1.0;
+    const double t = innerRadius > 0.0 ? std::min(1.0, depth / innerRadius) : 1.0;
+    return falloff == Falloff::Linear ? t : t * t * (3.0 - 2.0 * t);
+}
+
+int smoothingRadiusVoxels(const SdfField& brush, double voxelSize)
+{
+    return std::clamp(int(std::lround(brush.innerRadius() / (4.0 * voxelSize))), 1, 8);
+}
+
+double fieldBrushReach(const SdfField& brush, const FieldBrushOp& op, double voxelSize)
+{
+    // The rebuilt field is right within its box; a few voxels more keep the box's walls away.
+    double reach = 4.0 * voxelSize;
+    switch (op.mode) {
+    case FieldMode::Smooth: reach += 2.0 * smoothingRadiusVoxels(brush, voxelSize) * voxelSize; break;
+    case FieldMode::Flatten: reach += brush.innerRadius(); break; // the plane may lie that far off the surface
+    case FieldMode::Inflate:
+    case FieldMode::Deflate: reach += std::fabs(op.distance); break;
+    case FieldMode::Move: reach += op.offset.length(); break;
+    }
+    return reach;
+}
+
+void checkFieldBrush(const Volume& volume, const SdfField& brush, const FieldBrushOp& op)
+{
+    if (!(op.strength >= 0.0 && op.strength <= 1.0)) throw std::invalid_argument("strength must lie in [0,1]");
+    if (!std::isfinite(op.distance)) throw std::invalid_argument("distance must be a finite number");
+    for (int a = 0; a < 3; ++a)
+        if (!std::isfinite(op.offset[a])) throw std::invalid_argument("offset must be finite");
+    const WorldBounds b = brush.bounds();
+    if (!b.bounded()) throw std::invalid_argument(std::string(fieldModeName(op.mode)) + " needs a bounded brush");
+    const double h = volume.voxelSize(), reach = fieldBrushReach(brush, op, h);
+    for (int a = 0; a < 3; ++a) {
+        const double voxels = (b.max[a] - b.min[a] + 2.0 * reach) / h;
+        if (!(voxels <= double(kMaxFieldBrushVoxels)))
+            throw std::invalid_argument(std::string(fieldModeName(op.mode)) + " rebuilds the surface within " +
+                                        std::to_string(kMaxFieldBrushVoxels) + " voxels of a side; this brush, with its reach, spans " +
+                                        std::to_string(int64_t(std::min(voxels, 1e15))));
+    }
+    if (op.material) (void)volume.materials().at(*op.material); // throws std::out_of_range
+}
+
+EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrushOp& op)
+{
+    try {
+        checkFieldBrush(volume, brush, op);
+    } catch (const std::out_of_range&) {
+        throw std::invalid_argument("unknown material id " + std::to_string(*op.material));
+    }
+    const double h = volume.voxelSize();
+    const WorldBounds bounds = brush.bounds();
+    const double reach = fieldBrushReach(brush, op, h);
+    // The region: a leaf-aligned cube around the brush and its reach.
+    std::array<int32_t, 3> lo{}, hi{};
+    int32_t edge = 0;
+    for (int a = 0; a < 3; ++a) {
+        lo[std::size_t(a)] = floorDiv(int64_t(std::floor((bounds.min[a] - reach) / h)), kLeafDim) * kLeafDim;
+        hi[std::size_t(a)] = int32_t(std::ceil((bounds.max[a] + reach) / h));
+        edge = std::max(edge, hi[std::size_t(a)] - lo[std::size_t(a)] + 1);
+    }
+    edge = (edge + kLeafDim - 1) / kLeafDim * kLeafDim;
+    Volume part = copyRegion(volume, {{lo[0], lo[1], lo[2]}, edge});
+    // The material of new voxels: the op's, else the most common solid one inside the brush.
+    MaterialId material = op.material.value_or(kEmptyMaterial);
+    std::optional<GridTool> tool;
+    try {
+        tool.emplace(std::move(part));
+    } catch (const std::invalid_argument&) {
+        return {}; // nothing solid to reshape
+    }
+    LatticeGrid old = signedDistances(*tool, lo, {edge + 1, edge + 1, edge + 1}, h);
+    if (material == kEmptyMaterial) {
+        std::map<MaterialId, uint64_t> counts;
+        for (int32_t i = 0; i < old.dims[0]; ++i)
+            for (int32_t j = 0; j < old.dims[1]; ++j)
+                for (int32_t k = 0; k < old.dims[2]; ++k) {
+                    if (brush.distance(old.pointOf(i, j, k)) > 0.0) continue;
+                    const MaterialId m = tool->materialAt({old.origin[0] + i, old.origin[1] + j, old.origin[2] + k});
+                    if (m != kEmptyMaterial) ++counts[m];
+                }
+        material = counts.empty() ? MaterialId(1) : std::max_element(counts.begin(), counts.end(), [](const auto& x, const auto& y) {
+                                                         return x.second < y.second;
+                                                     })->first;
+    }
+
+    // Weights, once per point.
+    const double inner = brush.innerRadius();
+    std::vector<float> weight(old.values.size(), 0.0f);
+    tbb::parallel_for(tbb::blocked_range<int32_t>(0, old.dims[0]), [&](const tbb::blocked_range<int32_t>& range) {
+        for (int32_t i = range.begin(); i < range.end(); ++i)
+            for (int32_t j = 0; j < old.dims[1]; ++j)
+                for (int32_t k = 0; k < old.dims[2]; ++k)
+                    weight[old.index(i, j, k)] =
+                        float(op.strength * falloffWeight(op.falloff, -brush.distance(old.pointOf(i, j, k)), inner));
+    });
+
+    LatticeGrid next = old;
+    switch (op.mode) {
+    case FieldMode::Inflate:
+    case FieldMode::Deflate: {
+        const double d = op.mode == FieldMode::Inflate ? op.distance : -op.distance;
+        for (std::size_t i = 0; i < next.values.size(); ++i) next.values[i] = float(old.values[i] - weight[i] * d);
+        break;
+    }
+    case FieldMode::Smooth: {
+        LatticeGrid blurred = old;
+        const int r = smoothingRadiusVoxels(brush, h);
+        for (int pass = 0; pass < 2; ++pass) // two box passes per axis: a smooth, symmetric kernel
+            for (int a = 0; a < 3; ++a) boxBlurAxis(blurred, a, (r + 1) / 2);
+        for (std::size_t i = 0; i < next.values.size(); ++i)
+            next.values[i] = float(old.values[i] + weight[i] * (blurred.values[i] - old.values[i]));
+        break;
+    }
+    case FieldMode::Flatten: {
+        // The plane under the brush: the surface points (lattice points near the surface, projected on
+        // it) and normals, weighted.
+        Vec3d centroid(0.0), normal(0.0);
+        double total = 0.0;
+        for (int32_t i = 0; i < old.dims[0]; ++i)
+            for (int32_t j = 0; j < old.dims[1]; ++j)
+                for (int32_t k = 0; k < old.dims[2]; ++k) {
+                    const std::size_t n = old.index(i, j, k);
+                    if (weight[n] <= 0.0f || std::fabs(old.values[n]) > h) continue;
+                    Vec3d g = old.gradient(i, j, k);
+                    const double len = g.length();
+                    if (len < 1e-9) continue;
+                    g /= len;
+                    centroid += (old.pointOf(i, j, k) - g * double(old.values[n])) * double(weight[n]);
+                    normal += g * double(weight[n]);
+                    total += weight[n];
+                }
+        if (total <= 0.0 || normal.length() < 1e-9) return {}; // no surface under the brush
+        centroid /= total;
+        normal.normalize();
+        for (int32_t i = 0; i < old.dims[0]; ++i)
+            for (int32_t j = 0; j < old.dims[1]; ++j)
+                for (int32_t k = 0; k < old.dims[2]; ++k) {
+                    const std::size_t n = old.index(i, j, k);
+                    const double plane = (old.pointOf(i, j, k) - centroid).dot(normal);
+                    next.values[n] = float(old.values[n] + weight[n] * (plane - old.values[n]));
+                }
+        break;
+    }
+    case FieldMode::Move: {
+        // Each surface point p moves to p + w(p) offset (w where the brush grabbed it); a lattice point x
+        // takes the old field where it came from, p = x - w(p) offset, found by fixed-point steps (they
+        // converge while the offset is shorter than the falloff is wide).
+        const auto weightAt = [&](const Vec3d& p) {
+            return op.strength * falloffWeight(op.falloff, -brush.distance(p), inner);
+        };
+        tbb::parallel_for(tbb::blocked_range<int32_t>(0, old.dims[0]), [&](const tbb::blocked_range<int32_t>& range) {
+            for (int32_t i = range.begin(); i < range.end(); ++i)
+                for (int32_t j = 0; j < old.dims[1]; ++j)
+                    for (int32_t k = 0; k < old.dims[2]; ++k) {
+                        const Vec3d x = old.pointOf(i, j, k);
+                        Vec3d p = x - op.offset * double(weight[old.index(i, j, k)]);
+                        for (int step = 0; step < 8; ++step) p = x - op.offset * weightAt(p);
+                        next.values[old.index(i, j, k)] = float(old.sample(p));
+                    }
+        });
+        break;
+    }
+    }
+
+    // Write back inside the brush: add what the new field holds and the old did not, then remove what the
+    // new field leaves. Outside the brush nothing changes.
+    const double lipschitz = std::max({1.0, next.lipschitz(), old.lipschitz()});
+    EditStats stats = applyCsg(volume, ClippedGridField(next, 1.0, brush, &old, lipschitz), CsgOp{CsgMode::Add, material, 1.0, {}});
+    const EditStats removed = applyCsg(volume, ClippedGridField(next, -1.0, brush, nullptr, lipschitz), CsgOp{CsgMode::Remove, material, 1.0, {}});
+    stats.blocksComputed += removed.blocksComputed;
+    stats.leavesWritten += removed.leavesWritten;
+    stats.tilesWritten += removed.tilesWritten;
+    stats.crossingsComputed += removed.crossingsComputed;
+    stats.dirtyBlocks.insert(stats.dirtyBlocks.end(), removed.dirtyBlocks.begin(), removed.dirtyBlocks.end());
+    stats.blockChanges.insert(stats.blockChanges.end(), removed.blockChanges.begin(), removed.blockChanges.end());
+    return stats;
+}
+
+} // namespace vdbclay

@@ -1,0 +1,67 @@
+// Brushes that reshape the surface rather than add or carve a solid: smooth, flatten, inflate, deflate
+// and move (the sculpting brushes of Medium, Blender and SculptGL). Each rebuilds a signed distance
+// field around the brush from the Hermite data (as grid tools do), changes it inside the brush, weighted
+// by strength and falloff, and writes the result back with the CSG kernel: voxels the new field holds
+// and the old did not are added, voxels the new field leaves are removed, so every edge keeps one
+// consistent crossing and the surface stays closed.
+//
+// Definitions, with phi the old distance (world units, negative inside), w in [0, 1] the weight at a
+// point (strength times the falloff of its depth in the brush) and phi' the new distance:
+//   inflate   phi' = phi - w D            (the surface moves out by w D along its normal)
+//   deflate   phi' = phi + w D
+//   smooth    phi' = phi + w (blur(phi) - phi), blur a symmetric box filter of radius rho (a plane's
+//             distance is linear and stays as it is; edges and corners round off)
+//   flatten   phi' = phi + w (P - phi), P the distance to the plane fitted under the brush (centroid and
+//             mean normal of the surface there, weighted by w)
+//   move      phi'(x) = phi(x - w(x) offset)  (the surface under the brush centre moves by offset)
+// Voxels the brush adds take `material`, else the most common solid material under the brush.
+#pragma once
+
+#include "sculpt/Brush.h"
+#include "sculpt/Csg.h"
+#include "vdb_hermite/Volume.h"
+
+#include <optional>
+#include <string>
+
+namespace vdbclay {
+
+enum class FieldMode { Smooth, Flatten, Inflate, Deflate, Move };
+enum class Falloff { Smooth, Linear, Constant };
+
+const char* fieldModeName(FieldMode mode);
+/// nullopt for a name that is not a field mode.
+std::optional<FieldMode> parseFieldMode(const std::string& name);
+const char* falloffName(Falloff falloff);
+Falloff parseFalloff(const std::string& name); // throws std::invalid_argument
+
+struct FieldBrushOp {
+    FieldMode mode = FieldMode::Smooth;
+    double strength = 1.0;                 // in [0, 1]
+    Falloff falloff = Falloff::Smooth;     // of the weight from the brush's rim (0) to its deepest point (1)
+    double distance = 0.0;                 // inflate, deflate: world units at full weight
+    Vec3d offset{0.0, 0.0, 0.0};           // move: world units at full weight
+    std::optional<MaterialId> material;    // what added voxels are made of
+};
+
+/// The weight of a point `depth` inside a brush whose deepest point is `innerRadius` deep: 0 outside,
+/// rising to 1 at the deepest point as the falloff says (constant: 1 everywhere inside).
+double falloffWeight(Falloff falloff, double depth, double innerRadius);
+
+/// The smoothing filter's radius for a brush, in voxels: a quarter of the brush's inner radius, 1 to 8.
+int smoothingRadiusVoxels(const SdfField& brush, double voxelSize);
+
+/// World units beyond the brush's bounds the op reads: its field must see the surface there.
+double fieldBrushReach(const SdfField& brush, const FieldBrushOp& op, double voxelSize);
+
+/// The largest region (voxels a side) a field brush rebuilds its field over.
+constexpr int32_t kMaxFieldBrushVoxels = 200;
+
+/// Throws std::invalid_argument, changing nothing, for strength or distance out of range, an unbounded
+/// brush, a region wider than kMaxFieldBrushVoxels, or an unknown material.
+void checkFieldBrush(const Volume& volume, const SdfField& brush, const FieldBrushOp& op);
+
+/// Checks the op, then applies it. A region without solid voxels is left as it is.
+EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrushOp& op);
+
+} // namespace vdbclay

@@ -1,0 +1,183 @@
+// The reshaping brushes (smooth, flatten, inflate, deflate, move) against their definitions on analytic
+// shapes, measured on the CMS mesh, and closedness after random brushes on random scenes.
+#include "mesher/MeshMetrics.h"
+#include "mesher/Mesher.h"
+#include "sculpt/FieldBrushes.h"
+#include "support/Sculpt.h"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+using namespace vdbclay;
+using namespace vdbclay::test;
+
+namespace {
+
+/// CMS; `uniform`: a vertex in every surface cell (flat faces keep theirs).
+Mesh cmsMesh(const Volume& v, bool uniform = false)
+{
+    MeshOptions o;
+    o.kind = MesherKind::CubicalMarchingSquares;
+    if (uniform) o.maxCellWidth = 1;
+    return meshVolume(v, o);
+}
+
+bool closed(const Volume& v)
+{
+    const Mesh mesh = cmsMesh(v);
+    const MeshTopology t = analyzeTopology(mesh, kMergeDistanceVoxels * v.voxelSize());
+    INFO("boundary " << t.boundaryEdges << " non-manifold " << t.nonManifoldEdges << " misoriented " << t.misorientedEdges
+                     << " pinched " << t.pinchedVertices << " degenerate " << t.degenerateTriangles);
+    return mesh.triangleCount() > 0 && t.watertight();
+}
+
+Brush sphereBrush(double radius, const Vec3d& centre) { return Brush(sphere(radius), at(centre)); }
+
+FieldBrushOp fieldOp(FieldMode mode, Falloff falloff = Falloff::Constant)
+{
+    FieldBrushOp op;
+    op.mode = mode;
+    op.falloff = falloff;
+    return op;
+}
+
+Volume sphereVolume(double radius)
+{
+    Volume v(1.0);
+    apply(v, CsgMode::Add, sphere(radius), at(Vec3d(0.0)));
+    return v;
+}
+
+/// Mean and extreme distances of the mesh's vertices from the origin.
+std::array<double, 3> radii(const Mesh& mesh)
+{
+    double sum = 0.0, lo = 1e30, hi = 0.0;
+    for (const auto& p : mesh.positions) {
+        const double r = std::sqrt(double(p[0]) * p[0] + double(p[1]) * p[1] + double(p[2]) * p[2]);
+        sum += r;
+        lo = std::min(lo, r);
+        hi = std::max(hi, r);
+    }
+    return {sum / double(mesh.positions.size()), lo, hi};
+}
+
+} // namespace
+
+TEST_CASE("field brushes: inflate by d moves a sphere's surface out by d, deflate moves it in", "[field]")
+{
+    for (const double d : {1.0, 2.5, 4.0}) {
+        Volume v = sphereVolume(16.0);
+        FieldBrushOp inflate = fieldOp(FieldMode::Inflate);
+        inflate.distance = d;
+        applyFieldBrush(v, sphereBrush(30.0, Vec3d(0.0)), inflate);
+        INFO("d = " << d);
+        REQUIRE(closed(v));
+        const auto [mean, lo, hi] = radii(cmsMesh(v));
+        CHECK(std::fabs(mean - (16.0 + d)) < 0.25);
+        CHECK(lo > 16.0 + d - 0.6);
+        CHECK(hi < 16.0 + d + 0.6);
+
+        FieldBrushOp deflate = inflate;
+        deflate.mode = FieldMode::Deflate;
+        applyFieldBrush(v, sphereBrush(30.0, Vec3d(0.0)), deflate);
+        REQUIRE(closed(v));
+        CHECK(std::fabs(radii(cmsMesh(v))[0] - 16.0) < 0.3);
+    }
+    // Half the strength, half the distance.
+    Volume v = sphereVolume(16.0);
+    FieldBrushOp half = fieldOp(FieldMode::Inflate);
+    half.distance = 4.0;
+    half.strength = 0.5;
+    applyFieldBrush(v, sphereBrush(30.0, Vec3d(0.0)), half);
+    CHECK(std::fabs(radii(cmsMesh(v))[0] - 18.0) < 0.25);
+}
+
+TEST_CASE("field brushes: flatten makes the cap under the brush planar", "[field]")
+{
+    Volume v = sphereVolume(20.0);
+    const Vec3d centre(0.0, 20.0, 0.0);
+    applyFieldBrush(v, sphereBrush(8.0, centre), fieldOp(FieldMode::Flatten));
+    REQUIRE(closed(v));
+    const Mesh mesh = cmsMesh(v);
+    std::vector<double> heights;
+    for (const auto& p : mesh.positions)
+        if ((Vec3d(p[0], p[1], p[2]) - centre).length() < 6.0) heights.push_back(p[1]);
+    REQUIRE(heights.size() > 20);
+    const auto [lo, hi] = std::minmax_element(heights.begin(), heights.end());
+    CHECK(*hi - *lo < 0.3); // planar within a bound
+    CHECK(*hi < 19.9);      // the cap is cut down to the plane through its surface
+    CHECK(*lo > 17.0);
+}
+
+TEST_CASE("field brushes: smooth leaves planes where they are and rounds a box's edge", "[field]")
+{
+    Volume v(1.0);
+    apply(v, CsgMode::Add, box(Vec3d(20.0)), at(Vec3d(0.0)));
+    const Vec3d edge(20.0, 20.0, 0.0);
+    const Brush brush = sphereBrush(16.0, edge);
+    applyFieldBrush(v, brush, fieldOp(FieldMode::Smooth));
+    REQUIRE(closed(v));
+    const Mesh mesh = cmsMesh(v, true);
+    const int r = smoothingRadiusVoxels(brush, 1.0);
+    double inset = 0.0, faceError = 0.0;
+    int faceVertices = 0;
+    for (const auto& p : mesh.positions) {
+        const Vec3d q(p[0], p[1], p[2]);
+        if ((q - edge).length() > 14.0) continue;
+        // On the face x = 20, farther from the edge than the filter reaches: where it was.
+        if (q[1] < 20.0 - 2.0 * r - 2.0 && q[0] > 15.0) {
+            faceError = std::max(faceError, std::fabs(q[0] - 20.0));
+            ++faceVertices;
+        }
+        // Along the diagonal of the edge: how far in the surface now lies.
+        if (std::fabs(q[0] - q[1]) < 0.5) inset = std::max(inset, (40.0 - q[0] - q[1]) / std::sqrt(2.0));
+    }
+    CHECK(faceVertices > 10);
+    CHECK(faceError < 0.05);
+    CHECK(inset > 0.5);       // the edge rounded
+    CHECK(inset < r);         // by less than the filter's radius
+}
+
+TEST_CASE("field brushes: move displaces the grabbed point by the drag", "[field]")
+{
+    for (const Falloff falloff : {Falloff::Smooth, Falloff::Linear}) {
+        Volume v = sphereVolume(16.0);
+        FieldBrushOp move = fieldOp(FieldMode::Move, falloff);
+        move.offset = Vec3d(0.0, 4.0, 0.0);
+        applyFieldBrush(v, sphereBrush(10.0, Vec3d(0.0, 16.0, 0.0)), move);
+        INFO("falloff " << falloffName(falloff));
+        REQUIRE(closed(v));
+        double top = 0.0;
+        for (const auto& p : cmsMesh(v).positions) top = std::max(top, double(p[1]));
+        CHECK(std::fabs(top - 20.0) < 0.35);
+    }
+}
+
+TEST_CASE("field brushes: random brushes on random solids leave closed surfaces", "[field]")
+{
+    std::mt19937 rng(29);
+    const auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+    const FieldMode modes[] = {FieldMode::Smooth, FieldMode::Flatten, FieldMode::Inflate, FieldMode::Deflate, FieldMode::Move};
+    const Falloff falloffs[] = {Falloff::Smooth, Falloff::Linear, Falloff::Constant};
+    for (int scene = 0; scene < 6; ++scene) {
+        Volume v(1.0);
+        for (int i = 0; i < 3; ++i) {
+            const Vec3d c(integer(-8, 8), integer(-8, 8), integer(-8, 8));
+            if (i % 2) apply(v, CsgMode::Add, box(Vec3d(integer(4, 10), integer(4, 10), integer(4, 10))), at(c));
+            else apply(v, CsgMode::Add, sphere(integer(5, 12)), at(c));
+        }
+        for (int i = 0; i < 5; ++i) {
+            FieldBrushOp op = fieldOp(modes[integer(0, 4)], falloffs[integer(0, 2)]);
+            op.strength = integer(1, 4) / 4.0;
+            op.distance = integer(1, 4);
+            op.offset = Vec3d(integer(-3, 3), integer(-3, 3), integer(-3, 3));
+            const Vec3d c(integer(-14, 14), integer(-14, 14), integer(-14, 14));
+            applyFieldBrush(v, sphereBrush(integer(3, 10), c), op);
+            INFO("scene " << scene << " brush " << i << ": " << fieldModeName(op.mode) << " " << falloffName(op.falloff));
+            REQUIRE(closed(v));
+        }
+    }
+}
