@@ -72,7 +72,7 @@ const WorldBounds kKnobBox{Vec3d(-7.0, -38.0, -7.0), Vec3d(7.0, -25.0, 7.0)};
 
 std::string describeOp(const ScriptOp& op)
 {
-    std::string text = csgModeName(op.mode);
+    std::string text = opModeName(op);
     if (!op.toolFile.empty()) text += " tool " + op.toolFile;
     if (!op.material.empty()) text += " " + op.material;
     if (op.path.size() > 1) text += ", stroke of " + std::to_string(op.path.size()) + " points";

@@ -132,7 +132,7 @@ int runSculpt(const SculptOptions& o)
     const std::size_t total = script.ops.size();
     auto progress = [&](const ScriptOpReport& r) {
         if (o.json) return;
-        std::cerr << "op " << (r.index + 1) << '/' << total << ' ' << csgModeName(r.mode) << ": "
+        std::cerr << "op " << (r.index + 1) << '/' << total << ' ' << r.modeName << ": "
                   << r.stats.blocksComputed << " blocks, " << formatSeconds(r.seconds) << std::endl;
     };
     if (store) return sculptStoreInPlace(o, script, progress);

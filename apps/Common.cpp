@@ -53,7 +53,7 @@ void printFields(const std::vector<std::pair<std::string, std::string>>& fields,
 nlohmann::json opReportJson(const ScriptOpReport& report)
 {
     return {{"index", report.index},
-            {"mode", csgModeName(report.mode)},
+            {"mode", report.modeName},
             {"blocks", report.stats.blocksComputed},
             {"seconds", report.seconds}};
 }

@@ -3,6 +3,8 @@
 #include "mesher/MeshMetrics.h"
 #include "mesher/Mesher.h"
 #include "sculpt/FieldBrushes.h"
+#include "sculpt/StrokeScript.h"
+#include "support/HermiteProbe.h"
 #include "support/Sculpt.h"
 
 #include <catch2/catch.hpp>
@@ -178,6 +180,76 @@ TEST_CASE("field brushes: random brushes on random solids leave closed surfaces"
             applyFieldBrush(v, sphereBrush(integer(3, 10), c), op);
             INFO("scene " << scene << " brush " << i << ": " << fieldModeName(op.mode) << " " << falloffName(op.falloff));
             REQUIRE(closed(v));
+            REQUIRE(checkInvariants(v).empty());
         }
     }
+}
+
+TEST_CASE("field brushes in scripts: each mode runs as an op, equal to the brush applied directly; strokes; bad ops refused", "[field][script]")
+{
+    const std::vector<std::pair<std::string, FieldBrushOp>> cases = [] {
+        std::vector<std::pair<std::string, FieldBrushOp>> out;
+        FieldBrushOp op = fieldOp(FieldMode::Smooth, Falloff::Smooth);
+        op.strength = 0.75;
+        out.push_back({R"({"mode": "smooth", "strength": 0.75})", op});
+        op = fieldOp(FieldMode::Flatten, Falloff::Linear);
+        out.push_back({R"({"mode": "flatten", "falloff": "linear"})", op});
+        op = fieldOp(FieldMode::Inflate, Falloff::Smooth);
+        op.distance = 2.0;
+        out.push_back({R"({"mode": "inflate", "distance": 2})", op});
+        op = fieldOp(FieldMode::Deflate, Falloff::Constant);
+        op.distance = 1.5;
+        out.push_back({R"({"mode": "deflate", "distance": 1.5, "falloff": "constant"})", op});
+        op = fieldOp(FieldMode::Move, Falloff::Smooth);
+        op.offset = Vec3d(1.0, 3.0, 0.0);
+        out.push_back({R"({"mode": "move", "offset": [1, 3, 0]})", op});
+        return out;
+    }();
+    for (const auto& [json, op] : cases) {
+        INFO(json);
+        std::string text = json;
+        text.insert(1, R"("brush": {"shape": "sphere", "radius": 7}, "at": [3, 15, 2], )");
+        Volume byScript = sphereVolume(16.0), direct = sphereVolume(16.0);
+        const auto reports = runStrokeScript(byScript, parseStrokeScript(R"({"ops": [)" + text + "]}"));
+        REQUIRE(reports.size() == 1);
+        CHECK(std::string(reports[0].modeName) == fieldModeName(op.mode));
+        applyFieldBrush(direct, sphereBrush(7.0, Vec3d(3.0, 15.0, 2.0)), op);
+        CHECK(changedBlocks(byScript, direct).empty());
+        CHECK_FALSE(changedBlocks(byScript, sphereVolume(16.0)).empty());
+    }
+    // A stroke: the swept brush reshapes the whole path.
+    Volume stroke = sphereVolume(16.0);
+    runStrokeScript(stroke, parseStrokeScript(
+                                R"({"ops": [{"mode": "inflate", "distance": 2, "falloff": "constant", "brush": {"shape": "sphere", "radius": 4}, "path": [[-10, 13, 0], [10, 13, 0]]}]})"));
+    REQUIRE(closed(stroke));
+    for (const double x : {-8.0, 0.0, 8.0}) {
+        // The surface above the path rose by 2 voxels: the voxel just outside the old sphere is solid now.
+        const double y = std::floor(std::sqrt(16.0 * 16.0 - x * x)) + 1.0;
+        CHECK(stroke.materialAt({int32_t(x), int32_t(y), 0}) != kEmptyMaterial);
+    }
+    // Refused, naming the place.
+    const auto refused = [](const std::string& op, const std::string& where) {
+        try {
+            parseStrokeScript(R"({"ops": [)" + op + "]}");
+            FAIL("accepted: " << op);
+        } catch (const ScriptError& e) {
+            INFO(e.what());
+            CHECK(std::string(e.what()).find(where) != std::string::npos);
+        }
+    };
+    const std::string brush = R"("brush": {"shape": "sphere", "radius": 4}, "at": [0, 0, 0])";
+    refused(R"({"mode": "inflate", )" + brush + "}", "ops[0].distance");
+    refused(R"({"mode": "move", )" + brush + "}", "ops[0].offset");
+    refused(R"({"mode": "smooth", "distance": 2, )" + brush + "}", "ops[0].distance");
+    refused(R"({"mode": "add", "falloff": "smooth", )" + brush + "}", "ops[0].falloff");
+    refused(R"({"mode": "smooth", "falloff": "cubic", )" + brush + "}", "ops[0].falloff");
+    refused(R"({"mode": "deflate", "distance": -1, )" + brush + "}", "ops[0].distance");
+    refused(R"({"mode": "smooth", "depth": 2, )" + brush + "}", "ops[0].depth");
+    refused(R"({"mode": "smooth", "brush": {"shape": "grid", "file": "t.vdb"}})", "ops[0].brush");
+    refused(R"({"mode": "flatten", "brush": {"shape": "half-space", "normal": [0, 1, 0]}})", "needs a bounded brush");
+    refused(R"({"mode": "wobble", )" + brush + "}", "ops[0].mode");
+    // Too large for the rebuilt field: refused by the run, before anything changes.
+    Volume v = sphereVolume(8.0);
+    CHECK_THROWS_AS(runStrokeScript(v, parseStrokeScript(R"({"ops": [{"mode": "smooth", "brush": {"shape": "sphere", "radius": 500}}]})")), ScriptError);
+    CHECK(changedBlocks(v, sphereVolume(8.0)).empty());
 }

@@ -30,7 +30,7 @@ std::optional<std::pair<IndexCoord, IndexCoord>> brickRange(const ScriptOp& op, 
 std::optional<std::pair<IndexCoord, IndexCoord>> voxelsReachedBy(const ScriptOp& op, double voxelSize)
 {
     if (op.mode == CsgMode::Intersect) return std::nullopt;
-    const WorldBounds b = opBounds(op);
+    const WorldBounds b = opBounds(op, voxelSize);
     if (!b.bounded()) return std::nullopt;
     IndexCoord lo, hi;
     for (int i = 0; i < 3; ++i) {

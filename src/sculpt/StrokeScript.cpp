@@ -179,12 +179,42 @@ Brush parseBrush(const json& b, const std::string& where, const Placement& place
 
 ScriptOp parseOp(const json& o, const std::string& where)
 {
-    checkKeys(o, where, {"mode", "brush", "at", "path", "rotate", "scale", "material", "strength", "depth"});
+    checkKeys(o, where, {"mode", "brush", "at", "path", "rotate", "scale", "material", "strength", "depth", "falloff", "distance", "offset"});
     ScriptOp op;
-    try {
-        op.mode = parseCsgMode(text(o, "mode", where));
-    } catch (const std::invalid_argument& e) {
-        fail(where + ".mode", e.what());
+    const std::string mode = text(o, "mode", where);
+    if (const std::optional<FieldMode> field = parseFieldMode(mode)) {
+        op.field = FieldBrushOp{};
+        op.field->mode = *field;
+    } else {
+        try {
+            op.mode = parseCsgMode(mode);
+        } catch (const std::invalid_argument& e) {
+            fail(where + ".mode", std::string(e.what()) + ", or a reshaping brush (smooth, flatten, inflate, deflate, move)");
+        }
+    }
+    for (const char* key : {"falloff", "distance", "offset"})
+        if (o.contains(key) && !op.field) fail(where + "." + key, "belongs to reshaping brushes (smooth, flatten, inflate, deflate, move)");
+    if (op.field) {
+        const FieldMode m = op.field->mode;
+        if (o.contains("depth")) fail(where + ".depth", "belongs to erode");
+        if (o.contains("falloff")) {
+            try {
+                op.field->falloff = parseFalloff(text(o, "falloff", where));
+            } catch (const std::invalid_argument& e) {
+                fail(where + ".falloff", e.what());
+            }
+        }
+        const bool moves = m == FieldMode::Inflate || m == FieldMode::Deflate;
+        if (moves != o.contains("distance")) fail(where + ".distance", moves ? "inflate and deflate need a 'distance' (world units)" : "belongs to inflate and deflate");
+        if (moves) {
+            op.field->distance = number(o, "distance", where);
+            if (!(op.field->distance > 0.0 && op.field->distance < 1e6)) fail(where + ".distance", "must be positive (world units)");
+        }
+        if ((m == FieldMode::Move) != o.contains("offset")) fail(where + ".offset", m == FieldMode::Move ? "move needs an 'offset' [dx, dy, dz]" : "belongs to move");
+        if (m == FieldMode::Move) {
+            op.field->offset = vec3(o.at("offset"), where + ".offset");
+            if (!(op.field->offset.length() < 1e6)) fail(where + ".offset", "is too long");
+        }
     }
     if (o.contains("at") && o.contains("path")) fail(where, "give either 'at' or 'path', not both");
     if (o.contains("path")) {
@@ -201,6 +231,7 @@ ScriptOp parseOp(const json& o, const std::string& where)
     const json& brush = o.at("brush");
     const bool grid = brush.is_object() && brush.contains("shape") && brush.at("shape") == "grid";
     if (grid) {
+        if (op.field) fail(where + ".brush", std::string(fieldModeName(op.field->mode)) + " takes an analytic brush, not a grid tool");
         checkKeys(brush, where + ".brush", {"shape", "file"});
         op.toolFile = text(brush, "file", where + ".brush");
         if (op.toolFile.empty()) fail(where + ".brush.file", "must not be empty");
@@ -212,6 +243,11 @@ ScriptOp parseOp(const json& o, const std::string& where)
         fail(where, "paint needs a 'material' (or a grid tool, which paints with its own)");
     op.strength = number(o, "strength", where, 1.0);
     if (op.strength < 0.0 || op.strength > 1.0) fail(where + ".strength", "must lie in [0,1]");
+    if (op.field) {
+        op.field->strength = op.strength;
+        if (!op.brush.bounds().bounded()) fail(where, std::string(fieldModeName(op.field->mode)) + " needs a bounded brush");
+        return op;
+    }
     if (o.contains("depth")) {
         op.depth = number(o, "depth", where);
         if (!(*op.depth > 0.0)) fail(where + ".depth", "must be positive");
@@ -331,10 +367,17 @@ void loadScriptTools(StrokeScript& script, const std::string& folder)
     }
 }
 
-WorldBounds opBounds(const ScriptOp& op)
+const char* opModeName(const ScriptOp& op) { return op.field ? fieldModeName(op.field->mode) : csgModeName(op.mode); }
+
+WorldBounds opBounds(const ScriptOp& op, double voxelSize)
 {
     if (!op.toolFile.empty() && !op.tool) throw ScriptError("the tool '" + op.toolFile + "' is not loaded");
-    const WorldBounds one = op.tool ? PlacedTool(op.tool, op.placement).bounds() : op.brush.bounds();
+    WorldBounds one = op.tool ? PlacedTool(op.tool, op.placement).bounds() : op.brush.bounds();
+    if (one.bounded() && op.field) {
+        const double reach = fieldBrushReach(op.brush, *op.field, voxelSize);
+        one.min -= Vec3d(reach);
+        one.max += Vec3d(reach);
+    }
     if (!one.bounded() || op.path.empty()) return one;
     WorldBounds b = one;
     const Vec3d first = op.path.front();
@@ -353,6 +396,7 @@ namespace {
 struct OpStep {
     std::shared_ptr<const SdfField> field;
     CsgOp op;
+    std::optional<FieldBrushOp> reshape; // a reshaping brush instead of the CSG op
 };
 
 /// The field an op carves with, with the tool's region `region` where it uses a tool.
@@ -377,6 +421,11 @@ std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTabl
         const auto id = table.find(s.material);
         if (!id) throw ScriptError(where + ".material: '" + s.material + "' is neither in the volume nor in the script's materials");
         op.material = *id;
+    }
+    if (s.field) {
+        FieldBrushOp reshape = *s.field;
+        if (!s.material.empty()) reshape.material = op.material;
+        return {{opField(s, kEmptyMaterial), op, reshape}};
     }
     const bool toolMaterials = s.tool && s.material.empty() && (s.mode == CsgMode::Add || s.mode == CsgMode::Paint);
     try {
@@ -409,7 +458,13 @@ std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& 
         steps.push_back(compileOp(script.ops[i], i, table));
         for (const OpStep& step : steps.back()) {
             try {
-                checkCsgLimits(volume.voxelSize(), table, *step.field, step.op);
+                if (step.reshape) {
+                    Volume probe(volume.voxelSize()); // the checks read the voxel size and the materials only
+                    probe.materials() = table;
+                    checkFieldBrush(probe, *step.field, *step.reshape);
+                } else {
+                    checkCsgLimits(volume.voxelSize(), table, *step.field, step.op);
+                }
             } catch (const std::invalid_argument& e) {
                 throw ScriptError("ops[" + std::to_string(i) + "]: " + e.what());
             }
@@ -423,8 +478,9 @@ std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& 
         ScriptOpReport report;
         report.index = i;
         report.mode = script.ops[i].mode;
+        report.modeName = opModeName(script.ops[i]);
         for (const OpStep& step : steps[i]) {
-            EditStats stats = applyCsg(volume, *step.field, step.op);
+            EditStats stats = step.reshape ? applyFieldBrush(volume, *step.field, *step.reshape) : applyCsg(volume, *step.field, step.op);
             EditStats& total = report.stats;
             total.blocksComputed += stats.blocksComputed;
             total.leavesWritten += stats.leavesWritten;

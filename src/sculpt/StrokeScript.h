@@ -3,6 +3,7 @@
 
 #include "sculpt/Brush.h"
 #include "sculpt/Csg.h"
+#include "sculpt/FieldBrushes.h"
 #include "sculpt/GridTool.h"
 #include "vdb_hermite/Materials.h"
 #include "vdb_hermite/Volume.h"
@@ -28,7 +29,8 @@ constexpr std::size_t kMaxBlendParts = 256;
 constexpr uint64_t kMaxScriptBytes = 64ull << 20;
 
 struct ScriptOp {
-    CsgMode mode = CsgMode::Add;
+    CsgMode mode = CsgMode::Add; // unused by reshaping brushes (`field`)
+    std::optional<FieldBrushOp> field; // smooth, flatten, inflate, deflate, move (its material set when run)
     Brush brush;                 // placed at "at" (or at the first path point); unused with a tool
     std::string toolFile;        // {"shape": "grid", "file": ...}: the tool's file as the script names it
     Placement placement;         // the op's at (or first path point), rotate and scale
@@ -53,12 +55,16 @@ StrokeScript loadStrokeScript(const std::string& path);
 /// naming the op when a tool cannot be loaded.
 void loadScriptTools(StrokeScript& script, const std::string& folder);
 
-/// The world bounds an op can change (a stroke's whole path included): infinite for an unbounded brush.
-WorldBounds opBounds(const ScriptOp& op);
+/// The world bounds an op can change (a stroke's whole path included), and for a reshaping brush those
+/// it reads (fieldBrushReach on a lattice of `voxelSize`): infinite for an unbounded brush.
+WorldBounds opBounds(const ScriptOp& op, double voxelSize);
+/// "add", "smooth", ...: the op's mode as scripts name it.
+const char* opModeName(const ScriptOp& op);
 
 struct ScriptOpReport {
     std::size_t index = 0;
     CsgMode mode = CsgMode::Add;
+    const char* modeName = "add"; // as scripts name it (reshaping brushes included)
     EditStats stats;
     double seconds = 0.0;
 };
