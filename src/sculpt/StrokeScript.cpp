@@ -177,10 +177,50 @@ Brush parseBrush(const json& b, const std::string& where, const Placement& place
     }
 }
 
+int parseAxis(const json& v, const std::string& where)
+{
+    if (v.is_string()) {
+        const std::string a = v.get<std::string>();
+        if (a == "x") return 0;
+        if (a == "y") return 1;
+        if (a == "z") return 2;
+    }
+    fail(where, "must be \"x\", \"y\" or \"z\"");
+}
+
+Symmetry parseSymmetry(const json& s, const std::string& where)
+{
+    if (!s.is_object()) fail(where, "must be an object with 'mirror', 'radial' and/or 'center'");
+    checkKeys(s, where, {"mirror", "radial", "center"});
+    Symmetry out;
+    if (s.contains("mirror")) {
+        const json& m = s.at("mirror");
+        if (!m.is_array()) fail(where + ".mirror", "must be an array of axes, e.g. [\"x\"]");
+        for (std::size_t i = 0; i < m.size(); ++i) {
+            const int a = parseAxis(m[i], where + ".mirror[" + std::to_string(i) + "]");
+            if (out.mirror[std::size_t(a)]) fail(where + ".mirror", "names an axis twice");
+            out.mirror[std::size_t(a)] = true;
+        }
+    }
+    if (s.contains("radial")) {
+        const json& r = s.at("radial");
+        if (!r.is_object()) fail(where + ".radial", "must be an object {\"axis\": \"y\", \"count\": N}");
+        checkKeys(r, where + ".radial", {"axis", "count"});
+        out.radialAxis = r.contains("axis") ? parseAxis(r.at("axis"), where + ".radial.axis") : 1;
+        const double count = number(r, "count", where + ".radial");
+        if (!(count >= 1.0 && count <= double(kMaxRadialCopies)) || count != std::floor(count))
+            fail(where + ".radial.count", "must be a whole number from 1 to " + std::to_string(kMaxRadialCopies));
+        out.radialCount = int(count);
+    }
+    out.center = vec3Or(s, "center", where, Vec3d(0.0));
+    return out;
+}
+
 ScriptOp parseOp(const json& o, const std::string& where)
 {
-    checkKeys(o, where, {"mode", "brush", "at", "path", "rotate", "scale", "material", "strength", "depth", "falloff", "distance", "offset"});
+    checkKeys(o, where, {"mode", "brush", "at", "path", "rotate", "scale", "material", "strength", "depth", "falloff", "distance", "offset", "symmetry"});
     ScriptOp op;
+    if (o.contains("symmetry")) op.symmetry = parseSymmetry(o.at("symmetry"), where + ".symmetry");
     const std::string mode = text(o, "mode", where);
     if (const std::optional<FieldMode> field = parseFieldMode(mode)) {
         op.field = FieldBrushOp{};
@@ -378,15 +418,24 @@ WorldBounds opBounds(const ScriptOp& op, double voxelSize)
         one.min -= Vec3d(reach);
         one.max += Vec3d(reach);
     }
-    if (!one.bounded() || op.path.empty()) return one;
+    if (!one.bounded()) return one;
     WorldBounds b = one;
-    const Vec3d first = op.path.front();
+    const Vec3d first = op.path.empty() ? Vec3d(0.0) : op.path.front();
     for (const Vec3d& p : op.path)
         for (int i = 0; i < 3; ++i) {
             b.min[i] = std::min(b.min[i], one.min[i] + p[i] - first[i]);
             b.max[i] = std::max(b.max[i], one.max[i] + p[i] - first[i]);
         }
-    return b;
+    if (!op.symmetry.any()) return b;
+    WorldBounds all = b;
+    for (const Mat3d& copy : symmetryCopies(op.symmetry)) {
+        const WorldBounds c = transformBounds(b, copy, op.symmetry.center);
+        for (int i = 0; i < 3; ++i) {
+            all.min[i] = std::min(all.min[i], c.min[i]);
+            all.max[i] = std::max(all.max[i], c.max[i]);
+        }
+    }
+    return all;
 }
 
 namespace {
@@ -409,6 +458,23 @@ std::shared_ptr<const SdfField> opField(const ScriptOp& s, MaterialId region)
     return placed;
 }
 
+/// The steps of an op, then each again for every other copy of its symmetry (fields seen through the
+/// copy, a move's offset turned with it).
+std::vector<OpStep> withSymmetry(std::vector<OpStep> steps, const Symmetry& symmetry)
+{
+    if (!symmetry.any()) return steps;
+    const std::vector<Mat3d> copies = symmetryCopies(symmetry);
+    const std::size_t plain = steps.size();
+    for (std::size_t c = 1; c < copies.size(); ++c)
+        for (std::size_t i = 0; i < plain; ++i) {
+            OpStep copy = steps[i];
+            copy.field = std::make_shared<TransformedField>(steps[i].field, copies[c], symmetry.center);
+            if (copy.reshape) copy.reshape->offset = copies[c] * copy.reshape->offset;
+            steps.push_back(std::move(copy));
+        }
+    return steps;
+}
+
 std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTable& table)
 {
     const std::string where = "ops[" + std::to_string(index) + "]";
@@ -422,14 +488,16 @@ std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTabl
         if (!id) throw ScriptError(where + ".material: '" + s.material + "' is neither in the volume nor in the script's materials");
         op.material = *id;
     }
+    std::vector<OpStep> plain;
     if (s.field) {
         FieldBrushOp reshape = *s.field;
         if (!s.material.empty()) reshape.material = op.material;
-        return {{opField(s, kEmptyMaterial), op, reshape}};
+        plain = {{opField(s, kEmptyMaterial), op, reshape}};
     }
     const bool toolMaterials = s.tool && s.material.empty() && (s.mode == CsgMode::Add || s.mode == CsgMode::Paint);
     try {
-        if (!toolMaterials) return {{opField(s, kEmptyMaterial), op}};
+        if (!s.field && !toolMaterials) plain = {{opField(s, kEmptyMaterial), op, std::nullopt}};
+        if (!plain.empty()) return withSymmetry(std::move(plain), s.symmetry);
         // Each material of the tool over its own region: regions share their boundaries, so each
         // material boundary of the tool becomes one in the volume, with its crossings and normals.
         std::vector<OpStep> steps;
@@ -437,9 +505,9 @@ std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTabl
             const Material& m = s.tool->materials().at(region);
             const auto existing = table.find(m.name);
             op.material = existing ? *existing : table.define(m);
-            steps.push_back({opField(s, region), op});
+            steps.push_back({opField(s, region), op, std::nullopt});
         }
-        return steps;
+        return withSymmetry(std::move(steps), s.symmetry);
     } catch (const std::invalid_argument& e) {
         throw ScriptError(where + ": " + e.what());
     }

@@ -4,6 +4,7 @@
 #include "sculpt/Brush.h"
 #include "sculpt/Csg.h"
 #include "sculpt/FieldBrushes.h"
+#include "sculpt/Symmetry.h"
 #include "sculpt/GridTool.h"
 #include "vdb_hermite/Materials.h"
 #include "vdb_hermite/Volume.h"
@@ -39,6 +40,7 @@ struct ScriptOp {
     std::string material;        // empty: add uses the volume's first material
     double strength = 1.0;
     std::optional<double> depth; // erode depth override
+    Symmetry symmetry;           // the op runs once per copy (symmetryCopies), the plain one first
 };
 
 struct StrokeScript {
