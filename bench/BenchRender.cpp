@@ -91,7 +91,7 @@ struct TerrainFigures {
     // Complete views at 1080p, 1 px of error, over several stations.
     std::vector<double> viewTriangles;
     uint64_t maxChunks = 0, maxGpuBytes = 0;
-    // At the first station: resident bytes (bricks and the shown bricks' meshes) per voxel^2 of resident
+    // At the last station: resident bytes (bricks and the shown bricks' meshes) per voxel^2 of resident
     // surface, and the meshes' share of them.
     double residentPerSurfaceVoxel = 0.0, meshShare = 0.0;
     double gpuMs1080 = 0.0; // one complete view drawn at full size
@@ -159,9 +159,12 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
         f.viewTriangles.push_back(double(s.triangles));
         f.maxChunks = std::max(f.maxChunks, s.chunksDrawn);
         f.maxGpuBytes = std::max(f.maxGpuBytes, s.gpuMemoryBytes);
-        if (i == 0) {
+        if (i == stations - 1) {
+            // At the last station: the scene has learnt by then what meshes take beside their bricks.
             f.residentPerSurfaceVoxel = double(scene.residentBytes()) / double(std::max<uint64_t>(1, scene.residentActiveVoxels()));
             f.meshShare = double(scene.residentMeshBytes()) / double(std::max<uint64_t>(1, scene.residentBytes()));
+        }
+        if (i == 0) {
             render::OffscreenTarget full(context, kWidth, kHeight);
             f.gpuMs1080 = renderer.render({{cameraOf(v, far), &full, {}}}).gpuMs;
         }
