@@ -501,6 +501,16 @@ CoordBBox solidBounds(const HermiteTree& tree)
 
 } // namespace
 
+void EditStats::append(const EditStats& more)
+{
+    blocksComputed += more.blocksComputed;
+    leavesWritten += more.leavesWritten;
+    tilesWritten += more.tilesWritten;
+    crossingsComputed += more.crossingsComputed;
+    dirtyBlocks.insert(dirtyBlocks.end(), more.dirtyBlocks.begin(), more.dirtyBlocks.end());
+    blockChanges.insert(blockChanges.end(), more.blockChanges.begin(), more.blockChanges.end());
+}
+
 const char* csgModeName(CsgMode mode)
 {
     switch (mode) {

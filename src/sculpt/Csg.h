@@ -47,6 +47,9 @@ struct EditStats {
     /// The same blocks in the same order, each with the bounds of the voxels that changed in it, so
     /// that re-meshing can leave alone the leaves that read only unchanged parts of a block.
     std::vector<BlockChange> blockChanges;
+
+    /// Adds another edit's counts and blocks (an op made of several kernel runs).
+    void append(const EditStats& more);
 };
 
 /// What one edit may ask for, checked before any work starts (checkCsgLimits):

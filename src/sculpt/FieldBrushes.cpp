@@ -422,13 +422,7 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     // new field leaves. Outside the brush nothing changes.
     const double lipschitz = std::max({1.0, next.lipschitz(), old.lipschitz()});
     EditStats stats = applyCsg(volume, ClippedGridField(next, 1.0, brush, &old, lipschitz), CsgOp{CsgMode::Add, material, 1.0, {}});
-    const EditStats removed = applyCsg(volume, ClippedGridField(next, -1.0, brush, nullptr, lipschitz), CsgOp{CsgMode::Remove, material, 1.0, {}});
-    stats.blocksComputed += removed.blocksComputed;
-    stats.leavesWritten += removed.leavesWritten;
-    stats.tilesWritten += removed.tilesWritten;
-    stats.crossingsComputed += removed.crossingsComputed;
-    stats.dirtyBlocks.insert(stats.dirtyBlocks.end(), removed.dirtyBlocks.begin(), removed.dirtyBlocks.end());
-    stats.blockChanges.insert(stats.blockChanges.end(), removed.blockChanges.begin(), removed.blockChanges.end());
+    stats.append(applyCsg(volume, ClippedGridField(next, -1.0, brush, nullptr, lipschitz), CsgOp{CsgMode::Remove, material, 1.0, {}}));
     return stats;
 }
 

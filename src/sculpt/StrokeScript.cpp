@@ -548,14 +548,7 @@ std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& 
         report.mode = script.ops[i].mode;
         report.modeName = opModeName(script.ops[i]);
         for (const OpStep& step : steps[i]) {
-            EditStats stats = step.reshape ? applyFieldBrush(volume, *step.field, *step.reshape) : applyCsg(volume, *step.field, step.op);
-            EditStats& total = report.stats;
-            total.blocksComputed += stats.blocksComputed;
-            total.leavesWritten += stats.leavesWritten;
-            total.tilesWritten += stats.tilesWritten;
-            total.crossingsComputed += stats.crossingsComputed;
-            total.dirtyBlocks.insert(total.dirtyBlocks.end(), stats.dirtyBlocks.begin(), stats.dirtyBlocks.end());
-            total.blockChanges.insert(total.blockChanges.end(), stats.blockChanges.begin(), stats.blockChanges.end());
+            report.stats.append(step.reshape ? applyFieldBrush(volume, *step.field, *step.reshape) : applyCsg(volume, *step.field, step.op));
         }
         report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (onOp) onOp(report);
