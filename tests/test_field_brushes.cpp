@@ -253,3 +253,26 @@ TEST_CASE("field brushes in scripts: each mode runs as an op, equal to the brush
     CHECK_THROWS_AS(runStrokeScript(v, parseStrokeScript(R"({"ops": [{"mode": "smooth", "brush": {"shape": "sphere", "radius": 500}}]})")), ScriptError);
     CHECK(changedBlocks(v, sphereVolume(8.0)).empty());
 }
+
+TEST_CASE("field brushes: bad ops are refused before anything changes", "[field]")
+{
+    Volume v = sphereVolume(10.0);
+    FieldBrushOp op = fieldOp(FieldMode::Inflate);
+    op.distance = 2.0;
+    op.strength = 1.5;
+    CHECK_THROWS_AS(applyFieldBrush(v, sphereBrush(5.0, Vec3d(0.0, 10.0, 0.0)), op), std::invalid_argument);
+    op.strength = 1.0;
+    op.material = MaterialId(7); // not in the table
+    CHECK_THROWS_AS(applyFieldBrush(v, sphereBrush(5.0, Vec3d(0.0, 10.0, 0.0)), op), std::invalid_argument);
+    op.material.reset();
+    op.distance = std::nan("");
+    CHECK_THROWS_AS(applyFieldBrush(v, sphereBrush(5.0, Vec3d(0.0, 10.0, 0.0)), op), std::invalid_argument);
+    op.distance = 2.0;
+    CHECK_THROWS_AS(applyFieldBrush(v, sphereBrush(150.0, Vec3d(0.0)), op), std::invalid_argument); // wider than 200 voxels
+    CHECK_THROWS_AS(applyFieldBrush(v, Brush(halfSpace(Vec3d(0.0, 1.0, 0.0)), at(Vec3d(0.0))), op), std::invalid_argument);
+    CHECK(changedBlocks(v, sphereVolume(10.0)).empty());
+    // Empty space: nothing to reshape, nothing changes.
+    Volume empty(1.0);
+    CHECK(applyFieldBrush(empty, sphereBrush(5.0, Vec3d(0.0)), op).blocksComputed == 0);
+    CHECK(empty.stats().activeVoxels == 0);
+}

@@ -293,16 +293,13 @@ void checkFieldBrush(const Volume& volume, const SdfField& brush, const FieldBru
                                         std::to_string(kMaxFieldBrushVoxels) + " voxels of a side; this brush, with its reach, spans " +
                                         std::to_string(int64_t(std::min(voxels, 1e15))));
     }
-    if (op.material) (void)volume.materials().at(*op.material); // throws std::out_of_range
+    if (op.material && (*op.material == kEmptyMaterial || *op.material > volume.materials().size()))
+        throw std::invalid_argument("unknown material id " + std::to_string(*op.material));
 }
 
 EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrushOp& op)
 {
-    try {
-        checkFieldBrush(volume, brush, op);
-    } catch (const std::out_of_range&) {
-        throw std::invalid_argument("unknown material id " + std::to_string(*op.material));
-    }
+    checkFieldBrush(volume, brush, op);
     const double h = volume.voxelSize();
     const WorldBounds bounds = brush.bounds();
     const double reach = fieldBrushReach(brush, op, h);
