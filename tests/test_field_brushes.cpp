@@ -270,6 +270,7 @@ TEST_CASE("field brushes: bad ops are refused before anything changes", "[field]
     op.distance = 2.0;
     CHECK_THROWS_AS(applyFieldBrush(v, sphereBrush(150.0, Vec3d(0.0)), op), std::invalid_argument); // wider than 200 voxels
     CHECK_THROWS_AS(applyFieldBrush(v, Brush(halfSpace(Vec3d(0.0, 1.0, 0.0)), at(Vec3d(0.0))), op), std::invalid_argument);
+    CHECK_THROWS_AS(applyFieldBrush(v, sphereBrush(5.0, Vec3d(3e5, 0.0, 0.0)), op), std::invalid_argument); // beyond the lattice's reach
     CHECK(changedBlocks(v, sphereVolume(10.0)).empty());
     // Empty space: nothing to reshape, nothing changes.
     Volume empty(1.0);

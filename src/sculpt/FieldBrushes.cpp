@@ -287,6 +287,8 @@ void checkFieldBrush(const Volume& volume, const SdfField& brush, const FieldBru
     if (!b.bounded()) throw std::invalid_argument(std::string(fieldModeName(op.mode)) + " needs a bounded brush");
     const double h = volume.voxelSize(), reach = fieldBrushReach(brush, op, h);
     for (int a = 0; a < 3; ++a) {
+        if (!(std::fabs(b.min[a] - reach) <= kMaxReachVoxels * h && std::fabs(b.max[a] + reach) <= kMaxReachVoxels * h))
+            throw std::invalid_argument("the brush reaches beyond " + std::to_string(int64_t(kMaxReachVoxels)) + " voxels from the origin");
         const double voxels = (b.max[a] - b.min[a] + 2.0 * reach) / h;
         if (!(voxels <= double(kMaxFieldBrushVoxels)))
             throw std::invalid_argument(std::string(fieldModeName(op.mode)) + " rebuilds the surface within " +
