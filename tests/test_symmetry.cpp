@@ -2,6 +2,7 @@
 // bit where the brush's gradient is analytic, normals within one quantization step for boxes), for
 // every kind of op (add, remove, paint, reshaping brushes); malformed symmetry is refused naming the place.
 #include "sculpt/StrokeScript.h"
+#include "selftest/ExactScene.h"
 #include "support/HermiteProbe.h"
 #include "support/Sculpt.h"
 #include "vdb_hermite/Quantize.h"
@@ -135,4 +136,32 @@ TEST_CASE("symmetry: malformed symmetry is refused naming the place", "[symmetry
     refused({{"spin", 3}}, "ops[0].symmetry");
     refused(json::array(), "ops[0].symmetry");
     refused({{"center", {1, 2}}}, "ops[0].symmetry.center");
+}
+
+TEST_CASE("symmetry: the exact evaluation of the selftest follows the copies; it refuses reshaping brushes", "[symmetry][script]")
+{
+    const std::string text =
+        R"({"ops": [{"mode": "add", "brush": {"shape": "box", "size": [3, 2, 4]}, "at": [9.5, 1, 4], "rotate": [0, 30, 0],
+                     "symmetry": {"mirror": ["x"], "radial": {"axis": "y", "count": 3}, "center": [1, 0, 0]}}]})";
+    const StrokeScript script = parseStrokeScript(text);
+    Volume v(1.0);
+    runStrokeScript(v, script);
+    const ExactScene exact(script, v.materials(), 1.0);
+    int solid = 0, checked = 0;
+    for (int32_t x = -16; x <= 16; ++x)
+        for (int32_t y = -4; y <= 4; ++y)
+            for (int32_t z = -16; z <= 16; ++z) {
+                const Vec3d p(x, y, z);
+                if (exact.nearSurface(p, 0.01)) continue;
+                INFO(x << "," << y << "," << z);
+                CHECK(v.materialAt({x, y, z}) == exact.materialAt(p));
+                solid += exact.materialAt(p) != kEmptyMaterial;
+                ++checked;
+            }
+    CHECK(solid > 6 * 40); // six copies of the box, each about 3 x 2 x 4 x 8 voxels, some overlapping
+    CHECK(checked > 9000);
+    CHECK_THROWS_AS(ExactScene(parseStrokeScript(
+                                   R"({"ops": [{"mode": "smooth", "brush": {"shape": "sphere", "radius": 3}}]})"),
+                               v.materials(), 1.0),
+                    std::invalid_argument);
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace vdbclay {
 
@@ -17,6 +18,8 @@ ExactScene::ExactScene(const StrokeScript& script, const MaterialTable& material
     : onSurface_(1e-9 * voxelSize) // the CSG kernel's band (Csg.cpp, kOnSurfaceVoxels)
 {
     for (const ScriptOp& s : script.ops) {
+        // Reshaping brushes have no closed form to compare with.
+        if (s.field) throw std::invalid_argument(std::string("exact evaluation has no closed form for ") + opModeName(s));
         Op op;
         op.mode = s.mode;
         op.field = s.path.size() > 1 ? std::shared_ptr<const SdfField>(std::make_shared<SweptBrush>(s.brush, s.path))
@@ -30,7 +33,15 @@ ExactScene::ExactScene(const StrokeScript& script, const MaterialTable& material
                 op.erodeOffset[id] = bite > 0.0 ? (1.0 - bite) * depth : std::numeric_limits<double>::infinity();
             }
         }
-        ops_.push_back(std::move(op));
+        ops_.push_back(op);
+        // Symmetry: the same op through each further copy, in the order runStrokeScript applies them.
+        if (!s.symmetry.any()) continue;
+        const std::vector<Mat3d> copies = symmetryCopies(s.symmetry);
+        for (std::size_t c = 1; c < copies.size(); ++c) {
+            Op copy = op;
+            copy.field = std::make_shared<TransformedField>(op.field, copies[c], s.symmetry.center);
+            ops_.push_back(std::move(copy));
+        }
     }
 }
 
