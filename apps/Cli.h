@@ -244,6 +244,24 @@ struct DiffOptions {
 CLI::App* addDiffCommand(CLI::App& parent, DiffOptions& options);
 int runDiff(const DiffOptions& options);
 
+struct EditOptions {
+    std::string scene;
+    double memoryBudgetMB = 1024.0;
+    std::string record;        // write every command with its frame and time
+    std::string replay;        // apply a recorded session
+    bool headless = false;     // no window: replay, save, screenshot
+    std::optional<uint64_t> frames; // replay this many frames (default: all)
+    std::string screenshot;    // PNG of the view after the replay
+    std::string size;          // the screenshot's WxH (default: the record's viewport)
+    std::string output;        // save the result here (.vdb or .vdbclay)
+    std::string exportScript;  // the ops applied, as a stroke script
+    bool discardRecovery = false;
+    double autosaveSeconds = 5.0;
+    bool json = false;
+};
+CLI::App* addEditCommand(CLI::App& parent, EditOptions& options);
+int runEdit(const EditOptions& options);
+
 struct BenchCommandOptions {
     std::string which;
     bool json = false;

@@ -20,7 +20,7 @@ namespace {
 using namespace vdbclay::cli;
 
 constexpr const char* kCommandList =
-    "new, sculpt, mesh, render, info, import, export, export-levelset, lod, synth, diff, tool, demo, bench or selftest";
+    "new, sculpt, edit, mesh, render, info, import, export, export-levelset, lod, synth, diff, tool, demo, bench or selftest";
 
 int run(int argc, char** argv)
 {
@@ -44,11 +44,13 @@ int run(int argc, char** argv)
     DiffOptions diffOptions;
     ToolMakeOptions toolOptions;
     RenderOptions renderOptions;
+    EditOptions editOptions;
 
     CLI::App* newCmd = addNewCommand(app, newOptions);
     CLI::App* sculptCmd = addSculptCommand(app, sculptOptions);
     CLI::App* meshCmd = addMeshCommand(app, meshOptions);
     CLI::App* renderCmd = addRenderCommand(app, renderOptions);
+    CLI::App* editCmd = addEditCommand(app, editOptions);
     CLI::App* infoCmd = addInfoCommand(app, infoOptions);
     CLI::App* demoCmd = addDemoCommand(app, demoOptions);
     CLI::App* benchCmd = addBenchCommand(app, benchOptions);
@@ -60,7 +62,7 @@ int run(int argc, char** argv)
     CLI::App* synthCmd = addSynthCommand(app, synthOptions);
     CLI::App* diffCmd = addDiffCommand(app, diffOptions);
     const ToolCommands toolCmds = addToolCommand(app, toolOptions);
-    for (CLI::App* cmd : {newCmd, sculptCmd, meshCmd, renderCmd, demoCmd, benchCmd, importCmd, exportCmd, lodCmds.build, lodCmds.inspect, synthCmd, toolCmds.make}) addThreadsOption(*cmd, threads);
+    for (CLI::App* cmd : {newCmd, sculptCmd, editCmd, meshCmd, renderCmd, demoCmd, benchCmd, importCmd, exportCmd, lodCmds.build, lodCmds.inspect, synthCmd, toolCmds.make}) addThreadsOption(*cmd, threads);
     // Set after the subcommands exist: CLI11 copies the parent's footer into subcommands created later.
     app.footer("Run 'vdbclay COMMAND --help' for the options of one command.\n"
                "Exit codes: 0 success, 1 the command failed, 2 wrong command line.");
@@ -108,6 +110,7 @@ int run(int argc, char** argv)
     if (*sculptCmd) return runSculpt(sculptOptions);
     if (*meshCmd) return runMesh(meshOptions);
     if (*renderCmd) return runRender(renderOptions);
+    if (*editCmd) return runEdit(editOptions);
     if (*infoCmd) return runInfo(infoOptions);
     if (*demoCmd) return runDemo(demoOptions);
     if (*benchCmd) return runBenchCommand(benchOptions);

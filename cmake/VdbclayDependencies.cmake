@@ -21,3 +21,6 @@ pkg_check_modules(PLplot REQUIRED IMPORTED_TARGET plplot)
 find_package(Vulkan REQUIRED COMPONENTS glslc)
 find_package(glm REQUIRED)
 pkg_check_modules(STB REQUIRED IMPORTED_TARGET stb)
+# The desktop editor: a GLFW window, Dear ImGui menus (static libimgui.a with its GLFW and Vulkan backends).
+find_package(glfw3 3.3 REQUIRED)
+pkg_check_modules(IMGUI REQUIRED IMPORTED_TARGET imgui)

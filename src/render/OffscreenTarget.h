@@ -4,6 +4,7 @@
 #pragma once
 
 #include "render/GpuMemory.h"
+#include "render/RenderTarget.h"
 #include "render/VulkanContext.h"
 
 #include <cstdint>
@@ -25,7 +26,7 @@ struct Image {
 /// and depth. Cleared on load.
 VkRenderPass createRenderPass(VkDevice device, VkFormat colourFormat, VkImageLayout finalLayout);
 
-class OffscreenTarget {
+class OffscreenTarget : public RenderTarget {
 public:
     /// Throws std::invalid_argument for sizes outside 1 .. the device's image limit.
     OffscreenTarget(const VulkanContext& context, int width, int height);
@@ -33,15 +34,16 @@ public:
     OffscreenTarget(const OffscreenTarget&) = delete;
     OffscreenTarget& operator=(const OffscreenTarget&) = delete;
 
-    int width() const { return width_; }
-    int height() const { return height_; }
-    VkRenderPass renderPass() const { return renderPass_; }
-    VkFramebuffer framebuffer() const { return framebuffer_; }
+    int width() const override { return width_; }
+    int height() const override { return height_; }
+    VkRenderPass renderPass() const override { return renderPass_; }
+    VkFramebuffer framebuffer() const override { return framebuffer_; }
     VkImage colourImage() const { return colour_; }
     VkImage depthImage() const { return depth_; }
 
     /// Records the copy of the colour and depth images into host memory (after the render pass).
     void recordReadback(VkCommandBuffer cmd) const;
+    void recordAfterPass(VkCommandBuffer cmd) const override { recordReadback(cmd); }
     /// The pixels copied by the last readback that completed.
     Image colour() const;
     /// Depth per pixel (0 near .. 1 far, 1 where nothing was drawn), rows top to bottom.

@@ -143,7 +143,7 @@ struct Renderer::Impl {
         : context(c), options(o), heap(c, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)
     {
         VkDevice device = c.device();
-        compatiblePass = createRenderPass(device, kColourFormat, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+        compatiblePass = createRenderPass(device, o.colourFormat, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
         pipelines = std::make_unique<Pipelines>(c, compatiblePass);
         staging = std::make_unique<HostBuffer>(c, std::max<uint64_t>(o.stagingBytes, 1 << 20), VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
         const VkDeviceSize align = std::max<VkDeviceSize>(c.properties().limits.minUniformBufferOffsetAlignment, 16);
@@ -369,12 +369,12 @@ struct Renderer::Impl {
 
         std::set<int> levels;
         // Views that share a target are drawn in one render pass, which clears the target once.
-        std::vector<OffscreenTarget*> targets;
+        std::vector<RenderTarget*> targets;
         for (const auto& v : views) {
             if (!v.target) throw std::invalid_argument("a view has no render target");
             if (std::find(targets.begin(), targets.end(), v.target) == targets.end()) targets.push_back(v.target);
         }
-        for (OffscreenTarget* target : targets) {
+        for (RenderTarget* target : targets) {
             VkClearValue clears[2]{};
             clears[0].color = {{shading.background[0], shading.background[1], shading.background[2], 1.0f}};
             clears[1].depthStencil = {1.0f, 0};
@@ -432,8 +432,9 @@ struct Renderer::Impl {
                     vkCmdDraw(cmd, 3, 1, 0, 0);
                 }
             }
+            target->recordOverlay(cmd);
             vkCmdEndRenderPass(cmd);
-            target->recordReadback(cmd);
+            target->recordAfterPass(cmd);
         }
         if (queries) vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queries, 1);
         stats.cpuMs = msSince(start);

@@ -8,6 +8,8 @@
 #include "render/RenderTypes.h"
 #include "vdb_hermite/Materials.h"
 
+#include <vulkan/vulkan.h>
+
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -17,18 +19,19 @@
 namespace vdbclay::render {
 
 class VulkanContext;
-class OffscreenTarget;
+class RenderTarget;
 
 using ChunkId = uint64_t;
 
 struct RendererOptions {
     uint64_t gpuBudgetBytes = 1ull << 30; // mesh buffers; chunks not drawn lately are freed beyond it
     uint64_t stagingBytes = 16ull << 20;  // the staging ring: uploads beyond it in one frame flush early
+    VkFormat colourFormat = VK_FORMAT_R8G8B8A8_UNORM; // of every target drawn into (a swapchain's may differ)
 };
 
 struct RenderView {
     Camera camera;
-    OffscreenTarget* target = nullptr;
+    RenderTarget* target = nullptr; // an OffscreenTarget, a window's swapchain image, a headset's eye
     std::array<int, 4> viewport{0, 0, 0, 0}; // x, y, width, height in pixels; zero size: the whole target
 };
 

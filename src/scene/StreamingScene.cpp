@@ -5,6 +5,7 @@
 #include "mesher/VertexOcclusion.h"
 #include "scene/StoreLod.h"
 #include "scene/StoreSculpt.h"
+#include "vdb_hermite/RegionCodec.h"
 #include "vdb_hermite/VolumeRegions.h"
 
 #include <algorithm>
@@ -298,6 +299,105 @@ struct StreamingScene::Impl {
         }
     }
 
+    using VoxelRange = std::optional<std::pair<IndexCoord, IndexCoord>>; // level-0 voxels; nullopt: all
+
+    /// Loads the level-0 bricks an edit touches that are not resident: the shown ones stay if the budget
+    /// allows, else only the edit's are wanted and the view's make room (the next frame asks for them
+    /// again). Returns the bricks loaded. Lock held (released while reading).
+    uint64_t pageInForEdit(const std::vector<IndexCoord>& bricks, std::unique_lock<std::mutex>& lock)
+    {
+        wanted.clear();
+        wanted.insert(shown.begin(), shown.end());
+        for (const IndexCoord& b : bricks) wanted.insert({0, b});
+        const auto makeRoomForEdit = [&](uint64_t bytes) {
+            if (makeRoom(bytes, lock)) return true;
+            wanted.clear();
+            for (const IndexCoord& b : bricks) wanted.insert({0, b});
+            return makeRoom(bytes, lock);
+        };
+        uint64_t pagedIn = 0;
+        for (const IndexCoord& b : bricks) {
+            const BrickKey key{0, b};
+            if (resident.count(key)) continue;
+            const std::size_t materialCount = materials.size(); // as a loader does: an autosave may run meanwhile
+            lock.unlock();
+            uint64_t payloadBytes = 0;
+            DecodedRegion brick = scene.readBrick(0, b, scene.bricks(), materialCount, &payloadBytes);
+            lock.lock();
+            if (resident.count(key)) continue; // a loader got there first
+            const uint64_t bytes = brick.memoryBytes();
+            if (!makeRoomForEdit(bytes)) throw std::runtime_error("the edit reaches more bricks than the memory budget holds");
+            install(key, std::move(brick), bytes, payloadBytes);
+            ++pagedIn;
+        }
+        return pagedIn;
+    }
+
+    /// A volume holding the resident level-0 bricks listed, to edit apart from the loaders' trees. Lock held.
+    Volume workCopy(const std::vector<IndexCoord>& bricks) const
+    {
+        Volume work(scene.voxelSize());
+        work.materials() = materials;
+        for (const IndexCoord& b : bricks) pasteRegion(work, levelVolumes[0], brickBox(b));
+        return work;
+    }
+
+    /// Appends the leaf boxes of brick `b` where `work` differs from the resident data, before and after;
+    /// only boxes some range reaches are compared. Lock held.
+    void recordLeafChanges(const IndexCoord& b, const Volume& work, const std::vector<VoxelRange>& reached,
+                           std::vector<LeafChange>& out) const
+    {
+        const Volume& fine = levelVolumes[0];
+        const LeafAlignedBox box = brickBox(b);
+        if (!compareRegion(fine, work, box).any()) return;
+        for (int32_t z = 0; z < box.edge; z += kLeafDim)
+            for (int32_t y = 0; y < box.edge; y += kLeafDim)
+                for (int32_t x = 0; x < box.edge; x += kLeafDim) {
+                    const LeafAlignedBox leaf{{box.min[0] + x, box.min[1] + y, box.min[2] + z}, kLeafDim};
+                    const bool inReach = std::any_of(reached.begin(), reached.end(), [&](const VoxelRange& r) {
+                        if (!r) return true;
+                        for (std::size_t a = 0; a < 3; ++a)
+                            if (r->second[a] < leaf.min[a] || r->first[a] > leaf.min[a] + kLeafDim - 1) return false;
+                        return true;
+                    });
+                    if (!inReach || !compareRegion(fine, work, leaf).any()) continue;
+                    out.push_back({leaf.min, encodeRegion(fine, leaf), encodeRegion(work, leaf)});
+                }
+    }
+
+    /// Takes brick `b`'s content from `work` when it changed: dirty, a new version, and the sides whose
+    /// neighbours read what changed (those `reached` came within reach of) bumped. Lock held.
+    bool commitBrick(const IndexCoord& b, const Volume& work, const std::vector<VoxelRange>& reached)
+    {
+        Volume& fine = levelVolumes[0];
+        Resident& r = resident.at({0, b});
+        const LeafAlignedBox box = brickBox(b);
+        if (!compareRegion(fine, work, box).any()) return false;
+        pasteRegion(fine, work, box);
+        const uint64_t bytes = regionMemoryBytes(fine, box);
+        residentBytes = residentBytes - r.bytes + bytes;
+        r.bytes = bytes;
+        r.dirty = true;
+        r.version = ++versions;
+        for (int c = 0; c < kReachClasses; ++c) {
+            std::array<bool, 3> nearLow{}, nearHigh{};
+            for (const VoxelRange& range : reached)
+                for (int a = 0; a < 3; ++a) {
+                    const int64_t lo = box.min[std::size_t(a)], hi = lo + box.edge;
+                    nearLow[std::size_t(a)] = nearLow[std::size_t(a)] || !range || range->first[std::size_t(a)] < lo + reachOfClass(c);
+                    nearHigh[std::size_t(a)] = nearHigh[std::size_t(a)] || !range || range->second[std::size_t(a)] >= hi - reachOfClass(c);
+                }
+            for (int d = 0; d < 27; ++d) {
+                const std::array<int, 3> dir{d % 3 - 1, (d / 3) % 3 - 1, d / 9 - 1};
+                bool reads = true;
+                for (int a = 0; a < 3; ++a)
+                    reads = reads && (dir[std::size_t(a)] == 0 || (dir[std::size_t(a)] < 0 ? nearLow : nearHigh)[std::size_t(a)]);
+                if (reads) r.sides[std::size_t(c)][std::size_t(d)] = r.version;
+            }
+        }
+        return true;
+    }
+
     uint64_t autosaveLocked()
     {
         std::vector<std::pair<BrickKey, Resident*>> dirty;
@@ -521,7 +621,7 @@ void StreamingScene::waitForLoads()
     s.idle.wait(lock, [&] { return s.queue.empty() && s.inFlight.empty(); });
 }
 
-StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script)
+StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, std::vector<LeafChange>* changes)
 {
     Impl& s = *impl_;
     if (s.options.access == StoreAccess::ReadOnly) throw std::logic_error("sculpting a scene opened read-only");
@@ -532,71 +632,84 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script)
     });
     EditReport report;
     std::unique_lock<std::mutex> lock(s.mutex);
-    // Page in what the edit touches: the bricks shown stay if the budget allows, else only the edit's
-    // bricks are wanted and the view's make room (the next frame asks for them again).
-    s.wanted.clear();
-    s.wanted.insert(s.shown.begin(), s.shown.end());
-    for (const IndexCoord& b : bricks) s.wanted.insert({0, b});
-    const auto makeRoomForEdit = [&](uint64_t bytes) {
-        if (s.makeRoom(bytes, lock)) return true;
-        s.wanted.clear();
-        for (const IndexCoord& b : bricks) s.wanted.insert({0, b});
-        return s.makeRoom(bytes, lock);
-    };
-    for (const IndexCoord& b : bricks) {
-        const BrickKey key{0, b};
-        if (s.resident.count(key)) continue;
-        const std::size_t materialCount = s.materials.size(); // as a loader does: an autosave may run meanwhile
-        lock.unlock();
-        uint64_t payloadBytes = 0;
-        DecodedRegion brick = s.scene.readBrick(0, b, s.scene.bricks(), materialCount, &payloadBytes);
-        lock.lock();
-        if (s.resident.count(key)) continue; // a loader got there first
-        const uint64_t bytes = brick.memoryBytes();
-        if (!makeRoomForEdit(bytes)) throw std::runtime_error("the edit reaches more bricks than the memory budget holds");
-        s.install(key, std::move(brick), bytes, payloadBytes);
-        ++report.bricksPagedIn;
-    }
+    report.bricksPagedIn = s.pageInForEdit(bricks, lock);
     report.pageInSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    Volume work(s.scene.voxelSize());
-    work.materials() = s.materials;
-    Volume& fine = s.levelVolumes[0];
-    for (const IndexCoord& b : bricks) pasteRegion(work, fine, brickBox(b));
+    Volume work = s.workCopy(bricks);
     report.ops = runStrokeScript(work, script);
-    std::vector<std::optional<std::pair<IndexCoord, IndexCoord>>> reached; // per op; nullopt: everywhere
+    std::vector<Impl::VoxelRange> reached;
     for (const ScriptOp& op : script.ops) reached.push_back(voxelsReachedBy(op, s.scene.voxelSize()));
     for (const IndexCoord& b : bricks) {
-        Impl::Resident& r = s.resident.at({0, b});
-        const LeafAlignedBox box = brickBox(b);
-        if (!compareRegion(fine, work, box).any()) continue;
-        pasteRegion(fine, work, box);
-        const uint64_t bytes = regionMemoryBytes(fine, box);
-        s.residentBytes = s.residentBytes - r.bytes + bytes;
-        r.bytes = bytes;
-        r.dirty = true;
-        r.version = ++s.versions;
-        // The sides whose neighbours read what changed: those the ops came within reach of.
-        for (int c = 0; c < kReachClasses; ++c) {
-            std::array<bool, 3> nearLow{}, nearHigh{};
-            for (const auto& range : reached)
-                for (int a = 0; a < 3; ++a) {
-                    const int64_t lo = box.min[std::size_t(a)], hi = lo + box.edge;
-                    nearLow[std::size_t(a)] = nearLow[std::size_t(a)] || !range || range->first[std::size_t(a)] < lo + reachOfClass(c);
-                    nearHigh[std::size_t(a)] = nearHigh[std::size_t(a)] || !range || range->second[std::size_t(a)] >= hi - reachOfClass(c);
-                }
-            for (int d = 0; d < 27; ++d) {
-                const std::array<int, 3> dir{d % 3 - 1, (d / 3) % 3 - 1, d / 9 - 1};
-                bool reads = true;
-                for (int a = 0; a < 3; ++a)
-                    reads = reads && (dir[std::size_t(a)] == 0 || (dir[std::size_t(a)] < 0 ? nearLow : nearHigh)[std::size_t(a)]);
-                if (reads) r.sides[std::size_t(c)][std::size_t(d)] = r.version;
-            }
-        }
-        ++report.bricksChanged;
+        if (changes) s.recordLeafChanges(b, work, reached, *changes);
+        report.bricksChanged += s.commitBrick(b, work, reached);
     }
     s.materials = work.materials();
     s.edits += script.ops.size();
     return report;
+}
+
+StreamingScene::EditReport StreamingScene::restoreLeaves(const std::vector<LeafImage>& leaves)
+{
+    Impl& s = *impl_;
+    if (s.options.access == StoreAccess::ReadOnly) throw std::logic_error("editing a scene opened read-only");
+    const auto start = std::chrono::steady_clock::now();
+    std::set<IndexCoord> brickSet;
+    std::vector<Impl::VoxelRange> reached;
+    for (const LeafImage& leaf : leaves) {
+        IndexCoord brick, last;
+        for (int a = 0; a < 3; ++a) {
+            const int32_t o = leaf.origin[std::size_t(a)];
+            if (o % kLeafDim != 0) throw std::invalid_argument("a leaf image off the leaf lattice");
+            brick[std::size_t(a)] = o >= 0 ? o / kBrickEdge : -((-o + kBrickEdge - 1) / kBrickEdge);
+            last[std::size_t(a)] = o + kLeafDim - 1;
+        }
+        brickSet.insert(brick);
+        reached.push_back(std::make_pair(leaf.origin, last));
+    }
+    const std::vector<IndexCoord> bricks(brickSet.begin(), brickSet.end());
+    EditReport report;
+    std::unique_lock<std::mutex> lock(s.mutex);
+    report.bricksPagedIn = s.pageInForEdit(bricks, lock);
+    report.pageInSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    Volume work = s.workCopy(bricks);
+    for (const LeafImage& leaf : leaves)
+        pasteRegion(work, decodeRegion(leaf.bytes, {leaf.origin, kLeafDim}, s.scene.voxelSize(), s.materials.size(), "the edit history"));
+    for (const IndexCoord& b : bricks) report.bricksChanged += s.commitBrick(b, work, reached);
+    ++s.edits;
+    return report;
+}
+
+MaterialTable StreamingScene::materials() const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    return impl_->materials;
+}
+
+uint64_t StreamingScene::edits() const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    return impl_->edits;
+}
+
+void StreamingScene::visitResidentLevels(const std::function<void(const std::vector<const Volume*>&)>& visit) const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    std::vector<const Volume*> levels;
+    for (const Volume& v : impl_->levelVolumes) levels.push_back(&v);
+    visit(levels);
+}
+
+std::optional<std::string> StreamingScene::meta(const std::string& key) const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    return impl_->scene.bricks().meta(key);
+}
+
+void StreamingScene::commitMeta(const std::string& key, const std::string& value)
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    StoreTransaction transaction(impl_->scene.bricks());
+    impl_->scene.bricks().putMeta(key, value);
+    transaction.commit();
 }
 
 uint64_t StreamingScene::autosave()

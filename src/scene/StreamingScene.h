@@ -10,12 +10,25 @@
 #include "sculpt/StrokeScript.h"
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace vdbclay {
+
+/// One 8^3 box of level 0 (a leaf, uniform material or nothing) as encodeRegion writes it, before and
+/// after an edit: what the editor's undo history keeps per changed leaf.
+struct LeafChange {
+    IndexCoord origin{0, 0, 0};
+    std::string before, after;
+};
+/// One 8^3 box's content to put back (LeafChange::before to undo, after to redo).
+struct LeafImage {
+    IndexCoord origin{0, 0, 0};
+    std::string bytes;
+};
 
 struct StreamingOptions {
     uint64_t memoryBudgetBytes = 512ull << 20; // resident bricks (volume data) and their meshes
@@ -73,8 +86,22 @@ public:
         double pageInSeconds = 0.0;
     };
     /// Applies a script at level 0: the bricks its brushes reach are paged in first (loaded now if not
-    /// resident), the changed ones stay resident and dirty until autosave.
-    EditReport sculpt(const StrokeScript& script);
+    /// resident), the changed ones stay resident and dirty until autosave. `changes`, when given, receives
+    /// every level-0 leaf box the script changed, before and after (in brick order, then box order).
+    EditReport sculpt(const StrokeScript& script, std::vector<LeafChange>* changes = nullptr);
+    /// Puts leaf boxes back as the images hold them (undo, redo), paging their bricks in first; counts as
+    /// one edit. Throws VolumeIOError for damaged images.
+    EditReport restoreLeaves(const std::vector<LeafImage>& leaves);
+    /// The scene's materials, with those edits defined since the last autosave.
+    MaterialTable materials() const;
+    /// Edits applied since the store was made, including those not yet autosaved.
+    uint64_t edits() const;
+    /// Calls `visit` with each level's resident data (index = level), the loaders held off meanwhile.
+    void visitResidentLevels(const std::function<void(const std::vector<const Volume*>&)>& visit) const;
+    /// A value the store keeps beside the bricks (the editor's save marks), and writing one at once, in a
+    /// transaction of its own.
+    std::optional<std::string> meta(const std::string& key) const;
+    void commitMeta(const std::string& key, const std::string& value);
     /// Writes every dirty brick, and the count of edits applied, in one transaction, with the LOD pyramid
     /// above them brought up to date (resident coarse bricks it changed are loaded again). Returns the
     /// level-0 bricks written.

@@ -1,0 +1,134 @@
+// vdbclay edit: the editor. Opens a scene in a window (GLFW + Dear ImGui) or, with --headless, replays
+// a recorded session with no window, then saves, draws or exports what it made.
+#include "Cli.h"
+
+#include "editor/DesktopEditor.h"
+#include "editor/EditingSession.h"
+#include "render/ImageFile.h"
+#include "render/ScenePicture.h"
+#include "render/VulkanContext.h"
+#include "scene/SceneStore.h"
+#include "vdb_hermite/AtomicFile.h"
+
+#include <CLI/CLI.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+
+namespace vdbclay::cli {
+
+CLI::App* addEditCommand(CLI::App& parent, EditOptions& o)
+{
+    CLI::App* cmd = parent.add_subcommand("edit", "Sculpt a scene interactively (a window), or replay a recorded session (--headless)");
+    cmd->add_option("scene", o.scene, "Scene: a .vdb (edited through SCENE.vdb.edit.vdbclay beside it) or a store (.vdbclay)")
+        ->required()->type_name("SCENE")->check(sceneInput());
+    cmd->add_option("--memory-budget", o.memoryBudgetMB, "Resident bricks and their meshes may take at most this many MB")
+        ->capture_default_str()->type_name("MB")->check(memoryBudget());
+    cmd->add_option("--record", o.record, "Write every command with its frame and time (rewritten at each autosave)")->type_name("SESSION.json");
+    cmd->add_option("--replay", o.replay, "Apply a recorded session")->type_name("SESSION.json");
+    cmd->add_flag("--headless", o.headless, "No window: replay, then save (-o), draw (--screenshot) or export (--export-script)");
+    cmd->add_option("--frames", o.frames, "Replay only the session's first N frames")->type_name("N")->check(unsignedInteger());
+    cmd->add_option("--screenshot", o.screenshot, "Headless: draw the view after the replay into a PNG (needs a Vulkan device)")->type_name("OUT.png");
+    cmd->add_option("--size", o.size, "The screenshot's size (default: the session's window size)")->type_name("WxH");
+    cmd->add_option("-o,--output", o.output, "Headless: save the result (.vdb or .vdbclay); the scene itself is only changed by a save command")
+        ->type_name("OUT");
+    cmd->add_option("--export-script", o.exportScript, "Headless: write the ops the session applied as a stroke script (for 'vdbclay sculpt')")
+        ->type_name("OUT.json");
+    cmd->add_flag("--discard-recovery", o.discardRecovery, "A .vdb: drop edits autosaved after its last save instead of recovering them");
+    cmd->add_option("--autosave", o.autosaveSeconds, "Seconds between autosaves while sculpting")->capture_default_str()->type_name("S")->check(positiveNumber());
+    cmd->add_flag("--json", o.json, "Headless: print {\"recovered_edits\", \"frames\", \"commands\", \"stamps\", \"undo_depth\", ...}");
+    cmd->footer(desktopShortcutsHelp());
+    return cmd;
+}
+
+int runEdit(const EditOptions& o)
+{
+    if (!o.output.empty()) requireSceneExtension(o.output);
+    if (!o.headless && (!o.output.empty() || !o.screenshot.empty() || !o.exportScript.empty() || o.frames))
+        throw UsageError("-o, --screenshot, --export-script and --frames go with --headless");
+    if (!o.size.empty() && o.screenshot.empty()) throw UsageError("--size goes with --screenshot");
+    std::optional<std::pair<int, int>> size;
+    if (!o.size.empty()) size = parsePictureSize(o.size, "--size");
+    std::optional<SessionRecord> replay;
+    if (!o.replay.empty()) replay = loadSessionRecord(o.replay);
+    if (!o.headless && !desktopAvailable()) {
+        printError("no display to open the editor's window on (DISPLAY and WAYLAND_DISPLAY are unset): draw pictures with "
+                   "'vdbclay render', or replay a session with 'vdbclay edit SCENE --replay SESSION.json --headless'");
+        return kExitFailure;
+    }
+
+    SessionOptions options;
+    options.memoryBudgetBytes = uint64_t(o.memoryBudgetMB * 1048576.0);
+    options.recordPath = o.record;
+    options.discardRecovery = o.discardRecovery;
+    options.autosaveSeconds = o.autosaveSeconds;
+    options.message = [](const std::string& text) { std::cerr << "vdbclay: " << text << "\n"; };
+    std::unique_ptr<EditingSession> session;
+    try {
+        session = std::make_unique<EditingSession>(o.scene, options);
+    } catch (const std::invalid_argument& e) {
+        throw UsageError(e.what()); // a budget too small for one brick, discarding a store's edits
+    }
+    if (session->recoveredEdits() > 0)
+        std::cerr << "vdbclay: recovered " << session->recoveredEdits() << " edits autosaved after the last save of '" << o.scene
+                  << "' (kept: save to keep them for good" << (isStorePath(o.scene) ? "" : ", or run again with --discard-recovery to drop them")
+                  << ")\n";
+
+    if (!o.headless) return runDesktopEditor(options, std::move(session), replay ? &*replay : nullptr);
+
+    const auto start = std::chrono::steady_clock::now();
+    uint64_t frames = 0;
+    FrameReport last;
+    if (replay) replaySession(*session, *replay, o.frames, [&](uint64_t, const FrameReport& r) {
+        ++frames;
+        last = r;
+    });
+    if (!o.exportScript.empty()) {
+        const std::string text = session->appliedScript().dump(1) + "\n";
+        writeFileAtomically(o.exportScript, [&](std::ostream& out) { out << text; });
+    }
+    if (!o.output.empty()) {
+        Command save;
+        save.kind = Command::Kind::Save;
+        save.path = o.output;
+        session->apply(save);
+    }
+    if (!o.screenshot.empty()) {
+        std::unique_ptr<render::VulkanContext> context;
+        try {
+            context = std::make_unique<render::VulkanContext>();
+        } catch (const render::NoVulkanDevice& e) {
+            printError(std::string("cannot draw the screenshot: ") + e.what());
+            return kExitFailure;
+        }
+        const std::array<int, 2> viewport = replay ? replay->viewport : std::array<int, 2>{1280, 720};
+        render::PictureRequest request;
+        request.width = size ? size->first : viewport[0];
+        request.height = size ? size->second : viewport[1];
+        request.textureFolder = std::filesystem::path(o.scene).parent_path().string();
+        session->frame(0.0, {request.width, request.height});
+        session->scene().waitForLoads();
+        session->frame(0.0, {request.width, request.height});
+        const render::Picture picture = render::renderStreamed(*context, session->scene(), session->camera(), request);
+        render::writePng(picture.image, o.screenshot);
+    }
+    if (o.json) {
+        printJson({{"scene", o.scene},
+                   {"recovered_edits", session->recoveredEdits()},
+                   {"frames", frames},
+                   {"commands", replay ? replay->commands.size() : 0},
+                   {"stamps", session->stats().stampsApplied},
+                   {"refused", session->stats().opsRefused},
+                   {"undo_depth", session->history().undoDepth()},
+                   {"redo_depth", session->history().redoDepth()},
+                   {"edits", session->scene().edits()},
+                   {"resident_bytes", last.residentBytes},
+                   {"seconds", secondsSince(start)}});
+    } else {
+        std::cout << "replayed " << frames << " frames (" << session->stats().stampsApplied << " stamps) on " << o.scene << "\n";
+    }
+    return kExitOk;
+}
+
+} // namespace vdbclay::cli

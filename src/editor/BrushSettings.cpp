@@ -1,0 +1,104 @@
+#include "editor/BrushSettings.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace vdbclay {
+
+namespace {
+
+const char* pressureName(PressureTarget p) { return p == PressureTarget::Size ? "size" : p == PressureTarget::Strength ? "strength" : "none"; }
+
+double number(const nlohmann::json& json, const char* key, double fallback)
+{
+    if (!json.contains(key)) return fallback;
+    const nlohmann::json& v = json.at(key);
+    if (!v.is_number()) throw std::invalid_argument(std::string("brush.") + key + ": must be a number");
+    return v.get<double>();
+}
+
+std::string text(const nlohmann::json& json, const char* key, const std::string& fallback)
+{
+    if (!json.contains(key)) return fallback;
+    const nlohmann::json& v = json.at(key);
+    if (!v.is_string()) throw std::invalid_argument(std::string("brush.") + key + ": must be a string");
+    return v.get<std::string>();
+}
+
+} // namespace
+
+bool isReshapingMode(const std::string& mode)
+{
+    return mode == "smooth" || mode == "flatten" || mode == "inflate" || mode == "deflate" || mode == "move";
+}
+
+void checkBrushSettings(const BrushSettings& b)
+{
+    static const std::vector<std::string> modes{"add", "remove", "intersect", "paint", "erode", "smooth", "flatten", "inflate", "deflate", "move"};
+    if (std::find(modes.begin(), modes.end(), b.mode) == modes.end()) throw std::invalid_argument("brush.mode: unknown mode '" + b.mode + "'");
+    if (!b.shape.is_object() || !b.shape.contains("shape")) throw std::invalid_argument("brush.shape: must be a script brush object");
+    if (!(b.radius > 0.0) || !std::isfinite(b.radius)) throw std::invalid_argument("brush.radius: must be above 0");
+    if (!(b.strength >= 0.0 && b.strength <= 1.0)) throw std::invalid_argument("brush.strength: must be in [0, 1]");
+    if (b.falloff != "smooth" && b.falloff != "linear" && b.falloff != "constant") throw std::invalid_argument("brush.falloff: smooth, linear or constant");
+    if (!(b.distance > 0.0) || !std::isfinite(b.distance)) throw std::invalid_argument("brush.distance: must be above 0");
+    if (!(b.spacing >= 0.02 && b.spacing <= 4.0)) throw std::invalid_argument("brush.spacing: must be in [0.02, 4]");
+    if (!b.symmetry.is_null() && !b.symmetry.is_object()) throw std::invalid_argument("brush.symmetry: must be an object or null");
+}
+
+nlohmann::json brushSettingsJson(const BrushSettings& b)
+{
+    return {{"mode", b.mode}, {"shape", b.shape}, {"radius", b.radius}, {"strength", b.strength}, {"falloff", b.falloff},
+            {"material", b.material}, {"distance", b.distance}, {"spacing", b.spacing}, {"pressure", pressureName(b.pressure)},
+            {"symmetry", b.symmetry}};
+}
+
+BrushSettings parseBrushSettings(const nlohmann::json& json)
+{
+    if (!json.is_object()) throw std::invalid_argument("brush: must be an object");
+    static const std::vector<std::string> keys{"mode", "shape", "radius", "strength", "falloff", "material", "distance", "spacing", "pressure", "symmetry"};
+    for (const auto& item : json.items())
+        if (std::find(keys.begin(), keys.end(), item.key()) == keys.end()) throw std::invalid_argument("brush." + item.key() + ": unknown key");
+    BrushSettings b;
+    b.mode = text(json, "mode", b.mode);
+    if (json.contains("shape")) b.shape = json.at("shape");
+    b.radius = number(json, "radius", b.radius);
+    b.strength = number(json, "strength", b.strength);
+    b.falloff = text(json, "falloff", b.falloff);
+    b.material = text(json, "material", b.material);
+    b.distance = number(json, "distance", b.distance);
+    b.spacing = number(json, "spacing", b.spacing);
+    const std::string pressure = text(json, "pressure", pressureName(b.pressure));
+    if (pressure == "size") b.pressure = PressureTarget::Size;
+    else if (pressure == "strength") b.pressure = PressureTarget::Strength;
+    else if (pressure == "none") b.pressure = PressureTarget::None;
+    else throw std::invalid_argument("brush.pressure: size, strength or none");
+    if (json.contains("symmetry")) b.symmetry = json.at("symmetry");
+    checkBrushSettings(b);
+    return b;
+}
+
+nlohmann::json strokeOpJson(const BrushSettings& b, const std::vector<std::array<double, 3>>& points, double pressure,
+                            const std::array<double, 3>& offset)
+{
+    const double p = std::clamp(pressure, 0.05, 1.0);
+    nlohmann::json op = {{"mode", b.mode}, {"brush", b.shape}};
+    const double scale = b.radius * (b.pressure == PressureTarget::Size ? p : 1.0);
+    op["scale"] = {scale, scale, scale};
+    if (points.size() == 1) op["at"] = points[0];
+    else op["path"] = points;
+    if (!b.material.empty()) op["material"] = b.material;
+    const double strength = b.strength * (b.pressure == PressureTarget::Strength ? p : 1.0);
+    if (isReshapingMode(b.mode)) {
+        op["strength"] = strength;
+        op["falloff"] = b.falloff;
+        if (b.mode == "inflate" || b.mode == "deflate") op["distance"] = b.distance;
+        if (b.mode == "move") op["offset"] = offset;
+    } else if (b.mode == "erode") {
+        op["strength"] = strength;
+    }
+    if (!b.symmetry.is_null()) op["symmetry"] = b.symmetry;
+    return op;
+}
+
+} // namespace vdbclay

@@ -1,0 +1,43 @@
+// The editor's current brush: what the brush panel, the shortcuts and recorded sessions set, and how a
+// stretch of a stroke becomes a stroke-script op (so strokes, scripts, tests and replays share one code
+// path: every op the editor applies is one a script could hold).
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace vdbclay {
+
+enum class PressureTarget { None, Size, Strength };
+
+struct BrushSettings {
+    std::string mode = "add"; // any script mode: add, remove, paint, erode, smooth, flatten, inflate, deflate, move
+    nlohmann::json shape = {{"shape", "sphere"}, {"radius", 1.0}}; // a script brush at unit size
+    double radius = 8.0;      // world units: the op's scale on `shape`
+    double strength = 0.5;    // reshaping brushes and erode, 0..1
+    std::string falloff = "smooth";
+    std::string material;     // empty: the scene's first (add) or the most common under the brush (reshaping)
+    double distance = 2.0;    // inflate, deflate: world units at full strength
+    double spacing = 0.25;    // stamps every spacing * radius along a stroke
+    PressureTarget pressure = PressureTarget::Size;
+    nlohmann::json symmetry;  // null, or a script op's "symmetry" object
+};
+
+/// Throws std::invalid_argument naming the field for settings no script would accept (checked again
+/// when the op is parsed).
+void checkBrushSettings(const BrushSettings& brush);
+nlohmann::json brushSettingsJson(const BrushSettings& brush);
+/// Throws std::invalid_argument naming the key for malformed settings.
+BrushSettings parseBrushSettings(const nlohmann::json& json);
+
+bool isReshapingMode(const std::string& mode);
+
+/// The script op for stamps at `points` (one: a stamp; more: the swept brush along them) at `pressure`
+/// (0..1]; `offset` is the drag of a move.
+nlohmann::json strokeOpJson(const BrushSettings& brush, const std::vector<std::array<double, 3>>& points, double pressure,
+                            const std::array<double, 3>& offset = {0, 0, 0});
+
+} // namespace vdbclay

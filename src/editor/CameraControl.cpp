@@ -1,0 +1,113 @@
+#include "editor/CameraControl.h"
+
+#include <glm/glm.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace vdbclay {
+
+namespace {
+
+glm::dvec3 vec(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
+std::array<double, 3> arr(const glm::dvec3& v) { return {v.x, v.y, v.z}; }
+
+struct Frame {
+    glm::dvec3 forward, right, up;
+    double distance;
+};
+
+Frame frameOf(const render::Camera& c)
+{
+    Frame f;
+    const glm::dvec3 d = vec(c.target) - vec(c.eye);
+    f.distance = glm::length(d);
+    f.forward = d / f.distance;
+    f.right = glm::normalize(glm::cross(f.forward, vec(c.up)));
+    f.up = glm::cross(f.right, f.forward);
+    return f;
+}
+
+} // namespace
+
+Ray pointerRay(const render::Camera& camera, const std::array<int, 2>& viewport, double x, double y)
+{
+    const Frame f = frameOf(camera);
+    const double tanHalf = std::tan(glm::radians(camera.fovYDegrees) * 0.5);
+    const double aspect = double(viewport[0]) / double(std::max(1, viewport[1]));
+    const double ndcX = 2.0 * x / double(viewport[0]) - 1.0, ndcY = 1.0 - 2.0 * y / double(viewport[1]);
+    const glm::dvec3 d = glm::normalize(f.forward + f.right * (ndcX * tanHalf * aspect) + f.up * (ndcY * tanHalf));
+    return {camera.eye, arr(d)};
+}
+
+render::Camera orbit(const render::Camera& camera, double yawDegrees, double pitchDegrees)
+{
+    const glm::dvec3 up = glm::normalize(vec(camera.up));
+    const glm::dvec3 target = vec(camera.target);
+    glm::dvec3 offset = vec(camera.eye) - target;
+    const double length = glm::length(offset);
+    // Pitch is limited so that the view never flips over the up axis.
+    const double elevation = glm::degrees(std::asin(std::clamp(glm::dot(offset / length, up), -1.0, 1.0)));
+    const double pitch = std::clamp(elevation + pitchDegrees, -89.0, 89.0) - elevation;
+    const glm::dvec3 right = glm::normalize(glm::cross(-offset, up));
+    offset = glm::dvec3(glm::rotate(glm::dmat4(1.0), glm::radians(-pitch), right) * glm::dvec4(offset, 0.0));
+    offset = glm::dvec3(glm::rotate(glm::dmat4(1.0), glm::radians(-yawDegrees), up) * glm::dvec4(offset, 0.0));
+    render::Camera out = camera;
+    out.eye = arr(target + offset);
+    return out;
+}
+
+render::Camera pan(const render::Camera& camera, const std::array<int, 2>& viewport, double dxPixels, double dyPixels)
+{
+    const Frame f = frameOf(camera);
+    const double worldPerPixel = 2.0 * f.distance * std::tan(glm::radians(camera.fovYDegrees) * 0.5) / double(std::max(1, viewport[1]));
+    const glm::dvec3 shift = (-f.right * dxPixels + f.up * dyPixels) * worldPerPixel;
+    render::Camera out = camera;
+    out.eye = arr(vec(camera.eye) + shift);
+    out.target = arr(vec(camera.target) + shift);
+    return out;
+}
+
+render::Camera zoomToward(const render::Camera& camera, double factor, const std::optional<std::array<double, 3>>& toward)
+{
+    const glm::dvec3 eye = vec(camera.eye), point = toward ? vec(*toward) : vec(camera.target);
+    const glm::dvec3 newEye = point + (eye - point) / std::max(factor, 1e-6);
+    render::Camera out = camera;
+    out.eye = arr(newEye);
+    out.target = arr(vec(camera.target) + (newEye - eye));
+    if (!toward) out.target = camera.target;
+    return out;
+}
+
+render::Camera fly(const render::Camera& camera, double forward, double right, double up)
+{
+    const Frame f = frameOf(camera);
+    const glm::dvec3 shift = f.forward * forward + f.right * right + f.up * up;
+    render::Camera out = camera;
+    out.eye = arr(vec(camera.eye) + shift);
+    out.target = arr(vec(camera.target) + shift);
+    return out;
+}
+
+std::optional<std::array<double, 3>> dragPoint(const render::Camera& camera, const Ray& ray, const std::array<double, 3>& point)
+{
+    const glm::dvec3 n = frameOf(camera).forward, o = vec(ray.origin), d = vec(ray.direction);
+    const double denom = glm::dot(d, n);
+    if (std::abs(denom) < 1e-9) return std::nullopt;
+    const double t = glm::dot(vec(point) - o, n) / denom;
+    if (!(t > 0.0)) return std::nullopt;
+    return arr(o + d * t);
+}
+
+Viewer viewerOf(const render::Camera& camera, const std::array<int, 2>& viewport)
+{
+    Viewer v;
+    v.position = camera.eye;
+    v.target = camera.target;
+    v.fovDegrees = camera.fovYDegrees;
+    v.viewport = viewport;
+    return v;
+}
+
+} // namespace vdbclay

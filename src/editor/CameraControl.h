@@ -1,0 +1,36 @@
+// Camera moves as a sculptor makes them (orbit about the target, pan, zoom towards the cursor, fly),
+// and the pointer's ray: pure functions of the camera, so front ends turn mouse and keys into one
+// `camera` command holding the result.
+#pragma once
+
+#include "render/RenderTypes.h"
+#include "scene/ViewSelection.h"
+
+#include <array>
+#include <optional>
+
+namespace vdbclay {
+
+struct Ray {
+    std::array<double, 3> origin{0, 0, 0};
+    std::array<double, 3> direction{0, 0, -1}; // unit length
+};
+
+/// The ray through pixel (x, y) (top left 0, 0; pixel centres at +0.5) of a viewport.
+Ray pointerRay(const render::Camera& camera, const std::array<int, 2>& viewport, double x, double y);
+/// Turns the eye about the target: yaw about the up axis, pitch towards it (kept 1 degree off the poles).
+render::Camera orbit(const render::Camera& camera, double yawDegrees, double pitchDegrees);
+/// Slides eye and target across the view by a pointer drag of (dx, dy) pixels: the point at the target's
+/// depth follows the pointer.
+render::Camera pan(const render::Camera& camera, const std::array<int, 2>& viewport, double dxPixels, double dyPixels);
+/// Moves the eye towards `toward` (the surface under the cursor; the target when absent) so that the
+/// distance shrinks by `factor` (> 1 zooms in); the target moves along so that the point stays put.
+render::Camera zoomToward(const render::Camera& camera, double factor, const std::optional<std::array<double, 3>>& toward);
+/// Moves eye and target together: `forward` along the view, `right` and `up` across it (world units).
+render::Camera fly(const render::Camera& camera, double forward, double right, double up);
+/// Where a ray meets the plane through `point` facing the camera (what a move brush drags along).
+std::optional<std::array<double, 3>> dragPoint(const render::Camera& camera, const Ray& ray, const std::array<double, 3>& point);
+/// The streaming scene's viewer for the camera and viewport.
+Viewer viewerOf(const render::Camera& camera, const std::array<int, 2>& viewport);
+
+} // namespace vdbclay

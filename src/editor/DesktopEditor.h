@@ -1,0 +1,77 @@
+// The desktop editor: a GLFW window drawing the editing session with the renderer, Dear ImGui panels
+// (brush, custom brush, materials, tools, file, stats, help) and the shortcuts a sculptor expects. It only
+// maps mouse, keys and menus to the session's commands; everything it does is in the session's record.
+#pragma once
+
+#include "editor/EditingSession.h"
+#include "render/RenderTypes.h"
+
+#include <array>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+struct GLFWwindow;
+
+namespace vdbclay {
+
+/// No display to open a window on (no DISPLAY / WAYLAND_DISPLAY, or GLFW cannot reach it).
+struct NoDisplay : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+/// Whether the environment names a display (a window may still fail to open).
+bool desktopAvailable();
+/// The shortcuts, as `vdbclay edit --help` and the help panel list them.
+const char* desktopShortcutsHelp();
+
+struct DesktopOptions {
+    std::array<int, 2> windowSize{1280, 800};
+    bool validation = false; // the Khronos validation layer (tests: zero messages)
+    /// Runs after the window's input is polled and before the menus are built, each frame (tests drive
+    /// the menus through ImGui's input here).
+    std::function<void(uint64_t frame)> beforeUi;
+};
+
+class DesktopEditor {
+public:
+    /// Opens the window. Throws NoDisplay, render::NoVulkanDevice, render::VulkanError.
+    DesktopEditor(EditingSession& session, const DesktopOptions& options = {});
+    ~DesktopEditor();
+    DesktopEditor(const DesktopEditor&) = delete;
+    DesktopEditor& operator=(const DesktopEditor&) = delete;
+
+    /// One frame: input, menus, the session's frame, uploads, drawing, presentation. False once the
+    /// user closed the window.
+    bool frame();
+    /// Frames until the window closes.
+    void run();
+
+    // Input as GLFW delivers it; the window's callbacks call these (tests may too).
+    void mouseButton(int button, int action, int mods);
+    void cursorMoved(double x, double y);
+    void scrolled(double dx, double dy);
+    void key(int key, int action, int mods);
+
+    /// Applies a recorded session's commands, each before the frame it was recorded in.
+    void replay(const SessionRecord* record);
+    /// A scene the user asked to open from the file menu (the editor stopped for it), or empty.
+    std::string openRequested() const;
+
+    GLFWwindow* window() const;
+    const render::FrameStats& lastFrame() const;
+    uint64_t validationMessages() const;
+    EditingSession& session();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+/// `vdbclay edit` with a window: runs the editor on `session` until it closes (replaying `replay` as it
+/// goes, when given), opening other scenes the user asks for with the same options. Returns the exit code;
+/// a missing display or Vulkan device is one line on stderr and 1.
+int runDesktopEditor(const SessionOptions& options, std::unique_ptr<EditingSession> session, const SessionRecord* replay);
+
+} // namespace vdbclay

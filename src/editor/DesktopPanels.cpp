@@ -1,0 +1,383 @@
+#include "editor/DesktopPanels.h"
+
+#include "editor/DesktopEditor.h"
+#include "editor/SceneFileActions.h"
+#include "vdb_hermite/AtomicFile.h"
+
+#include <imgui.h>
+#include <imgui_stdlib.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+namespace vdbclay {
+
+namespace {
+
+constexpr const char* kModes[] = {"add", "remove", "paint", "erode", "smooth", "flatten", "inflate", "deflate", "move", "intersect"};
+constexpr const char* kShapes[] = {"sphere", "box", "cylinder", "capsule", "torus", "cone"};
+constexpr const char* kFalloffs[] = {"smooth", "linear", "constant"};
+constexpr const char* kAxes[] = {"x", "y", "z"};
+
+int indexOf(const char* const* names, int count, const std::string& name)
+{
+    for (int i = 0; i < count; ++i)
+        if (name == names[i]) return i;
+    return -1;
+}
+
+/// A primitive of unit size as a script brush: what the brush's radius scales.
+nlohmann::json unitShape(int shape)
+{
+    switch (shape) {
+    case 1: return {{"shape", "box"}, {"size", {1.0, 1.0, 1.0}}, {"rounding", 0.1}};
+    case 2: return {{"shape", "cylinder"}, {"radius", 1.0}, {"height", 2.0}};
+    case 3: return {{"shape", "capsule"}, {"radius", 0.6}, {"length", 0.8}};
+    case 4: return {{"shape", "torus"}, {"radius", 0.75}, {"minor_radius", 0.25}};
+    case 5: return {{"shape", "cone"}, {"radius", 1.0}, {"height", 2.0}};
+    default: return {{"shape", "sphere"}, {"radius", 1.0}};
+    }
+}
+
+Command brushCommand(const BrushSettings& brush)
+{
+    Command c;
+    c.kind = Command::Kind::SetBrush;
+    c.brush = brush;
+    return c;
+}
+
+struct SymmetryUi {
+    bool mirror[3] = {false, false, false};
+    int radialAxis = 1, radialCount = 1;
+    float center[3] = {0, 0, 0};
+};
+
+SymmetryUi symmetryOf(const nlohmann::json& s)
+{
+    SymmetryUi ui;
+    if (!s.is_object()) return ui;
+    if (s.contains("mirror"))
+        for (const auto& m : s.at("mirror"))
+            if (m.is_string()) {
+                const int a = indexOf(kAxes, 3, m.get<std::string>());
+                if (a >= 0) ui.mirror[a] = true;
+            }
+    if (s.contains("radial")) {
+        const nlohmann::json& r = s.at("radial");
+        if (r.contains("count")) ui.radialCount = r.at("count").get<int>();
+        if (r.contains("axis")) ui.radialAxis = std::max(0, indexOf(kAxes, 3, r.at("axis").get<std::string>()));
+    }
+    if (s.contains("center"))
+        for (int a = 0; a < 3; ++a) ui.center[a] = s.at("center")[std::size_t(a)].get<float>();
+    return ui;
+}
+
+nlohmann::json symmetryJson(const SymmetryUi& ui)
+{
+    nlohmann::json mirror = nlohmann::json::array();
+    for (int a = 0; a < 3; ++a)
+        if (ui.mirror[a]) mirror.push_back(kAxes[a]);
+    if (mirror.empty() && ui.radialCount <= 1) return nullptr;
+    nlohmann::json s = {{"center", {ui.center[0], ui.center[1], ui.center[2]}}};
+    if (!mirror.empty()) s["mirror"] = mirror;
+    if (ui.radialCount > 1) s["radial"] = {{"axis", kAxes[ui.radialAxis]}, {"count", ui.radialCount}};
+    return s;
+}
+
+} // namespace
+
+std::vector<Command> DesktopPanels::draw(EditingSession& session, const FrameFigures& figures)
+{
+    std::vector<Command> out;
+    ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(330, 0), ImGuiCond_FirstUseEver);
+    if (ImGui::Begin("VDBClay")) {
+        if (ImGui::CollapsingHeader("Brush", ImGuiTreeNodeFlags_DefaultOpen)) brushPanel(session, out);
+        if (ImGui::CollapsingHeader("Custom brush")) customBrushPanel(session, out);
+        if (ImGui::CollapsingHeader("Materials")) materialsPanel(session, out);
+        if (ImGui::CollapsingHeader("Tools")) toolsPanel(session, out);
+        if (ImGui::CollapsingHeader("File")) filePanel(session, out);
+        ImGui::Checkbox("Stats", &showStats);
+        ImGui::SameLine();
+        ImGui::Checkbox("Help (H)", &showHelp);
+        if (!status.empty()) ImGui::TextWrapped("%s", status.c_str());
+    }
+    ImGui::End();
+    if (showStats) statsPanel(session, figures);
+    if (showHelp) {
+        ImGui::SetNextWindowPos(ImVec2(360, 10), ImGuiCond_FirstUseEver);
+        if (ImGui::Begin("Help", &showHelp)) ImGui::TextUnformatted(desktopShortcutsHelp());
+        ImGui::End();
+    }
+    return out;
+}
+
+void DesktopPanels::brushPanel(EditingSession& session, std::vector<Command>& out)
+{
+    BrushSettings b = session.brush();
+    bool changed = false;
+    int mode = std::max(0, indexOf(kModes, IM_ARRAYSIZE(kModes), b.mode));
+    if (ImGui::Combo("Mode", &mode, kModes, IM_ARRAYSIZE(kModes))) {
+        b.mode = kModes[mode];
+        changed = true;
+    }
+    const std::string shapeName = b.shape.value("shape", std::string("sphere"));
+    int shape = indexOf(kShapes, IM_ARRAYSIZE(kShapes), shapeName);
+    const char* preview = shape >= 0 ? kShapes[shape] : shapeName.c_str();
+    if (ImGui::BeginCombo("Shape", preview)) {
+        for (int i = 0; i < IM_ARRAYSIZE(kShapes); ++i)
+            if (ImGui::Selectable(kShapes[i], i == shape)) {
+                b.shape = unitShape(i);
+                changed = true;
+            }
+        ImGui::EndCombo();
+    }
+    float radius = float(b.radius);
+    const float voxel = float(session.scene().store().voxelSize());
+    if (ImGui::SliderFloat("Radius", &radius, voxel, 200.0f * voxel, "%.2f", ImGuiSliderFlags_Logarithmic)) {
+        b.radius = std::max(radius, 0.01f * voxel);
+        changed = true;
+    }
+    float strength = float(b.strength);
+    if (ImGui::SliderFloat("Strength", &strength, 0.0f, 1.0f)) {
+        b.strength = strength;
+        changed = true;
+    }
+    int falloff = std::max(0, indexOf(kFalloffs, 3, b.falloff));
+    if (ImGui::Combo("Falloff", &falloff, kFalloffs, 3)) {
+        b.falloff = kFalloffs[falloff];
+        changed = true;
+    }
+    if (b.mode == "inflate" || b.mode == "deflate") {
+        float distance = float(b.distance);
+        if (ImGui::SliderFloat("Distance", &distance, 0.1f * voxel, 16.0f * voxel)) {
+            b.distance = std::max(distance, 0.01f * voxel);
+            changed = true;
+        }
+    }
+    if (b.shape.value("shape", std::string()) == "blend") {
+        float smoothness = b.shape.value("smoothness", 0.0f);
+        if (ImGui::SliderFloat("Smoothness", &smoothness, 0.0f, 1.0f)) {
+            b.shape["smoothness"] = smoothness;
+            changed = true;
+        }
+    }
+    float spacing = float(b.spacing);
+    if (ImGui::SliderFloat("Spacing", &spacing, 0.05f, 2.0f)) {
+        b.spacing = spacing;
+        changed = true;
+    }
+    const MaterialTable materials = session.scene().materials();
+    const std::vector<std::string> names = materials.names();
+    if (ImGui::BeginCombo("Material", b.material.empty() ? "(default)" : b.material.c_str())) {
+        if (ImGui::Selectable("(default)", b.material.empty())) {
+            b.material.clear();
+            changed = true;
+        }
+        for (const std::string& n : names)
+            if (ImGui::Selectable(n.c_str(), n == b.material)) {
+                b.material = n;
+                changed = true;
+            }
+        ImGui::EndCombo();
+    }
+    SymmetryUi sym = symmetryOf(b.symmetry);
+    bool symChanged = false;
+    ImGui::Text("Symmetry");
+    for (int a = 0; a < 3; ++a) {
+        ImGui::SameLine();
+        symChanged |= ImGui::Checkbox((std::string("mirror ") + kAxes[a]).c_str(), &sym.mirror[a]);
+    }
+    symChanged |= ImGui::SliderInt("Radial copies", &sym.radialCount, 1, 16);
+    symChanged |= ImGui::Combo("Radial axis", &sym.radialAxis, kAxes, 3);
+    symChanged |= ImGui::InputFloat3("Symmetry centre", sym.center);
+    if (symChanged) {
+        b.symmetry = symmetryJson(sym);
+        changed = true;
+    }
+    if (changed) out.push_back(brushCommand(b));
+}
+
+void DesktopPanels::customBrushPanel(EditingSession& session, std::vector<Command>& out)
+{
+    ImGui::SliderFloat("Blend", &customSmoothness_, 0.0f, 1.0f);
+    for (std::size_t i = 0; i < parts_.size(); ++i) {
+        CustomBrushPart& p = parts_[i];
+        ImGui::PushID(int(i));
+        ImGui::Separator();
+        ImGui::Combo("Part", &p.shape, kShapes, IM_ARRAYSIZE(kShapes));
+        ImGui::InputFloat3("Offset", p.at);
+        ImGui::SliderFloat("Size", &p.size, 0.05f, 2.0f);
+        ImGui::InputFloat3("Axis scale", p.scale);
+        if (i > 0) ImGui::Checkbox("Subtract", &p.remove);
+        if (i > 0 && ImGui::SmallButton("Remove part")) {
+            parts_.erase(parts_.begin() + std::ptrdiff_t(i));
+            ImGui::PopID();
+            break;
+        }
+        ImGui::PopID();
+    }
+    if (ImGui::Button("Add part")) parts_.push_back(CustomBrushPart{});
+    nlohmann::json partsJson = nlohmann::json::array();
+    for (const CustomBrushPart& p : parts_) {
+        nlohmann::json part = unitShape(p.shape);
+        part["at"] = {p.at[0], p.at[1], p.at[2]};
+        part["scale"] = {std::max(p.size * p.scale[0], 0.01f), std::max(p.size * p.scale[1], 0.01f), std::max(p.size * p.scale[2], 0.01f)};
+        if (p.remove) part["op"] = "remove";
+        partsJson.push_back(part);
+    }
+    const nlohmann::json shape = {{"shape", "blend"}, {"smoothness", customSmoothness_}, {"parts", partsJson}};
+    if (ImGui::Button("Use as brush")) {
+        BrushSettings b = session.brush();
+        b.shape = shape;
+        out.push_back(brushCommand(b));
+    }
+    ImGui::InputText("Preset name", &presetName_);
+    if (ImGui::Button("Save preset and script brush")) {
+        try {
+            BrushSettings b = session.brush();
+            b.shape = shape;
+            const std::string base = (std::filesystem::path(session.scenePath()).parent_path() / presetName_).string();
+            const std::string preset = brushSettingsJson(b).dump(1) + "\n";
+            const std::string script = nlohmann::json{{"ops", {{{"mode", "add"}, {"brush", shape}, {"at", {0, 0, 0}}, {"scale", b.radius}}}}}.dump(1) + "\n";
+            writeFileAtomically(base + ".brush.json", [&](std::ostream& o) { o << preset; });
+            writeFileAtomically(base + ".script.json", [&](std::ostream& o) { o << script; });
+            status = "saved " + base + ".brush.json (preset) and " + base + ".script.json (a stroke script using it)";
+        } catch (const std::exception& e) {
+            status = std::string("could not save the preset: ") + e.what();
+        }
+    }
+    if (ImGui::Button("Load preset")) {
+        try {
+            const std::string path = (std::filesystem::path(session.scenePath()).parent_path() / (presetName_ + ".brush.json")).string();
+            std::ifstream in(path);
+            if (!in) throw std::runtime_error("cannot read " + path);
+            out.push_back(brushCommand(parseBrushSettings(nlohmann::json::parse(in))));
+        } catch (const std::exception& e) {
+            status = std::string("could not load the preset: ") + e.what();
+        }
+    }
+}
+
+void DesktopPanels::materialsPanel(EditingSession& session, std::vector<Command>& out)
+{
+    const MaterialTable materials = session.scene().materials();
+    for (const std::string& n : materials.names()) {
+        const Material& m = materials.at(*materials.find(n));
+        ImGui::ColorButton(("##" + n).c_str(), ImVec4(m.color[0], m.color[1], m.color[2], 1.0f));
+        ImGui::SameLine();
+        if (ImGui::Selectable((n + "  (toughness " + std::to_string(m.toughness).substr(0, 4) + ")").c_str(), false)) {
+            materialName_ = n;
+            std::copy(m.color.begin(), m.color.begin() + 3, materialColour_);
+            materialToughness_ = m.toughness;
+            materialTexture_ = m.texture;
+        }
+    }
+    ImGui::Separator();
+    ImGui::InputText("Name", &materialName_);
+    ImGui::ColorPicker3("Colour", materialColour_, ImGuiColorEditFlags_PickerHueWheel | ImGuiColorEditFlags_DisplayHSV);
+    ImGui::SliderFloat("Toughness", &materialToughness_, 0.0f, 1.0f);
+    ImGui::InputText("Texture", &materialTexture_);
+    if (ImGui::Button("Define / update") && !materialName_.empty()) {
+        Command c;
+        c.kind = Command::Kind::DefineMaterial;
+        c.material = {{"name", materialName_}, {"color", {materialColour_[0], materialColour_[1], materialColour_[2]}}, {"toughness", materialToughness_}};
+        if (!materialTexture_.empty()) c.material["texture"] = materialTexture_;
+        out.push_back(c);
+        BrushSettings b = session.brush();
+        b.material = materialName_;
+        out.push_back(brushCommand(b));
+    }
+}
+
+void DesktopPanels::toolsPanel(EditingSession& session, std::vector<Command>& out)
+{
+    ImGui::InputFloat3("Box min", toolMin_);
+    ImGui::InputFloat3("Box max", toolMax_);
+    ImGui::InputText("Tool file", &toolPath_);
+    if (ImGui::Button("Make tool and stamp with it")) {
+        try {
+            WorldBounds box{Vec3d(toolMin_[0], toolMin_[1], toolMin_[2]), Vec3d(toolMax_[0], toolMax_[1], toolMax_[2])};
+            const std::string path = (std::filesystem::path(session.scenePath()).parent_path() / toolPath_).string();
+            BrushSettings b = session.brush();
+            b.shape = makeToolFromBox(session, box, path);
+            b.radius = 1.0; // a tool keeps its size
+            out.push_back(brushCommand(b));
+            status = "made the tool " + path + ": the brush now stamps it";
+        } catch (const std::exception& e) {
+            status = std::string("could not make the tool: ") + e.what();
+        }
+    }
+}
+
+void DesktopPanels::filePanel(EditingSession& session, std::vector<Command>& out)
+{
+    if (ImGui::Button("Save (Ctrl+S)")) {
+        Command c;
+        c.kind = Command::Kind::Save;
+        out.push_back(c);
+    }
+    ImGui::InputText("Save as", &savePath_);
+    ImGui::SameLine();
+    if (ImGui::Button("Save##as") && !savePath_.empty()) {
+        Command c;
+        c.kind = Command::Kind::Save;
+        c.path = savePath_;
+        out.push_back(c);
+    }
+    ImGui::InputText("Import", &importPath_);
+    ImGui::SameLine();
+    if (ImGui::Button("Import##go") && !importPath_.empty()) {
+        try {
+            Command c;
+            c.kind = Command::Kind::ApplyOp;
+            c.op = importIntoScene(session, importPath_, session.brush().material);
+            out.push_back(c);
+            status = "imported " + importPath_;
+        } catch (const std::exception& e) {
+            status = std::string("could not import: ") + e.what();
+        }
+    }
+    ImGui::InputText("Export", &exportPath_);
+    ImGui::SameLine();
+    if (ImGui::Button("Export##go") && !exportPath_.empty()) {
+        try {
+            if (std::filesystem::path(exportPath_).extension() == ".vdb") exportSceneLevelSet(session, exportPath_);
+            else exportSceneMesh(session, exportPath_);
+            status = "exported " + exportPath_;
+        } catch (const std::exception& e) {
+            status = std::string("could not export: ") + e.what();
+        }
+    }
+    ImGui::InputText("Open", &openPath_);
+    ImGui::SameLine();
+    if (ImGui::Button("Open##go") && !openPath_.empty()) openRequested = openPath_;
+}
+
+void DesktopPanels::statsPanel(const EditingSession& session, const FrameFigures& f)
+{
+    const ImGuiIO& io = ImGui::GetIO();
+    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - 300, 10), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowBgAlpha(0.6f);
+    if (ImGui::Begin("Stats", &showStats, ImGuiWindowFlags_AlwaysAutoResize)) {
+        ImGui::Text("frame %.2f ms (sculpt %.2f ms)", f.frameMs, f.editMs);
+        ImGui::Text("triangles %llu, chunks %llu", (unsigned long long)f.draw.triangles, (unsigned long long)f.draw.chunksDrawn);
+        ImGui::Text("uploaded %.1f KiB", double(f.draw.uploadBytes) / 1024.0);
+        ImGui::Text("resident %.1f MiB (meshes %.1f MiB)", double(f.stream.residentBytes) / 1048576.0, double(f.stream.meshBytes) / 1048576.0);
+        std::string perLevel;
+        for (uint64_t n : f.stream.residentPerLevel) perLevel += std::to_string(n) + " ";
+        ImGui::Text("bricks per level: %s", perLevel.c_str());
+        ImGui::Text("shown %llu, pending %llu, hit rate %.0f%%", (unsigned long long)f.bricksShown, (unsigned long long)f.stream.pending,
+                    100.0 * f.stream.hitRate());
+        ImGui::Text("screen error %.2f px (target %.2f)%s", f.stream.screenError, f.stream.targetError, f.stream.budgetLimited ? ", budget-limited" : "");
+        ImGui::Text("undo %zu, redo %zu, history %.1f MiB (+%.1f spilled)", session.history().undoDepth(), session.history().redoDepth(),
+                    double(session.history().memoryBytes()) / 1048576.0, double(session.history().spilledBytes()) / 1048576.0);
+        ImGui::Text("edits %llu, autosaves %llu", (unsigned long long)session.scene().edits(), (unsigned long long)session.stats().autosaves);
+    }
+    ImGui::End();
+}
+
+} // namespace vdbclay

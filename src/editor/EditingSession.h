@@ -1,0 +1,130 @@
+// The editing session: a scene streaming under a memory budget, the current brush, the camera, the
+// undo history, autosave and the session record. Device-free: every user action is a Command applied
+// here, so the desktop window, the headset and replays drive the same code.
+#pragma once
+
+#include "editor/EditedScene.h"
+#include "editor/History.h"
+#include "editor/SessionCommand.h"
+#include "editor/VolumeRayCast.h"
+#include "scene/StreamingScene.h"
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vdbclay {
+
+struct SessionOptions {
+    uint64_t memoryBudgetBytes = 1ull << 30; // resident bricks and meshes
+    HistoryLimits history;
+    double autosaveSeconds = 5.0;  // dirty bricks are committed this often while sculpting,
+    double idleAutosaveSeconds = 1.0; // and once no command came for this long
+    int loaderThreads = 2;
+    bool discardRecovery = false;  // a .vdb's working store: drop unsaved edits instead of recovering them
+    std::string recordPath;        // written at every autosave and by saveRecord(): the session so far
+    std::function<void(const std::string&)> message; // one-line notices (autosaves, refused strokes)
+};
+
+struct SessionStats {
+    uint64_t stampsApplied = 0;
+    uint64_t opsRefused = 0;   // stroke stretches a brush could not apply (reported through `message`)
+    uint64_t autosaves = 0;
+    uint64_t bricksChangedLastFrame = 0;
+    double editMsLastFrame = 0.0; // sculpting (page-in included) in the last frame's commands
+};
+
+class EditingSession {
+public:
+    /// Opens `scenePath` (a .vdb or a store) for editing; see prepareScene for recovery.
+    EditingSession(const std::string& scenePath, const SessionOptions& options);
+    /// Autosaves and writes the record (when recording).
+    ~EditingSession();
+    EditingSession(const EditingSession&) = delete;
+    EditingSession& operator=(const EditingSession&) = delete;
+
+    /// Edits autosaved after the last save that this session found and kept (a session that crashed).
+    uint64_t recoveredEdits() const { return prepared_.recoveredEdits; }
+
+    /// Everything a user can do. Recorded with the current frame and time. A stroke stretch the brush
+    /// cannot apply (too large, unknown material) is skipped with a message, never thrown; a save that
+    /// fails throws (the scene stays as it was).
+    void apply(const Command& command);
+
+    /// One frame at `time` seconds since the session began: streams for the camera's view at this
+    /// viewport and autosaves when due. Commands applied next belong to the next frame.
+    FrameReport frame(double time, const std::array<int, 2>& viewport);
+
+    /// The surface under a ray, from the resident data of any level (no loading).
+    std::optional<SurfaceHit> pick(const std::array<double, 3>& origin, const std::array<double, 3>& direction,
+                                   double maxDistance = 1e30) const;
+
+    const BrushSettings& brush() const { return brush_; }
+    const render::Camera& camera() const { return camera_; }
+    bool strokeActive() const { return stroke_.active; }
+    /// Where the active stroke's brush is (for the overlay and a move brush's drag plane).
+    std::array<double, 3> strokePoint() const { return stroke_.lastPoint; }
+    const History& history() const { return history_; }
+    const SessionStats& stats() const { return stats_; }
+    const SessionRecord& record() const { return record_; }
+    /// The ops applied so far, as a stroke script (what `vdbclay sculpt` would apply to the same scene).
+    nlohmann::json appliedScript() const;
+    uint64_t frameNumber() const { return frameNumber_; }
+    StreamingScene& scene() { return *scene_; }
+    const StreamingScene& scene() const { return *scene_; }
+    const std::string& scenePath() const { return scenePath_; }
+
+    /// Commits dirty bricks now (Ctrl+S saves; this only protects against a crash).
+    void autosave();
+    /// Writes the record to options.recordPath (nothing when not recording).
+    void saveRecord() const;
+
+private:
+    struct Stroke {
+        bool active = false;
+        std::array<double, 3> lastStamp{0, 0, 0}; // where the last stamp went
+        std::array<double, 3> lastPoint{0, 0, 0}; // where the pointer was last
+        double travelled = 0.0;                   // along the pointer's path since the last stamp
+        std::vector<LeafChange> changes;          // merged per leaf: first before, last after
+        std::map<IndexCoord, std::size_t> changeIndex;
+    };
+    void beginStroke(const std::array<double, 3>& point, double pressure);
+    void moveStroke(const std::array<double, 3>& point, double pressure);
+    void endStroke();
+    void applyOp(const nlohmann::json& op);
+    void undo();
+    void redo();
+    void defineMaterial(const nlohmann::json& material);
+    void notify(const std::string& text) const;
+
+    std::string scenePath_;
+    SessionOptions options_;
+    PreparedScene prepared_;
+    std::unique_ptr<StreamingScene> scene_;
+    History history_;
+    BrushSettings brush_;
+    render::Camera camera_;
+    Stroke stroke_;
+    SessionStats stats_;
+    SessionRecord record_;
+    nlohmann::json materialsDefined_ = nlohmann::json::array();
+    nlohmann::json appliedOps_ = nlohmann::json::array();
+    uint64_t frameNumber_ = 0;
+    double time_ = 0.0, lastAutosave_ = 0.0, lastCommand_ = 0.0;
+    bool editedSinceAutosave_ = false;
+    double editMs_ = 0.0;
+    uint64_t bricksChanged_ = 0;
+};
+
+/// Replays a recorded session on `session` (frame by frame, each frame's commands first) up to `frames`
+/// frames (all when absent); `viewport` is the record's unless given. `onFrame` runs after each frame.
+void replaySession(EditingSession& session, const SessionRecord& record, std::optional<uint64_t> frames = std::nullopt,
+                   const std::function<void(uint64_t frame, const FrameReport&)>& onFrame = {});
+
+} // namespace vdbclay

@@ -1,0 +1,61 @@
+// The editor's undo history: per edit (a whole stroke), the level-0 leaf boxes it changed, before and
+// after, encoded as the store encodes bricks (copy on write: only changed leaves are kept). Entries
+// beyond the memory cap are spilled, oldest first, to an anonymous temporary file and read back when
+// undone, so undo works however far the camera has flown (restoring pages the bricks in again).
+#pragma once
+
+#include "scene/StreamingScene.h"
+
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <vector>
+
+namespace vdbclay {
+
+struct HistoryLimits {
+    uint64_t memoryBytes = 256ull << 20; // entries kept in memory
+    uint64_t spillBytes = 8ull << 30;    // the spill file; beyond it the oldest entries are forgotten
+};
+
+class History {
+public:
+    explicit History(const HistoryLimits& limits = {});
+    ~History();
+    History(const History&) = delete;
+    History& operator=(const History&) = delete;
+
+    /// Records an edit (changes with equal before and after are dropped; nothing is recorded when none
+    /// remain) and forgets what could be redone.
+    void push(std::vector<LeafChange> changes);
+    /// The leaf images that take the scene back before the latest edit; the edit moves to the redo side.
+    std::optional<std::vector<LeafImage>> undo();
+    /// The leaf images that apply the latest undone edit again.
+    std::optional<std::vector<LeafImage>> redo();
+
+    std::size_t undoDepth() const { return undo_.size(); }
+    std::size_t redoDepth() const { return redo_.size(); }
+    uint64_t memoryBytes() const { return memoryBytes_; }
+    uint64_t spilledBytes() const { return spilledBytes_; }
+    uint64_t forgotten() const { return forgotten_; } // oldest edits dropped past the spill limit
+
+private:
+    struct Entry {
+        std::vector<LeafChange> changes; // empty while spilled
+        uint64_t bytes = 0;              // encoded size
+        bool spilled = false;
+        uint64_t fileOffset = 0;
+    };
+    void spillOver();
+    void load(Entry& entry);
+    void release(Entry& entry);
+
+    HistoryLimits limits_;
+    std::vector<Entry> undo_, redo_;
+    uint64_t memoryBytes_ = 0, spilledBytes_ = 0, forgotten_ = 0;
+    uint64_t fileEnd_ = 0;
+    std::FILE* spill_ = nullptr;
+};
+
+} // namespace vdbclay

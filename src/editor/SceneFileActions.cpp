@@ -1,0 +1,99 @@
+#include "editor/SceneFileActions.h"
+
+#include "interop/LevelSetExport.h"
+#include "interop/LevelSetImport.h"
+#include "mesher/MeshIO.h"
+#include "mesher/Mesher.h"
+#include "scene/SceneStore.h"
+#include "sculpt/GridTool.h"
+#include "vdb_hermite/VolumeIO.h"
+#include "voxelize/TriangleMesh.h"
+#include "voxelize/Voxelizer.h"
+
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+
+namespace vdbclay {
+
+namespace {
+
+std::string absolute(const std::string& path) { return std::filesystem::absolute(path).lexically_normal().string(); }
+
+/// Level 0 as the store holds it after an autosave.
+Volume committedScene(EditingSession& session)
+{
+    session.autosave();
+    return session.scene().store().loadLevel(0);
+}
+
+} // namespace
+
+nlohmann::json importIntoScene(const EditingSession& session, const std::string& path, const std::string& material)
+{
+    const double voxelSize = session.scene().store().voxelSize();
+    Volume volume(voxelSize);
+    if (isMeshPath(path)) {
+        VoxelizeOptions options;
+        options.voxelSize = voxelSize;
+        options.material = material;
+        volume = voxelizeMesh(loadTriangleMesh(path), options);
+    } else {
+        LevelSetImportOptions options;
+        options.voxelSize = voxelSize;
+        if (!material.empty()) options.material = material;
+        volume = importLevelSet(path, options);
+    }
+    if (volume.stats().empty) throw std::runtime_error("'" + path + "' holds no solid on the scene's lattice (voxel size " + std::to_string(voxelSize) + ")");
+    const std::filesystem::path folder = std::filesystem::path(session.scenePath()).string() + ".imports";
+    std::filesystem::create_directories(folder);
+    const std::string toolPath = absolute((folder / (std::filesystem::path(path).stem().string() + ".vdb")).string());
+    saveVolume(volume, toolPath);
+    const GridTool tool(loadVolume(toolPath)); // as the op will read it: its pivot goes where it was
+    nlohmann::json op = {{"mode", "add"}, {"brush", {{"shape", "grid"}, {"file", toolPath}}}};
+    op["at"] = {tool.pivot()[0] * voxelSize, tool.pivot()[1] * voxelSize, tool.pivot()[2] * voxelSize};
+    if (!material.empty()) op["material"] = material;
+    return op;
+}
+
+void exportSceneMesh(EditingSession& session, const std::string& path)
+{
+    const Volume volume = committedScene(session);
+    MeshOptions options;
+    options.kind = MesherKind::CubicalMarchingSquares;
+    writeMesh(meshVolume(volume, options), volume.materials(), path);
+}
+
+void exportSceneLevelSet(EditingSession& session, const std::string& path)
+{
+    exportLevelSet(committedScene(session), path, LevelSetExportOptions{});
+}
+
+nlohmann::json makeToolFromBox(EditingSession& session, const WorldBounds& box, const std::string& path)
+{
+    for (int a = 0; a < 3; ++a)
+        if (!(box.max[a] > box.min[a]) || !std::isfinite(box.min[a]) || !std::isfinite(box.max[a]))
+            throw std::invalid_argument("a tool's box needs finite corners, each minimum below its maximum");
+    session.autosave();
+    const SceneStore& store = session.scene().store();
+    const double vs = store.voxelSize();
+    std::vector<IndexCoord> bricks;
+    IndexCoord lo, hi;
+    double count = 1.0;
+    for (std::size_t a = 0; a < 3; ++a) {
+        lo[a] = int32_t(std::floor(std::floor(std::max(box.min[int(a)] / vs, -1e9)) / kBrickEdge));
+        hi[a] = int32_t(std::floor(std::ceil(std::min(box.max[int(a)] / vs, 1e9)) / kBrickEdge));
+        count *= double(hi[a] - lo[a] + 1);
+    }
+    if (count > 1e5) throw std::invalid_argument("the box reaches too many bricks for a tool; choose a smaller box");
+    for (int32_t x = lo[0]; x <= hi[0]; ++x)
+        for (int32_t y = lo[1]; y <= hi[1]; ++y)
+            for (int32_t z = lo[2]; z <= hi[2]; ++z) bricks.push_back({x, y, z});
+    Volume volume(vs);
+    volume.materials() = store.materials();
+    store.loadBricks(0, bricks, volume);
+    saveVolume(toolFromScene(std::move(volume), box), path);
+    return {{"shape", "grid"}, {"file", absolute(path)}};
+}
+
+} // namespace vdbclay

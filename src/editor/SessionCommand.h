@@ -1,0 +1,71 @@
+// Everything a user does in the editor, as plain commands: front ends (the desktop window, the headset)
+// only turn device input into these, and a recorded session is the list of them with their frames, so
+// it replays headless, bit for bit.
+#pragma once
+
+#include "editor/BrushSettings.h"
+#include "render/RenderTypes.h"
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace vdbclay {
+
+/// A malformed session file or command; what() names the place ("commands[3].point: ...").
+class SessionError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+struct Command {
+    enum class Kind {
+        StrokeBegin, // at `point` (the surface under the pointer) with `pressure`
+        StrokeMove,  // the pointer moved to `point` with `pressure` (a move brush: the drag's point)
+        StrokeEnd,
+        SetBrush,    // `brush`
+        Undo,
+        Redo,
+        Save,        // to `path`, or the scene's own file when empty
+        SetCamera,   // `camera`
+        DefineMaterial, // `material`: a script's material definition (name, color, toughness, texture)
+        ApplyOp,     // `op`: one stroke-script op as one edit (tool stamps, imported meshes)
+    };
+    Kind kind = Kind::StrokeEnd;
+    std::array<double, 3> point{0, 0, 0};
+    double pressure = 1.0;
+    BrushSettings brush;
+    render::Camera camera;
+    std::string path;
+    nlohmann::json material;
+    nlohmann::json op;
+};
+
+const char* commandName(Command::Kind kind);
+nlohmann::json commandJson(const Command& command);
+/// Throws SessionError naming `where` and the key.
+Command parseCommand(const nlohmann::json& json, const std::string& where);
+
+/// A command as a session file lists it: the frame it was applied before, and the session's clock then.
+struct RecordedCommand {
+    uint64_t frame = 0;
+    double time = 0.0;
+    Command command;
+};
+
+struct SessionRecord {
+    std::array<int, 2> viewport{1280, 720}; // the window's size when recording began
+    std::vector<RecordedCommand> commands;
+    uint64_t frames = 0; // frames the session ran
+};
+
+nlohmann::json sessionRecordJson(const SessionRecord& record);
+/// Reads a session file; throws SessionError for unreadable or malformed ones.
+SessionRecord loadSessionRecord(const std::string& path);
+/// Writes the record atomically (a crash leaves the old file or the new one).
+void saveSessionRecord(const SessionRecord& record, const std::string& path);
+
+} // namespace vdbclay

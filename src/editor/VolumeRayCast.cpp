@@ -1,0 +1,95 @@
+#include "editor/VolumeRayCast.h"
+
+#include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/Quantize.h"
+
+#include <cmath>
+#include <limits>
+
+namespace vdbclay {
+
+std::optional<SurfaceHit> castRay(const Volume& volume, const std::array<double, 3>& origin,
+                                  const std::array<double, 3>& direction, double maxDistance)
+{
+    const double length = std::sqrt(direction[0] * direction[0] + direction[1] * direction[1] + direction[2] * direction[2]);
+    if (!(length > 0.0) || !std::isfinite(length) || !(maxDistance > 0.0)) return std::nullopt;
+    const double h = volume.voxelSize();
+    std::array<double, 3> o{}, d{};
+    for (int a = 0; a < 3; ++a) {
+        o[std::size_t(a)] = origin[std::size_t(a)] / h;
+        d[std::size_t(a)] = direction[std::size_t(a)] / length;
+        if (!std::isfinite(o[std::size_t(a)]) || std::abs(o[std::size_t(a)]) > kMaxLatticeCoordinate) return std::nullopt;
+    }
+    const double tEnd = std::min(maxDistance / h, 4.0 * kMaxLatticeCoordinate);
+
+    // Amanatides-Woo over the cells of lattice points (the cube of half a voxel around each): consecutive
+    // cells share a face, so an empty point followed by a solid one spans exactly one lattice edge.
+    Coord cell;
+    std::array<int, 3> step{};
+    std::array<double, 3> tMax{}, tDelta{};
+    for (int a = 0; a < 3; ++a) {
+        const std::size_t i = std::size_t(a);
+        cell[a] = int32_t(std::floor(o[i] + 0.5));
+        if (d[i] > 0) {
+            step[i] = 1;
+            tMax[i] = (double(cell[a]) + 0.5 - o[i]) / d[i];
+            tDelta[i] = 1.0 / d[i];
+        } else if (d[i] < 0) {
+            step[i] = -1;
+            tMax[i] = (double(cell[a]) - 0.5 - o[i]) / d[i];
+            tDelta[i] = -1.0 / d[i];
+        } else {
+            tMax[i] = tDelta[i] = std::numeric_limits<double>::infinity();
+        }
+    }
+    const HermiteGrid& grid = *volume.impl().grid;
+    auto access = grid.getConstAccessor();
+    bool wasSolid = access.getValue(cell).solid();
+    bool leftSolid = !wasSolid; // a ray starting inside looks for the next entry
+    while (true) {
+        const int axis = tMax[0] < tMax[1] ? (tMax[0] < tMax[2] ? 0 : 2) : (tMax[1] < tMax[2] ? 1 : 2);
+        const double t = tMax[std::size_t(axis)];
+        if (t > tEnd) return std::nullopt;
+        const Coord previous = cell;
+        cell[axis] += step[std::size_t(axis)];
+        tMax[std::size_t(axis)] += tDelta[std::size_t(axis)];
+        const bool solid = access.getValue(cell).solid();
+        if (!solid) leftSolid = true;
+        if (solid && !wasSolid && leftSolid) {
+            // The crossing lies on the edge from the lower of the two points along `axis`.
+            const Coord lower = step[std::size_t(axis)] > 0 ? previous : cell;
+            SurfaceHit hit;
+            std::array<double, 3> p{double(lower[0]), double(lower[1]), double(lower[2])};
+            double offset = 0.5;
+            std::array<double, 3> n{0, 0, 0};
+            n[std::size_t(axis)] = -double(step[std::size_t(axis)]);
+            if (const HermiteLeaf* leaf = access.probeConstLeaf(lower))
+                if (const PackedSample* s = leaf->sample(HermiteLeaf::coordToOffset(lower), axis)) {
+                    const UnpackedSample u = unpackSample(*s);
+                    offset = u.offset;
+                    n = {u.normal[0], u.normal[1], u.normal[2]};
+                }
+            p[std::size_t(axis)] += offset;
+            for (int a = 0; a < 3; ++a) hit.point[std::size_t(a)] = p[std::size_t(a)] * h;
+            hit.normal = n;
+            hit.distance = t * h;
+            return hit;
+        }
+        wasSolid = solid;
+    }
+}
+
+std::optional<SurfaceHit> castRayAcrossLevels(const std::vector<const Volume*>& levels, const std::array<double, 3>& origin,
+                                              const std::array<double, 3>& direction, double maxDistance)
+{
+    std::optional<SurfaceHit> best;
+    for (std::size_t k = 0; k < levels.size(); ++k) {
+        std::optional<SurfaceHit> hit = castRay(*levels[k], origin, direction, maxDistance);
+        if (!hit) continue;
+        hit->level = int(k);
+        if (!best || hit->distance < best->distance - 2.0 * levels[k]->voxelSize()) best = hit;
+    }
+    return best;
+}
+
+} // namespace vdbclay

@@ -1,0 +1,33 @@
+// Where a ray first meets the surface of a volume, from its Hermite data (not from drawn triangles): the
+// crossing stored on the lattice edge the ray enters the solid through. What puts the editor's brush on
+// the surface under the pointer.
+#pragma once
+
+#include "vdb_hermite/Volume.h"
+
+#include <array>
+#include <optional>
+#include <vector>
+
+namespace vdbclay {
+
+struct SurfaceHit {
+    std::array<double, 3> point{0, 0, 0};  // world units, on the surface
+    std::array<double, 3> normal{0, 0, 1}; // outward unit normal there
+    double distance = 0.0;                 // along the ray, world units
+    int level = 0;                         // the level of detail whose data the ray met
+};
+
+/// The first entry of the ray into solid matter within `maxDistance` (world units; `direction` need not
+/// be unit length). A ray that starts inside solid matter hits where it enters solid matter again after
+/// leaving it. Steps voxel by voxel: at most about maxDistance / voxelSize * 1.8 lookups.
+std::optional<SurfaceHit> castRay(const Volume& volume, const std::array<double, 3>& origin,
+                                  const std::array<double, 3>& direction, double maxDistance);
+
+/// The ray against every level's data (index = level, each on its own lattice): the finest level's hit,
+/// unless a coarser level meets the surface clearly in front of it (two of that level's voxels), where
+/// the finer data are not resident.
+std::optional<SurfaceHit> castRayAcrossLevels(const std::vector<const Volume*>& levels, const std::array<double, 3>& origin,
+                                              const std::array<double, 3>& direction, double maxDistance);
+
+} // namespace vdbclay

@@ -1,0 +1,22 @@
+// What a frame draws into: an offscreen image read back to the host, a window's swapchain image, one eye
+// of a headset. All share the render pass shape of createRenderPass (colour + 32-bit depth, cleared).
+#pragma once
+
+#include <vulkan/vulkan.h>
+
+namespace vdbclay::render {
+
+class RenderTarget {
+public:
+    virtual ~RenderTarget() = default;
+    virtual int width() const = 0;
+    virtual int height() const = 0;
+    virtual VkRenderPass renderPass() const = 0;
+    virtual VkFramebuffer framebuffer() const = 0;
+    /// Recorded inside the render pass after the scene's views: what the target draws over them (menus).
+    virtual void recordOverlay(VkCommandBuffer) {}
+    /// Recorded after the render pass (a readback of the pixels).
+    virtual void recordAfterPass(VkCommandBuffer) const {}
+};
+
+} // namespace vdbclay::render

@@ -1,0 +1,60 @@
+// A window's swapchain as render targets: one per image (colour from the swapchain, one shared depth
+// image: frames are drawn one at a time), acquired with a fence and presented once drawn.
+#pragma once
+
+#include "render/RenderTarget.h"
+#include "render/VulkanContext.h"
+
+#include <functional>
+#include <memory>
+#include <vector>
+
+namespace vdbclay::render {
+
+class SwapchainTarget {
+public:
+    /// `surface` stays the caller's. Throws VulkanError when the device cannot present to it.
+    SwapchainTarget(const VulkanContext& context, VkSurfaceKHR surface, int width, int height);
+    ~SwapchainTarget();
+    SwapchainTarget(const SwapchainTarget&) = delete;
+    SwapchainTarget& operator=(const SwapchainTarget&) = delete;
+
+    /// The colour format of its images (give it to RendererOptions::colourFormat) and its render pass.
+    VkFormat format() const { return format_; }
+    VkRenderPass renderPass() const { return renderPass_; }
+    uint32_t imageCount() const { return uint32_t(images_.size()); }
+    int width() const { return width_; }
+    int height() const { return height_; }
+
+    /// What every target draws over the scene, inside its render pass (the menus).
+    void setOverlay(std::function<void(VkCommandBuffer)> overlay) { overlay_ = std::move(overlay); }
+
+    /// Waits for the next image and returns it as a target; nullptr when the swapchain no longer matches
+    /// the window (call resize).
+    RenderTarget* acquire();
+    /// Presents the image acquired last (drawn and waited for). False when the swapchain must be resized.
+    bool present();
+    /// Makes the swapchain again for the window's new size (0 x 0 while minimized: nothing to draw).
+    void resize(int width, int height);
+
+private:
+    struct Image;
+    void create(int width, int height);
+    void destroy();
+
+    const VulkanContext& context_;
+    VkSurfaceKHR surface_;
+    VkFormat format_ = VK_FORMAT_UNDEFINED;
+    VkRenderPass renderPass_ = VK_NULL_HANDLE;
+    VkSwapchainKHR swapchain_ = VK_NULL_HANDLE;
+    VkFence acquired_ = VK_NULL_HANDLE;
+    VkImage depth_ = VK_NULL_HANDLE;
+    VkDeviceMemory depthMemory_ = VK_NULL_HANDLE;
+    VkImageView depthView_ = VK_NULL_HANDLE;
+    std::vector<std::unique_ptr<Image>> images_;
+    uint32_t current_ = 0;
+    int width_ = 0, height_ = 0;
+    std::function<void(VkCommandBuffer)> overlay_;
+};
+
+} // namespace vdbclay::render
