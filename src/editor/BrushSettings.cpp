@@ -88,6 +88,7 @@ nlohmann::json strokeOpJson(const BrushSettings& b, const std::vector<std::array
     if (points.size() == 1) op["at"] = points[0];
     else op["path"] = points;
     if (!b.material.empty()) op["material"] = b.material;
+    else if (b.mode == "paint") op["material"] = "default"; // paint needs one: the volume's first, as add uses
     const double strength = b.strength * (b.pressure == PressureTarget::Strength ? p : 1.0);
     if (isReshapingMode(b.mode)) {
         op["strength"] = strength;

@@ -3,6 +3,7 @@
 #include "vdb_hermite/HermiteGrid.h"
 #include "vdb_hermite/Quantize.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -20,7 +21,32 @@ std::optional<SurfaceHit> castRay(const Volume& volume, const std::array<double,
         d[std::size_t(a)] = direction[std::size_t(a)] / length;
         if (!std::isfinite(o[std::size_t(a)]) || std::abs(o[std::size_t(a)]) > kMaxLatticeCoordinate) return std::nullopt;
     }
-    const double tEnd = std::min(maxDistance / h, 4.0 * kMaxLatticeCoordinate);
+    double tStart = 0.0, tEnd = std::min(maxDistance / h, 4.0 * kMaxLatticeCoordinate);
+    // Only the part of the ray inside the root's children and solid tiles (a few, 4096^3 voxels each) is
+    // walked: a ray that misses everything costs nothing.
+    const HermiteGrid& grid = *volume.impl().grid;
+    {
+        CoordBBox bounds;
+        const auto& root = grid.tree().root();
+        for (auto child = root.cbeginChildOn(); child; ++child) bounds.expand(child->getNodeBoundingBox());
+        for (auto tile = root.cbeginValueAll(); tile; ++tile)
+            if (tile->solid()) bounds.expand(CoordBBox::createCube(tile.getCoord(), HermiteTree::RootNodeType::ChildNodeType::DIM));
+        if (bounds.empty()) return std::nullopt;
+        for (int a = 0; a < 3; ++a) {
+            const std::size_t i = std::size_t(a);
+            const double lo = double(bounds.min()[a]) - 1.0, hi = double(bounds.max()[a]) + 1.0;
+            if (d[i] == 0.0) {
+                if (o[i] < lo || o[i] > hi) return std::nullopt;
+                continue;
+            }
+            double t0 = (lo - o[i]) / d[i], t1 = (hi - o[i]) / d[i];
+            if (t0 > t1) std::swap(t0, t1);
+            tStart = std::max(tStart, t0);
+            tEnd = std::min(tEnd, t1);
+        }
+        if (tStart > tEnd) return std::nullopt;
+        for (std::size_t i = 0; i < 3; ++i) o[i] += d[i] * tStart; // start at the entry (distances add tStart back)
+    }
 
     // Amanatides-Woo over the cells of lattice points (the cube of half a voxel around each): consecutive
     // cells share a face, so an empty point followed by a solid one spans exactly one lattice edge.
@@ -42,7 +68,7 @@ std::optional<SurfaceHit> castRay(const Volume& volume, const std::array<double,
             tMax[i] = tDelta[i] = std::numeric_limits<double>::infinity();
         }
     }
-    const HermiteGrid& grid = *volume.impl().grid;
+    tEnd -= tStart;
     auto access = grid.getConstAccessor();
     bool wasSolid = access.getValue(cell).solid();
     bool leftSolid = !wasSolid; // a ray starting inside looks for the next entry
@@ -72,7 +98,7 @@ std::optional<SurfaceHit> castRay(const Volume& volume, const std::array<double,
             p[std::size_t(axis)] += offset;
             for (int a = 0; a < 3; ++a) hit.point[std::size_t(a)] = p[std::size_t(a)] * h;
             hit.normal = n;
-            hit.distance = t * h;
+            hit.distance = (t + tStart) * h;
             return hit;
         }
         wasSolid = solid;

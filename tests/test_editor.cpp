@@ -1,0 +1,399 @@
+// The editing session, device-free: replays equal the strokes applied by scripts, undo and redo are
+// bit-exact (after eviction and with the history spilled too), symmetry equals the written-out strokes,
+// autosaved edits survive a SIGKILL, the ray cast meets analytic surfaces, bad session files are refused.
+#include "editor/EditingSession.h"
+#include "editor/VolumeRayCast.h"
+#include "scene/SceneStore.h"
+#include "scene/StoreLod.h"
+#include "scene/Synthesize.h"
+#include "sculpt/StrokeScript.h"
+#include "support/CliRun.h"
+#include "support/TestUtil.h"
+#include "vdb_hermite/VolumeIO.h"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <csignal>
+#include <filesystem>
+#include <random>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+using namespace vdbclay;
+using namespace vdbclay::test;
+
+namespace {
+
+/// A .vdb holding a sphere of `radius` voxels at the origin (voxel size 1).
+std::string makeBall(const TempDir& dir, double radius = 20.0, const std::string& name = "ball.vdb")
+{
+    Volume v(1.0);
+    runStrokeScript(v, parseStrokeScript(nlohmann::json{{"ops", {{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", radius}}}}}}}.dump()));
+    const std::string path = dir.file(name);
+    saveVolume(v, path);
+    return path;
+}
+
+/// A terrain store of 256 voxels with its levels of detail.
+std::string makeTerrain(const TempDir& dir, const std::string& name = "t.vdbclay")
+{
+    SynthOptions o;
+    o.kind = SynthKind::Terrain;
+    o.extent = 256;
+    o.seed = 11;
+    const std::string path = dir.file(name);
+    synthesizeStore(o, path);
+    SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
+    buildStoreLod(scene, 3);
+    return path;
+}
+
+Command brushCommand(const std::string& mode, double radius, const nlohmann::json& symmetry = nullptr)
+{
+    Command c;
+    c.kind = Command::Kind::SetBrush;
+    c.brush.mode = mode;
+    c.brush.radius = radius;
+    c.brush.strength = 0.7;
+    c.brush.distance = 1.5;
+    c.brush.symmetry = symmetry;
+    return c;
+}
+
+Command strokeCommand(Command::Kind kind, const std::array<double, 3>& p = {0, 0, 0}, double pressure = 1.0)
+{
+    Command c;
+    c.kind = kind;
+    c.point = p;
+    c.pressure = pressure;
+    return c;
+}
+
+Command simple(Command::Kind kind)
+{
+    Command c;
+    c.kind = kind;
+    return c;
+}
+
+/// The session's scene as its store holds it after an autosave.
+Volume committed(EditingSession& session)
+{
+    session.autosave();
+    return session.scene().store().loadLevel(0);
+}
+
+/// Random strokes of every mode on a terrain: each starts where a ray from above meets the surface (the
+/// session's own ray cast) and moves a few voxels; pressure varies.
+std::vector<Command> randomStrokes(EditingSession& session, int count, uint64_t seed, double from = 40.0, double to = 216.0)
+{
+    static const char* modes[] = {"add", "remove", "paint", "smooth", "flatten", "inflate", "deflate", "move", "erode"};
+    std::mt19937 rng{unsigned(seed)};
+    std::uniform_real_distribution<double> xz(from, to), step(-4.0, 4.0), radius(3.0, 6.0), pressure(0.3, 1.0);
+    std::vector<Command> out;
+    for (int i = 0; i < count; ++i) {
+        const std::array<double, 3> top{xz(rng), 200.0, xz(rng)};
+        const auto hit = session.pick(top, {0, -1, 0});
+        if (!hit) continue;
+        out.push_back(brushCommand(modes[i % 9], radius(rng), i % 4 == 3 ? nlohmann::json{{"mirror", {"x"}}, {"center", {128, 0, 128}}} : nlohmann::json()));
+        std::array<double, 3> p = hit->point;
+        out.push_back(strokeCommand(Command::Kind::StrokeBegin, p, pressure(rng)));
+        for (int m = 0; m < 3; ++m) {
+            p[0] += step(rng);
+            p[2] += step(rng);
+            p[1] += 0.3 * step(rng);
+            out.push_back(strokeCommand(Command::Kind::StrokeMove, p, pressure(rng)));
+        }
+        out.push_back(simple(Command::Kind::StrokeEnd));
+    }
+    return out;
+}
+
+SessionOptions quietOptions(uint64_t budgetMB = 256)
+{
+    SessionOptions o;
+    o.memoryBudgetBytes = budgetMB << 20;
+    o.autosaveSeconds = 1e9;
+    o.idleAutosaveSeconds = 1e9;
+    o.message = [](const std::string& m) { std::fprintf(stderr, "session: %s\n", m.c_str()); };
+    return o;
+}
+
+} // namespace
+
+TEST_CASE("editor: the ray cast meets a sphere at its analytic distance, with its normal", "[editor]")
+{
+    Volume v(0.5);
+    runStrokeScript(v, parseStrokeScript(R"({"ops": [{"mode": "add", "brush": {"shape": "sphere", "radius": 10}, "at": [1.3, -0.7, 0.4]}]})"));
+    const std::array<double, 3> c{1.3, -0.7, 0.4};
+    std::mt19937 rng{5};
+    std::normal_distribution<double> g(0.0, 1.0);
+    for (int i = 0; i < 200; ++i) {
+        std::array<double, 3> d{g(rng), g(rng), g(rng)};
+        const double n = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        for (double& x : d) x /= n;
+        // From 30 units out towards a point near the centre: the ray meets the sphere.
+        const std::array<double, 3> o{c[0] - 30 * d[0], c[1] - 30 * d[1], c[2] - 30 * d[2]};
+        const auto hit = castRay(v, o, d, 100.0);
+        REQUIRE(hit);
+        const double r = std::sqrt(std::pow(hit->point[0] - c[0], 2) + std::pow(hit->point[1] - c[1], 2) + std::pow(hit->point[2] - c[2], 2));
+        CHECK(std::abs(r - 10.0) < 0.1); // on the surface: quantized crossings, within a fifth of a voxel
+        CHECK(std::abs(hit->distance - 20.0) < 0.5 + 1e-9); // the first crossing, within a voxel of the analytic one
+        double cosine = 0.0;
+        for (std::size_t a = 0; a < 3; ++a) cosine += hit->normal[a] * (hit->point[a] - c[a]) / r;
+        CHECK(cosine > std::cos(3.0 * M_PI / 180.0));
+    }
+    // Pointing away, or too short: no hit. From inside: the next entry after leaving (none for a ball).
+    CHECK_FALSE(castRay(v, {30, 0, 0}, {1, 0, 0}, 100.0));
+    CHECK_FALSE(castRay(v, {30, 0, 0}, {-1, 0, 0}, 5.0));
+    CHECK_FALSE(castRay(v, c, {1, 0, 0}, 100.0));
+    CHECK_FALSE(castRay(v, {0, 0, 0}, {0, 0, 0}, 100.0));
+}
+
+TEST_CASE("replay: a replayed session equals the session and the same strokes applied as a script", "[editor][replay]")
+{
+    TempDir dir;
+    const std::string original = makeTerrain(dir);
+    std::filesystem::copy_file(original, dir.file("a.vdbclay"));
+    std::filesystem::copy_file(original, dir.file("b.vdbclay"));
+    SessionRecord record;
+    nlohmann::json script;
+    Volume live;
+    {
+        EditingSession session(dir.file("a.vdbclay"), quietOptions());
+        session.frame(0.0, {640, 480});
+        session.scene().waitForLoads();
+        session.frame(0.1, {640, 480});
+        const std::vector<Command> strokes = randomStrokes(session, 14, 3);
+        REQUIRE(strokes.size() > 50);
+        for (std::size_t i = 0; i < strokes.size(); ++i) {
+            session.apply(strokes[i]);
+            if (i % 3 == 0) session.frame(0.2 + double(i) * 0.01, {640, 480});
+        }
+        CHECK(session.stats().opsRefused == 0);
+        CHECK(session.stats().stampsApplied > 40);
+        record = session.record();
+        script = session.appliedScript();
+        live = committed(session);
+    }
+    // Through its file, as users attach it to reports.
+    saveSessionRecord(record, dir.file("s.json"));
+    const SessionRecord loaded = loadSessionRecord(dir.file("s.json"));
+    REQUIRE(loaded.commands.size() == record.commands.size());
+    EditingSession replayed(dir.file("b.vdbclay"), quietOptions());
+    replaySession(replayed, loaded);
+    CHECK(identical(committed(replayed), live));
+
+    Volume scripted = loadScene(original);
+    StrokeScript parsed = parseStrokeScript(script.dump());
+    runStrokeScript(scripted, parsed);
+    CHECK(identical(scripted, live));
+}
+
+TEST_CASE("editor: undo of random strokes restores the scene bit-exactly after eviction and spills; redo restores the edits", "[editor]")
+{
+    TempDir dir;
+    const std::string path = makeTerrain(dir);
+    const Volume before = loadScene(path);
+    SessionOptions options = quietOptions(3); // a few bricks: the strokes' bricks are evicted as the view moves
+    options.history.memoryBytes = 64 << 10;    // most of the history goes to the spill file
+    EditingSession session(path, options);
+    session.frame(0.0, {640, 480});
+    session.scene().waitForLoads();
+    const std::vector<Command> strokes = randomStrokes(session, 12, 9, 8.0, 248.0);
+    uint64_t strokeCount = 0;
+    for (const Command& c : strokes) {
+        session.apply(c);
+        strokeCount += c.kind == Command::Kind::StrokeEnd;
+        if (c.kind == Command::Kind::StrokeEnd) session.frame(1.0, {640, 480});
+    }
+    CHECK(session.stats().opsRefused == 0);
+    REQUIRE(session.history().undoDepth() >= strokeCount / 2); // a stroke may change nothing (paint on one material)
+    CHECK(session.history().spilledBytes() > 0);
+    const Volume after = committed(session);
+    CHECK_FALSE(identical(after, before));
+
+    // Fly far off: the bricks the strokes touched leave memory.
+    Command away;
+    away.kind = Command::Kind::SetCamera;
+    away.camera.eye = {5000, 400, 5000};
+    away.camera.target = {5100, 380, 5100};
+    session.apply(away);
+    session.frame(2.0, {640, 480});
+    session.scene().waitForLoads();
+    session.frame(2.1, {640, 480});
+
+    const std::size_t depth = session.history().undoDepth();
+    for (std::size_t i = 0; i < depth; ++i) session.apply(simple(Command::Kind::Undo));
+    CHECK(session.history().undoDepth() == 0);
+    CHECK(identical(committed(session), before));
+    for (std::size_t i = 0; i < depth; ++i) session.apply(simple(Command::Kind::Redo));
+    CHECK(identical(committed(session), after));
+    // A new stroke that changes the scene after an undo forgets what could be redone (one that changes
+    // nothing keeps it).
+    session.apply(simple(Command::Kind::Undo));
+    REQUIRE(session.history().redoDepth() == 1);
+    session.apply(brushCommand("remove", 6.0));
+    session.apply(strokes[1]);
+    session.apply(simple(Command::Kind::StrokeEnd));
+    CHECK(session.history().redoDepth() == 0);
+}
+
+TEST_CASE("editor: a mirrored stroke equals the stroke and its mirror image applied one by one", "[editor]")
+{
+    TempDir dir;
+    const std::string ball = makeBall(dir);
+    std::filesystem::copy_file(ball, dir.file("b.vdb"));
+    // x >= 12: the copies' regions (brush, reach, blur) stay apart, so their order does not matter.
+    const std::vector<std::array<double, 3>> path{{12, 15, 5}, {13, 14, 6}, {14, 13, 6}, {15, 12, 6}};
+    const auto stroke = [&](EditingSession& s, double sign) {
+        s.apply(strokeCommand(Command::Kind::StrokeBegin, {sign * path[0][0], path[0][1], path[0][2]}));
+        for (std::size_t i = 1; i < path.size(); ++i) s.apply(strokeCommand(Command::Kind::StrokeMove, {sign * path[i][0], path[i][1], path[i][2]}));
+        s.apply(simple(Command::Kind::StrokeEnd));
+    };
+    for (const char* mode : {"add", "remove", "inflate", "smooth"}) {
+        DYNAMIC_SECTION(mode)
+        {
+            EditingSession mirrored(ball, quietOptions());
+            mirrored.apply(brushCommand(mode, 3.0, {{"mirror", {"x"}}}));
+            stroke(mirrored, 1.0);
+            EditingSession written(dir.file("b.vdb"), quietOptions());
+            written.apply(brushCommand(mode, 3.0));
+            stroke(written, 1.0);
+            stroke(written, -1.0);
+            CHECK(identical(committed(mirrored), committed(written)));
+        }
+    }
+}
+
+TEST_CASE("editor: a session killed after an autosave reopens with its edits; the .vdb stays as it was", "[editor]")
+{
+    TempDir dir;
+    const std::string ball = makeBall(dir);
+    const std::vector<char> original = readBytes(ball);
+    std::vector<Command> commands{brushCommand("add", 4.0), strokeCommand(Command::Kind::StrokeBegin, {0, 20, 0}),
+                                  strokeCommand(Command::Kind::StrokeMove, {8, 18, 0}), simple(Command::Kind::StrokeEnd),
+                                  brushCommand("remove", 3.0), strokeCommand(Command::Kind::StrokeBegin, {0, 0, 20}),
+                                  simple(Command::Kind::StrokeEnd)};
+    const pid_t child = ::fork();
+    REQUIRE(child >= 0);
+    if (child == 0) {
+        try {
+            EditingSession session(ball, quietOptions());
+            for (const Command& c : commands) session.apply(c);
+            session.autosave();
+            std::raise(SIGKILL); // no destructor, no save
+        } catch (...) {
+        }
+        ::_exit(3);
+    }
+    int status = 0;
+    REQUIRE(::waitpid(child, &status, 0) == child);
+    REQUIRE(WIFSIGNALED(status));
+    CHECK(readBytes(ball) == original);
+
+    // What those strokes make, in a session that finishes normally on a copy.
+    std::filesystem::copy_file(ball, dir.file("copy.vdb"));
+    Volume expected;
+    uint64_t edits = 0;
+    {
+        EditingSession session(dir.file("copy.vdb"), quietOptions());
+        for (const Command& c : commands) session.apply(c);
+        expected = committed(session);
+        edits = session.scene().edits();
+    }
+    REQUIRE(edits > 0);
+    {
+        EditingSession reopened(ball, quietOptions());
+        CHECK(reopened.recoveredEdits() == edits);
+        CHECK(identical(committed(reopened), expected));
+        reopened.apply(simple(Command::Kind::Save)); // the .vdb now holds them
+    }
+    CHECK(identical(loadVolume(ball), expected));
+    {
+        EditingSession again(ball, quietOptions());
+        CHECK(again.recoveredEdits() == 0);
+    }
+    // Dropping a recovery gives the saved file back.
+    SessionOptions discard = quietOptions();
+    {
+        EditingSession session(ball, quietOptions());
+        for (const Command& c : commands) session.apply(c);
+    } // autosaved at the end, not saved
+    discard.discardRecovery = true;
+    EditingSession fresh(ball, discard);
+    CHECK(fresh.recoveredEdits() == 0);
+    CHECK(identical(committed(fresh), expected));
+}
+
+TEST_CASE("editor: malformed session files are refused naming the place", "[editor][replay]")
+{
+    TempDir dir;
+    const auto refused = [&](const std::string& text, const std::string& expected) {
+        writeText(dir.file("s.json"), text);
+        try {
+            loadSessionRecord(dir.file("s.json"));
+            FAIL("accepted: " << text);
+        } catch (const SessionError& e) {
+            INFO(e.what());
+            CHECK(std::string(e.what()).find(expected) != std::string::npos);
+        }
+    };
+    refused("{", "not valid JSON");
+    refused(R"({"ops": []})", "not a VDBClay session file");
+    refused(R"({"vdbclay_session": 2, "commands": []})", "version 1");
+    refused(R"({"vdbclay_session": 1, "commands": [{"frame": 0, "command": "fly"}]})", "commands[0].command");
+    refused(R"({"vdbclay_session": 1, "commands": [{"frame": 0, "command": "stroke_begin", "point": [0, 1]}]})", "commands[0].point");
+    refused(R"({"vdbclay_session": 1, "commands": [{"frame": 0, "command": "stroke_move", "point": [0, 1, 2], "pressure": 2}]})", "pressure");
+    refused(R"({"vdbclay_session": 1, "commands": [{"frame": 3, "command": "undo"}, {"frame": 2, "command": "undo"}]})", "commands[1].frame");
+    refused(R"({"vdbclay_session": 1, "commands": [{"frame": 0, "command": "brush", "brush": {"mode": "melt"}}]})", "brush.mode");
+    refused(R"({"vdbclay_session": 1, "commands": [{"frame": 0, "command": "camera", "eye": [0, 0, 0], "target": [0, 0, 0]}]})", "differ");
+    refused(R"({"vdbclay_session": 1, "commands": [{"frame": 0, "command": "undo", "extra": 1}]})", "commands[0].extra");
+    refused(R"({"vdbclay_session": 1, "viewport": [0, 10], "commands": []})", "viewport");
+}
+
+TEST_CASE("replay: vdbclay edit --headless replays, saves, exports the script, and refuses what it cannot do", "[editor][replay][cli]")
+{
+    TempDir dir;
+    makeBall(dir);
+    SessionRecord record;
+    record.viewport = {320, 240};
+    record.commands = {{0, 0.0, brushCommand("add", 4.0, {{"radial", {{"axis", "y"}, {"count", 3}}}})},
+                       {1, 0.1, strokeCommand(Command::Kind::StrokeBegin, {0, 20, 0})},
+                       {2, 0.2, strokeCommand(Command::Kind::StrokeMove, {10, 17, 0}, 0.6)},
+                       {3, 0.3, simple(Command::Kind::StrokeEnd)},
+                       {4, 0.4, brushCommand("smooth", 5.0)},
+                       {4, 0.4, strokeCommand(Command::Kind::StrokeBegin, {0, 0, 20})},
+                       {5, 0.5, simple(Command::Kind::StrokeEnd)},
+                       {6, 0.6, simple(Command::Kind::Undo)},
+                       {7, 0.7, simple(Command::Kind::Redo)}};
+    record.frames = 8;
+    saveSessionRecord(record, dir.file("s.json"));
+    const CommandResult r = runCli(dir, "edit ball.vdb --replay s.json --headless -o out.vdb --export-script applied.json --json");
+    const nlohmann::json j = parseJsonOutput(r);
+    CHECK(j.at("frames") == 8);
+    CHECK(j.at("undo_depth") == 2);
+    CHECK(j.at("refused") == 0);
+    const CommandResult sculpted = runCli(dir, "sculpt ball.vdb applied.json -o ref.vdb");
+    REQUIRE(sculpted.exitCode == 0);
+    CHECK(identical(loadVolume(dir.file("out.vdb")), loadVolume(dir.file("ref.vdb"))));
+    // --frames 4: only the first stroke.
+    const nlohmann::json part = parseJsonOutput(runCli(dir, "edit ball.vdb --replay s.json --headless --frames 4 --discard-recovery --json"));
+    CHECK(part.at("frames") == 4);
+    CHECK(part.at("undo_depth") == 1);
+
+    writeText(dir.file("bad.json"), R"({"vdbclay_session": 1, "commands": [{"frame": 0, "command": "stroke_begin"}]})");
+    checkCleanFailure(runCli(dir, "edit ball.vdb --replay bad.json --headless"));
+    checkCleanFailure(runCli(dir, "edit ball.vdb --replay missing.json --headless"));
+    checkCleanFailure(runCli(dir, "edit ball.vdb -o out2.vdb"));
+    checkCleanFailure(runCli(dir, "edit ball.vdb --headless -o out.png"));
+    if (!std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY")) { // with a display, the window would open
+        const CommandResult noDisplay = runCli(dir, "edit ball.vdb");
+        checkCleanFailure(noDisplay);
+        CHECK(noDisplay.err.find("no display") != std::string::npos);
+        CHECK(noDisplay.err.find("--headless") != std::string::npos);
+    }
+}
