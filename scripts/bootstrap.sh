@@ -93,8 +93,13 @@ case "$action" in
         step "demo: results in ${repo}/demo-out"
         ;;
     test)
-        step "test: ctest --test-dir build --output-on-failure -j${jobs}"
-        ctest --test-dir build --output-on-failure -j"${jobs}"
+        # The desktop editor's tests need a display: without one, the suite runs under Xvfb (lavapipe draws).
+        display=()
+        if [[ -z "${DISPLAY:-}" && -z "${WAYLAND_DISPLAY:-}" ]]; then
+            display=(xvfb-run -a -s "-screen 0 1280x1024x24")
+        fi
+        step "test: ${display[*]:+${display[*]} }ctest --test-dir build --output-on-failure -j${jobs}"
+        "${display[@]}" ctest --test-dir build --output-on-failure -j"${jobs}"
         if [[ "${SANITIZER_TESTS:-1}" != 0 ]]; then
             if [[ ! -f build-asan/build.ninja ]]; then
                 step "configure: build-asan/ (clang, AddressSanitizer + UBSan, libFuzzer targets)"
@@ -105,12 +110,13 @@ case "$action" in
             ninja -C build-asan -j"${jobs}"
             # The renderer's tests run on lavapipe in step 1 with the validation layer; under ASan, Mesa's
             # CPU rasterizer is slow and leaks from its unloaded JIT code, so they are left out and the
-            # Vulkan driver is hidden (commands that draw then take their no-device path).
+            # Vulkan driver is hidden (commands that draw then take their no-device path). The desktop editor's
+            # tests draw too, and there is no display here: they are left out as well.
             step "test: the suite under AddressSanitizer and UBSan (all but the renderer's tests, no Vulkan driver)"
             VK_DRIVER_FILES=/nonexistent/vdbclay-no-driver.json VK_ICD_FILENAMES=/nonexistent/vdbclay-no-driver.json \
             ASAN_OPTIONS=detect_leaks=1 VDBCLAY_SWEEP_STEP=1 VDBCLAY_KILL_TRIALS=12 LSAN_OPTIONS="suppressions=${repo}/tests/sanitizer/lsan.supp" \
                 UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=${repo}/tests/sanitizer/ubsan.supp" \
-                ctest --test-dir build-asan --output-on-failure -j"${jobs}" -E 'render'
+                ctest --test-dir build-asan --output-on-failure -j"${jobs}" -E 'render|desktop'
             step "test: fuzzers, ${FUZZ_SECONDS:-60} s each"
             bash scripts/run-fuzzers.sh build-asan "${FUZZ_SECONDS:-60}"
         fi

@@ -482,6 +482,12 @@ void DesktopEditor::key(int key, int action, int mods)
 }
 
 GLFWwindow* DesktopEditor::window() const { return impl_->window; }
+std::optional<std::array<float, 4>> DesktopEditor::widgetRect(const std::string& label) const
+{
+    const auto it = impl_->panels.widgetRects.find(label);
+    if (it == impl_->panels.widgetRects.end()) return std::nullopt;
+    return it->second;
+}
 const render::FrameStats& DesktopEditor::lastFrame() const { return impl_->lastStats; }
 uint64_t DesktopEditor::validationMessages() const { return impl_->context ? impl_->context->validationMessages() : 0; }
 EditingSession& DesktopEditor::session() { return impl_->session; }

@@ -9,6 +9,7 @@
 #include <array>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -58,6 +59,9 @@ public:
     void replay(const SessionRecord* record);
     /// A scene the user asked to open from the file menu (the editor stopped for it), or empty.
     std::string openRequested() const;
+
+    /// Where a tracked widget was drawn last frame (DesktopPanels::widgetRects), if it was.
+    std::optional<std::array<float, 4>> widgetRect(const std::string& label) const;
 
     GLFWwindow* window() const;
     const render::FrameStats& lastFrame() const;

@@ -92,6 +92,7 @@ nlohmann::json symmetryJson(const SymmetryUi& ui)
 std::vector<Command> DesktopPanels::draw(EditingSession& session, const FrameFigures& figures)
 {
     std::vector<Command> out;
+    widgetRects.clear();
     ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowSize(ImVec2(330, 0), ImGuiCond_FirstUseEver);
     if (ImGui::Begin("VDBClay")) {
@@ -113,6 +114,12 @@ std::vector<Command> DesktopPanels::draw(EditingSession& session, const FrameFig
         ImGui::End();
     }
     return out;
+}
+
+void DesktopPanels::track(const std::string& label)
+{
+    const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
+    widgetRects[label] = {lo.x, lo.y, hi.x, hi.y};
 }
 
 void DesktopPanels::brushPanel(EditingSession& session, std::vector<Command>& out)
@@ -190,6 +197,7 @@ void DesktopPanels::brushPanel(EditingSession& session, std::vector<Command>& ou
     for (int a = 0; a < 3; ++a) {
         ImGui::SameLine();
         symChanged |= ImGui::Checkbox((std::string("mirror ") + kAxes[a]).c_str(), &sym.mirror[a]);
+        track(std::string("mirror ") + kAxes[a]);
     }
     symChanged |= ImGui::SliderInt("Radial copies", &sym.radialCount, 1, 16);
     symChanged |= ImGui::Combo("Radial axis", &sym.radialAxis, kAxes, 3);
@@ -230,7 +238,9 @@ void DesktopPanels::customBrushPanel(EditingSession& session, std::vector<Comman
         partsJson.push_back(part);
     }
     const nlohmann::json shape = {{"shape", "blend"}, {"smoothness", customSmoothness_}, {"parts", partsJson}};
-    if (ImGui::Button("Use as brush")) {
+    const bool use = ImGui::Button("Use as brush");
+    track("Use as brush");
+    if (use) {
         BrushSettings b = session.brush();
         b.shape = shape;
         out.push_back(brushCommand(b));
@@ -315,7 +325,9 @@ void DesktopPanels::toolsPanel(EditingSession& session, std::vector<Command>& ou
 
 void DesktopPanels::filePanel(EditingSession& session, std::vector<Command>& out)
 {
-    if (ImGui::Button("Save (Ctrl+S)")) {
+    const bool save = ImGui::Button("Save (Ctrl+S)");
+    track("Save (Ctrl+S)");
+    if (save) {
         Command c;
         c.kind = Command::Kind::Save;
         out.push_back(c);

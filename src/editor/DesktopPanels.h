@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -36,12 +38,17 @@ public:
     /// they issued, in order. File actions that write other files run here and report in `status`.
     std::vector<Command> draw(EditingSession& session, const FrameFigures& figures);
 
+    /// Where some widgets were drawn in the last frame (min x, min y, max x, max y; window pixels), by label:
+    /// "mirror x", "mirror y", "mirror z", "Use as brush", "Save (Ctrl+S)". Tests click them through ImGui.
+    std::map<std::string, std::array<float, 4>> widgetRects;
+
     bool showHelp = false;
     bool showStats = true;
     std::string status;       // the last action's outcome, shown at the bottom
     std::string openRequested; // a scene the user asked to open instead (the front end reopens)
 
 private:
+    void track(const std::string& label);
     void brushPanel(EditingSession& session, std::vector<Command>& out);
     void customBrushPanel(EditingSession& session, std::vector<Command>& out);
     void materialsPanel(EditingSession& session, std::vector<Command>& out);

@@ -1,0 +1,146 @@
+// The desktop editor under a display (Xvfb and lavapipe in the test command): the window opens and draws
+// with the validation layer silent, a mouse stroke drawn through the window's input equals its replay,
+// and a menu clicked through Dear ImGui changes what the next stroke does. Skipped, saying so, where
+// there is no display or no Vulkan device.
+#include "editor/DesktopEditor.h"
+#include "editor/EditingSession.h"
+#include "render/VulkanContext.h"
+#include "sculpt/StrokeScript.h"
+#include "support/TestUtil.h"
+#include "vdb_hermite/Volume.h"
+#include "vdb_hermite/VolumeIO.h"
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <catch2/catch.hpp>
+#include <imgui.h>
+
+#include <filesystem>
+
+using namespace vdbclay;
+using namespace vdbclay::test;
+
+namespace {
+
+std::string makeBall(const TempDir& dir, const std::string& name)
+{
+    Volume v(1.0);
+    runStrokeScript(v, parseStrokeScript(R"({"ops": [{"mode": "add", "brush": {"shape": "sphere", "radius": 20}}]})"));
+    saveVolume(v, dir.file(name));
+    return dir.file(name);
+}
+
+SessionOptions quiet()
+{
+    SessionOptions o;
+    o.memoryBudgetBytes = 256ull << 20;
+    o.autosaveSeconds = 1e9;
+    o.idleAutosaveSeconds = 1e9;
+    return o;
+}
+
+Volume committed(EditingSession& session)
+{
+    session.autosave();
+    return session.scene().store().loadLevel(0);
+}
+
+} // namespace
+
+TEST_CASE("desktop: a mouse stroke through the window equals its replay; a menu clicked through ImGui changes the next stroke", "[desktop][editor]")
+{
+    if (!desktopAvailable()) {
+        WARN("skipped: no display (the test command runs the suite under xvfb-run)");
+        return;
+    }
+    TempDir dir;
+    const std::string ball = makeBall(dir, "ball.vdb");
+    std::filesystem::copy_file(ball, dir.file("copy.vdb"));
+    EditingSession session(ball, quiet());
+    // The menus are driven through ImGui's input: this frame's pointer and left button, when set.
+    std::optional<std::array<float, 2>> uiPointer;
+    bool uiButton = false;
+    DesktopOptions options;
+    options.validation = true;
+    options.windowSize = {800, 600};
+    options.beforeUi = [&](uint64_t) {
+        if (!uiPointer) return;
+        ImGuiIO& io = ImGui::GetIO();
+        io.MousePos = ImVec2((*uiPointer)[0], (*uiPointer)[1]);
+        io.MouseDown[0] = uiButton;
+    };
+    std::unique_ptr<DesktopEditor> editor;
+    try {
+        editor = std::make_unique<DesktopEditor>(session, options);
+    } catch (const NoDisplay& e) {
+        WARN("skipped: " << e.what());
+        return;
+    } catch (const render::NoVulkanDevice& e) {
+        WARN("skipped: no Vulkan device: " << e.what());
+        return;
+    }
+    for (int i = 0; i < 3; ++i) REQUIRE(editor->frame());
+    session.scene().waitForLoads();
+    for (int i = 0; i < 2; ++i) REQUIRE(editor->frame());
+    CHECK(editor->lastFrame().triangles > 1000);
+
+    // A stroke as the window delivers it: the pointer moves (GLFW's cursor callback), the left button goes
+    // down, the pointer drags across the ball, the button comes up.
+    const auto moveTo = [&](double x, double y) {
+        glfwSetCursorPos(editor->window(), x, y);
+        editor->cursorMoved(x, y);
+    };
+    const auto stroke = [&](double x0, double y0) {
+        moveTo(x0, y0);
+        REQUIRE(editor->frame());
+        editor->mouseButton(GLFW_MOUSE_BUTTON_LEFT, GLFW_PRESS, 0);
+        REQUIRE(editor->frame());
+        for (int k = 1; k <= 4; ++k) {
+            moveTo(x0 + 12.0 * k, y0 - 4.0 * k);
+            REQUIRE(editor->frame());
+        }
+        editor->mouseButton(GLFW_MOUSE_BUTTON_LEFT, GLFW_RELEASE, 0);
+        REQUIRE(editor->frame());
+    };
+    stroke(420, 300);
+    CHECK(session.history().undoDepth() == 1);
+    CHECK(session.stats().stampsApplied >= 3);
+    CHECK_FALSE(session.brush().symmetry.is_object());
+
+    // Click "mirror x" in the brush panel: pointer over it, button down one frame, up the next (two
+    // frames per UI step: ImGui acts on the release).
+    const auto rect = editor->widgetRect("mirror x");
+    REQUIRE(rect);
+    uiPointer = std::array<float, 2>{((*rect)[0] + (*rect)[2]) * 0.5f, ((*rect)[1] + (*rect)[3]) * 0.5f};
+    uiButton = true;
+    REQUIRE(editor->frame());
+    uiButton = false;
+    REQUIRE(editor->frame());
+    uiPointer.reset();
+    REQUIRE(session.brush().symmetry.is_object());
+    CHECK(session.brush().symmetry.at("mirror") == nlohmann::json::array({"x"}));
+
+    // The next stroke is mirrored: it adds where its mirror image lies too.
+    const Volume beforeSecond = committed(session);
+    stroke(430, 330);
+    CHECK(session.history().undoDepth() == 2);
+    const Volume after = committed(session);
+    const nlohmann::json ops = session.appliedScript().at("ops");
+    REQUIRE(!ops.empty());
+    const nlohmann::json& lastOp = ops.back();
+    REQUIRE(lastOp.contains("symmetry"));
+    const nlohmann::json& at = lastOp.contains("at") ? lastOp.at("at") : lastOp.at("path").back();
+    const std::array<int32_t, 3> mirrored{int32_t(std::lround(-at[0].get<double>())), int32_t(std::lround(at[1].get<double>())),
+                                          int32_t(std::lround(at[2].get<double>()))};
+    INFO("stamp at " << at.dump());
+    CHECK(after.materialAt(mirrored) != kEmptyMaterial);
+    CHECK_FALSE(identical(beforeSecond, after));
+
+    // The session's record, replayed with no window on the scene as it was, makes the same scene.
+    const SessionRecord record = session.record();
+    CHECK(editor->validationMessages() == 0);
+    editor.reset();
+    EditingSession replayed(dir.file("copy.vdb"), quiet());
+    replaySession(replayed, record);
+    CHECK(identical(committed(replayed), after));
+}
