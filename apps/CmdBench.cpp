@@ -15,7 +15,7 @@ CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& o)
     cmd->add_option("name", o.which, "Which benchmark: " + names)->required()->type_name("NAME");
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of a table");
     cmd->add_flag("--quick", o.quick, "Small sizes (seconds, for CI); the default runs the full sizes");
-    cmd->add_option("--memory-budget", o.memoryBudgetMb, "stream and render: the memory budget (stream: 192, or 2 with --quick; render: 384)")
+    cmd->add_option("--memory-budget", o.memoryBudgetMb, "stream, render and editor: the memory budget (stream: 192, or 2 with --quick; render and editor: 384)")
         ->type_name("MB")
         ->check(memoryBudget());
     cmd->footer("csg     sphere creation, then median time of remove-sphere stamps on its surface\n"
@@ -34,6 +34,9 @@ CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& o)
                 "        GridTransformer resampling + csgUnion of the tool's level set\n"
                 "render  terrains of extent 1024 and 4096 streamed for 1080p views: triangles of a complete view, CPU\n"
                 "        per frame of a 90 Hz flight, uploads, GPU time, an r=32 stamp to its chunks uploaded vs volumeToMesh\n"
+                "editor  a stroke-heavy session (r=32 strokes of every mode, mirrored) replayed frame by frame on a terrain\n"
+                "        of extent 1024 (512 with --quick): CPU frame p50/p99, edit-to-visible frames, triangles, uploads,\n"
+                "        resident memory vs the budget, the rotated 64^3 tool stamp vs OpenVDB's csgUnion + volumeToMesh\n"
                 "Build in Release for meaningful figures; docs/BENCHMARKS.md has measured tables.");
     return cmd;
 }
@@ -42,9 +45,9 @@ int runBenchCommand(const BenchCommandOptions& o)
 {
     bool known = false;
     for (const auto& n : bench::benchNames()) known = known || n == o.which;
-    if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool or render)");
-    if (o.memoryBudgetMb > 0.0 && o.which != "stream" && o.which != "render")
-        throw UsageError("--memory-budget is for 'bench stream' and 'bench render'");
+    if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool, render or editor)");
+    if (o.memoryBudgetMb > 0.0 && o.which != "stream" && o.which != "render" && o.which != "editor")
+        throw UsageError("--memory-budget is for 'bench stream', 'bench render' and 'bench editor'");
     return bench::runBench(o.which, o.json, o.quick, o.memoryBudgetMb);
 }
 

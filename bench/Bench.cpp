@@ -8,7 +8,7 @@
 
 namespace vdbclay::bench {
 
-std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream", "import", "tool", "render"}; }
+std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream", "import", "tool", "render", "editor"}; }
 
 int runBench(const std::string& which, bool json, bool quick, double memoryBudgetMb)
 {
@@ -22,7 +22,8 @@ int runBench(const std::string& which, bool json, bool quick, double memoryBudge
     if (which == "import") return benchImport(json, quick);
     if (which == "tool") return benchTool(json, quick);
     if (which == "render") return benchRender(json, quick, memoryBudgetMb);
-    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool or render)");
+    if (which == "editor") return benchEditor(json, quick, memoryBudgetMb);
+    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool, render or editor)");
 }
 
 } // namespace vdbclay::bench

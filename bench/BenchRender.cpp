@@ -59,20 +59,6 @@ render::Camera cameraOf(const Viewer& v, double far)
     return c;
 }
 
-double percentile(std::vector<double> v, double p)
-{
-    if (v.empty()) return 0.0;
-    std::sort(v.begin(), v.end());
-    return v[std::min(v.size() - 1, std::size_t(std::ceil(p * double(v.size()))) - 1)];
-}
-
-double mean(const std::vector<double>& v)
-{
-    double s = 0.0;
-    for (double x : v) s += x;
-    return v.empty() ? 0.0 : s / double(v.size());
-}
-
 /// Frames and waits until the view is refined as far as the budget allows.
 FrameReport settle(StreamingScene& scene, const Viewer& viewer)
 {

@@ -12,5 +12,6 @@ int benchStream(bool json, bool quick, double memoryBudgetMb);
 int benchImport(bool json, bool quick);
 int benchTool(bool json, bool quick);
 int benchRender(bool json, bool quick, double memoryBudgetMb);
+int benchEditor(bool json, bool quick, double memoryBudgetMb);
 
 } // namespace vdbclay::bench

@@ -21,6 +21,20 @@ double maximum(const std::vector<double>& values)
     return values.empty() ? 0.0 : *std::max_element(values.begin(), values.end());
 }
 
+double percentile(std::vector<double> v, double p)
+{
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    return v[std::min(v.size() - 1, std::size_t(std::max(1.0, std::ceil(p * double(v.size())))) - 1)];
+}
+
+double mean(const std::vector<double>& v)
+{
+    double s = 0.0;
+    for (double x : v) s += x;
+    return v.empty() ? 0.0 : s / double(v.size());
+}
+
 int threadCount()
 {
     return int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));

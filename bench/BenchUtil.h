@@ -29,6 +29,9 @@ double timeMs(F&& f)
 
 double median(std::vector<double> values);
 double maximum(const std::vector<double>& values);
+/// The smallest value at or above the fraction p (0..1] of the sorted values.
+double percentile(std::vector<double> values, double p);
+double mean(const std::vector<double>& values);
 
 /// Worker threads TBB uses now (default concurrency, or the --threads limit).
 int threadCount();
