@@ -184,6 +184,33 @@ RandomScene randomScene(uint64_t seed, uint64_t index)
             boxes.push_back({centre, half});
         ops.push_back(op);
     }
+    // Reshaping brushes come last, drawn from a stream of their own so that the scenes above stay what
+    // they were before these brushes existed (failures reported by seed and index still replay).
+    SceneRandom f(seed * 0xD6E8FEB86659FD93ull + index * 0x94D049BB133111EBull + 5);
+    if (f.chance(0.35)) {
+        static const char* fieldModes[] = {"smooth", "flatten", "inflate", "deflate", "move"};
+        static const char* falloffs[] = {"smooth", "linear", "constant"};
+        const int fieldCount = f.integer(1, 2);
+        for (int i = 0; i < fieldCount; ++i) {
+            const std::string mode = fieldModes[f.integer(0, 4)];
+            json op{{"mode", mode}, {"strength", f.chance(0.3) ? 1.0 : f.uniform(0.1, 1.0)}, {"falloff", falloffs[f.integer(0, 2)]}};
+            op["brush"] = f.chance(0.7) ? json{{"shape", "sphere"}, {"radius", f.voxels(2.0, 8.0) * vs}}
+                                        : json{{"shape", "box"}, {"size", scaled({f.voxels(1.5, 6.0), f.voxels(1.5, 6.0), f.voxels(1.5, 6.0)}, vs)}};
+            const std::array<double, 3> at = f.point(8.0);
+            if (f.chance(0.2)) op["path"] = json::array({scaled(at, vs), scaled(f.point(8.0), vs)});
+            else op["at"] = scaled(at, vs);
+            if (mode == "inflate" || mode == "deflate") op["distance"] = f.voxels(0.5, 3.0) * vs;
+            if (mode == "move") op["offset"] = scaled({f.voxels(-3.0, 3.0), f.voxels(-3.0, 3.0), f.voxels(-3.0, 3.0)}, vs);
+            if (f.chance(0.3)) op["material"] = materials[f.integer(0, 2)];
+            if (f.chance(0.3)) {
+                json symmetry{{"center", scaled({f.voxels(-2.0, 2.0), f.voxels(-2.0, 2.0), f.voxels(-2.0, 2.0)}, vs)}};
+                if (f.chance(0.6)) symmetry["mirror"] = json::array({f.chance(0.5) ? "x" : "z"});
+                else symmetry["radial"] = {{"axis", f.chance(0.5) ? "y" : "x"}, {"count", f.integer(2, 4)}};
+                op["symmetry"] = symmetry;
+            }
+            ops.push_back(op);
+        }
+    }
     script["ops"] = ops;
     scene.script = script.dump();
     return scene;
