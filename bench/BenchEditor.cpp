@@ -214,7 +214,7 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
         planMode.push_back("");
     }
 
-    std::optional<std::size_t> editWaiting; // the frame of an edit not yet drawn
+    int64_t editWaiting = -1; // the frame of an edit not yet drawn
     bool baselineDone = false;
     for (std::size_t i = 0; i < plan.size(); ++i) {
         FrameSample s;
@@ -232,10 +232,10 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
         s.uploadBytes = stats.uploadBytes;
         s.residentBytes = report.residentBytes;
         f.frames.push_back(s);
-        if (session.stats().bricksChangedLastFrame > 0 && !editWaiting) editWaiting = i;
-        if (editWaiting && sync.uploaded > 0) {
-            f.latencyFrames.push_back(double(i - *editWaiting + 1));
-            editWaiting.reset();
+        if (session.stats().bricksChangedLastFrame > 0 && editWaiting < 0) editWaiting = int64_t(i);
+        if (editWaiting >= 0 && sync.uploaded > 0) {
+            f.latencyFrames.push_back(double(int64_t(i) - editWaiting + 1));
+            editWaiting = -1;
         }
         if (!planMode[i].empty() && planMode[i] != "tool" && plan[i].size() == 1) f.stampMsByMode[planMode[i]].push_back(s.editMs);
         if (i == toolFrame) {

@@ -134,84 +134,6 @@ void boxBlurAxis(LatticeGrid& g, int axis, int r)
     });
 }
 
-/// Signed distances (world units) over a box of the lattice, Euclidean out to any depth: the tool's
-/// field is exact only near the surface, so the points within a voxel of it seed their closest surface
-/// points (the point less its distance along the field's gradient), and raster passes carry the nearest
-/// of those through the box (each point offered its neighbours' closest points); signs from materials.
-LatticeGrid signedDistances(const GridTool& tool, const std::array<int32_t, 3>& origin, const std::array<int32_t, 3>& dims, double h)
-{
-    const ToolField& solid = tool.fields().front();
-    const std::array<int32_t, 3> toolLo = tool.origin(), toolDims = tool.dims();
-    const auto toolValue = [&](int32_t x, int32_t y, int32_t z) -> double {
-        const std::array<int32_t, 3> c{x - toolLo[0], y - toolLo[1], z - toolLo[2]};
-        for (std::size_t a = 0; a < 3; ++a)
-            if (c[a] < 0 || c[a] >= toolDims[a]) return solid.outerValue;
-        return solid.distance[(std::size_t(c[0]) * std::size_t(toolDims[1]) + std::size_t(c[1])) * std::size_t(toolDims[2]) + std::size_t(c[2])];
-    };
-    LatticeGrid out;
-    out.origin = origin;
-    out.dims = dims;
-    out.voxelSize = h;
-    const std::size_t count = std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]);
-    constexpr float kNone = std::numeric_limits<float>::infinity();
-    std::vector<std::array<float, 3>> closest(count, {kNone, kNone, kNone}); // lattice units, absolute
-    std::vector<float> best(count, kNone);
-    for (int32_t i = 0; i < dims[0]; ++i)
-        for (int32_t j = 0; j < dims[1]; ++j)
-            for (int32_t k = 0; k < dims[2]; ++k) {
-                const int32_t x = origin[0] + i, y = origin[1] + j, z = origin[2] + k;
-                const double v = toolValue(x, y, z);
-                if (std::fabs(v) > 1.0) continue;
-                Vec3d g(toolValue(x + 1, y, z) - toolValue(x - 1, y, z), toolValue(x, y + 1, z) - toolValue(x, y - 1, z),
-                        toolValue(x, y, z + 1) - toolValue(x, y, z - 1));
-                const double len = g.length();
-                if (len < 1e-9) continue;
-                g /= len;
-                const std::size_t n = out.index(i, j, k);
-                closest[n] = {float(x - v * g[0]), float(y - v * g[1]), float(z - v * g[2])};
-                best[n] = float(std::fabs(v));
-            }
-    const auto offer = [&](std::size_t n, int32_t x, int32_t y, int32_t z, std::size_t from) {
-        const auto& c = closest[from];
-        if (c[0] == kNone) return;
-        const float dx = c[0] - float(x), dy = c[1] - float(y), dz = c[2] - float(z);
-        const float d = std::sqrt(dx * dx + dy * dy + dz * dz);
-        if (d < best[n]) {
-            best[n] = d;
-            closest[n] = c;
-        }
-    };
-    for (int round = 0; round < 2; ++round)
-        for (int direction = 0; direction < 2; ++direction) {
-            const int step = direction == 0 ? 1 : -1;
-            const int32_t i0 = direction == 0 ? 0 : dims[0] - 1, j0 = direction == 0 ? 0 : dims[1] - 1, k0 = direction == 0 ? 0 : dims[2] - 1;
-            for (int32_t i = i0; i >= 0 && i < dims[0]; i += step)
-                for (int32_t j = j0; j >= 0 && j < dims[1]; j += step)
-                    for (int32_t k = k0; k >= 0 && k < dims[2]; k += step) {
-                        const std::size_t n = out.index(i, j, k);
-                        // The 13 neighbours this raster order has visited.
-                        for (int di = -1; di <= 0; ++di)
-                            for (int dj = -1; dj <= 1; ++dj)
-                                for (int dk = -1; dk <= 1; ++dk) {
-                                    if (di == 0 && (dj > 0 || (dj == 0 && dk >= 0))) continue;
-                                    const int32_t ni = i + di * step, nj = j + dj * step, nk = k + dk * step;
-                                    if (ni < 0 || nj < 0 || nk < 0 || ni >= dims[0] || nj >= dims[1] || nk >= dims[2]) continue;
-                                    offer(n, origin[0] + i, origin[1] + j, origin[2] + k, out.index(ni, nj, nk));
-                                }
-                    }
-        }
-    out.values.resize(count);
-    for (int32_t i = 0; i < dims[0]; ++i)
-        for (int32_t j = 0; j < dims[1]; ++j)
-            for (int32_t k = 0; k < dims[2]; ++k) {
-                const std::size_t n = out.index(i, j, k);
-                const bool inside = tool.materialAt({origin[0] + i, origin[1] + j, origin[2] + k}) != kEmptyMaterial;
-                const double d = std::isfinite(best[n]) ? double(best[n]) : 1e6;
-                out.values[n] = float((inside ? -d : d) * h);
-            }
-    return out;
-}
-
 } // namespace
 
 const char* fieldModeName(FieldMode mode)
@@ -314,24 +236,25 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
         edge = std::max(edge, hi[std::size_t(a)] - lo[std::size_t(a)] + 1);
     }
     edge = (edge + kLeafDim - 1) / kLeafDim * kLeafDim;
-    Volume part = copyRegion(volume, {{lo[0], lo[1], lo[2]}, edge});
+    // The old field, rebuilt from the Hermite data in the region, and the materials there.
+    const SolidDistances solid = solidDistances(volume, lo, {edge + 1, edge + 1, edge + 1});
+    if (std::none_of(solid.material.begin(), solid.material.end(), [](MaterialId m) { return m != kEmptyMaterial; }))
+        return {}; // nothing solid to reshape
+    LatticeGrid old;
+    old.origin = lo;
+    old.dims = solid.dims;
+    old.voxelSize = h;
+    old.values.resize(solid.distance.size());
+    for (std::size_t n = 0; n < old.values.size(); ++n) old.values[n] = float(double(solid.distance[n]) * h);
     // The material of new voxels: the op's, else the most common solid one inside the brush.
     MaterialId material = op.material.value_or(kEmptyMaterial);
-    std::optional<GridTool> tool;
-    try {
-        tool.emplace(std::move(part));
-    } catch (const std::invalid_argument&) {
-        return {}; // nothing solid to reshape
-    }
-    LatticeGrid old = signedDistances(*tool, lo, {edge + 1, edge + 1, edge + 1}, h);
     if (material == kEmptyMaterial) {
         std::map<MaterialId, uint64_t> counts;
         for (int32_t i = 0; i < old.dims[0]; ++i)
             for (int32_t j = 0; j < old.dims[1]; ++j)
                 for (int32_t k = 0; k < old.dims[2]; ++k) {
-                    if (brush.distance(old.pointOf(i, j, k)) > 0.0) continue;
-                    const MaterialId m = tool->materialAt({old.origin[0] + i, old.origin[1] + j, old.origin[2] + k});
-                    if (m != kEmptyMaterial) ++counts[m];
+                    const MaterialId m = solid.material[old.index(i, j, k)];
+                    if (m != kEmptyMaterial && brush.distance(old.pointOf(i, j, k)) <= 0.0) ++counts[m];
                 }
         material = counts.empty() ? MaterialId(1) : std::max_element(counts.begin(), counts.end(), [](const auto& x, const auto& y) {
                                                          return x.second < y.second;

@@ -73,6 +73,8 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
         for (int i = base[0] - 1; i <= base[0] + 2; ++i)
             for (int j = base[1] - 1; j <= base[1] + 2; ++j)
                 for (int k = base[2] - 1; k <= base[2] + 2; ++k) {
+                    // A tool's box keeps a margin round its crossings; a box cut from a scene does not.
+                    if (i < 0 || j < 0 || k < 0 || i >= box.dims[0] || j >= box.dims[1] || k >= box.dims[2]) continue;
                     const float candidate = crossingDistance(c, point(i, j, k));
                     const std::size_t n = box.index(i, j, k);
                     if (candidate < d[n]) d[n] = candidate, nearest[n] = int32_t(id);
@@ -104,6 +106,53 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
         for (int j = ny - 1; j >= 0; --j)
             for (int k = nz - 1; k >= 0; --k) offer(i, j, k, -1);
     return d;
+}
+
+/// The materials at the box's lattice points (dense) and the Hermite crossings of the voxels inside it,
+/// with the materials at both ends of their edges (empty beyond the box).
+void readLattice(const Volume& volume, const Box& box, std::vector<MaterialId>& material, std::vector<Crossing>& crossings)
+{
+    material.assign(box.size(), kEmptyMaterial);
+    const HermiteTree& tree = volume.impl().grid->tree();
+    const CoordBBox dense(Coord(box.origin[0], box.origin[1], box.origin[2]),
+                          Coord(box.origin[0] + box.dims[0] - 1, box.origin[1] + box.dims[1] - 1, box.origin[2] + box.dims[2] - 1));
+    auto put = [&](const Coord& c, MaterialValue v) {
+        material[box.index(c.x() - box.origin[0], c.y() - box.origin[1], c.z() - box.origin[2])] = v.id;
+    };
+    forEachTile(tree, [&](const CoordBBox& tile, MaterialValue value) {
+        if (!value.solid()) return;
+        CoordBBox clipped = tile;
+        clipped.intersect(dense);
+        for (auto it = clipped.begin(); it; ++it) put(*it, value);
+    });
+    for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
+        if (!dense.hasOverlap(leaf->getNodeBoundingBox())) continue;
+        for (Index n = 0; n < Index(kLeafVoxels); ++n) {
+            const Coord c = leaf->offsetToGlobalCoord(n);
+            if (!dense.isInside(c)) continue;
+            const MaterialValue m = leaf->getValue(n);
+            if (m.solid()) put(c, m);
+            for (int a = 0; a < 3; ++a) {
+                const PackedSample* s = leaf->sample(n, a);
+                if (!s) continue;
+                Crossing x;
+                x.point = Vec3d(c.x(), c.y(), c.z());
+                x.point[a] += dequantizeOffset(s->offset);
+                const auto normal = decodeNormal(s->normalU, s->normalV);
+                x.normal = Vec3d(normal[0], normal[1], normal[2]);
+                x.end = {c.x(), c.y(), c.z()};
+                x.end[std::size_t(a)] += 1;
+                x.before = m.id;
+                crossings.push_back(x);
+            }
+        }
+    }
+    // The material at each crossing's far end, read once the dense materials are complete.
+    for (Crossing& x : crossings) {
+        bool inside = true;
+        for (std::size_t a = 0; a < 3; ++a) inside = inside && x.end[a] >= box.origin[a] && x.end[a] < box.origin[a] + box.dims[a];
+        x.after = inside ? material[box.index(x.end[0] - box.origin[0], x.end[1] - box.origin[1], x.end[2] - box.origin[2])] : kEmptyMaterial;
+    }
 }
 
 /// The signed field of one region: signs from the materials, outside values capped so that the outer
@@ -212,40 +261,8 @@ GridTool::GridTool(Volume volume) : volume_(std::move(volume))
                                     " a tool may hold (make it from a smaller box or a coarser scene)");
     }
     const Box box{origin_, dims_};
-    material_.assign(box.size(), kEmptyMaterial);
-    const HermiteTree& tree = volume_.impl().grid->tree();
-    const CoordBBox dense(Coord(origin_[0], origin_[1], origin_[2]),
-                          Coord(origin_[0] + dims_[0] - 1, origin_[1] + dims_[1] - 1, origin_[2] + dims_[2] - 1));
-    auto put = [&](const Coord& c, MaterialValue v) {
-        material_[box.index(c.x() - origin_[0], c.y() - origin_[1], c.z() - origin_[2])] = v.id;
-    };
-    forEachTile(tree, [&](const CoordBBox& tile, MaterialValue value) {
-        if (!value.solid()) return;
-        CoordBBox clipped = tile;
-        clipped.intersect(dense);
-        for (auto it = clipped.begin(); it; ++it) put(*it, value);
-    });
     std::vector<Crossing> crossings;
-    for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
-        for (Index n = 0; n < Index(kLeafVoxels); ++n) {
-            const Coord c = leaf->offsetToGlobalCoord(n);
-            const MaterialValue m = leaf->getValue(n);
-            if (m.solid()) put(c, m);
-            for (int a = 0; a < 3; ++a) {
-                const PackedSample* s = leaf->sample(n, a);
-                if (!s) continue;
-                Crossing x;
-                x.point = Vec3d(c.x(), c.y(), c.z());
-                x.point[a] += dequantizeOffset(s->offset);
-                const auto normal = decodeNormal(s->normalU, s->normalV);
-                x.normal = Vec3d(normal[0], normal[1], normal[2]);
-                x.end = {c.x(), c.y(), c.z()};
-                x.end[std::size_t(a)] += 1;
-                x.before = m.id;
-                crossings.push_back(x);
-            }
-        }
-    }
+    readLattice(volume_, box, material_, crossings);
     // The pivot: the middle of the solid voxels' box (the stats' box also holds empty surface voxels).
     std::array<int32_t, 3> lo{INT32_MAX, INT32_MAX, INT32_MAX}, hi{INT32_MIN, INT32_MIN, INT32_MIN};
     for (int32_t i = 0; i < dims_[0]; ++i)
@@ -259,8 +276,6 @@ GridTool::GridTool(Volume volume) : volume_(std::move(volume))
                 }
             }
     for (std::size_t a = 0; a < 3; ++a) pivot_[a] = int32_t((int64_t(lo[a]) + hi[a]) >> 1); // floor of the mean
-    // The material at each crossing's far end, read once the dense materials are complete.
-    for (Crossing& x : crossings) x.after = materialAt(x.end);
 
     const std::vector<MaterialId> present = regions();
     std::vector<MaterialId> wanted{kEmptyMaterial};
@@ -319,6 +334,22 @@ std::optional<PackedSample> GridTool::sampleAt(const std::array<int32_t, 3>& ijk
     const PackedSample* s = leaf ? leaf->sample(HermiteLeaf::coordToOffset(c), axis) : nullptr;
     if (!s) return std::nullopt;
     return *s;
+}
+
+SolidDistances solidDistances(const Volume& volume, const std::array<int32_t, 3>& origin, const std::array<int32_t, 3>& dims)
+{
+    const Box box{origin, dims};
+    SolidDistances out;
+    out.origin = origin;
+    out.dims = dims;
+    std::vector<Crossing> crossings;
+    readLattice(volume, box, out.material, crossings);
+    out.distance = boundaryDistances(box, crossings, kEmptyMaterial);
+    for (std::size_t n = 0; n < out.distance.size(); ++n) {
+        const float magnitude = std::max(out.distance[n], kLeastDistance);
+        out.distance[n] = out.material[n] != kEmptyMaterial ? -magnitude : magnitude;
+    }
+    return out;
 }
 
 // --- PlacedTool ----------------------------------------------------------------------------------

@@ -40,6 +40,17 @@ struct ToolField {
     double deepest = 0.0;               // the depth of its deepest inside point (voxels)
 };
 
+/// The signed distance to a volume's solid (voxels, negative inside) at the lattice points of a box, built
+/// as a tool's fields are: the points near a Hermite crossing take their distance to it, and a vector
+/// propagation carries the nearest crossing through the box (Euclidean to any depth; crossings outside the
+/// box are not seen). With the material at each point. Points indexed (x * dims[1] + y) * dims[2] + z.
+struct SolidDistances {
+    std::array<int32_t, 3> origin{0, 0, 0}, dims{0, 0, 0};
+    std::vector<float> distance;
+    std::vector<MaterialId> material;
+};
+SolidDistances solidDistances(const Volume& volume, const std::array<int32_t, 3>& origin, const std::array<int32_t, 3>& dims);
+
 class GridTool {
 public:
     /// Rebuilds the fields of `volume`. The tool's pivot, where a placement's `at` puts it, is the
