@@ -518,7 +518,7 @@ TEST_CASE("brushes that do not reach the solid change nothing", "[csg]")
     CHECK(identical(a, b));
 }
 
-TEST_CASE("adding or painting a solid's own material inside it computes no block; another material does", "[csg][add]")
+TEST_CASE("adding or painting a solid's own material inside it computes no block, another material does", "[csg][add]")
 {
     Volume a(1.0);
     const MaterialId red = defineMaterial(a, "red", 0.5f);

@@ -47,7 +47,7 @@ Volume committed(EditingSession& session)
 
 } // namespace
 
-TEST_CASE("desktop: a mouse stroke through the window equals its replay; a menu clicked through ImGui changes the next stroke", "[desktop][editor]")
+TEST_CASE("desktop: a mouse stroke through the window equals its replay, a menu clicked through ImGui changes the next stroke", "[desktop][editor]")
 {
     if (!desktopAvailable()) {
         WARN("skipped: no display (the test command runs the suite under xvfb-run)");

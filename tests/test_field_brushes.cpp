@@ -185,7 +185,7 @@ TEST_CASE("field brushes: random brushes on random solids leave closed surfaces"
     }
 }
 
-TEST_CASE("field brushes in scripts: each mode runs as an op, equal to the brush applied directly; strokes; bad ops refused", "[field][script]")
+TEST_CASE("field brushes in scripts: each mode runs as an op, equal to the brush applied directly, strokes, bad ops refused", "[field][script]")
 {
     const std::vector<std::pair<std::string, FieldBrushOp>> cases = [] {
         std::vector<std::pair<std::string, FieldBrushOp>> out;

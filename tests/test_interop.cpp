@@ -160,7 +160,7 @@ TEST_CASE("a level set imports within a tenth of a voxel of the sphere, for ever
     }
 }
 
-TEST_CASE("a fog volume imports at an iso value; without one it is refused", "[interop]")
+TEST_CASE("a fog volume imports at an iso value, without one it is refused", "[interop]")
 {
     TempDir dir;
     const double radius = 10.0, vs = 0.5;
@@ -198,7 +198,7 @@ TEST_CASE("a fog volume imports at an iso value; without one it is refused", "[i
     CHECK(enclosedVolume(mesh) == Approx(128.0 * 128.0 * 128.0).epsilon(1e-3)); // crossings half-way: -0.5 .. 127.5
 }
 
-TEST_CASE("a grid of no class is a density when its background is below the iso value; a solid background is refused",
+TEST_CASE("a grid of no class is a density when its background is below the iso value, a solid background is refused",
           "[interop]")
 {
     TempDir dir;

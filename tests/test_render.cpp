@@ -202,7 +202,7 @@ TEST_CASE("render: a painted region shows its material's colour, the rest the de
     requireNoValidationMessages(*context);
 }
 
-TEST_CASE("render: the brush highlight covers exactly the surface inside the brush; the preview draws the brush", "[render]")
+TEST_CASE("render: the brush highlight covers exactly the surface inside the brush, the preview draws the brush", "[render]")
 {
     auto context = validatedContext();
     const Volume volume = slab();
@@ -264,7 +264,7 @@ TEST_CASE("render: the brush highlight covers exactly the surface inside the bru
     requireNoValidationMessages(*context);
 }
 
-TEST_CASE("render: two views of one frame (stereo) each see the scene; a thumbnail frames a mesh", "[render]")
+TEST_CASE("render: two views of one frame (stereo) each see the scene, a thumbnail frames a mesh", "[render]")
 {
     auto context = validatedContext();
     Volume volume(1.0);
@@ -305,7 +305,7 @@ TEST_CASE("render: two views of one frame (stereo) each see the scene; a thumbna
     requireNoValidationMessages(*context);
 }
 
-TEST_CASE("render: uploads happen once per new or changed chunk; removed and over-budget chunks free their memory", "[render]")
+TEST_CASE("render: uploads happen once per new or changed chunk, removed and over-budget chunks free their memory", "[render]")
 {
     auto context = validatedContext();
     Volume volume(1.0);
@@ -357,7 +357,7 @@ TEST_CASE("render: uploads happen once per new or changed chunk; removed and ove
     requireNoValidationMessages(*context);
 }
 
-TEST_CASE("render: a store streamed under a small budget draws what the .vdb draws at level 0; an edit re-uploads only its bricks", "[render]")
+TEST_CASE("render: a store streamed under a small budget draws what the .vdb draws at level 0, an edit re-uploads only its bricks", "[render]")
 {
     auto context = validatedContext();
     TempDir dir;
@@ -442,7 +442,7 @@ TEST_CASE("render: a store streamed under a small budget draws what the .vdb dra
     requireNoValidationMessages(*context);
 }
 
-TEST_CASE("cli: render writes the picture it is asked for; bad arguments and a missing device fail cleanly", "[render][cli]")
+TEST_CASE("cli: render writes the picture it is asked for, bad arguments and a missing device fail cleanly", "[render][cli]")
 {
     TempDir dir;
     REQUIRE(runCli(dir, "new s.vdb --shape sphere --size 6").exitCode == 0);
@@ -585,7 +585,7 @@ TEST_CASE("render: a triangle shows its own material, whatever its corners carry
     requireNoValidationMessages(*context);
 }
 
-TEST_CASE("render: a material's picture lands where the tri-planar projection puts it; an unreadable one is reported", "[render]")
+TEST_CASE("render: a material's picture lands where the tri-planar projection puts it, an unreadable one is reported", "[render]")
 {
     TempDir dir;
     // A checker of 8 x 8 squares, red and blue: one repetition covers 32 voxels, a square 4.

@@ -45,7 +45,7 @@ pid_t deadPid()
 
 } // namespace
 
-TEST_CASE("the same volume saves to the same bytes; another volume does not", "[io][saves]")
+TEST_CASE("the same volume saves to the same bytes, another volume does not", "[io][saves]")
 {
     TempDir dir;
     saveVolume(ball(6.0), dir.file("a.vdb"));

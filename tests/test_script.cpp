@@ -297,7 +297,7 @@ TEST_CASE("duplicate keys and files that are not regular are script errors", "[s
     CHECK_THROWS_WITH(loadStrokeScript("/dev/zero"), Catch::Contains("not a regular file"));
 }
 
-TEST_CASE("voxel sizes outside 2e-5 .. 1e6 are refused; a 10 cm scan in metres at 2048 voxels is not", "[script][limits]")
+TEST_CASE("voxel sizes outside 2e-5 .. 1e6 are refused, a 10 cm scan in metres at 2048 voxels is not", "[script][limits]")
 {
     CHECK_THROWS_AS(Volume(1e300), std::invalid_argument);
     CHECK_THROWS_AS(Volume(1e-9), std::invalid_argument);
@@ -329,7 +329,7 @@ TEST_CASE("numbers too large for a double and raw bytes in a script are clean sc
     }
 }
 
-TEST_CASE("scripts name material textures; empty or unprintable paths are refused", "[script]")
+TEST_CASE("scripts name material textures, empty or unprintable paths are refused", "[script]")
 {
     const StrokeScript script = parseStrokeScript(
         R"({"materials": [{"name": "brick", "texture": "textures/brick.png"}], "ops": []})");

@@ -111,7 +111,7 @@ TEST_CASE("sculpting a store keeps every level of its pyramid equal to a rebuild
     CHECK(changedCoarse > 0);
 }
 
-TEST_CASE("an edit on a store whose pyramid has no densities marks it stale; a rebuild replaces levels", "[store][lod]")
+TEST_CASE("an edit on a store whose pyramid has no densities marks it stale, a rebuild replaces levels", "[store][lod]")
 {
     TempDir dir;
     SceneStore scene = storeWithPyramid(dir);

@@ -449,7 +449,7 @@ TEST_CASE("the scene keeps the shown bricks' meshes within the memory budget and
     }
 }
 
-TEST_CASE("after stamps anywhere (across brick faces too), every kept mesh is the one its brick makes now; a stamp inside one brick leaves the others' meshes", "[streaming]")
+TEST_CASE("after stamps anywhere (across brick faces too), every kept mesh is the one its brick makes now, a stamp inside one brick leaves the others' meshes", "[streaming]")
 {
     TempDir dir;
     const std::string path = makeTerrain(dir);

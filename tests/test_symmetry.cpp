@@ -83,7 +83,7 @@ TEST_CASE("symmetry: a mirrored op equals the op and its mirror image applied on
     CHECK(painted.materialAt({10, 5, 0}) != painted.materialAt({0, 5, 0}));
 }
 
-TEST_CASE("symmetry: radial copies equal the turned ops; a reshaping brush's offset turns with it", "[symmetry][script]")
+TEST_CASE("symmetry: radial copies equal the turned ops, a reshaping brush's offset turns with it", "[symmetry][script]")
 {
     const json sphere{{"shape", "sphere"}, {"radius", 4}};
     // Four copies about y: (x, z) -> (z, -x) -> (-x, -z) -> (-z, x).
@@ -138,7 +138,7 @@ TEST_CASE("symmetry: malformed symmetry is refused naming the place", "[symmetry
     refused({{"center", {1, 2}}}, "ops[0].symmetry.center");
 }
 
-TEST_CASE("symmetry: the exact evaluation of the selftest follows the copies; it refuses reshaping brushes", "[symmetry][script]")
+TEST_CASE("symmetry: the exact evaluation of the selftest follows the copies, it refuses reshaping brushes", "[symmetry][script]")
 {
     const std::string text =
         R"({"ops": [{"mode": "add", "brush": {"shape": "box", "size": [3, 2, 4]}, "at": [9.5, 1, 4], "rotate": [0, 30, 0],

@@ -361,7 +361,7 @@ TEST_CASE("random triangle soups voxelize into valid volumes whose meshes are cl
     }
 }
 
-TEST_CASE("a mesh read in a child process comes back whole; its crash, hang or refusal is one line", "[voxelize]")
+TEST_CASE("a mesh read in a child process comes back whole, its crash, hang or refusal is one line", "[voxelize]")
 {
     TriangleSoup sent;
     sent.positions = {{-1.5, 0.25, 1e-7}, {3.0, -2.0, 1e6}, {0.1, 0.2, 0.3}, {7.0, 8.0, -9.0}};
@@ -509,7 +509,7 @@ std::string colouredCubePly(const std::function<std::array<int, 3>(int face)>& c
 
 } // namespace
 
-TEST_CASE("each face's material covers the solid nearest it; touching parts keep their own", "[voxelize]")
+TEST_CASE("each face's material covers the solid nearest it, touching parts keep their own", "[voxelize]")
 {
     // A cube from 0 to 6 whose top (+y) faces are red and the rest blue, at voxel sizes on and off the
     // lattice: a solid point takes the material of its nearest face (rays along every axis).

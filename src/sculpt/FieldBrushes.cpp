@@ -17,7 +17,6 @@ namespace vdbclay {
 
 namespace {
 
-int32_t floorDiv(int64_t v, int64_t d) { return int32_t(v >= 0 ? v / d : -((-v + d - 1) / d)); }
 
 /// A dense field on a box of the volume's lattice (world units), trilinear between its points.
 struct LatticeGrid {
@@ -227,17 +226,15 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     const double h = volume.voxelSize();
     const WorldBounds bounds = brush.bounds();
     const double reach = fieldBrushReach(brush, op, h);
-    // The region: a leaf-aligned cube around the brush and its reach.
-    std::array<int32_t, 3> lo{}, hi{};
-    int32_t edge = 0;
+    // The region: the lattice points of the brush's bounds grown by its reach (what opBounds promises a
+    // store pages in, so a streamed scene and a whole volume read the same voxels).
+    std::array<int32_t, 3> lo{}, dims{};
     for (int a = 0; a < 3; ++a) {
-        lo[std::size_t(a)] = floorDiv(int64_t(std::floor((bounds.min[a] - reach) / h)), kLeafDim) * kLeafDim;
-        hi[std::size_t(a)] = int32_t(std::ceil((bounds.max[a] + reach) / h));
-        edge = std::max(edge, hi[std::size_t(a)] - lo[std::size_t(a)] + 1);
+        lo[std::size_t(a)] = int32_t(std::floor((bounds.min[a] - reach) / h));
+        dims[std::size_t(a)] = int32_t(std::ceil((bounds.max[a] + reach) / h)) - lo[std::size_t(a)] + 1;
     }
-    edge = (edge + kLeafDim - 1) / kLeafDim * kLeafDim;
     // The old field, rebuilt from the Hermite data in the region, and the materials there.
-    const SolidDistances solid = solidDistances(volume, lo, {edge + 1, edge + 1, edge + 1});
+    const SolidDistances solid = solidDistances(volume, lo, dims);
     if (std::none_of(solid.material.begin(), solid.material.end(), [](MaterialId m) { return m != kEmptyMaterial; }))
         return {}; // nothing solid to reshape
     LatticeGrid old;

@@ -120,7 +120,7 @@ void readLattice(const Volume& volume, const Box& box, std::vector<MaterialId>& 
         material[box.index(c.x() - box.origin[0], c.y() - box.origin[1], c.z() - box.origin[2])] = v.id;
     };
     forEachTile(tree, [&](const CoordBBox& tile, MaterialValue value) {
-        if (!value.solid()) return;
+        if (!value.solid() || !tile.hasOverlap(dense)) return; // an empty intersection still iterates
         CoordBBox clipped = tile;
         clipped.intersect(dense);
         for (auto it = clipped.begin(); it; ++it) put(*it, value);
