@@ -200,14 +200,17 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
             planMode.push_back("");
         }
     }
-    // The rotated tool stamp, alone in its frame.
+    // The rotated tool stamp, alone in its frame, twice: the first builds the tool's fields (once per
+    // session), the second is the stamp reported.
     const std::string tool = makeTool(dir, voxel);
-    const auto toolAt = session.pick({cx + 40 * voxel, 400 * voxel, cz - 40 * voxel}, {0, -1, 0});
     std::size_t toolFrame = plan.size();
-    if (toolAt) {
+    for (const double dz : {-40.0, -80.0}) {
+        const auto toolAt = session.pick({cx + 40 * voxel, 400 * voxel, cz + dz * voxel}, {0, -1, 0});
+        if (!toolAt) continue;
         Command stamp;
         stamp.kind = Command::Kind::ApplyOp;
         stamp.op = {{"mode", "add"}, {"brush", {{"shape", "grid"}, {"file", tool}}}, {"at", toolAt->point}, {"rotate", {20, 35, 10}}};
+        toolFrame = plan.size();
         plan.push_back({stamp});
         planMode.push_back("tool");
         plan.push_back({});

@@ -97,7 +97,7 @@ void EditingSession::applyOp(const nlohmann::json& op)
     const auto start = std::chrono::steady_clock::now();
     try {
         StrokeScript script = parseStrokeScript(nlohmann::json{{"ops", {op}}}.dump());
-        loadScriptTools(script, std::filesystem::path(scenePath_).parent_path().string());
+        loadScriptTools(script, std::filesystem::path(scenePath_).parent_path().string(), tools_);
         std::vector<LeafChange> changes;
         const StreamingScene::EditReport report = scene_->sculpt(script, &changes);
         bricksChanged_ += report.bricksChanged;

@@ -8,6 +8,7 @@
 #include "editor/SessionCommand.h"
 #include "editor/VolumeRayCast.h"
 #include "scene/StreamingScene.h"
+#include "sculpt/StrokeScript.h"
 
 #include <nlohmann/json.hpp>
 
@@ -115,6 +116,7 @@ private:
     SessionRecord record_;
     nlohmann::json materialsDefined_ = nlohmann::json::array();
     nlohmann::json appliedOps_ = nlohmann::json::array();
+    ToolCache tools_; // grid tools stamped so far, built once (a tool file is not expected to change under a session)
     uint64_t frameNumber_ = 0;
     double time_ = 0.0, lastAutosave_ = 0.0, lastCommand_ = 0.0;
     bool editedSinceAutosave_ = false;

@@ -388,7 +388,12 @@ std::string toolFileHint(const std::string& file)
 
 void loadScriptTools(StrokeScript& script, const std::string& folder)
 {
-    std::map<std::string, std::shared_ptr<const GridTool>> loaded;
+    ToolCache loaded;
+    loadScriptTools(script, folder, loaded);
+}
+
+void loadScriptTools(StrokeScript& script, const std::string& folder, ToolCache& loaded)
+{
     for (std::size_t i = 0; i < script.ops.size(); ++i) {
         ScriptOp& op = script.ops[i];
         if (op.toolFile.empty()) continue;

@@ -10,6 +10,7 @@
 #include "vdb_hermite/Volume.h"
 
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -56,6 +57,10 @@ StrokeScript loadStrokeScript(const std::string& path);
 /// Loads each op's grid tool, once per file; relative names are taken from `folder`. Throws ScriptError
 /// naming the op when a tool cannot be loaded.
 void loadScriptTools(StrokeScript& script, const std::string& folder);
+/// Tools built so far, by file name as resolved: a caller running many scripts (the editor) keeps one
+/// so that a tool is built once, not once per stamp.
+using ToolCache = std::map<std::string, std::shared_ptr<const GridTool>>;
+void loadScriptTools(StrokeScript& script, const std::string& folder, ToolCache& cache);
 
 /// The world bounds an op can change (a stroke's whole path included), and for a reshaping brush those
 /// it reads (fieldBrushReach on a lattice of `voxelSize`): infinite for an unbounded brush.
