@@ -29,7 +29,6 @@
 #include <iostream>
 #include <map>
 
-#include <unistd.h>
 
 namespace vdbclay::bench {
 
@@ -262,16 +261,8 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
 int benchEditor(bool json, bool quick, double memoryBudgetMb)
 {
     const uint64_t budget = memoryBudgetMb > 0.0 ? uint64_t(memoryBudgetMb * double(1 << 20)) : 384ull << 20;
-    const fs::path dir = fs::temp_directory_path() / ("vdbclay-bench-editor-" + std::to_string(::getpid()));
-    fs::create_directories(dir);
-    struct Cleanup {
-        fs::path dir;
-        ~Cleanup()
-        {
-            std::error_code ec;
-            fs::remove_all(dir, ec);
-        }
-    } cleanup{dir};
+    const ScratchDir scratch("editor");
+    const fs::path& dir = scratch.path();
     const int extent = quick ? 512 : 1024;
     if (!json) std::cerr << "bench editor: terrain of extent " << extent << " ..." << std::endl;
     const EditorFigures f = measure(extent, quick, budget, dir);

@@ -28,7 +28,6 @@
 #include <iostream>
 #include <thread>
 
-#include <unistd.h>
 
 namespace vdbclay::bench {
 
@@ -232,16 +231,8 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
 int benchRender(bool json, bool quick, double memoryBudgetMb)
 {
     const uint64_t budget = memoryBudgetMb > 0.0 ? uint64_t(memoryBudgetMb * double(1 << 20)) : 384ull << 20;
-    const fs::path dir = fs::temp_directory_path() / ("vdbclay-bench-render-" + std::to_string(::getpid()));
-    fs::create_directories(dir);
-    struct Cleanup {
-        fs::path dir;
-        ~Cleanup()
-        {
-            std::error_code ec;
-            fs::remove_all(dir, ec);
-        }
-    } cleanup{dir};
+    const ScratchDir scratch("render");
+    const fs::path& dir = scratch.path();
 
     render::VulkanContext context;
     std::vector<TerrainFigures> terrains;

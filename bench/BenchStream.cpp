@@ -29,7 +29,6 @@
 #include <malloc.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
-#include <unistd.h>
 
 namespace vdbclay::bench {
 
@@ -130,17 +129,9 @@ int benchStream(bool json, bool quick, double memoryBudgetMb)
 {
     const int extent = quick ? 768 : 4096;
     const uint64_t budget = memoryBudgetMb > 0.0 ? uint64_t(memoryBudgetMb * double(1 << 20)) : (quick ? 2ull : 192ull) << 20;
-    const fs::path dir = fs::temp_directory_path() / ("vdbclay-bench-stream-" + std::to_string(::getpid()));
-    fs::create_directories(dir);
+    const ScratchDir scratch("stream");
+    const fs::path& dir = scratch.path();
     const std::string store = (dir / "terrain.vdbclay").string();
-    struct Cleanup {
-        fs::path dir;
-        ~Cleanup()
-        {
-            std::error_code ec;
-            fs::remove_all(dir, ec);
-        }
-    } cleanup{dir};
 
     SynthOptions synth;
     synth.kind = SynthKind::Terrain;

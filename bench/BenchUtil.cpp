@@ -5,6 +5,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
+
+#include <unistd.h>
 
 namespace vdbclay::bench {
 
@@ -33,6 +36,18 @@ double mean(const std::vector<double>& v)
     double s = 0.0;
     for (double x : v) s += x;
     return v.empty() ? 0.0 : s / double(v.size());
+}
+
+ScratchDir::ScratchDir(const std::string& name)
+    : path_(std::filesystem::temp_directory_path() / ("vdbclay-bench-" + name + "-" + std::to_string(::getpid())))
+{
+    std::filesystem::create_directories(path_);
+}
+
+ScratchDir::~ScratchDir()
+{
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
 }
 
 int threadCount()

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <ostream>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,19 @@ std::string openvdbVersion();
 
 std::string fixed(double value, int decimals);
 std::string megabytes(double bytes); // "12.34 MB" (10^6 bytes)
+
+/// A temporary folder for a benchmark's files (vdbclay-bench-NAME-PID), removed with everything in it.
+class ScratchDir {
+public:
+    explicit ScratchDir(const std::string& name);
+    ~ScratchDir();
+    ScratchDir(const ScratchDir&) = delete;
+    ScratchDir& operator=(const ScratchDir&) = delete;
+    const std::filesystem::path& path() const { return path_; }
+
+private:
+    std::filesystem::path path_;
+};
 
 /// A table printed in Markdown, so a run can be pasted into docs/BENCHMARKS.md.
 struct Table {
