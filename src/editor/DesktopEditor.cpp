@@ -113,6 +113,12 @@ struct DesktopEditor::Impl {
 
     const SessionRecord* replay = nullptr;
     std::size_t replayNext = 0;
+    MaterialTable drawnMaterials; // what the renderer was last given
+
+    render::MaterialLook look() const
+    {
+        return render::materialLook(session.scene().store().voxelSize(), std::filesystem::path(session.scenePath()).parent_path().string());
+    }
 
     Impl(DesktopEditor& editor, EditingSession& s, const DesktopOptions& o) : self(editor), session(s), options(o) {}
 
@@ -334,10 +340,8 @@ struct DesktopEditor::Impl {
         render::RendererOptions ro;
         ro.colourFormat = swapchain->format();
         renderer = std::make_unique<render::Renderer>(*context, ro);
-        for (const std::string& w : renderer->setMaterials(session.scene().materials(),
-                                                           render::materialLook(session.scene().store().voxelSize(),
-                                                                                std::filesystem::path(session.scenePath()).parent_path().string())))
-            std::cerr << "vdbclay: warning: " << w << "\n";
+        drawnMaterials = session.scene().materials();
+        for (const std::string& w : renderer->setMaterials(drawnMaterials, look())) std::cerr << "vdbclay: warning: " << w << "\n";
 
         IMGUI_CHECKVERSION();
         ImGui::CreateContext();
@@ -397,7 +401,10 @@ struct DesktopEditor::Impl {
         lastFrame = start;
         flyKeys(std::min(seconds, 0.1));
         if (replay)
-            while (replayNext < replay->commands.size() && replay->commands[replayNext].frame <= frames) apply(replay->commands[replayNext++].command);
+            while (replayNext < replay->commands.size() && replay->commands[replayNext].frame <= frames) {
+                const Command& c = replay->commands[replayNext++].command;
+                if (c.kind != Command::Kind::Save) apply(c); // as replaySession: a replay writes no files
+            }
 
         ImGui_ImplVulkan_NewFrame();
         ImGui_ImplGlfw_NewFrame();
@@ -410,8 +417,11 @@ struct DesktopEditor::Impl {
         figures.stream = session.frame(now(), windowSize());
         chunks.sync(session.scene(), *renderer);
         figures.bricksShown = session.scene().shownBricks().size();
-        renderer->setMaterials(session.scene().materials(), render::materialLook(session.scene().store().voxelSize(),
-                                                                                std::filesystem::path(session.scenePath()).parent_path().string()));
+        MaterialTable materials = session.scene().materials();
+        if (!(materials == drawnMaterials)) { // a material defined or changed: its colour and picture
+            for (const std::string& w : renderer->setMaterials(materials, look())) std::cerr << "vdbclay: warning: " << w << "\n";
+            drawnMaterials = std::move(materials);
+        }
         if (drag == Drag::None) hover = pickAt(cursorX, cursorY);
         const std::optional<std::array<double, 3>> brushAt =
             session.strokeActive() ? std::optional<std::array<double, 3>>(session.strokePoint()) : hover ? std::optional<std::array<double, 3>>(hover->point) : std::nullopt;

@@ -239,8 +239,10 @@ void replaySession(EditingSession& session, const SessionRecord& record, std::op
     for (uint64_t f = 0; f < last; ++f) {
         double time = 0.0;
         while (next < record.commands.size() && record.commands[next].frame <= f) {
-            time = record.commands[next].time;
-            session.apply(record.commands[next++].command);
+            const RecordedCommand& rc = record.commands[next++];
+            time = rc.time;
+            // A replay never writes the files the recorded session saved to (the caller saves with -o).
+            if (rc.command.kind != Command::Kind::Save) session.apply(rc.command);
         }
         const FrameReport report = session.frame(time, record.viewport);
         if (onFrame) onFrame(f, report);

@@ -124,8 +124,9 @@ private:
     uint64_t bricksChanged_ = 0;
 };
 
-/// Replays a recorded session on `session` (frame by frame, each frame's commands first) up to `frames`
-/// frames (all when absent); `viewport` is the record's unless given. `onFrame` runs after each frame.
+/// Replays a recorded session on `session` (frame by frame, each frame's commands first, the record's
+/// viewport) up to `frames` frames (all when absent); `onFrame` runs after each frame. Save commands are
+/// skipped: a replay never writes the files the recorded session saved to.
 void replaySession(EditingSession& session, const SessionRecord& record, std::optional<uint64_t> frames = std::nullopt,
                    const std::function<void(uint64_t frame, const FrameReport&)>& onFrame = {});
 
