@@ -372,7 +372,7 @@ void DesktopPanels::filePanel(EditingSession& session, std::vector<Command>& out
 void DesktopPanels::statsPanel(const EditingSession& session, const FrameFigures& f)
 {
     const ImGuiIO& io = ImGui::GetIO();
-    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - 300, 10), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - 10, 10), ImGuiCond_FirstUseEver, ImVec2(1.0f, 0.0f)); // top right, whatever its width
     ImGui::SetNextWindowBgAlpha(0.6f);
     if (ImGui::Begin("Stats", &showStats, ImGuiWindowFlags_AlwaysAutoResize)) {
         ImGui::Text("frame %.2f ms (sculpt %.2f ms)", f.frameMs, f.editMs);
