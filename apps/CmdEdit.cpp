@@ -31,7 +31,7 @@ CLI::App* addEditCommand(CLI::App& parent, EditOptions& o)
     cmd->add_option("--frames", o.frames, "Replay only the session's first N frames")->type_name("N")->check(unsignedInteger());
     cmd->add_option("--screenshot", o.screenshot, "Headless: draw the view after the replay into a PNG (needs a Vulkan device)")->type_name("OUT.png");
     cmd->add_option("--size", o.size, "The screenshot's size (default: the session's window size)")->type_name("WxH");
-    cmd->add_option("-o,--output", o.output, "Headless: save the result here (.vdb or .vdbclay); a replay never writes the scene's own file")
+    cmd->add_option("-o,--output", o.output, "Headless: save the result here (.vdb or .vdbclay). A replay never writes a .vdb scene itself; a store takes the edits, as in any session")
         ->type_name("OUT");
     cmd->add_option("--export-script", o.exportScript, "Headless: write the ops the session applied as a stroke script (for 'vdbclay sculpt')")
         ->type_name("OUT.json");
