@@ -12,7 +12,7 @@ seconds="${2:-60}"
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 artifacts="$build/fuzz-artifacts"
 mkdir -p "$artifacts"
-for target in vdb_reader standard_vdb script_parser mesh_writers mesh_import region_codec camera_path store_rows; do
+for target in vdb_reader standard_vdb script_parser mesh_writers mesh_import region_codec camera_path store_rows session_file; do
     case "$target" in
         vdb_reader) corpus_name=vdb ;;
         standard_vdb) corpus_name=standard ;;
@@ -22,6 +22,7 @@ for target in vdb_reader standard_vdb script_parser mesh_writers mesh_import reg
         region_codec) corpus_name=region ;;
         camera_path) corpus_name=camera ;;
         store_rows) corpus_name=store ;;
+        session_file) corpus_name=session ;;
     esac
     work="$build/fuzz-corpus/$target"
     mkdir -p "$work"

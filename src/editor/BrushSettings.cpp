@@ -1,5 +1,7 @@
 #include "editor/BrushSettings.h"
 
+#include "vdb_hermite/PrintableText.h"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -36,7 +38,7 @@ bool isReshapingMode(const std::string& mode)
 void checkBrushSettings(const BrushSettings& b)
 {
     static const std::vector<std::string> modes{"add", "remove", "intersect", "paint", "erode", "smooth", "flatten", "inflate", "deflate", "move"};
-    if (std::find(modes.begin(), modes.end(), b.mode) == modes.end()) throw std::invalid_argument("brush.mode: unknown mode '" + b.mode + "'");
+    if (std::find(modes.begin(), modes.end(), b.mode) == modes.end()) throw std::invalid_argument("brush.mode: unknown mode '" + printableText(b.mode, 80) + "'");
     if (!b.shape.is_object() || !b.shape.contains("shape")) throw std::invalid_argument("brush.shape: must be a script brush object");
     if (!(b.radius > 0.0) || !std::isfinite(b.radius)) throw std::invalid_argument("brush.radius: must be above 0");
     if (!(b.strength >= 0.0 && b.strength <= 1.0)) throw std::invalid_argument("brush.strength: must be in [0, 1]");
@@ -58,7 +60,7 @@ BrushSettings parseBrushSettings(const nlohmann::json& json)
     if (!json.is_object()) throw std::invalid_argument("brush: must be an object");
     static const std::vector<std::string> keys{"mode", "shape", "radius", "strength", "falloff", "material", "distance", "spacing", "pressure", "symmetry"};
     for (const auto& item : json.items())
-        if (std::find(keys.begin(), keys.end(), item.key()) == keys.end()) throw std::invalid_argument("brush." + item.key() + ": unknown key");
+        if (std::find(keys.begin(), keys.end(), item.key()) == keys.end()) throw std::invalid_argument("brush." + printableText(item.key(), 80) + ": unknown key");
     BrushSettings b;
     b.mode = text(json, "mode", b.mode);
     if (json.contains("shape")) b.shape = json.at("shape");

@@ -1,6 +1,7 @@
 #include "editor/SessionCommand.h"
 
 #include "vdb_hermite/AtomicFile.h"
+#include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/StrictJson.h"
 
 #include <algorithm>
@@ -142,7 +143,7 @@ Command parseCommand(const nlohmann::json& j, const std::string& where)
     default: break;
     }
     for (const auto& item : j.items())
-        if (std::find(keys.begin(), keys.end(), item.key()) == keys.end()) fail(where + "." + item.key(), "unknown key");
+        if (std::find(keys.begin(), keys.end(), item.key()) == keys.end()) fail(where + "." + printableText(item.key(), 80), "unknown key");
     return c;
 }
 
@@ -161,22 +162,27 @@ nlohmann::json sessionRecordJson(const SessionRecord& record)
 SessionRecord loadSessionRecord(const std::string& path)
 {
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw SessionError("cannot read the session file '" + path + "'");
+    if (!in) throw SessionError("cannot read the session file '" + printableText(path, 200) + "'");
     std::ostringstream text;
     text << in.rdbuf();
-    if (text.str().size() > (256u << 20)) throw SessionError("'" + path + "' is too large for a session file (over 256 MB)");
+    if (text.str().size() > (256u << 20)) throw SessionError("'" + printableText(path, 200) + "' is too large for a session file (over 256 MB)");
+    return parseSessionRecord(text.str(), path);
+}
+
+SessionRecord parseSessionRecord(const std::string& text, const std::string& name)
+{
+    const std::string where = "'" + printableText(name, 200) + "'";
     nlohmann::json root;
     try {
-        root = parseStrictJson(text.str(), "'" + path + "'");
+        root = parseStrictJson(text, where);
     } catch (const std::invalid_argument& e) {
         throw SessionError(e.what());
     }
-    const std::string where = "'" + path + "'";
     if (!root.is_object() || !root.contains("vdbclay_session")) fail(where, "not a VDBClay session file (no \"vdbclay_session\" key)");
     if (root.at("vdbclay_session") != 1) fail(where + ".vdbclay_session", "this version reads sessions of version 1");
     for (const auto& item : root.items())
         if (item.key() != "vdbclay_session" && item.key() != "viewport" && item.key() != "frames" && item.key() != "commands")
-            fail(where + "." + item.key(), "unknown key");
+            fail(where + "." + printableText(item.key(), 80), "unknown key");
     SessionRecord record;
     if (root.contains("viewport")) {
         const nlohmann::json& v = root.at("viewport");

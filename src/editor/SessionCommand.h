@@ -65,6 +65,8 @@ struct SessionRecord {
 nlohmann::json sessionRecordJson(const SessionRecord& record);
 /// Reads a session file; throws SessionError for unreadable or malformed ones.
 SessionRecord loadSessionRecord(const std::string& path);
+/// The same from the file's text; `name` labels the errors.
+SessionRecord parseSessionRecord(const std::string& text, const std::string& name);
 /// Writes the record atomically (a crash leaves the old file or the new one).
 void saveSessionRecord(const SessionRecord& record, const std::string& path);
 
