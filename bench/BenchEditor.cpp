@@ -13,8 +13,6 @@
 #include "render/SceneChunks.h"
 #include "render/VulkanContext.h"
 #include "scene/SceneStore.h"
-#include "scene/StoreLod.h"
-#include "scene/Synthesize.h"
 #include "sculpt/StrokeScript.h"
 #include "vdb_hermite/VolumeIO.h"
 
@@ -121,16 +119,7 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
     EditorFigures f;
     f.extent = extent;
     f.budget = budget;
-    const std::string store = (dir / ("terrain-" + std::to_string(extent) + ".vdbclay")).string();
-    SynthOptions synth;
-    synth.kind = SynthKind::Terrain;
-    synth.extent = extent;
-    synth.seed = 7;
-    synthesizeStore(synth, store);
-    {
-        SceneStore s = SceneStore::open(store, StoreAccess::ReadWrite);
-        buildStoreLod(s, 0);
-    }
+    const std::string store = terrainStoreWithLod(dir, extent);
     SessionOptions options;
     options.memoryBudgetBytes = budget;
     EditingSession session(store, options);

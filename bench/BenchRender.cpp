@@ -12,9 +12,7 @@
 #include "render/SceneChunks.h"
 #include "render/VulkanContext.h"
 #include "scene/SceneStore.h"
-#include "scene/StoreLod.h"
 #include "scene/StreamingScene.h"
-#include "scene/Synthesize.h"
 #include "sculpt/StrokeScript.h"
 
 #include <openvdb/openvdb.h>
@@ -110,16 +108,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
 {
     TerrainFigures f;
     f.extent = extent;
-    const std::string store = (dir / ("terrain-" + std::to_string(extent) + ".vdbclay")).string();
-    SynthOptions synth;
-    synth.kind = SynthKind::Terrain;
-    synth.extent = extent;
-    synth.seed = 7;
-    synthesizeStore(synth, store);
-    {
-        SceneStore s = SceneStore::open(store, StoreAccess::ReadWrite);
-        buildStoreLod(s, 0);
-    }
+    const std::string store = terrainStoreWithLod(dir, extent);
     f.storeBytes = fs::file_size(store);
 
     StreamingOptions options;

@@ -1,5 +1,9 @@
 #include "BenchUtil.h"
 
+#include "scene/SceneStore.h"
+#include "scene/StoreLod.h"
+#include "scene/Synthesize.h"
+
 #include <openvdb/version.h>
 #include <tbb/global_control.h>
 
@@ -48,6 +52,19 @@ ScratchDir::~ScratchDir()
 {
     std::error_code ec;
     std::filesystem::remove_all(path_, ec);
+}
+
+std::string terrainStoreWithLod(const std::filesystem::path& dir, int extent)
+{
+    const std::string store = (dir / ("terrain-" + std::to_string(extent) + ".vdbclay")).string();
+    SynthOptions synth;
+    synth.kind = SynthKind::Terrain;
+    synth.extent = extent;
+    synth.seed = 7;
+    synthesizeStore(synth, store);
+    SceneStore scene = SceneStore::open(store, StoreAccess::ReadWrite);
+    buildStoreLod(scene, 0);
+    return store;
 }
 
 int threadCount()

@@ -56,6 +56,10 @@ private:
     std::filesystem::path path_;
 };
 
+/// A synthetic terrain store of `extent` voxels (seed 7, bench stream's kind) with its levels of detail,
+/// written into `dir`; returns its path.
+std::string terrainStoreWithLod(const std::filesystem::path& dir, int extent);
+
 /// A table printed in Markdown, so a run can be pasted into docs/BENCHMARKS.md.
 struct Table {
     std::vector<std::string> header;
