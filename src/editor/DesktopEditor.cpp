@@ -400,11 +400,15 @@ struct DesktopEditor::Impl {
         const double seconds = std::chrono::duration<double>(start - lastFrame).count();
         lastFrame = start;
         flyKeys(std::min(seconds, 0.1));
-        if (replay)
-            while (replayNext < replay->commands.size() && replay->commands[replayNext].frame <= frames) {
-                const Command& c = replay->commands[replayNext++].command;
-                if (c.kind != Command::Kind::Save) apply(c); // as replaySession: a replay writes no files
+        if (replay) {
+            try {
+                replayNext = applyRecordedFrame(session, *replay, replayNext, frames);
+            } catch (const std::exception& e) {
+                panels.status = std::string("the replay stopped: ") + e.what();
+                std::cerr << "vdbclay: " << panels.status << "\n";
+                replay = nullptr;
             }
+        }
 
         ImGui_ImplVulkan_NewFrame();
         ImGui_ImplGlfw_NewFrame();

@@ -231,6 +231,16 @@ std::optional<SurfaceHit> EditingSession::pick(const std::array<double, 3>& orig
 
 nlohmann::json EditingSession::appliedScript() const { return {{"materials", materialsDefined_}, {"ops", appliedOps_}}; }
 
+std::size_t applyRecordedFrame(EditingSession& session, const SessionRecord& record, std::size_t next, uint64_t frame, double* time)
+{
+    while (next < record.commands.size() && record.commands[next].frame <= frame) {
+        const RecordedCommand& rc = record.commands[next++];
+        if (time) *time = rc.time;
+        if (rc.command.kind != Command::Kind::Save) session.apply(rc.command);
+    }
+    return next;
+}
+
 void replaySession(EditingSession& session, const SessionRecord& record, std::optional<uint64_t> frames,
                    const std::function<void(uint64_t frame, const FrameReport&)>& onFrame)
 {
@@ -238,12 +248,7 @@ void replaySession(EditingSession& session, const SessionRecord& record, std::op
     std::size_t next = 0;
     for (uint64_t f = 0; f < last; ++f) {
         double time = 0.0;
-        while (next < record.commands.size() && record.commands[next].frame <= f) {
-            const RecordedCommand& rc = record.commands[next++];
-            time = rc.time;
-            // A replay never writes the files the recorded session saved to (the caller saves with -o).
-            if (rc.command.kind != Command::Kind::Save) session.apply(rc.command);
-        }
+        next = applyRecordedFrame(session, record, next, f, &time);
         const FrameReport report = session.frame(time, record.viewport);
         if (onFrame) onFrame(f, report);
     }

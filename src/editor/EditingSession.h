@@ -124,6 +124,11 @@ private:
     uint64_t bricksChanged_ = 0;
 };
 
+/// Applies the recorded commands from index `next` on that belong before frame `frame` (save commands
+/// skipped: a replay never writes the files the recorded session saved to); returns the next index and,
+/// in `time`, the clock of the last one applied. What replaySession and the window's replay do each frame.
+std::size_t applyRecordedFrame(EditingSession& session, const SessionRecord& record, std::size_t next, uint64_t frame, double* time = nullptr);
+
 /// Replays a recorded session on `session` (frame by frame, each frame's commands first, the record's
 /// viewport) up to `frames` frames (all when absent); `onFrame` runs after each frame. Save commands are
 /// skipped: a replay never writes the files the recorded session saved to.

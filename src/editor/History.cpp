@@ -80,26 +80,18 @@ void History::push(std::vector<LeafChange> changes)
     spillOver();
 }
 
-std::optional<std::vector<LeafImage>> History::undo()
-{
-    if (undo_.empty()) return std::nullopt;
-    Entry entry = std::move(undo_.back());
-    undo_.pop_back();
-    load(entry);
-    std::vector<LeafImage> images = imagesOf(entry.changes, true);
-    redo_.push_back(std::move(entry));
-    spillOver();
-    return images;
-}
+std::optional<std::vector<LeafImage>> History::undo() { return step(undo_, redo_, true); }
 
-std::optional<std::vector<LeafImage>> History::redo()
+std::optional<std::vector<LeafImage>> History::redo() { return step(redo_, undo_, false); }
+
+std::optional<std::vector<LeafImage>> History::step(std::vector<Entry>& from, std::vector<Entry>& to, bool before)
 {
-    if (redo_.empty()) return std::nullopt;
-    Entry entry = std::move(redo_.back());
-    redo_.pop_back();
+    if (from.empty()) return std::nullopt;
+    Entry entry = std::move(from.back());
+    from.pop_back();
     load(entry);
-    std::vector<LeafImage> images = imagesOf(entry.changes, false);
-    undo_.push_back(std::move(entry));
+    std::vector<LeafImage> images = imagesOf(entry.changes, before);
+    to.push_back(std::move(entry));
     spillOver();
     return images;
 }

@@ -47,6 +47,8 @@ private:
         bool spilled = false;
         uint64_t fileOffset = 0;
     };
+    /// Moves the latest entry of `from` to `to`, returning its images before (undo) or after (redo).
+    std::optional<std::vector<LeafImage>> step(std::vector<Entry>& from, std::vector<Entry>& to, bool before);
     void spillOver();
     void load(Entry& entry);
     void release(Entry& entry);
