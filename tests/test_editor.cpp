@@ -221,14 +221,17 @@ TEST_CASE("editor: undo of random strokes restores the scene bit-exactly after e
     const Volume after = committed(session);
     CHECK_FALSE(identical(after, before));
 
-    // Look at the far corner: loading it evicts the bricks the strokes touched.
-    Command away;
-    away.kind = Command::Kind::SetCamera;
-    away.camera.eye = {250, 60, 250};
-    away.camera.target = {180, 30, 180};
-    session.apply(away);
+    // Look at the far side from station to station: loading what each shows pushes the bricks the
+    // strokes touched out of the budget (least recently used first).
+    const std::array<std::array<double, 2>, 4> stations{{{250, 250}, {250, 150}, {150, 250}, {200, 200}}};
     uint64_t strokesEvicted = 0;
-    for (int i = 0; i < 30 && strokesEvicted == 0; ++i) { // until the view's loads have pushed them out
+    for (int i = 0; i < 40 && strokesEvicted == 0; ++i) {
+        const auto& at = stations[std::size_t(i / 10) % stations.size()];
+        Command away;
+        away.kind = Command::Kind::SetCamera;
+        away.camera.eye = {at[0], 50, at[1]};
+        away.camera.target = {at[0] - 40, 25, at[1] - 40};
+        session.apply(away);
         session.frame(2.0 + i, {640, 480});
         session.scene().waitForLoads();
         const Volume resident = session.scene().residentLevel0();
