@@ -31,4 +31,13 @@ Mesh meshLevel(const Volume& fine, const wavelet::LodPyramid& pyramid, int level
 Mesh meshLodBrick(const std::vector<const Volume*>& levels, const LodCut& cut, const LodBrick& brick,
                   const MeshOptions& options);
 
+/// meshLodBrick in two parts, for re-meshing a brick where an edit changed it. First, the chunks of the
+/// leaves whose cells the brick meshes (its own, and one layer of leaves past its high faces), in the
+/// order of their origins; `onlyLeaves` (optional, sorted): only the chunks of those leaves.
+std::vector<MeshChunk> meshLodBrickChunks(const std::vector<const Volume*>& levels, const LodCut& cut, const LodBrick& brick,
+                                          const MeshOptions& options,
+                                          const std::vector<std::array<int32_t, 3>>* onlyLeaves = nullptr);
+/// Then the transition cells, appended to the welded chunks.
+void appendLodTransitions(const std::vector<const Volume*>& levels, const LodCut& cut, const LodBrick& brick, Mesh& mesh);
+
 } // namespace vdbclay

@@ -337,26 +337,52 @@ private:
     std::vector<std::size_t> crossingSides_;
 };
 
-} // namespace
-
-Mesh meshLodBrick(const std::vector<const Volume*>& levels, const LodCut& cut, const LodBrick& brick, const MeshOptions& options)
+void checkLevel(const std::vector<const Volume*>& levels, int level)
 {
-    const int level = brick.level;
     if (level < 0 || std::size_t(level) >= levels.size() || !levels[std::size_t(level)])
         throw std::invalid_argument("meshLodBrick: no data for level " + std::to_string(level));
+}
+
+std::array<int32_t, 3> brickMin(const LodBrick& brick)
+{
+    std::array<int32_t, 3> b{};
+    for (int a = 0; a < 3; ++a) b[std::size_t(a)] = brick.brick[std::size_t(a)] * kLodBrickVoxels;
+    return b;
+}
+
+} // namespace
+
+std::vector<MeshChunk> meshLodBrickChunks(const std::vector<const Volume*>& levels, const LodCut& cut, const LodBrick& brick,
+                                          const MeshOptions& options, const std::vector<std::array<int32_t, 3>>* onlyLeaves)
+{
+    const int level = brick.level;
+    checkLevel(levels, level);
     if (options.kind != MesherKind::CubicalMarchingSquares)
         throw std::invalid_argument("meshing levels of detail side by side needs CMS (its faces decide the transitions)");
     MeshOptions o = options;
     o.lodCut = &cut;
     o.lodLevel = level;
-    for (int a = 0; a < 3; ++a) o.lodBrickMin[std::size_t(a)] = brick.brick[std::size_t(a)] * kLodBrickVoxels;
+    o.lodBrickMin = brickMin(brick);
     const int widest = options.maxCellWidth;
     o.leafMaxCellWidth = [&cut, level, widest](const std::array<int32_t, 3>& origin) { return cut.leafMaxCellWidth(level, origin, widest); };
-    Mesh mesh = weldChunks(meshRegionChunks(*levels[std::size_t(level)], o.lodBrickMin, kLodBrickVoxels, o));
+    return meshRegionChunks(*levels[std::size_t(level)], o.lodBrickMin, kLodBrickVoxels, o, onlyLeaves);
+}
+
+Mesh meshLodBrick(const std::vector<const Volume*>& levels, const LodCut& cut, const LodBrick& brick, const MeshOptions& options)
+{
+    Mesh mesh = weldChunks(meshLodBrickChunks(levels, cut, brick, options));
+    appendLodTransitions(levels, cut, brick, mesh);
+    return mesh;
+}
+
+void appendLodTransitions(const std::vector<const Volume*>& levels, const LodCut& cut, const LodBrick& brick, Mesh& mesh)
+{
+    const int level = brick.level;
+    checkLevel(levels, level);
     TransitionMesher transitions(levels, cut);
     transitions.setVoxelSizes(levels);
     std::set<std::array<int32_t, 3>> meshed;
-    const std::array<int32_t, 3>& b = o.lodBrickMin;
+    const std::array<int32_t, 3> b = brickMin(brick);
     if (level > cut.finestLevel()) {
         // Only cells on a face of the brick that a finer brick touches can touch one, and the cells of
         // an empty region just below its low faces that it meshes (LodCut::cellOwner).
@@ -433,7 +459,6 @@ Mesh meshLodBrick(const std::vector<const Volume*>& levels, const LodCut& cut, c
                     transitions.meshCell(top, cell, mesh);
                 }
     }
-    return mesh;
 }
 
 } // namespace vdbclay

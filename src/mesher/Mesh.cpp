@@ -113,8 +113,16 @@ Mesh weldChunks(const std::vector<MeshChunk>& chunks)
     return weldChunks(pointers);
 }
 
-Mesh weldChunks(const std::vector<const MeshChunk*>& chunks)
+Mesh weldChunks(const std::vector<const MeshChunk*>& chunks) { return weldChunks(chunks, {}, nullptr); }
+
+Mesh weldChunks(const std::vector<const MeshChunk*>& chunks, const std::vector<const std::vector<uint8_t>*>& values,
+                std::vector<uint8_t>* welded)
 {
+    if (welded) {
+        if (values.size() != chunks.size()) throw std::invalid_argument("weldChunks: one value array per chunk");
+        for (std::size_t c = 0; c < chunks.size(); ++c)
+            if (values[c]->size() != chunks[c]->mesh.vertexCount()) throw std::invalid_argument("weldChunks: one value per vertex");
+    }
     // The welded mesh is the chunks' vertices in order, each shared key at its first holder, then their
     // triangles in order. Built in parallel: only keys on a leaf's border can be shared, and those are
     // matched in shards by key, each shard walking the chunks in order. Vertices are numbered as in the
@@ -184,6 +192,7 @@ Mesh weldChunks(const std::vector<const MeshChunk*>& chunks)
     out.materials.resize(outputBase[n]);
     out.triangles.resize(triangleBase[n]);
     out.triangleMaterials.resize(triangleBase[n]);
+    if (welded) welded->resize(outputBase[n]);
     std::vector<uint32_t>& output = border; // its border lists are no longer needed
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8), [&](const auto& range) {
         for (std::size_t c = range.begin(); c != range.end(); ++c) {
@@ -195,6 +204,7 @@ Mesh weldChunks(const std::vector<const MeshChunk*>& chunks)
                 out.positions[next] = m.positions[v];
                 out.normals[next] = m.normals[v];
                 out.materials[next] = m.materials[v];
+                if (welded) (*welded)[next] = (*values[c])[v];
                 ++next;
             }
         }

@@ -112,7 +112,7 @@ std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions&
 }
 
 std::vector<MeshChunk> meshRegionChunks(const Volume& volume, const std::array<int32_t, 3>& min, int32_t edge,
-                                        const MeshOptions& options)
+                                        const MeshOptions& options, const std::vector<std::array<int32_t, 3>>* onlyLeaves)
 {
     using namespace mesher_detail;
     validateMeshOptions(options);
@@ -130,7 +130,9 @@ std::vector<MeshChunk> meshRegionChunks(const Volume& volume, const std::array<i
     for (int32_t x = min[0]; x < min[0] + reach; x += kLeafDim)
         for (int32_t y = min[1]; y < min[1] + reach; y += kLeafDim)
             for (int32_t z = min[2]; z < min[2] + reach; z += kLeafDim)
-                if (const HermiteLeaf* leaf = acc.probeConstLeaf(Coord(x, y, z))) leaves.push_back(leaf);
+                if (const HermiteLeaf* leaf = acc.probeConstLeaf(Coord(x, y, z)))
+                    if (!onlyLeaves || std::binary_search(onlyLeaves->begin(), onlyLeaves->end(), std::array<int32_t, 3>{x, y, z}))
+                        leaves.push_back(leaf);
     std::vector<MeshChunk> chunks(leaves.size());
     std::vector<MeshChunk*> into(chunks.size());
     for (std::size_t i = 0; i < chunks.size(); ++i) into[i] = &chunks[i];

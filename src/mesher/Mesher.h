@@ -69,8 +69,10 @@ std::vector<MeshChunk> meshVolumeChunks(const Volume& volume, const MeshOptions&
                                         mesher_detail::AdaptiveCellCache* cells = nullptr);
 Mesh meshVolume(const Volume& volume, const MeshOptions& options = {});
 /// The chunks of the leaves whose origins lie in the box [min, min + edge) of index space, each the same
-/// as meshVolumeChunks gives for that leaf (cells read their neighbours outside the box as usual).
+/// as meshVolumeChunks gives for that leaf (cells read their neighbours outside the box as usual), in the
+/// order of their origins. `onlyLeaves` (optional, sorted): mesh only the leaves with these origins.
 std::vector<MeshChunk> meshRegionChunks(const Volume& volume, const std::array<int32_t, 3>& min, int32_t edge,
-                                        const MeshOptions& options = {});
+                                        const MeshOptions& options = {},
+                                        const std::vector<std::array<int32_t, 3>>* onlyLeaves = nullptr);
 
 } // namespace vdbclay

@@ -26,13 +26,14 @@ constexpr double kDistances[2] = {1.5, 3.5}; // voxels
 
 } // namespace
 
-std::vector<uint8_t> vertexOcclusion(const Volume& volume, const Mesh& mesh)
+std::vector<uint8_t> vertexOcclusion(const Volume& volume, const Mesh& mesh, std::size_t firstVertex)
 {
     using namespace mesher_detail;
-    std::vector<uint8_t> out(mesh.positions.size(), 255);
+    firstVertex = std::min(firstVertex, mesh.positions.size());
+    std::vector<uint8_t> out(mesh.positions.size() - firstVertex, 255);
     const HermiteTree& tree = volume.impl().grid->constTree();
     const double inv = 1.0 / volume.voxelSize();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.positions.size(), 512), [&](const auto& range) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(firstVertex, mesh.positions.size(), 512), [&](const auto& range) {
         ConstAccessor acc(tree);
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
             if (v >= mesh.normals.size()) break;
@@ -60,7 +61,7 @@ std::vector<uint8_t> vertexOcclusion(const Volume& volume, const Mesh& mesh)
                 }
             // Every sample lies outside a flat or convex surface; creases and pits hide some.
             const double openness = double(open) / double(total);
-            out[v] = uint8_t(std::lround(255.0 * openness));
+            out[v - firstVertex] = uint8_t(std::lround(255.0 * openness));
         }
     });
     return out;

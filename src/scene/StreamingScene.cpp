@@ -8,6 +8,9 @@
 #include "vdb_hermite/RegionCodec.h"
 #include "vdb_hermite/VolumeRegions.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
@@ -40,6 +43,27 @@ int64_t reachOfClass(int c) { return kMeshReach + (c > 0 ? (int64_t(1) << c) : 0
 /// The 27 directions from a brick to the bricks around it (13: itself), each axis -1, 0 or +1.
 int directionIndex(const std::array<int, 3>& d) { return (d[0] + 1) + 3 * (d[1] + 1) + 9 * (d[2] + 1); }
 
+/// The leaf changes StreamingScene remembers for re-meshing only what an edit reached; a brick's mesh
+/// older than the oldest one kept is made whole again.
+constexpr std::size_t kLeafLogLength = 1 << 16;
+
+/// One leaf's part of a level-0 brick's mesh.
+struct LeafMesh {
+    MeshChunk chunk;
+    std::vector<uint8_t> occlusion; // per vertex of the chunk
+};
+
+} // namespace
+
+struct StreamingScene::BrickMeshPieces {
+    std::vector<std::shared_ptr<const LeafMesh>> leaves; // in the order of their origins
+    uint64_t leafLogSeq = 0; // the leaf log's last entry when made
+    uint64_t inputs = 0;     // the brick's mesh version counting loads only (meshVersionLocked)
+    uint64_t bytes = 0;
+};
+
+namespace {
+
 } // namespace
 
 struct StreamingScene::Impl {
@@ -53,6 +77,8 @@ struct StreamingScene::Impl {
         // that side leave the neighbour's mesh as it was.
         std::array<std::array<uint64_t, 27>, kReachClasses> sides{};
         std::shared_ptr<const BrickMesh> mesh; // the last made, while the brick is shown
+        uint64_t meshInputs = 0;  // meshVersionLocked(key, true) when it was made
+        uint64_t loadVersion = 0; // the version it was loaded at: changes other than edits
     };
 
     StreamingOptions options;
@@ -82,6 +108,9 @@ struct StreamingScene::Impl {
     uint64_t edits = 0;
     uint64_t lodBricksWritten = 0;
     uint64_t versions = 0; // the last content version handed out
+    // Level-0 leaves edits changed, each with a number; numbers up to leafLogFloor are forgotten.
+    std::deque<std::pair<uint64_t, IndexCoord>> leafLog;
+    uint64_t leafLogSeq = 0, leafLogFloor = 0;
     std::vector<BrickKey> shown;
     LodCut cut; // the shown bricks and the rest of the split bricks' children
     MaterialTable materials; // the scene's, with what edits defined since the last autosave
@@ -130,13 +159,14 @@ struct StreamingScene::Impl {
     }
 
     /// Changes when the brick's content, or the bricks its mesh reads (those of the cut touching it,
-    /// and their content), change. 0 when it is not resident. Lock held.
-    uint64_t meshVersionLocked(const BrickKey& key) const
+    /// and their content), change. 0 when it is not resident. `loadsOnly`: counts the bricks' loads, not
+    /// their edits (which the leaf log tells). Lock held.
+    uint64_t meshVersionLocked(const BrickKey& key, bool loadsOnly = false) const
     {
         const auto it = resident.find(key);
         if (it == resident.end()) return 0;
         // Order-independent sums over the cut's bricks touching this one: which they are, and their content.
-        uint64_t v = it->second.version * 0x9E3779B97F4A7C15ull;
+        uint64_t v = (loadsOnly ? it->second.loadVersion : it->second.version) * 0x9E3779B97F4A7C15ull;
         const LodBrickHash hash;
         const int64_t own = int64_t(kLodBrickVoxels) << key.level;
         LodCut::Point lo, hi;
@@ -157,7 +187,8 @@ struct StreamingScene::Impl {
                 towards[std::size_t(a)] = hi[std::size_t(a)] <= olo ? -1 : lo[std::size_t(a)] >= ohi ? 1 : 0;
             }
             const int reachClass = std::clamp(key.level - other.level, 0, kReachClasses - 1);
-            v += r->second.sides[std::size_t(reachClass)][std::size_t(directionIndex(towards))] * 0xC2B2AE3D27D4EB4Full;
+            v += (loadsOnly ? r->second.loadVersion : r->second.sides[std::size_t(reachClass)][std::size_t(directionIndex(towards))]) *
+                 0xC2B2AE3D27D4EB4Full;
         }
         return v;
     }
@@ -199,24 +230,119 @@ struct StreamingScene::Impl {
         residentBytes += mesh->bytes;
         meshBytes += mesh->bytes;
         r.mesh = std::move(mesh);
+        r.meshInputs = meshVersionLocked(key, true);
         meshed.insert(key);
     }
 
-    /// The mesh of a resident brick as its data and the cut make it now. Lock held.
-    std::shared_ptr<const BrickMesh> makeMesh(const BrickKey& key) const
+    /// The mesh of a resident brick as its data and the cut make it now. `inPieces`: made and kept in
+    /// pieces per leaf, re-using those of `old` (optional) where no edit since reached them (above level
+    /// 0 only the transition cells, which read the finer levels, are made again). Lock held.
+    std::shared_ptr<const BrickMesh> makeMesh(const BrickKey& key, bool inPieces = false, const BrickMeshPieces* old = nullptr) const
     {
         std::vector<const Volume*> levelsOf;
         for (const Volume& v : levelVolumes) levelsOf.push_back(&v);
         auto out = std::make_shared<BrickMesh>();
         const LodBrick brick{key.level, key.brick};
-        // A brick outside the last frame's cut (asked for directly) is meshed alone at its level.
-        out->mesh = meshLodBrick(levelsOf, cut.shows(brick) ? cut : LodCut({brick}), brick, options.meshing);
-        out->occlusion = vertexOcclusion(*levelsOf[std::size_t(key.level)], out->mesh);
+        const Volume& volume = *levelsOf[std::size_t(key.level)];
+        if (inPieces && cut.shows(brick)) {
+            out->pieces = remeshPieces(key, levelsOf, old);
+            std::vector<const MeshChunk*> chunks;
+            std::vector<const std::vector<uint8_t>*> occlusion;
+            for (const auto& leaf : out->pieces->leaves) {
+                chunks.push_back(&leaf->chunk);
+                occlusion.push_back(&leaf->occlusion);
+            }
+            out->mesh = weldChunks(chunks, occlusion, &out->occlusion);
+            const std::size_t welded = out->mesh.vertexCount();
+            appendLodTransitions(levelsOf, cut, brick, out->mesh);
+            const std::vector<uint8_t> transitions = vertexOcclusion(volume, out->mesh, welded);
+            out->occlusion.insert(out->occlusion.end(), transitions.begin(), transitions.end());
+        } else {
+            // A brick outside the last frame's cut (asked for directly) is meshed alone at its level.
+            out->mesh = meshLodBrick(levelsOf, cut.shows(brick) ? cut : LodCut({brick}), brick, options.meshing);
+            out->occlusion = vertexOcclusion(volume, out->mesh);
+        }
         out->version = meshVersionLocked(key);
         out->hash = contentHash(out->mesh);
         for (uint8_t o : out->occlusion) out->hash = (out->hash ^ o) * 1099511628211ull;
-        out->bytes = sizeof(BrickMesh) + out->mesh.memoryBytes() + out->occlusion.capacity();
+        out->bytes = sizeof(BrickMesh) + out->mesh.memoryBytes() + out->occlusion.capacity() + (out->pieces ? out->pieces->bytes : 0);
         return out;
+    }
+
+    /// The pieces of a brick's mesh of the current cut: those of `old` where they still hold (the same
+    /// loads around, and no edit logged since reached the leaf), the rest meshed now. Lock held.
+    std::shared_ptr<const BrickMeshPieces> remeshPieces(const BrickKey& key, const std::vector<const Volume*>& levelsOf, const BrickMeshPieces* old) const
+    {
+        auto next = std::make_shared<BrickMeshPieces>();
+        next->inputs = meshVersionLocked(key, true);
+        next->leafLogSeq = leafLogSeq;
+        const LodBrick brick{key.level, key.brick};
+        std::array<int32_t, 3> lo{}, hi{}; // the leaves whose chunks the brick holds, [lo, hi)
+        for (int a = 0; a < 3; ++a) {
+            lo[std::size_t(a)] = key.brick[std::size_t(a)] * kBrickEdge;
+            hi[std::size_t(a)] = lo[std::size_t(a)] + kBrickEdge + kLeafDim;
+        }
+        const auto inBox = [&](const IndexCoord& c, int32_t grow) {
+            for (std::size_t a = 0; a < 3; ++a)
+                if (c[a] < lo[a] - grow || c[a] >= hi[a] + grow) return false;
+            return true;
+        };
+        const bool reuse = old && old->inputs == next->inputs && old->leafLogSeq >= leafLogFloor;
+        // The leaves edits changed since `old`, near enough for this brick's cells or occlusion to read
+        // (edits change level 0; the levels above change by loads).
+        std::vector<IndexCoord> changed;
+        if (reuse && key.level == 0)
+            for (auto it = leafLog.rbegin(); it != leafLog.rend() && it->first > old->leafLogSeq; ++it)
+                if (inBox(it->second, 2 * kLeafDim)) changed.push_back(it->second);
+        std::sort(changed.begin(), changed.end());
+        changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+        std::vector<IndexCoord> remesh; // sorted
+        if (reuse) {
+            for (const IndexCoord& leaf : leavesAffectedBy(changed, options.meshing))
+                if (inBox(leaf, 0)) remesh.push_back(leaf);
+        }
+        std::vector<MeshChunk> fresh = meshLodBrickChunks(levelsOf, cut, brick, options.meshing, reuse ? &remesh : nullptr);
+        // Occlusion samples reach 3.5 voxels beyond a chunk's cells: the leaves around a change.
+        std::set<IndexCoord> occludedAgain;
+        for (const IndexCoord& c : changed)
+            for (int d = 0; d < 27; ++d)
+                occludedAgain.insert({c[0] + (d % 3 - 1) * kLeafDim, c[1] + ((d / 3) % 3 - 1) * kLeafDim, c[2] + (d / 9 - 1) * kLeafDim});
+        std::vector<std::shared_ptr<const LeafMesh>> made(fresh.size()), kept;
+        if (reuse)
+            for (const auto& leaf : old->leaves)
+                if (!std::binary_search(remesh.begin(), remesh.end(), leaf->chunk.leafOrigin)) {
+                    if (!occludedAgain.count(leaf->chunk.leafOrigin)) kept.push_back(leaf);
+                    else fresh.push_back(leaf->chunk); // occluded again below
+                }
+        made.resize(fresh.size());
+        const Volume& volume = *levelsOf[std::size_t(key.level)];
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, fresh.size(), 4), [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                auto leaf = std::make_shared<LeafMesh>();
+                leaf->occlusion = vertexOcclusion(volume, fresh[i].mesh);
+                leaf->chunk = std::move(fresh[i]);
+                made[i] = std::move(leaf);
+            }
+        });
+        next->leaves = std::move(kept);
+        next->leaves.insert(next->leaves.end(), made.begin(), made.end());
+        std::sort(next->leaves.begin(), next->leaves.end(),
+                  [](const auto& a, const auto& b) { return a->chunk.leafOrigin < b->chunk.leafOrigin; });
+        next->bytes = sizeof(BrickMeshPieces);
+        for (const auto& leaf : next->leaves)
+            next->bytes += sizeof(LeafMesh) + leaf->chunk.mesh.memoryBytes() + leaf->chunk.vertexKeys.capacity() * sizeof(uint64_t) +
+                           leaf->occlusion.capacity();
+        return next;
+    }
+
+    /// Remembers level-0 leaves an edit changed. Lock held.
+    void logLeafChanges(const std::vector<IndexCoord>& leaves)
+    {
+        for (const IndexCoord& leaf : leaves) leafLog.emplace_back(++leafLogSeq, leaf);
+        while (leafLog.size() > kLeafLogLength) {
+            leafLogFloor = leafLog.front().first;
+            leafLog.pop_front();
+        }
     }
 
     /// Removes a resident brick (and its mesh) from memory. Lock held.
@@ -232,7 +358,8 @@ struct StreamingScene::Impl {
     void install(const BrickKey& key, DecodedRegion&& brick, uint64_t bytes, uint64_t bytesReadFromStore)
     {
         pasteRegion(levelVolumes[std::size_t(key.level)], std::move(brick));
-        Resident r{bytes, frameNumber, false, ++versions, {}, nullptr};
+        Resident r{bytes, frameNumber, false, ++versions, {}, nullptr, 0, 0};
+        r.loadVersion = r.version;
         for (auto& c : r.sides) c.fill(r.version);
         resident[key] = std::move(r);
         residentBytes += bytes;
@@ -342,14 +469,14 @@ struct StreamingScene::Impl {
         return work;
     }
 
-    /// Appends the leaf boxes of brick `b` where `work` differs from the resident data, before and after;
-    /// only boxes some range reaches are compared. Lock held.
-    void recordLeafChanges(const IndexCoord& b, const Volume& work, const std::vector<VoxelRange>& reached,
-                           std::vector<LeafChange>& out) const
+    /// The origins of the leaf boxes of brick `b` where `work` differs from the resident data; only boxes
+    /// some range reaches are compared. Lock held.
+    std::vector<IndexCoord> changedLeaves(const IndexCoord& b, const Volume& work, const std::vector<VoxelRange>& reached) const
     {
+        std::vector<IndexCoord> out;
         const Volume& fine = levelVolumes[0];
         const LeafAlignedBox box = brickBox(b);
-        if (!compareRegion(fine, work, box).any()) return;
+        if (!compareRegion(fine, work, box).any()) return out;
         for (int32_t z = 0; z < box.edge; z += kLeafDim)
             for (int32_t y = 0; y < box.edge; y += kLeafDim)
                 for (int32_t x = 0; x < box.edge; x += kLeafDim) {
@@ -360,20 +487,31 @@ struct StreamingScene::Impl {
                             if (r->second[a] < leaf.min[a] || r->first[a] > leaf.min[a] + kLeafDim - 1) return false;
                         return true;
                     });
-                    if (!inReach || !compareRegion(fine, work, leaf).any()) continue;
-                    out.push_back({leaf.min, encodeRegion(fine, leaf), encodeRegion(work, leaf)});
+                    if (inReach && compareRegion(fine, work, leaf).any()) out.push_back(leaf.min);
                 }
+        return out;
     }
 
-    /// Takes brick `b`'s content from `work` when it changed: dirty, a new version, and the sides whose
-    /// neighbours read what changed (those `reached` came within reach of) bumped. Lock held.
-    bool commitBrick(const IndexCoord& b, const Volume& work, const std::vector<VoxelRange>& reached)
+    /// The leaves of the resident data and of `work` at the origins given, before and after. Lock held.
+    void recordLeafChanges(const std::vector<IndexCoord>& leaves, const Volume& work, std::vector<LeafChange>& out) const
+    {
+        for (const IndexCoord& origin : leaves) {
+            const LeafAlignedBox leaf{origin, kLeafDim};
+            out.push_back({origin, encodeRegion(levelVolumes[0], leaf), encodeRegion(work, leaf)});
+        }
+    }
+
+    /// Takes brick `b`'s content from `work` when it changed (at `leaves`, changedLeaves): dirty, a new
+    /// version, the leaves logged, and the sides whose neighbours read what changed (those `reached` came
+    /// within reach of) bumped. Lock held.
+    bool commitBrick(const IndexCoord& b, const Volume& work, const std::vector<VoxelRange>& reached, const std::vector<IndexCoord>& leaves)
     {
         Volume& fine = levelVolumes[0];
         Resident& r = resident.at({0, b});
         const LeafAlignedBox box = brickBox(b);
-        if (!compareRegion(fine, work, box).any()) return false;
+        if (leaves.empty()) return false;
         pasteRegion(fine, work, box);
+        logLeafChanges(leaves);
         const uint64_t bytes = regionMemoryBytes(fine, box);
         residentBytes = residentBytes - r.bytes + bytes;
         r.bytes = bytes;
@@ -639,8 +777,9 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
     std::vector<Impl::VoxelRange> reached;
     for (const ScriptOp& op : script.ops) reached.push_back(voxelsReachedBy(op, s.scene.voxelSize()));
     for (const IndexCoord& b : bricks) {
-        if (changes) s.recordLeafChanges(b, work, reached, *changes);
-        report.bricksChanged += s.commitBrick(b, work, reached);
+        const std::vector<IndexCoord> leaves = s.changedLeaves(b, work, reached);
+        if (changes) s.recordLeafChanges(leaves, work, *changes);
+        report.bricksChanged += s.commitBrick(b, work, reached, leaves);
     }
     s.materials = work.materials();
     s.edits += script.ops.size();
@@ -673,7 +812,7 @@ StreamingScene::EditReport StreamingScene::restoreLeaves(const std::vector<LeafI
     Volume work = s.workCopy(bricks);
     for (const LeafImage& leaf : leaves)
         pasteRegion(work, decodeRegion(leaf.bytes, {leaf.origin, kLeafDim}, s.scene.voxelSize(), s.materials.size(), "the edit history"));
-    for (const IndexCoord& b : bricks) report.bricksChanged += s.commitBrick(b, work, reached);
+    for (const IndexCoord& b : bricks) report.bricksChanged += s.commitBrick(b, work, reached, s.changedLeaves(b, work, reached));
     ++s.edits;
     return report;
 }
@@ -785,7 +924,10 @@ std::shared_ptr<const StreamingScene::BrickMesh> StreamingScene::meshBrick(const
     const auto it = s.resident.find(key);
     if (it == s.resident.end()) return nullptr;
     if (it->second.mesh && it->second.mesh->version == s.meshVersionLocked(key)) return it->second.mesh;
-    std::shared_ptr<const BrickMesh> out = s.makeMesh(key);
+    // A mesh made again for edits (the loads around unchanged) is made in pieces, so that the next
+    // edits re-mesh only the leaves they reach; others are made whole and take less memory.
+    const bool forEdits = it->second.mesh && it->second.meshInputs == s.meshVersionLocked(key, true);
+    std::shared_ptr<const BrickMesh> out = s.makeMesh(key, forEdits, forEdits ? it->second.mesh->pieces.get() : nullptr);
     s.learnMeshShare(it->second, *out);
     // Kept if the budget holds it (other bricks may make room); else made again when asked for.
     s.dropMesh(key, it->second);

@@ -136,12 +136,16 @@ public:
     /// when the brick is not resident. The scene keeps it beside the brick, counted in the memory
     /// budget, until the brick's version changes, the brick leaves the view or is evicted: asking again
     /// costs nothing. A mesh the budget cannot hold (other bricks being needed) is not kept.
+    struct BrickMeshPieces;
     struct BrickMesh {
         Mesh mesh;
         std::vector<uint8_t> occlusion; // per vertex (vertexOcclusion)
         uint64_t version = 0;
         uint64_t hash = 0;  // of the mesh and its occlusion: equal meshes need no new upload
-        uint64_t bytes = 0; // what it takes in memory
+        uint64_t bytes = 0; // what it takes in memory, its pieces included
+        /// Once edits re-mesh the brick (its own or, for a coarse brick, finer ones beside it): the
+        /// mesh per leaf, which the next re-mesh re-uses where no edit reached.
+        std::shared_ptr<const BrickMeshPieces> pieces;
     };
     std::shared_ptr<const BrickMesh> meshBrick(const BrickKey& key) const;
     /// The same mesh made now from the resident data and the last cut, neither taken from the scene's

@@ -4,12 +4,13 @@
 #include "vdb_hermite/VolumeRegions.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <stdexcept>
 #include <vector>
 
@@ -65,15 +66,20 @@ struct LatticeGrid {
     /// The largest change per world unit between neighbouring points (bounds the interpolant's gradient).
     double lipschitz() const
     {
-        double worst = 0.0;
-        for (int32_t i = 0; i < dims[0]; ++i)
-            for (int32_t j = 0; j < dims[1]; ++j)
-                for (int32_t k = 0; k < dims[2]; ++k) {
-                    const float v = values[index(i, j, k)];
-                    double g2 = 0.0;
-                    for (const float n : {at(i + 1, j, k), at(i, j + 1, k), at(i, j, k + 1)}) g2 += double(n - v) * double(n - v);
-                    worst = std::max(worst, g2);
-                }
+        const double worst = tbb::parallel_reduce(
+            tbb::blocked_range<int32_t>(0, dims[0]), 0.0,
+            [&](const tbb::blocked_range<int32_t>& range, double found) {
+                for (int32_t i = range.begin(); i < range.end(); ++i)
+                    for (int32_t j = 0; j < dims[1]; ++j)
+                        for (int32_t k = 0; k < dims[2]; ++k) {
+                            const float v = values[index(i, j, k)];
+                            double g2 = 0.0;
+                            for (const float n : {at(i + 1, j, k), at(i, j + 1, k), at(i, j, k + 1)}) g2 += double(n - v) * double(n - v);
+                            found = std::max(found, g2);
+                        }
+                return found;
+            },
+            [](double a, double b) { return std::max(a, b); });
         return std::sqrt(worst) / voxelSize;
     }
 };
@@ -225,16 +231,48 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     checkFieldBrush(volume, brush, op);
     const double h = volume.voxelSize();
     const WorldBounds bounds = brush.bounds();
-    const double reach = fieldBrushReach(brush, op, h);
-    // The region: the lattice points of the brush's bounds grown by its reach (what opBounds promises a
-    // store pages in, so a streamed scene and a whole volume read the same voxels).
-    std::array<int32_t, 3> lo{}, dims{};
-    for (int a = 0; a < 3; ++a) {
-        lo[std::size_t(a)] = int32_t(std::floor((bounds.min[a] - reach) / h));
-        dims[std::size_t(a)] = int32_t(std::ceil((bounds.max[a] + reach) / h)) - lo[std::size_t(a)] + 1;
+    const double inner = brush.innerRadius();
+    const auto weightAt = [&](const Vec3d& world) { return op.strength * falloffWeight(op.falloff, -brush.distance(world), inner); };
+    const auto latticeBox = [&](double grow, std::array<int32_t, 3>& lo, std::array<int32_t, 3>& dims) {
+        for (int a = 0; a < 3; ++a) {
+            lo[std::size_t(a)] = int32_t(std::floor((bounds.min[a] - grow) / h));
+            dims[std::size_t(a)] = int32_t(std::ceil((bounds.max[a] + grow) / h)) - lo[std::size_t(a)] + 1;
+        }
+    };
+    // The old field must be right as far from the surface as the surface may move and the new field
+    // reads it (the band); farther, its magnitude is capped. The region is the brush's bounds grown by
+    // the band: at most what opBounds promises a store pages in (fieldBrushReach), so a streamed scene
+    // and a whole volume read the same voxels.
+    double band = fieldBrushReach(brush, op, h);
+    Vec3d centroid(0.0), normal(0.0); // flatten's plane
+    if (op.mode == FieldMode::Flatten) {
+        // The plane under the brush, fitted to the surface's crossings there weighted by the falloff.
+        // The surface moves at most as far as it lies from the plane.
+        std::array<int32_t, 3> lo{}, dims{};
+        latticeBox(0.0, lo, dims);
+        const std::vector<SurfaceSample> samples = surfaceSamples(volume, lo, dims);
+        double total = 0.0;
+        std::vector<std::pair<Vec3d, double>> weighted;
+        for (const SurfaceSample& sample : samples) {
+            const Vec3d p = sample.point * h;
+            const double w = weightAt(p);
+            if (w <= 0.0) continue;
+            weighted.push_back({p, w});
+            centroid += p * w;
+            normal += sample.normal * w;
+            total += w;
+        }
+        if (total <= 0.0 || normal.length() < 1e-9) return {}; // no surface under the brush
+        centroid /= total;
+        normal.normalize();
+        double gap = 0.0;
+        for (const auto& [p, w] : weighted) gap = std::max(gap, std::fabs((p - centroid).dot(normal)));
+        band = std::min(band, gap + 4.0 * h);
     }
+    std::array<int32_t, 3> lo{}, dims{};
+    latticeBox(band, lo, dims);
     // The old field, rebuilt from the Hermite data in the region, and the materials there.
-    const SolidDistances solid = solidDistances(volume, lo, dims);
+    const SolidDistances solid = solidDistances(volume, lo, dims, float(band / h));
     if (std::none_of(solid.material.begin(), solid.material.end(), [](MaterialId m) { return m != kEmptyMaterial; }))
         return {}; // nothing solid to reshape
     LatticeGrid old;
@@ -246,27 +284,31 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     // The material of new voxels: the op's, else the most common solid one inside the brush.
     MaterialId material = op.material.value_or(kEmptyMaterial);
     if (material == kEmptyMaterial) {
-        std::map<MaterialId, uint64_t> counts;
-        for (int32_t i = 0; i < old.dims[0]; ++i)
-            for (int32_t j = 0; j < old.dims[1]; ++j)
-                for (int32_t k = 0; k < old.dims[2]; ++k) {
-                    const MaterialId m = solid.material[old.index(i, j, k)];
-                    if (m != kEmptyMaterial && brush.distance(old.pointOf(i, j, k)) <= 0.0) ++counts[m];
-                }
-        material = counts.empty() ? MaterialId(1) : std::max_element(counts.begin(), counts.end(), [](const auto& x, const auto& y) {
-                                                         return x.second < y.second;
-                                                     })->first;
+        const std::size_t ids = volume.materials().size() + 1;
+        tbb::enumerable_thread_specific<std::vector<uint64_t>> counts([&] { return std::vector<uint64_t>(ids, 0); });
+        tbb::parallel_for(tbb::blocked_range<int32_t>(0, old.dims[0]), [&](const tbb::blocked_range<int32_t>& range) {
+            std::vector<uint64_t>& local = counts.local();
+            for (int32_t i = range.begin(); i < range.end(); ++i)
+                for (int32_t j = 0; j < old.dims[1]; ++j)
+                    for (int32_t k = 0; k < old.dims[2]; ++k) {
+                        const MaterialId m = solid.material[old.index(i, j, k)];
+                        if (m != kEmptyMaterial && m < ids && brush.distance(old.pointOf(i, j, k)) <= 0.0) ++local[m];
+                    }
+        });
+        std::vector<uint64_t> total(ids, 0);
+        for (const std::vector<uint64_t>& local : counts)
+            for (std::size_t m = 0; m < ids; ++m) total[m] += local[m];
+        material = MaterialId(1);
+        for (std::size_t m = 1; m < ids; ++m)
+            if (total[m] > total[material]) material = MaterialId(m);
     }
 
     // Weights, once per point.
-    const double inner = brush.innerRadius();
     std::vector<float> weight(old.values.size(), 0.0f);
     tbb::parallel_for(tbb::blocked_range<int32_t>(0, old.dims[0]), [&](const tbb::blocked_range<int32_t>& range) {
         for (int32_t i = range.begin(); i < range.end(); ++i)
             for (int32_t j = 0; j < old.dims[1]; ++j)
-                for (int32_t k = 0; k < old.dims[2]; ++k)
-                    weight[old.index(i, j, k)] =
-                        float(op.strength * falloffWeight(op.falloff, -brush.distance(old.pointOf(i, j, k)), inner));
+                for (int32_t k = 0; k < old.dims[2]; ++k) weight[old.index(i, j, k)] = float(weightAt(old.pointOf(i, j, k)));
     });
 
     LatticeGrid next = old;
@@ -287,42 +329,21 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
         break;
     }
     case FieldMode::Flatten: {
-        // The plane under the brush: the surface points (lattice points near the surface, projected on
-        // it) and normals, weighted.
-        Vec3d centroid(0.0), normal(0.0);
-        double total = 0.0;
-        for (int32_t i = 0; i < old.dims[0]; ++i)
-            for (int32_t j = 0; j < old.dims[1]; ++j)
-                for (int32_t k = 0; k < old.dims[2]; ++k) {
-                    const std::size_t n = old.index(i, j, k);
-                    if (weight[n] <= 0.0f || std::fabs(old.values[n]) > h) continue;
-                    Vec3d g = old.gradient(i, j, k);
-                    const double len = g.length();
-                    if (len < 1e-9) continue;
-                    g /= len;
-                    centroid += (old.pointOf(i, j, k) - g * double(old.values[n])) * double(weight[n]);
-                    normal += g * double(weight[n]);
-                    total += weight[n];
-                }
-        if (total <= 0.0 || normal.length() < 1e-9) return {}; // no surface under the brush
-        centroid /= total;
-        normal.normalize();
-        for (int32_t i = 0; i < old.dims[0]; ++i)
-            for (int32_t j = 0; j < old.dims[1]; ++j)
-                for (int32_t k = 0; k < old.dims[2]; ++k) {
-                    const std::size_t n = old.index(i, j, k);
-                    const double plane = (old.pointOf(i, j, k) - centroid).dot(normal);
-                    next.values[n] = float(old.values[n] + weight[n] * (plane - old.values[n]));
-                }
+        tbb::parallel_for(tbb::blocked_range<int32_t>(0, old.dims[0]), [&](const tbb::blocked_range<int32_t>& range) {
+            for (int32_t i = range.begin(); i < range.end(); ++i)
+                for (int32_t j = 0; j < old.dims[1]; ++j)
+                    for (int32_t k = 0; k < old.dims[2]; ++k) {
+                        const std::size_t n = old.index(i, j, k);
+                        const double plane = (old.pointOf(i, j, k) - centroid).dot(normal);
+                        next.values[n] = float(old.values[n] + weight[n] * (plane - old.values[n]));
+                    }
+        });
         break;
     }
     case FieldMode::Move: {
         // Each surface point p moves to p + w(p) offset (w where the brush grabbed it); a lattice point x
         // takes the old field where it came from, p = x - w(p) offset, found by fixed-point steps (they
         // converge while the offset is shorter than the falloff is wide).
-        const auto weightAt = [&](const Vec3d& p) {
-            return op.strength * falloffWeight(op.falloff, -brush.distance(p), inner);
-        };
         tbb::parallel_for(tbb::blocked_range<int32_t>(0, old.dims[0]), [&](const tbb::blocked_range<int32_t>& range) {
             for (int32_t i = range.begin(); i < range.end(); ++i)
                 for (int32_t j = 0; j < old.dims[1]; ++j)

@@ -60,7 +60,11 @@ inline float crossingDistance(const Crossing& c, const Vec3d& p)
 /// (each point offered its 26 neighbours' crossings, forward then backward) carries the nearest
 /// crossing through the box, so far values are Euclidean distances to the surface's samples and the
 /// field's gradient stays close to 1 (a chamfer transform's diagonal steps made it √3).
-std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>& crossings, MaterialId region)
+/// `band` (voxels, finite): distances beyond it are capped at it, and the propagation skips the blocks
+/// of points farther than it from every crossing (on their way to a nearer point, nearest crossings
+/// only pass points nearer still, so the points within the band are as without it).
+std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>& crossings, MaterialId region,
+                                     float band = std::numeric_limits<float>::infinity())
 {
     std::vector<float> d(box.size(), std::numeric_limits<float>::max());
     std::vector<int32_t> nearest(box.size(), -1);
@@ -80,14 +84,46 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
                     if (candidate < d[n]) d[n] = candidate, nearest[n] = int32_t(id);
                 }
     }
+    const int nx = box.dims[0], ny = box.dims[1], nz = box.dims[2];
+    // Blocks of 4^3 points: those within the band of a seeded point's block.
+    constexpr int kBlock = 4;
+    const bool banded = std::isfinite(band);
+    const int bx = (nx + kBlock - 1) / kBlock, by = (ny + kBlock - 1) / kBlock, bz = (nz + kBlock - 1) / kBlock;
+    const auto blockIndex = [&](int i, int j, int k) {
+        return (std::size_t(i / kBlock) * std::size_t(by) + std::size_t(j / kBlock)) * std::size_t(bz) + std::size_t(k / kBlock);
+    };
+    std::vector<uint8_t> nearBlock;
+    if (banded) {
+        nearBlock.assign(std::size_t(bx) * std::size_t(by) * std::size_t(bz), 0);
+        for (int i = 0; i < nx; ++i)
+            for (int j = 0; j < ny; ++j)
+                for (int k = 0; k < nz; ++k)
+                    if (nearest[box.index(i, j, k)] >= 0) nearBlock[blockIndex(i, j, k)] = 1;
+        // Grown by the band plus a block (the seeds sit anywhere in theirs), one axis at a time.
+        const int grow = int(std::ceil(band / float(kBlock))) + 1;
+        const int bdims[3] = {bx, by, bz};
+        for (int axis = 0; axis < 3; ++axis) {
+            const std::vector<uint8_t> before = nearBlock;
+            const std::size_t stride[3] = {std::size_t(by) * std::size_t(bz), std::size_t(bz), 1};
+            for (int a = 0; a < bx; ++a)
+                for (int b = 0; b < by; ++b)
+                    for (int c = 0; c < bz; ++c) {
+                        const std::size_t n = std::size_t(a) * stride[0] + std::size_t(b) * stride[1] + std::size_t(c);
+                        if (!before[n]) continue;
+                        const int at = axis == 0 ? a : axis == 1 ? b : c;
+                        for (int t = std::max(0, at - grow); t <= std::min(bdims[axis] - 1, at + grow); ++t)
+                            nearBlock[n + (std::size_t(t) - std::size_t(at)) * stride[axis]] = 1;
+                    }
+        }
+    }
     struct Step { int di, dj, dk; };
     std::vector<Step> earlier; // the 13 neighbours a forward raster scan has visited
     for (int di = -1; di <= 1; ++di)
         for (int dj = -1; dj <= 1; ++dj)
             for (int dk = -1; dk <= 1; ++dk)
                 if (di * 9 + dj * 3 + dk < 0) earlier.push_back({di, dj, dk});
-    const int nx = box.dims[0], ny = box.dims[1], nz = box.dims[2];
     auto offer = [&](int i, int j, int k, int sign) {
+        if (banded && !nearBlock[blockIndex(i, j, k)]) return;
         const std::size_t n = box.index(i, j, k);
         const Vec3d p = point(i, j, k);
         for (const Step& s : earlier) {
@@ -105,6 +141,8 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
     for (int i = nx - 1; i >= 0; --i)
         for (int j = ny - 1; j >= 0; --j)
             for (int k = nz - 1; k >= 0; --k) offer(i, j, k, -1);
+    if (banded)
+        for (float& v : d) v = std::min(v, band);
     return d;
 }
 
@@ -336,7 +374,7 @@ std::optional<PackedSample> GridTool::sampleAt(const std::array<int32_t, 3>& ijk
     return *s;
 }
 
-SolidDistances solidDistances(const Volume& volume, const std::array<int32_t, 3>& origin, const std::array<int32_t, 3>& dims)
+SolidDistances solidDistances(const Volume& volume, const std::array<int32_t, 3>& origin, const std::array<int32_t, 3>& dims, float band)
 {
     const Box box{origin, dims};
     SolidDistances out;
@@ -344,10 +382,27 @@ SolidDistances solidDistances(const Volume& volume, const std::array<int32_t, 3>
     out.dims = dims;
     std::vector<Crossing> crossings;
     readLattice(volume, box, out.material, crossings);
-    out.distance = boundaryDistances(box, crossings, kEmptyMaterial);
+    out.distance = boundaryDistances(box, crossings, kEmptyMaterial, band);
     for (std::size_t n = 0; n < out.distance.size(); ++n) {
         const float magnitude = std::max(out.distance[n], kLeastDistance);
         out.distance[n] = out.material[n] != kEmptyMaterial ? -magnitude : magnitude;
+    }
+    return out;
+}
+
+std::vector<SurfaceSample> surfaceSamples(const Volume& volume, const std::array<int32_t, 3>& origin, const std::array<int32_t, 3>& dims)
+{
+    // One point more on the high sides: the material at each crossing's far end is then read, not
+    // taken as empty.
+    const Box box{origin, {dims[0] + 1, dims[1] + 1, dims[2] + 1}};
+    std::vector<MaterialId> material;
+    std::vector<Crossing> crossings;
+    readLattice(volume, box, material, crossings);
+    std::vector<SurfaceSample> out;
+    for (const Crossing& c : crossings) {
+        bool inside = true;
+        for (int a = 0; a < 3; ++a) inside = inside && c.point[a] < double(origin[std::size_t(a)] + dims[std::size_t(a)]);
+        if (inside && inRegion(c.before, kEmptyMaterial) != inRegion(c.after, kEmptyMaterial)) out.push_back({c.point, c.normal});
     }
     return out;
 }

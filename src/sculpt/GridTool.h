@@ -16,6 +16,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -44,12 +45,22 @@ struct ToolField {
 /// as a tool's fields are: the points near a Hermite crossing take their distance to it, and a vector
 /// propagation carries the nearest crossing through the box (Euclidean to any depth; crossings outside the
 /// box are not seen). With the material at each point. Points indexed (x * dims[1] + y) * dims[2] + z.
+/// `band` (voxels): magnitudes are capped at it, and the work spent on points beyond it is skipped.
 struct SolidDistances {
     std::array<int32_t, 3> origin{0, 0, 0}, dims{0, 0, 0};
     std::vector<float> distance;
     std::vector<MaterialId> material;
 };
-SolidDistances solidDistances(const Volume& volume, const std::array<int32_t, 3>& origin, const std::array<int32_t, 3>& dims);
+SolidDistances solidDistances(const Volume& volume, const std::array<int32_t, 3>& origin, const std::array<int32_t, 3>& dims,
+                              float band = std::numeric_limits<float>::infinity());
+
+/// Where the solid's boundary crosses the lattice edges inside a box (Hermite crossings between solid
+/// and empty), index space.
+struct SurfaceSample {
+    Vec3d point;
+    Vec3d normal; // unit, out of the solid
+};
+std::vector<SurfaceSample> surfaceSamples(const Volume& volume, const std::array<int32_t, 3>& origin, const std::array<int32_t, 3>& dims);
 
 class GridTool {
 public:
