@@ -116,31 +116,55 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
                     }
         }
     }
-    struct Step { int di, dj, dk; };
+    struct Step {
+        int di, dj, dk;
+        std::ptrdiff_t offset; // in the arrays
+        float length;
+    };
     std::vector<Step> earlier; // the 13 neighbours a forward raster scan has visited
     for (int di = -1; di <= 1; ++di)
         for (int dj = -1; dj <= 1; ++dj)
             for (int dk = -1; dk <= 1; ++dk)
-                if (di * 9 + dj * 3 + dk < 0) earlier.push_back({di, dj, dk});
+                if (di * 9 + dj * 3 + dk < 0)
+                    earlier.push_back({di, dj, dk, (std::ptrdiff_t(di) * ny + dj) * nz + dk, float(std::sqrt(double(di * di + dj * dj + dk * dk)))});
     auto offer = [&](int i, int j, int k, int sign) {
         if (banded && !nearBlock[blockIndex(i, j, k)]) return;
         const std::size_t n = box.index(i, j, k);
         const Vec3d p = point(i, j, k);
+        const bool inner = i > 0 && j > 0 && k > 0 && i < nx - 1 && j < ny - 1 && k < nz - 1;
         for (const Step& s : earlier) {
-            const int a = i + sign * s.di, b = j + sign * s.dj, c = k + sign * s.dk;
-            if (a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz) continue;
-            const int32_t id = nearest[box.index(a, b, c)];
-            if (id < 0 || id == nearest[n]) continue;
+            std::size_t q;
+            if (inner) {
+                q = std::size_t(std::ptrdiff_t(n) + sign * s.offset);
+            } else {
+                const int a = i + sign * s.di, b = j + sign * s.dj, c = k + sign * s.dk;
+                if (a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz) continue;
+                q = box.index(a, b, c);
+            }
+            const int32_t id = nearest[q];
+            // crossingDistance changes by at most the step between two points: q's crossing cannot
+            // beat n's when q lies that much farther from it.
+            if (id < 0 || id == nearest[n] || d[q] - s.length >= d[n]) continue;
             const float candidate = crossingDistance(crossings[std::size_t(id)], p);
             if (candidate < d[n]) d[n] = candidate, nearest[n] = id;
         }
     };
-    for (int i = 0; i < nx; ++i)
-        for (int j = 0; j < ny; ++j)
-            for (int k = 0; k < nz; ++k) offer(i, j, k, 1);
-    for (int i = nx - 1; i >= 0; --i)
-        for (int j = ny - 1; j >= 0; --j)
-            for (int k = nz - 1; k >= 0; --k) offer(i, j, k, -1);
+    // Each pass in wavefronts of rows: row (i, j) reads rows (i - 1, j - 1..j + 1) and (i, j - 1) of its
+    // pass (mirrored for the backward one), all on earlier fronts 2i + j, so a front's rows run in
+    // parallel and every point sees what the raster scan shows it.
+    for (const int sign : {1, -1})
+        for (int front = 0; front <= 2 * (nx - 1) + (ny - 1); ++front) {
+            const int first = std::max(0, (front - (ny - 1) + 1) / 2), last = std::min(nx - 1, front / 2);
+            tbb::parallel_for(tbb::blocked_range<int>(first, last + 1, 4), [&](const tbb::blocked_range<int>& rows) {
+                for (int r = rows.begin(); r != rows.end(); ++r) {
+                    const int j = front - 2 * r;
+                    if (sign > 0)
+                        for (int k = 0; k < nz; ++k) offer(r, j, k, 1);
+                    else
+                        for (int k = nz - 1; k >= 0; --k) offer(nx - 1 - r, ny - 1 - j, k, -1);
+                }
+            });
+        }
     if (banded)
         for (float& v : d) v = std::min(v, band);
     return d;
