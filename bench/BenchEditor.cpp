@@ -46,7 +46,7 @@ struct EditorFigures {
     int extent = 0;
     uint64_t budget = 0;
     std::vector<FrameSample> frames;
-    std::vector<double> latencyFrames; // per edit: frames until its chunks were drawn (1 = the next frame)
+    std::vector<double> latencyFrames; // per edit: frames until the view showed it (1 = the next frame)
     std::map<std::string, std::vector<double>> stampMsByMode; // edit time of frames with one stroke step
     double toolFrameMs = 0.0, toolEditMs = 0.0, toolMeshMs = 0.0;
     uint64_t toolBricks = 0;
@@ -205,7 +205,20 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
         planMode.push_back("");
     }
 
+    // An edit is visible once the view shows level 0, where the level-0 data changed, at the points it
+    // was made (and their mirror images): a coarse brick shown there still holds the data before it.
     int64_t editWaiting = -1; // the frame of an edit not yet drawn
+    std::vector<std::array<double, 3>> waitingAt;
+    const auto shownCoarseAt = [&](const std::array<double, 3>& world) {
+        for (const BrickKey& key : session.scene().shownBricks()) {
+            const double edge = double(kBrickEdge) * double(1 << key.level) * voxel;
+            bool inside = true;
+            for (int a = 0; a < 3; ++a)
+                inside = inside && world[std::size_t(a)] >= key.brick[std::size_t(a)] * edge && world[std::size_t(a)] < (key.brick[std::size_t(a)] + 1) * edge;
+            if (inside) return key.level > 0;
+        }
+        return false; // out of the view
+    };
     bool baselineDone = false;
     for (std::size_t i = 0; i < plan.size(); ++i) {
         FrameSample s;
@@ -223,10 +236,20 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
         s.uploadBytes = stats.uploadBytes;
         s.residentBytes = report.residentBytes;
         f.frames.push_back(s);
-        if (session.stats().bricksChangedLastFrame > 0 && editWaiting < 0) editWaiting = int64_t(i);
-        if (editWaiting >= 0 && sync.uploaded > 0) {
+        if (session.stats().bricksChangedLastFrame > 0) {
+            if (editWaiting < 0) editWaiting = int64_t(i);
+            for (const Command& c : plan[i]) {
+                std::array<double, 3> at = c.point;
+                if (c.kind == Command::Kind::ApplyOp) at = c.op.at("at").get<std::array<double, 3>>();
+                else if (c.kind != Command::Kind::StrokeBegin && c.kind != Command::Kind::StrokeMove) continue;
+                waitingAt.push_back(at);
+                waitingAt.push_back({at[0], at[1], 2.0 * cz - at[2]}); // the mirror image
+            }
+        }
+        if (editWaiting >= 0 && std::none_of(waitingAt.begin(), waitingAt.end(), shownCoarseAt)) {
             f.latencyFrames.push_back(double(int64_t(i) - editWaiting + 1));
             editWaiting = -1;
+            waitingAt.clear();
         }
         if (!planMode[i].empty() && planMode[i] != "tool" && plan[i].size() == 1) f.stampMsByMode[planMode[i]].push_back(s.editMs);
         if (i == toolFrame) {

@@ -543,3 +543,49 @@ TEST_CASE("after stamps anywhere (across brick faces too), every kept mesh is th
     }
     checkKeptMeshes("the stamp inside one brick");
 }
+
+TEST_CASE("an edit where the view shows a coarse level shows at level 0 until it is saved, then at the coarse level again", "[streaming]")
+{
+    TempDir dir;
+    const std::string path = makeTerrain(dir);
+    StreamingOptions options = roomyOptions();
+    options.access = StoreAccess::ReadWrite;
+    options.pixelTolerance = 4.0; // from afar: the terrain shows at a coarse level
+    StreamingScene scene(path, options);
+    const Viewer view = lookingAt({-500, 200, -500}, {128, 30, 128});
+    const auto settle = [&] {
+        FrameReport report;
+        for (int i = 0; i < 50 && !(report.settled && report.pending == 0); ++i) {
+            report = scene.frame(view);
+            scene.waitForLoads();
+        }
+    };
+    const auto levelShownAt = [&](const std::array<double, 3>& p) {
+        for (const BrickKey& key : scene.shownBricks()) {
+            const double edge = double(kBrickEdge << key.level);
+            bool inside = true;
+            for (std::size_t a = 0; a < 3; ++a) inside = inside && p[a] >= key.brick[a] * edge && p[a] < (key.brick[a] + 1) * edge;
+            if (inside) return key.level;
+        }
+        return -1;
+    };
+    settle();
+    // A point on the surface shown at a coarse level.
+    std::optional<std::array<double, 3>> at;
+    for (const BrickKey& key : scene.shownBricks()) {
+        if (key.level == 0 || at) continue;
+        const double edge = double(kBrickEdge << key.level);
+        for (double y = 60; y >= 10 && !at; y -= 2) {
+            const std::array<double, 3> p{(key.brick[0] + 0.5) * edge, y, (key.brick[2] + 0.5) * edge};
+            if (levelShownAt(p) <= 0) continue;
+            const nlohmann::json op{{"mode", "remove"}, {"brush", {{"shape", "sphere"}, {"radius", 4}}}, {"at", p}};
+            if (scene.sculpt(parseStrokeScript(nlohmann::json{{"ops", {op}}}.dump())).bricksChanged > 0) at = p;
+        }
+    }
+    REQUIRE(at);
+    settle();
+    CHECK(levelShownAt(*at) == 0);
+    scene.autosave(); // rebuilds the levels above the edit
+    settle();
+    CHECK(levelShownAt(*at) > 0);
+}

@@ -668,6 +668,16 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     selection.levels = s.levels;
     // Under the lock: an autosave on a loader thread (evicting a dirty brick) adds to `present`.
     std::unique_lock<std::mutex> lock(s.mutex);
+    // The levels above edited bricks are rebuilt when they are saved: until then the view shows level 0
+    // there.
+    std::unordered_set<BrickKey, BrickKeyHash> stale;
+    for (const auto& [key, r] : s.resident)
+        if (key.level == 0 && r.dirty)
+            for (BrickKey up = key; up.level < s.levels;) {
+                up = {up.level + 1, parentBrick(up.brick)};
+                if (!stale.insert(up).second) break;
+            }
+    selection.refineAlways = &stale;
     const std::vector<SelectedBrick> selected = selectBricks(viewer, selection, s.present);
     ++s.frameNumber;
     FrameReport report;

@@ -109,7 +109,7 @@ std::vector<SelectedBrick> selectBricks(const Viewer& viewer, const SelectionOpt
         const double distance = distanceToBox(viewer.position, lo, hi);
         const double voxel = options.voxelSize * double(1 << key.level);
         const double error = distance > 0.0 ? voxel * pixelsPerRadian / distance : 1e30;
-        if (key.level > 0 && error > options.pixelTolerance) {
+        if (key.level > 0 && (error > options.pixelTolerance || (options.refineAlways && options.refineAlways->count(key)))) {
             std::vector<BrickKey> children;
             const std::set<IndexCoord>& below = stored[std::size_t(key.level - 1)];
             for (int c = 0; c < 8; ++c) {

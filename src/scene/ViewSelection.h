@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <set>
+#include <unordered_set>
 #include <vector>
 
 namespace vdbclay {
@@ -24,6 +25,9 @@ struct SelectionOptions {
     double pixelTolerance = 1.0; // screen-space error a brick may show, in pixels
     double voxelSize = 1.0;      // level 0
     int levels = 0;              // coarse levels available (bricks of level k: 64 voxels of 2^k * voxelSize)
+    /// Optional: coarse bricks refined whatever their error (those older than the edited level-0 data
+    /// below them, so that an edit shows at once).
+    const std::unordered_set<BrickKey, BrickKeyHash>* refineAlways = nullptr;
 };
 
 struct SelectedBrick {
