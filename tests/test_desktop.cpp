@@ -144,3 +144,78 @@ TEST_CASE("desktop: a mouse stroke through the window equals its replay, a menu 
     replaySession(replayed, record);
     CHECK(identical(committed(replayed), after));
 }
+
+TEST_CASE("desktop: edits recovered after a crash are offered: kept, or dropped through the dialog", "[desktop][editor]")
+{
+    if (!desktopAvailable()) {
+        WARN("skipped: no display (the test command runs the suite under xvfb-run)");
+        return;
+    }
+    TempDir dir;
+    const std::string ball = makeBall(dir, "ball.vdb");
+    const Volume saved = loadVolume(ball);
+    {
+        // Edits autosaved, never saved into the .vdb: what a crash leaves.
+        EditingSession crashed(ball, quiet());
+        Command op;
+        op.kind = Command::Kind::ApplyOp;
+        op.op = {{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 6}}}, {"at", {20, 0, 0}}};
+        crashed.apply(op);
+        crashed.autosave();
+    }
+    std::optional<std::array<float, 2>> uiPointer;
+    bool uiButton = false;
+    DesktopOptions options;
+    options.validation = true;
+    options.windowSize = {800, 600};
+    options.beforeUi = [&](uint64_t) {
+        if (!uiPointer) return;
+        ImGuiIO& io = ImGui::GetIO();
+        io.MousePos = ImVec2((*uiPointer)[0], (*uiPointer)[1]);
+        io.MouseDown[0] = uiButton;
+    };
+    const auto click = [&](DesktopEditor& editor, const std::string& label) {
+        const auto rect = editor.widgetRect(label);
+        REQUIRE(rect);
+        uiPointer = std::array<float, 2>{((*rect)[0] + (*rect)[2]) * 0.5f, ((*rect)[1] + (*rect)[3]) * 0.5f};
+        uiButton = true;
+        const bool open = editor.frame();
+        uiButton = false;
+        const bool stillOpen = open && editor.frame();
+        uiPointer.reset();
+        return stillOpen;
+    };
+    for (const std::string answer : {"Keep them", "Discard them"}) {
+        EditingSession session(ball, quiet());
+        REQUIRE(session.recoveredEdits() > 0);
+        std::unique_ptr<DesktopEditor> editor;
+        try {
+            editor = std::make_unique<DesktopEditor>(session, options);
+        } catch (const NoDisplay& e) {
+            WARN("skipped: " << e.what());
+            return;
+        } catch (const render::NoVulkanDevice& e) {
+            WARN("skipped: no Vulkan device: " << e.what());
+            return;
+        }
+        for (int i = 0; i < 2; ++i) REQUIRE(editor->frame());
+        INFO(answer);
+        if (answer == "Keep them") {
+            CHECK(click(*editor, answer)); // the editor goes on, the edits stay
+            CHECK_FALSE(editor->discardRecoveryRequested());
+            REQUIRE(editor->frame());
+            CHECK_FALSE(editor->widgetRect("Keep them")); // the dialog is gone
+            CHECK_FALSE(identical(committed(session), saved));
+        } else {
+            CHECK_FALSE(click(*editor, answer)); // the editor stops so that the scene is opened again
+            CHECK(editor->discardRecoveryRequested());
+            CHECK(editor->validationMessages() == 0);
+            editor.reset();
+        }
+    }
+    SessionOptions discard = quiet();
+    discard.discardRecovery = true;
+    EditingSession reopened(ball, discard);
+    CHECK(reopened.recoveredEdits() == 0);
+    CHECK(identical(committed(reopened), saved));
+}

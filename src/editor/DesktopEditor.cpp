@@ -416,7 +416,7 @@ struct DesktopEditor::Impl {
         ImGui::NewFrame();
         for (const Command& c : panels.draw(session, figures)) apply(c);
         ImGui::Render();
-        if (!panels.openRequested.empty()) return false;
+        if (!panels.openRequested.empty() || panels.discardRecoveryRequested) return false;
 
         figures.stream = session.frame(now(), windowSize());
         chunks.sync(session.scene(), *renderer);
@@ -508,15 +508,19 @@ EditingSession& DesktopEditor::session() { return impl_->session; }
 void DesktopEditor::replay(const SessionRecord* record) { impl_->replay = record; impl_->replayNext = 0; }
 std::string DesktopEditor::openRequested() const { return impl_->panels.openRequested; }
 
+bool DesktopEditor::discardRecoveryRequested() const { return impl_->panels.discardRecoveryRequested; }
+
 int runDesktopEditor(const SessionOptions& options, std::unique_ptr<EditingSession> session, const SessionRecord* replay)
 {
     while (true) {
         std::string open;
+        bool discard = false;
         try {
             DesktopEditor editor(*session);
             editor.replay(replay);
             editor.run();
             open = editor.openRequested();
+            discard = editor.discardRecoveryRequested();
         } catch (const NoDisplay& e) {
             std::cerr << "vdbclay: error: " << e.what() << ": draw pictures with 'vdbclay render', or replay a session with "
                       << "'vdbclay edit SCENE --replay SESSION.json --headless'\n";
@@ -525,10 +529,16 @@ int runDesktopEditor(const SessionOptions& options, std::unique_ptr<EditingSessi
             std::cerr << "vdbclay: error: cannot open the editor: " << e.what() << "\n";
             return 1;
         }
+        SessionOptions next = options;
+        if (discard) {
+            // The same scene again, as last saved.
+            open = session->scenePath();
+            next.discardRecovery = true;
+        }
         if (open.empty()) return 0;
         replay = nullptr;
         session.reset();
-        session = std::make_unique<EditingSession>(open, options);
+        session = std::make_unique<EditingSession>(open, next);
     }
 }
 

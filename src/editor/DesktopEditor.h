@@ -59,6 +59,9 @@ public:
     void replay(const SessionRecord* record);
     /// A scene the user asked to open from the file menu (the editor stopped for it), or empty.
     std::string openRequested() const;
+    /// Whether the user chose to drop the edits recovered after a crash (the editor stopped for it:
+    /// reopen the scene with SessionOptions::discardRecovery).
+    bool discardRecoveryRequested() const;
 
     /// Where a tracked widget was drawn last frame (DesktopPanels::widgetRects), if it was.
     std::optional<std::array<float, 4>> widgetRect(const std::string& label) const;

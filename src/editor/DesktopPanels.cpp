@@ -2,6 +2,7 @@
 
 #include "editor/DesktopEditor.h"
 #include "editor/SceneFileActions.h"
+#include "scene/SceneStore.h"
 #include "vdb_hermite/AtomicFile.h"
 
 #include <imgui.h>
@@ -108,12 +109,43 @@ std::vector<Command> DesktopPanels::draw(EditingSession& session, const FrameFig
     }
     ImGui::End();
     if (showStats) statsPanel(session, figures);
+    recoveryOffer(session);
     if (showHelp) {
         ImGui::SetNextWindowPos(ImVec2(360, 10), ImGuiCond_FirstUseEver);
         if (ImGui::Begin("Help", &showHelp)) ImGui::TextUnformatted(desktopShortcutsHelp());
         ImGui::End();
     }
     return out;
+}
+
+void DesktopPanels::recoveryOffer(const EditingSession& session)
+{
+    if (recoveryAnswered_ || session.recoveredEdits() == 0) return;
+    const char* title = "Recovered edits";
+    if (!ImGui::IsPopupOpen(title)) ImGui::OpenPopup(title);
+    ImGui::SetNextWindowPos(ImGui::GetMainViewport()->GetCenter(), ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
+    if (!ImGui::BeginPopupModal(title, nullptr, ImGuiWindowFlags_AlwaysAutoResize)) return;
+    // A store keeps its edits as they are made: only a .vdb's working store can drop them.
+    const bool canDiscard = !isStorePath(session.scenePath());
+    ImGui::Text("%llu edits made after the last save of\n%s\nwere recovered (the editor stopped before saving them).",
+                static_cast<unsigned long long>(session.recoveredEdits()), session.scenePath().c_str());
+    ImGui::TextUnformatted(canDiscard ? "Keep them (Ctrl+S saves them into the file), or go back to the file as last saved?"
+                                      : "A store keeps every edit as it is made.");
+    if (ImGui::Button("Keep them")) {
+        recoveryAnswered_ = true;
+        ImGui::CloseCurrentPopup();
+    }
+    track("Keep them");
+    if (canDiscard) {
+        ImGui::SameLine();
+        if (ImGui::Button("Discard them")) {
+            recoveryAnswered_ = true;
+            discardRecoveryRequested = true;
+            ImGui::CloseCurrentPopup();
+        }
+        track("Discard them");
+    }
+    ImGui::EndPopup();
 }
 
 void DesktopPanels::track(const std::string& label)

@@ -39,13 +39,17 @@ public:
     std::vector<Command> draw(EditingSession& session, const FrameFigures& figures);
 
     /// Where some widgets were drawn in the last frame (min x, min y, max x, max y; window pixels), by label:
-    /// "mirror x", "mirror y", "mirror z", "Use as brush", "Save (Ctrl+S)". Tests click them through ImGui.
+    /// "mirror x", "mirror y", "mirror z", "Use as brush", "Save (Ctrl+S)", "Keep them", "Discard them".
+    /// Tests click them through ImGui.
     std::map<std::string, std::array<float, 4>> widgetRects;
 
     bool showHelp = false;
     bool showStats = true;
     std::string status;       // the last action's outcome, shown at the bottom
     std::string openRequested; // a scene the user asked to open instead (the front end reopens)
+    /// The user chose to drop the edits recovered after a crash (the front end reopens the scene
+    /// discarding them).
+    bool discardRecoveryRequested = false;
 
 private:
     void track(const std::string& label);
@@ -55,7 +59,9 @@ private:
     void toolsPanel(EditingSession& session, std::vector<Command>& out);
     void filePanel(EditingSession& session, std::vector<Command>& out);
     void statsPanel(const EditingSession& session, const FrameFigures& figures);
+    void recoveryOffer(const EditingSession& session);
 
+    bool recoveryAnswered_ = false;
     std::vector<CustomBrushPart> parts_{CustomBrushPart{}};
     float customSmoothness_ = 0.2f;
     std::string presetName_ = "my-brush";
