@@ -24,3 +24,5 @@ pkg_check_modules(STB REQUIRED IMPORTED_TARGET stb)
 # The desktop editor: a GLFW window, Dear ImGui menus (static libimgui.a with its GLFW and Vulkan backends).
 find_package(glfw3 3.3 REQUIRED)
 pkg_check_modules(IMGUI REQUIRED IMPORTED_TARGET imgui)
+# The desktop tests press mouse buttons as the X server delivers them (XTEST, which Xvfb has).
+pkg_check_modules(XTST REQUIRED IMPORTED_TARGET xtst x11)

@@ -52,7 +52,7 @@ packages=(
     libopenvdb-tools python3-openvdb libassimp-dev
     clang-14 libclang-rt-14-dev
     libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslc libglm-dev libstb-dev
-    libglfw3-dev libimgui-dev xvfb xauth
+    libglfw3-dev libimgui-dev libxtst-dev xvfb xauth
 )
 
 installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q 'install ok installed'; }

@@ -1,6 +1,7 @@
 // The desktop editor under a display (Xvfb and lavapipe in the test command): the window opens and draws
-// with the validation layer silent, a mouse stroke drawn through the window's input equals its replay,
-// and a menu clicked through Dear ImGui changes what the next stroke does. Skipped, saying so, where
+// with the validation layer silent, a mouse stroke made of X events (XTEST) through GLFW equals its
+// replay, a menu clicked through Dear ImGui changes what the next stroke does, and recovered edits are
+// offered. Skipped, saying so, where
 // there is no display or no Vulkan device.
 #include "editor/DesktopEditor.h"
 #include "editor/EditingSession.h"
@@ -16,6 +17,9 @@
 #include <imgui.h>
 
 #include <filesystem>
+
+// Last: X11's headers define macros (None, Bool, Status...) that other headers use as names.
+#include <X11/extensions/XTest.h>
 
 using namespace vdbclay;
 using namespace vdbclay::test;
@@ -84,22 +88,33 @@ TEST_CASE("desktop: a mouse stroke through the window equals its replay, a menu 
     for (int i = 0; i < 2; ++i) REQUIRE(editor->frame());
     CHECK(editor->lastFrame().triangles > 1000);
 
-    // A stroke as the window delivers it: the pointer moves (GLFW's cursor callback), the left button goes
-    // down, the pointer drags across the ball, the button comes up.
+    // A stroke as the X server delivers it (XTEST: the pointer moves, the left button goes down, the
+    // pointer drags across the ball, the button comes up), through GLFW's event loop and callbacks. The
+    // events are made on a connection of the test's own; the server sends them to the window under the
+    // pointer.
+    const std::unique_ptr<Display, int (*)(Display*)> connection(XOpenDisplay(nullptr), XCloseDisplay);
+    Display* display = connection.get();
+    REQUIRE(display);
+    int windowX = 0, windowY = 0;
+    glfwGetWindowPos(editor->window(), &windowX, &windowY);
     const auto moveTo = [&](double x, double y) {
-        glfwSetCursorPos(editor->window(), x, y);
-        editor->cursorMoved(x, y);
+        XTestFakeMotionEvent(display, -1, windowX + int(x), windowY + int(y), CurrentTime);
+        XSync(display, False); // the events are queued when the next frame polls
+    };
+    const auto leftButton = [&](bool down) {
+        XTestFakeButtonEvent(display, 1, down ? True : False, CurrentTime);
+        XSync(display, False);
     };
     const auto stroke = [&](double x0, double y0) {
         moveTo(x0, y0);
         REQUIRE(editor->frame());
-        editor->mouseButton(GLFW_MOUSE_BUTTON_LEFT, GLFW_PRESS, 0);
+        leftButton(true);
         REQUIRE(editor->frame());
         for (int k = 1; k <= 4; ++k) {
             moveTo(x0 + 12.0 * k, y0 - 4.0 * k);
             REQUIRE(editor->frame());
         }
-        editor->mouseButton(GLFW_MOUSE_BUTTON_LEFT, GLFW_RELEASE, 0);
+        leftButton(false);
         REQUIRE(editor->frame());
     };
     stroke(420, 300);
