@@ -33,7 +33,7 @@ CLI::App* addEditCommand(CLI::App& parent, EditOptions& o)
     cmd->add_option("--size", o.size, "The screenshot's size (default: the session's window size)")->type_name("WxH");
     cmd->add_option("-o,--output", o.output, "Headless: save the result here (.vdb or .vdbclay). A replay never writes a .vdb scene itself; a store takes the edits, as in any session")
         ->type_name("OUT");
-    cmd->add_option("--export-script", o.exportScript, "Headless: write the ops the session applied as a stroke script (for 'vdbclay sculpt')")
+    cmd->add_option("--export-script", o.exportScript, "Headless: write the ops in effect (undone strokes left out) as a stroke script (for 'vdbclay sculpt')")
         ->type_name("OUT.json");
     cmd->add_flag("--discard-recovery", o.discardRecovery, "A .vdb: drop edits autosaved after its last save instead of recovering them");
     cmd->add_option("--autosave", o.autosaveSeconds, "Seconds between autosaves while sculpting")->capture_default_str()->type_name("S")->check(positiveNumber());

@@ -74,7 +74,8 @@ public:
     const History& history() const { return history_; }
     const SessionStats& stats() const { return stats_; }
     const SessionRecord& record() const { return record_; }
-    /// The ops applied so far, as a stroke script (what `vdbclay sculpt` would apply to the same scene).
+    /// The ops in effect, as a stroke script (what `vdbclay sculpt` applies to the scene as it was opened
+    /// to make it as it is): those of undone strokes and of strokes that changed nothing are left out.
     nlohmann::json appliedScript() const;
     uint64_t frameNumber() const { return frameNumber_; }
     StreamingScene& scene() { return *scene_; }
@@ -94,6 +95,7 @@ private:
         double travelled = 0.0;                   // along the pointer's path since the last stamp
         std::vector<LeafChange> changes;          // merged per leaf: first before, last after
         std::map<IndexCoord, std::size_t> changeIndex;
+        nlohmann::json ops = nlohmann::json::array(); // applied
     };
     void beginStroke(const std::array<double, 3>& point, double pressure);
     void moveStroke(const std::array<double, 3>& point, double pressure);
@@ -115,7 +117,10 @@ private:
     SessionStats stats_;
     SessionRecord record_;
     nlohmann::json materialsDefined_ = nlohmann::json::array();
-    nlohmann::json appliedOps_ = nlohmann::json::array();
+    // The ops of the edits in effect: those past undo's reach, then per history entry (undo side), and
+    // of the undone ones (redo side).
+    nlohmann::json permanentOps_ = nlohmann::json::array();
+    std::vector<nlohmann::json> undoableOps_, redoableOps_;
     ToolCache tools_; // grid tools stamped so far, built once (a tool file is not expected to change under a session)
     uint64_t frameNumber_ = 0;
     double time_ = 0.0, lastAutosave_ = 0.0, lastCommand_ = 0.0;
