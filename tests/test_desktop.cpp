@@ -49,6 +49,53 @@ Volume committed(EditingSession& session)
     return session.scene().store().loadLevel(0);
 }
 
+/// Drives the menus through ImGui's input: this frame's pointer and left button, when set.
+struct UiDriver {
+    std::optional<std::array<float, 2>> pointer;
+    bool button = false;
+
+    DesktopOptions options()
+    {
+        DesktopOptions o;
+        o.validation = true;
+        o.windowSize = {800, 600};
+        o.beforeUi = [this](uint64_t) {
+            if (!pointer) return;
+            ImGuiIO& io = ImGui::GetIO();
+            io.MousePos = ImVec2((*pointer)[0], (*pointer)[1]);
+            io.MouseDown[0] = button;
+        };
+        return o;
+    }
+    /// Clicks a tracked widget: pressed one frame, released the next (ImGui acts on the release). False
+    /// when a frame reported the window closed.
+    bool click(DesktopEditor& editor, const std::string& label)
+    {
+        const auto rect = editor.widgetRect(label);
+        REQUIRE(rect);
+        pointer = std::array<float, 2>{((*rect)[0] + (*rect)[2]) * 0.5f, ((*rect)[1] + (*rect)[3]) * 0.5f};
+        button = true;
+        const bool open = editor.frame();
+        button = false;
+        const bool stillOpen = open && editor.frame();
+        pointer.reset();
+        return stillOpen;
+    }
+};
+
+/// The editor's window, or null (with a warning saying why the test is skipped) where none can open.
+std::unique_ptr<DesktopEditor> openEditor(EditingSession& session, const DesktopOptions& options)
+{
+    try {
+        return std::make_unique<DesktopEditor>(session, options);
+    } catch (const NoDisplay& e) {
+        WARN("skipped: " << e.what());
+    } catch (const render::NoVulkanDevice& e) {
+        WARN("skipped: no Vulkan device: " << e.what());
+    }
+    return nullptr;
+}
+
 } // namespace
 
 TEST_CASE("desktop: a mouse stroke through the window equals its replay, a menu clicked through ImGui changes the next stroke", "[desktop][editor]")
@@ -61,28 +108,9 @@ TEST_CASE("desktop: a mouse stroke through the window equals its replay, a menu 
     const std::string ball = makeBall(dir, "ball.vdb");
     std::filesystem::copy_file(ball, dir.file("copy.vdb"));
     EditingSession session(ball, quiet());
-    // The menus are driven through ImGui's input: this frame's pointer and left button, when set.
-    std::optional<std::array<float, 2>> uiPointer;
-    bool uiButton = false;
-    DesktopOptions options;
-    options.validation = true;
-    options.windowSize = {800, 600};
-    options.beforeUi = [&](uint64_t) {
-        if (!uiPointer) return;
-        ImGuiIO& io = ImGui::GetIO();
-        io.MousePos = ImVec2((*uiPointer)[0], (*uiPointer)[1]);
-        io.MouseDown[0] = uiButton;
-    };
-    std::unique_ptr<DesktopEditor> editor;
-    try {
-        editor = std::make_unique<DesktopEditor>(session, options);
-    } catch (const NoDisplay& e) {
-        WARN("skipped: " << e.what());
-        return;
-    } catch (const render::NoVulkanDevice& e) {
-        WARN("skipped: no Vulkan device: " << e.what());
-        return;
-    }
+    UiDriver ui;
+    std::unique_ptr<DesktopEditor> editor = openEditor(session, ui.options());
+    if (!editor) return;
     for (int i = 0; i < 3; ++i) REQUIRE(editor->frame());
     session.scene().waitForLoads();
     for (int i = 0; i < 2; ++i) REQUIRE(editor->frame());
@@ -122,16 +150,8 @@ TEST_CASE("desktop: a mouse stroke through the window equals its replay, a menu 
     CHECK(session.stats().stampsApplied >= 3);
     CHECK_FALSE(session.brush().symmetry.is_object());
 
-    // Click "mirror x" in the brush panel: pointer over it, button down one frame, up the next (two
-    // frames per UI step: ImGui acts on the release).
-    const auto rect = editor->widgetRect("mirror x");
-    REQUIRE(rect);
-    uiPointer = std::array<float, 2>{((*rect)[0] + (*rect)[2]) * 0.5f, ((*rect)[1] + (*rect)[3]) * 0.5f};
-    uiButton = true;
-    REQUIRE(editor->frame());
-    uiButton = false;
-    REQUIRE(editor->frame());
-    uiPointer.reset();
+    // Click "mirror x" in the brush panel (two frames per UI step).
+    REQUIRE(ui.click(*editor, "mirror x"));
     REQUIRE(session.brush().symmetry.is_object());
     CHECK(session.brush().symmetry.at("mirror") == nlohmann::json::array({"x"}));
 
@@ -178,51 +198,22 @@ TEST_CASE("desktop: edits recovered after a crash are offered: kept, or dropped 
         crashed.apply(op);
         crashed.autosave();
     }
-    std::optional<std::array<float, 2>> uiPointer;
-    bool uiButton = false;
-    DesktopOptions options;
-    options.validation = true;
-    options.windowSize = {800, 600};
-    options.beforeUi = [&](uint64_t) {
-        if (!uiPointer) return;
-        ImGuiIO& io = ImGui::GetIO();
-        io.MousePos = ImVec2((*uiPointer)[0], (*uiPointer)[1]);
-        io.MouseDown[0] = uiButton;
-    };
-    const auto click = [&](DesktopEditor& editor, const std::string& label) {
-        const auto rect = editor.widgetRect(label);
-        REQUIRE(rect);
-        uiPointer = std::array<float, 2>{((*rect)[0] + (*rect)[2]) * 0.5f, ((*rect)[1] + (*rect)[3]) * 0.5f};
-        uiButton = true;
-        const bool open = editor.frame();
-        uiButton = false;
-        const bool stillOpen = open && editor.frame();
-        uiPointer.reset();
-        return stillOpen;
-    };
+    UiDriver ui;
     for (const std::string answer : {"Keep them", "Discard them"}) {
         EditingSession session(ball, quiet());
         REQUIRE(session.recoveredEdits() > 0);
-        std::unique_ptr<DesktopEditor> editor;
-        try {
-            editor = std::make_unique<DesktopEditor>(session, options);
-        } catch (const NoDisplay& e) {
-            WARN("skipped: " << e.what());
-            return;
-        } catch (const render::NoVulkanDevice& e) {
-            WARN("skipped: no Vulkan device: " << e.what());
-            return;
-        }
+        std::unique_ptr<DesktopEditor> editor = openEditor(session, ui.options());
+        if (!editor) return;
         for (int i = 0; i < 2; ++i) REQUIRE(editor->frame());
         INFO(answer);
         if (answer == "Keep them") {
-            CHECK(click(*editor, answer)); // the editor goes on, the edits stay
+            CHECK(ui.click(*editor, answer)); // the editor goes on, the edits stay
             CHECK_FALSE(editor->discardRecoveryRequested());
             REQUIRE(editor->frame());
             CHECK_FALSE(editor->widgetRect("Keep them")); // the dialog is gone
             CHECK_FALSE(identical(committed(session), saved));
         } else {
-            CHECK_FALSE(click(*editor, answer)); // the editor stops so that the scene is opened again
+            CHECK_FALSE(ui.click(*editor, answer)); // the editor stops so that the scene is opened again
             CHECK(editor->discardRecoveryRequested());
             CHECK(editor->validationMessages() == 0);
             editor.reset();

@@ -62,10 +62,6 @@ struct StreamingScene::BrickMeshPieces {
     uint64_t bytes = 0;
 };
 
-namespace {
-
-} // namespace
-
 struct StreamingScene::Impl {
     struct Resident {
         uint64_t bytes = 0;
@@ -307,14 +303,14 @@ struct StreamingScene::Impl {
         for (const IndexCoord& c : changed)
             for (int d = 0; d < 27; ++d)
                 occludedAgain.insert({c[0] + (d % 3 - 1) * kLeafDim, c[1] + ((d / 3) % 3 - 1) * kLeafDim, c[2] + (d / 9 - 1) * kLeafDim});
-        std::vector<std::shared_ptr<const LeafMesh>> made(fresh.size()), kept;
+        std::vector<std::shared_ptr<const LeafMesh>> kept;
         if (reuse)
             for (const auto& leaf : old->leaves)
                 if (!std::binary_search(remesh.begin(), remesh.end(), leaf->chunk.leafOrigin)) {
                     if (!occludedAgain.count(leaf->chunk.leafOrigin)) kept.push_back(leaf);
                     else fresh.push_back(leaf->chunk); // occluded again below
                 }
-        made.resize(fresh.size());
+        std::vector<std::shared_ptr<const LeafMesh>> made(fresh.size());
         const Volume& volume = *levelsOf[std::size_t(key.level)];
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, fresh.size(), 4), [&](const tbb::blocked_range<std::size_t>& range) {
             for (std::size_t i = range.begin(); i != range.end(); ++i) {

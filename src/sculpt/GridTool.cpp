@@ -61,8 +61,8 @@ inline float crossingDistance(const Crossing& c, const Vec3d& p)
 /// crossing through the box, so far values are Euclidean distances to the surface's samples and the
 /// field's gradient stays close to 1 (a chamfer transform's diagonal steps made it √3).
 /// `band` (voxels, finite): distances beyond it are capped at it, and the propagation skips the blocks
-/// of points farther than it from every crossing (on their way to a nearer point, nearest crossings
-/// only pass points nearer still, so the points within the band are as without it).
+/// of points farther than it (and a block more) from every seeded point: a crossing reaches a point
+/// through points about as near to it, which those blocks hold.
 std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>& crossings, MaterialId region,
                                      float band = std::numeric_limits<float>::infinity())
 {
@@ -112,7 +112,7 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
                         if (!before[n]) continue;
                         const int at = axis == 0 ? a : axis == 1 ? b : c;
                         for (int t = std::max(0, at - grow); t <= std::min(bdims[axis] - 1, at + grow); ++t)
-                            nearBlock[n + (std::size_t(t) - std::size_t(at)) * stride[axis]] = 1;
+                            nearBlock[std::size_t(std::ptrdiff_t(n) + std::ptrdiff_t(t - at) * std::ptrdiff_t(stride[axis]))] = 1;
                     }
         }
     }
