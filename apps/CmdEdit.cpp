@@ -71,7 +71,8 @@ int runEdit(const EditOptions& o)
         throw UsageError(e.what()); // a budget too small for one brick, discarding a store's edits
     }
     if (session->recoveredEdits() > 0)
-        std::cerr << "vdbclay: recovered " << session->recoveredEdits() << " edits autosaved after the last save of '" << o.scene
+        std::cerr << "vdbclay: recovered " << session->recoveredEdits() << (session->recoveredEdits() == 1 ? " edit" : " edits")
+                  << " autosaved after the last save of '" << o.scene
                   << "' (kept: save to keep them for good" << (isStorePath(o.scene) ? "" : ", or run again with --discard-recovery to drop them")
                   << ")\n";
 

@@ -127,8 +127,10 @@ void DesktopPanels::recoveryOffer(const EditingSession& session)
     if (!ImGui::BeginPopupModal(title, nullptr, ImGuiWindowFlags_AlwaysAutoResize)) return;
     // A store keeps its edits as they are made: only a .vdb's working store can drop them.
     const bool canDiscard = !isStorePath(session.scenePath());
-    ImGui::Text("%llu edits made after the last save of\n%s\nwere recovered (the editor stopped before saving them).",
-                static_cast<unsigned long long>(session.recoveredEdits()), session.scenePath().c_str());
+    const uint64_t edits = session.recoveredEdits();
+    ImGui::Text("%llu %s made after the last save of\n%s\n%s recovered (the editor stopped before saving %s).",
+                static_cast<unsigned long long>(edits), edits == 1 ? "edit" : "edits", session.scenePath().c_str(),
+                edits == 1 ? "was" : "were", edits == 1 ? "it" : "them");
     ImGui::TextUnformatted(canDiscard ? "Keep them (Ctrl+S saves them into the file), or go back to the file as last saved?"
                                       : "A store keeps every edit as it is made.");
     if (ImGui::Button("Keep them")) {
