@@ -589,3 +589,33 @@ TEST_CASE("an edit where the view shows a coarse level shows at level 0 until it
     settle();
     CHECK(levelShownAt(*at) > 0);
 }
+
+TEST_CASE("an edit in empty space, where no brick was stored, shows at once", "[streaming]")
+{
+    TempDir dir;
+    const std::string path = makeTerrain(dir);
+    StreamingOptions options = roomyOptions();
+    options.access = StoreAccess::ReadWrite;
+    StreamingScene scene(path, options);
+    // High above the terrain: the bricks there were never stored, at any level.
+    const std::array<double, 3> at{100.0, 230.0, 100.0};
+    const IndexCoord brick{int32_t(at[0]) / kBrickEdge, int32_t(at[1]) / kBrickEdge, int32_t(at[2]) / kBrickEdge};
+    REQUIRE_FALSE(scene.store().bricks().get({0, brick}));
+    const Viewer view = lookingAt({100, 230, 160}, at);
+    const auto settle = [&] {
+        FrameReport report;
+        for (int i = 0; i < 50 && !(report.settled && report.pending == 0); ++i) {
+            report = scene.frame(view);
+            scene.waitForLoads();
+        }
+    };
+    settle();
+    const nlohmann::json op{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 6}}}, {"at", at}};
+    REQUIRE(scene.sculpt(parseStrokeScript(nlohmann::json{{"ops", {op}}}.dump())).bricksChanged == 1);
+    settle();
+    const std::vector<BrickKey> shown = scene.shownBricks();
+    REQUIRE(std::find(shown.begin(), shown.end(), BrickKey{0, brick}) != shown.end());
+    const auto mesh = scene.meshBrick({0, brick});
+    REQUIRE(mesh);
+    CHECK(mesh->mesh.triangleCount() > 100);
+}

@@ -508,6 +508,10 @@ struct StreamingScene::Impl {
         if (leaves.empty()) return false;
         pasteRegion(fine, work, box);
         logLeafChanges(leaves);
+        // A brick the store did not hold (an edit in empty space) is shown from now on, not from the
+        // autosave that stores it: the view walks the bricks present and their ancestors.
+        IndexCoord up = b;
+        for (int k = 0; k <= levels && present[std::size_t(k)].insert(up).second; ++k) up = parentBrick(up);
         const uint64_t bytes = regionMemoryBytes(fine, box);
         residentBytes = residentBytes - r.bytes + bytes;
         r.bytes = bytes;
