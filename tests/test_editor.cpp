@@ -424,3 +424,25 @@ TEST_CASE("replay: vdbclay edit --headless replays, saves, exports the script, a
         CHECK(noDisplay.err.find("--headless") != std::string::npos);
     }
 }
+
+TEST_CASE("editor: a material defined and not used yet survives an autosave, a crash and a save", "[editor]")
+{
+    TempDir dir;
+    const std::string ball = makeBall(dir);
+    Command define;
+    define.kind = Command::Kind::DefineMaterial;
+    define.material = {{"name", "jade"}, {"color", {0.2, 0.7, 0.5, 1.0}}, {"toughness", 0.8}};
+    {
+        EditingSession session(ball, quietOptions());
+        session.apply(define);
+        session.autosave(); // then the session ends without a save: what a crash leaves
+    }
+    {
+        EditingSession reopened(ball, quietOptions());
+        CHECK(reopened.scene().materials().find("jade"));
+        Command save;
+        save.kind = Command::Kind::Save;
+        reopened.apply(save);
+    }
+    CHECK(loadVolume(ball).materials().find("jade"));
+}

@@ -544,7 +544,9 @@ struct StreamingScene::Impl {
         std::sort(dirty.begin(), dirty.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
         Volume& fine = levelVolumes[0];
         fine.materials() = materials;
-        if (dirty.empty() && committedEdits(scene) == edits) return 0;
+        // Materials defined since (even ones no voxel uses yet) are saved with the bricks, or alone.
+        const bool newMaterials = !(materials == scene.materials());
+        if (dirty.empty() && committedEdits(scene) == edits && !newMaterials) return 0;
         StoreTransaction transaction(scene.bricks());
         for (auto& [key, r] : dirty) {
             if (const std::optional<BrickRecord> record = encodeBrick(fine, key.brick)) {
@@ -555,8 +557,8 @@ struct StreamingScene::Impl {
             }
         }
         LodRefresh lod;
+        if (newMaterials) scene.setMaterials(materials);
         if (!dirty.empty()) {
-            scene.setMaterials(materials);
             scene.forgetBounds();
             std::vector<IndexCoord> bricks;
             for (auto& [key, r] : dirty) bricks.push_back(key.brick);
