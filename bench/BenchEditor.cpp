@@ -209,16 +209,7 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
     // was made (and their mirror images): a coarse brick shown there still holds the data before it.
     int64_t editWaiting = -1; // the frame of an edit not yet drawn
     std::vector<std::array<double, 3>> waitingAt;
-    const auto shownCoarseAt = [&](const std::array<double, 3>& world) {
-        for (const BrickKey& key : session.scene().shownBricks()) {
-            const double edge = double(kBrickEdge) * double(1 << key.level) * voxel;
-            bool inside = true;
-            for (int a = 0; a < 3; ++a)
-                inside = inside && world[std::size_t(a)] >= key.brick[std::size_t(a)] * edge && world[std::size_t(a)] < (key.brick[std::size_t(a)] + 1) * edge;
-            if (inside) return key.level > 0;
-        }
-        return false; // out of the view
-    };
+    const auto shownCoarseAt = [&](const std::array<double, 3>& world) { return session.scene().shownLevelAt(world).value_or(0) > 0; };
     bool baselineDone = false;
     for (std::size_t i = 0; i < plan.size(); ++i) {
         FrameSample s;

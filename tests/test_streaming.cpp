@@ -60,6 +60,16 @@ Viewer lookingAt(const std::array<double, 3>& from, const std::array<double, 3>&
 
 /// A view from just above the terrain's middle, and a budget that holds all it asks for.
 Viewer groundView() { return lookingAt({128, 40, 128}, {129, 30, 128}); }
+/// Frames (waiting for the loads) until the view is settled and nothing is pending.
+void settleView(StreamingScene& scene, const Viewer& view)
+{
+    FrameReport report;
+    for (int i = 0; i < 50 && !(report.settled && report.pending == 0); ++i) {
+        report = scene.frame(view);
+        scene.waitForLoads();
+    }
+}
+
 StreamingOptions roomyOptions()
 {
     StreamingOptions options;
@@ -457,11 +467,7 @@ TEST_CASE("after stamps anywhere (across brick faces too), every kept mesh is th
     options.access = StoreAccess::ReadWrite;
     StreamingScene scene(path, options);
     const Viewer view = lookingAt({30, 70, 30}, {128, 30, 128}); // near bricks at level 0, far ones coarser
-    FrameReport report;
-    for (int i = 0; i < 50 && !(report.settled && report.pending == 0); ++i) {
-        report = scene.frame(view);
-        scene.waitForLoads();
-    }
+    settleView(scene, view);
     std::vector<BrickKey> shown = scene.shownBricks();
     std::set<int> levels;
     for (const BrickKey& key : shown) levels.insert(key.level);
@@ -553,23 +559,8 @@ TEST_CASE("an edit where the view shows a coarse level shows at level 0 until it
     options.pixelTolerance = 4.0; // from afar: the terrain shows at a coarse level
     StreamingScene scene(path, options);
     const Viewer view = lookingAt({-500, 200, -500}, {128, 30, 128});
-    const auto settle = [&] {
-        FrameReport report;
-        for (int i = 0; i < 50 && !(report.settled && report.pending == 0); ++i) {
-            report = scene.frame(view);
-            scene.waitForLoads();
-        }
-    };
-    const auto levelShownAt = [&](const std::array<double, 3>& p) {
-        for (const BrickKey& key : scene.shownBricks()) {
-            const double edge = double(kBrickEdge << key.level);
-            bool inside = true;
-            for (std::size_t a = 0; a < 3; ++a) inside = inside && p[a] >= key.brick[a] * edge && p[a] < (key.brick[a] + 1) * edge;
-            if (inside) return key.level;
-        }
-        return -1;
-    };
-    settle();
+    const auto levelShownAt = [&](const std::array<double, 3>& p) { return scene.shownLevelAt(p).value_or(-1); };
+    settleView(scene, view);
     // A point on the surface shown at a coarse level.
     std::optional<std::array<double, 3>> at;
     for (const BrickKey& key : scene.shownBricks()) {
@@ -583,10 +574,10 @@ TEST_CASE("an edit where the view shows a coarse level shows at level 0 until it
         }
     }
     REQUIRE(at);
-    settle();
+    settleView(scene, view);
     CHECK(levelShownAt(*at) == 0);
     scene.autosave(); // rebuilds the levels above the edit
-    settle();
+    settleView(scene, view);
     CHECK(levelShownAt(*at) > 0);
 }
 
@@ -602,17 +593,10 @@ TEST_CASE("an edit in empty space, where no brick was stored, shows at once", "[
     const IndexCoord brick{int32_t(at[0]) / kBrickEdge, int32_t(at[1]) / kBrickEdge, int32_t(at[2]) / kBrickEdge};
     REQUIRE_FALSE(scene.store().bricks().get({0, brick}));
     const Viewer view = lookingAt({100, 230, 160}, at);
-    const auto settle = [&] {
-        FrameReport report;
-        for (int i = 0; i < 50 && !(report.settled && report.pending == 0); ++i) {
-            report = scene.frame(view);
-            scene.waitForLoads();
-        }
-    };
-    settle();
+    settleView(scene, view);
     const nlohmann::json op{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 6}}}, {"at", at}};
     REQUIRE(scene.sculpt(parseStrokeScript(nlohmann::json{{"ops", {op}}}.dump())).bricksChanged == 1);
-    settle();
+    settleView(scene, view);
     const std::vector<BrickKey> shown = scene.shownBricks();
     REQUIRE(std::find(shown.begin(), shown.end(), BrickKey{0, brick}) != shown.end());
     const auto mesh = scene.meshBrick({0, brick});

@@ -161,16 +161,7 @@ void EditingSession::moveStroke(const std::array<double, 3>& point, double press
 void EditingSession::endStroke()
 {
     if (!stroke_.active) return;
-    const std::size_t recorded = history_.undoDepth() + history_.forgotten(), forgotten = history_.forgotten();
-    history_.push(std::move(stroke_.changes));
-    if (history_.undoDepth() + history_.forgotten() > recorded) { // a stroke that changed nothing is not recorded
-        undoableOps_.push_back(std::move(stroke_.ops));
-        redoableOps_.clear();
-        for (std::size_t k = forgotten; k < history_.forgotten(); ++k) { // the oldest, no longer undoable
-            for (nlohmann::json& op : undoableOps_.front()) permanentOps_.push_back(std::move(op));
-            undoableOps_.erase(undoableOps_.begin());
-        }
-    }
+    history_.push(std::move(stroke_.changes), std::move(stroke_.ops));
     stroke_ = Stroke{};
 }
 
@@ -180,8 +171,6 @@ void EditingSession::undo()
     if (const auto images = history_.undo()) {
         bricksChanged_ += scene_->restoreLeaves(*images).bricksChanged;
         editedSinceAutosave_ = true;
-        redoableOps_.push_back(std::move(undoableOps_.back()));
-        undoableOps_.pop_back();
     }
 }
 
@@ -191,8 +180,6 @@ void EditingSession::redo()
     if (const auto images = history_.redo()) {
         bricksChanged_ += scene_->restoreLeaves(*images).bricksChanged;
         editedSinceAutosave_ = true;
-        undoableOps_.push_back(std::move(redoableOps_.back()));
-        redoableOps_.pop_back();
     }
 }
 
@@ -242,12 +229,7 @@ std::optional<SurfaceHit> EditingSession::pick(const std::array<double, 3>& orig
     return hit;
 }
 
-nlohmann::json EditingSession::appliedScript() const
-{
-    nlohmann::json ops = permanentOps_;
-    for (const nlohmann::json& stroke : undoableOps_) ops.insert(ops.end(), stroke.begin(), stroke.end());
-    return {{"materials", materialsDefined_}, {"ops", ops}};
-}
+nlohmann::json EditingSession::appliedScript() const { return {{"materials", materialsDefined_}, {"ops", history_.opsInEffect()}}; }
 
 std::size_t applyRecordedFrame(EditingSession& session, const SessionRecord& record, std::size_t next, uint64_t frame, double* time)
 {

@@ -117,10 +117,6 @@ private:
     SessionStats stats_;
     SessionRecord record_;
     nlohmann::json materialsDefined_ = nlohmann::json::array();
-    // The ops of the edits in effect: those past undo's reach, then per history entry (undo side), and
-    // of the undone ones (redo side).
-    nlohmann::json permanentOps_ = nlohmann::json::array();
-    std::vector<nlohmann::json> undoableOps_, redoableOps_;
     ToolCache tools_; // grid tools stamped so far, built once (a tool file is not expected to change under a session)
     uint64_t frameNumber_ = 0;
     double time_ = 0.0, lastAutosave_ = 0.0, lastCommand_ = 0.0;

@@ -61,15 +61,16 @@ History::~History()
     if (spill_) std::fclose(spill_);
 }
 
-void History::push(std::vector<LeafChange> changes)
+bool History::push(std::vector<LeafChange> changes, nlohmann::json ops)
 {
     changes.erase(std::remove_if(changes.begin(), changes.end(), [](const LeafChange& c) { return c.before == c.after; }), changes.end());
-    if (changes.empty()) return;
+    if (changes.empty()) return false;
     for (Entry& e : redo_) release(e);
     redo_.clear();
     Entry entry;
     entry.bytes = bytesOf(changes);
     entry.changes = std::move(changes);
+    entry.ops = std::move(ops);
     memoryBytes_ += entry.bytes;
     undo_.push_back(std::move(entry));
     if (undo_.size() == 1 && redo_.empty() && spill_) { // nothing spilled is referenced any more
@@ -78,6 +79,14 @@ void History::push(std::vector<LeafChange> changes)
         fileEnd_ = spilledBytes_ = 0;
     }
     spillOver();
+    return true;
+}
+
+nlohmann::json History::opsInEffect() const
+{
+    nlohmann::json ops = forgottenOps_;
+    for (const Entry& e : undo_) ops.insert(ops.end(), e.ops.begin(), e.ops.end());
+    return ops;
 }
 
 std::optional<std::vector<LeafImage>> History::undo() { return step(undo_, redo_, true); }
@@ -158,6 +167,7 @@ void History::spillOver()
     // dropped when nothing spilled is referenced any more).
     while (spilledBytes_ > limits_.spillBytes && !undo_.empty() && undo_.front().spilled) {
         release(undo_.front());
+        for (nlohmann::json& op : undo_.front().ops) forgottenOps_.push_back(std::move(op));
         undo_.erase(undo_.begin());
         ++forgotten_;
         if (spilledBytes_ == 0) {

@@ -6,6 +6,8 @@
 
 #include "scene/StreamingScene.h"
 
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
 #include <cstdio>
 #include <memory>
@@ -26,9 +28,10 @@ public:
     History(const History&) = delete;
     History& operator=(const History&) = delete;
 
-    /// Records an edit (changes with equal before and after are dropped; nothing is recorded when none
-    /// remain) and forgets what could be redone.
-    void push(std::vector<LeafChange> changes);
+    /// Records an edit and the stroke-script ops that made it (changes with equal before and after are
+    /// dropped; nothing is recorded when none remain) and forgets what could be redone. Returns whether
+    /// it was recorded.
+    bool push(std::vector<LeafChange> changes, nlohmann::json ops = nlohmann::json::array());
     /// The leaf images that take the scene back before the latest edit; the edit moves to the redo side.
     std::optional<std::vector<LeafImage>> undo();
     /// The leaf images that apply the latest undone edit again.
@@ -39,10 +42,14 @@ public:
     uint64_t memoryBytes() const { return memoryBytes_; }
     uint64_t spilledBytes() const { return spilledBytes_; }
     uint64_t forgotten() const { return forgotten_; } // oldest edits dropped past the spill limit
+    /// The ops of the edits in effect, oldest first: those forgotten (no longer undoable) and those on
+    /// the undo side; undone ones are left out.
+    nlohmann::json opsInEffect() const;
 
 private:
     struct Entry {
         std::vector<LeafChange> changes; // empty while spilled
+        nlohmann::json ops;              // kept in memory: small beside the changes
         uint64_t bytes = 0;              // encoded size
         bool spilled = false;
         uint64_t fileOffset = 0;
@@ -56,6 +63,7 @@ private:
     HistoryLimits limits_;
     std::vector<Entry> undo_, redo_;
     uint64_t memoryBytes_ = 0, spilledBytes_ = 0, forgotten_ = 0;
+    nlohmann::json forgottenOps_ = nlohmann::json::array();
     uint64_t fileEnd_ = 0;
     std::FILE* spill_ = nullptr;
 };

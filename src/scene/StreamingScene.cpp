@@ -221,19 +221,22 @@ struct StreamingScene::Impl {
         meshShare = meshSamples++ == 0 ? share : 0.9 * meshShare + 0.1 * share;
     }
 
-    void keepMesh(const BrickKey& key, Resident& r, std::shared_ptr<const BrickMesh> mesh)
+    /// `inputs`: meshVersionLocked(key, true) when the mesh was made.
+    void keepMesh(const BrickKey& key, Resident& r, std::shared_ptr<const BrickMesh> mesh, uint64_t inputs)
     {
         residentBytes += mesh->bytes;
         meshBytes += mesh->bytes;
         r.mesh = std::move(mesh);
-        r.meshInputs = meshVersionLocked(key, true);
+        r.meshInputs = inputs;
         meshed.insert(key);
     }
 
     /// The mesh of a resident brick as its data and the cut make it now. `inPieces`: made and kept in
     /// pieces per leaf, re-using those of `old` (optional) where no edit since reached them (above level
-    /// 0 only the transition cells, which read the finer levels, are made again). Lock held.
-    std::shared_ptr<const BrickMesh> makeMesh(const BrickKey& key, bool inPieces = false, const BrickMeshPieces* old = nullptr) const
+    /// 0 only the transition cells, which read the finer levels, are made again); `inputs` is then
+    /// meshVersionLocked(key, true). Lock held.
+    std::shared_ptr<const BrickMesh> makeMesh(const BrickKey& key, bool inPieces = false, const BrickMeshPieces* old = nullptr,
+                                              uint64_t inputs = 0) const
     {
         std::vector<const Volume*> levelsOf;
         for (const Volume& v : levelVolumes) levelsOf.push_back(&v);
@@ -241,7 +244,7 @@ struct StreamingScene::Impl {
         const LodBrick brick{key.level, key.brick};
         const Volume& volume = *levelsOf[std::size_t(key.level)];
         if (inPieces && cut.shows(brick)) {
-            out->pieces = remeshPieces(key, levelsOf, old);
+            out->pieces = remeshPieces(key, levelsOf, old, inputs);
             std::vector<const MeshChunk*> chunks;
             std::vector<const std::vector<uint8_t>*> occlusion;
             for (const auto& leaf : out->pieces->leaves) {
@@ -267,10 +270,11 @@ struct StreamingScene::Impl {
 
     /// The pieces of a brick's mesh of the current cut: those of `old` where they still hold (the same
     /// loads around, and no edit logged since reached the leaf), the rest meshed now. Lock held.
-    std::shared_ptr<const BrickMeshPieces> remeshPieces(const BrickKey& key, const std::vector<const Volume*>& levelsOf, const BrickMeshPieces* old) const
+    std::shared_ptr<const BrickMeshPieces> remeshPieces(const BrickKey& key, const std::vector<const Volume*>& levelsOf,
+                                                        const BrickMeshPieces* old, uint64_t inputs) const
     {
         auto next = std::make_shared<BrickMeshPieces>();
-        next->inputs = meshVersionLocked(key, true);
+        next->inputs = inputs;
         next->leafLogSeq = leafLogSeq;
         const LodBrick brick{key.level, key.brick};
         std::array<int32_t, 3> lo{}, hi{}; // the leaves whose chunks the brick holds, [lo, hi)
@@ -922,6 +926,18 @@ std::vector<BrickKey> StreamingScene::shownBricks() const
     return impl_->shown;
 }
 
+std::optional<int> StreamingScene::shownLevelAt(const std::array<double, 3>& world) const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    for (const BrickKey& key : impl_->shown) {
+        const double edge = double(int64_t(kBrickEdge) << key.level) * impl_->scene.voxelSize();
+        bool inside = true;
+        for (std::size_t a = 0; a < 3; ++a) inside = inside && world[a] >= key.brick[a] * edge && world[a] < (key.brick[a] + 1) * edge;
+        if (inside) return key.level;
+    }
+    return std::nullopt;
+}
+
 uint64_t StreamingScene::brickVersion(const BrickKey& key) const
 {
     std::lock_guard<std::mutex> lock(impl_->mutex);
@@ -938,14 +954,15 @@ std::shared_ptr<const StreamingScene::BrickMesh> StreamingScene::meshBrick(const
     if (it->second.mesh && it->second.mesh->version == s.meshVersionLocked(key)) return it->second.mesh;
     // A mesh made again for edits (the loads around unchanged) is made in pieces, so that the next
     // edits re-mesh only the leaves they reach; others are made whole and take less memory.
-    const bool forEdits = it->second.mesh && it->second.meshInputs == s.meshVersionLocked(key, true);
-    std::shared_ptr<const BrickMesh> out = s.makeMesh(key, forEdits, forEdits ? it->second.mesh->pieces.get() : nullptr);
+    const uint64_t inputs = s.meshVersionLocked(key, true);
+    const bool forEdits = it->second.mesh && it->second.meshInputs == inputs;
+    std::shared_ptr<const BrickMesh> out = s.makeMesh(key, forEdits, forEdits ? it->second.mesh->pieces.get() : nullptr, inputs);
     s.learnMeshShare(it->second, *out);
     // Kept if the budget holds it (other bricks may make room); else made again when asked for.
     s.dropMesh(key, it->second);
     if (s.makeRoom(out->bytes, lock)) {
         const auto kept = s.resident.find(key); // makeRoom may have evicted it, if it was not wanted
-        if (kept != s.resident.end()) s.keepMesh(key, kept->second, out);
+        if (kept != s.resident.end()) s.keepMesh(key, kept->second, out, inputs);
     }
     return out;
 }

@@ -126,6 +126,9 @@ public:
     /// selected brick is not, the finest resident ancestor that stands for all of its selected
     /// descendants (a brick is shown split into its children only once all of them can be shown).
     std::vector<BrickKey> shownBricks() const;
+    /// The level the last frame showed at a world point (that of the shown brick holding it), or
+    /// nothing where no shown brick holds it.
+    std::optional<int> shownLevelAt(const std::array<double, 3>& world) const;
     /// A number that changes whenever what a resident brick's mesh is made from changes: its content
     /// (loaded again, sculpted), the bricks of the view's cut that touch it, or theirs; 0 when the brick
     /// is not resident.
