@@ -20,6 +20,9 @@
 
 // Last: X11's headers define macros (None, Bool, Status...) that other headers use as names.
 #include <X11/extensions/XTest.h>
+// GLFW's X11 accessor, declared here: glfw3native.h pulls in Xrandr's headers, a package the tests need
+// for nothing else.
+extern "C" Display* glfwGetX11Display(void);
 
 using namespace vdbclay;
 using namespace vdbclay::test;
@@ -125,13 +128,21 @@ TEST_CASE("desktop: a mouse stroke through the window equals its replay, a menu 
     REQUIRE(display);
     int windowX = 0, windowY = 0;
     glfwGetWindowPos(editor->window(), &windowX, &windowY);
+    // When the test's XSync returns, the server has made the events and put them in the window's
+    // output; a round trip on GLFW's own connection then reads them into its queue (its reply comes
+    // after them), so the next frame's poll sees them however the two processes are scheduled. Without
+    // it, a release still in flight on a loaded machine left the stroke open when the test looked.
+    const auto deliver = [&] {
+        XSync(display, False);
+        XSync(glfwGetX11Display(), False);
+    };
     const auto moveTo = [&](double x, double y) {
         XTestFakeMotionEvent(display, -1, windowX + int(x), windowY + int(y), CurrentTime);
-        XSync(display, False); // the events are queued when the next frame polls
+        deliver();
     };
     const auto leftButton = [&](bool down) {
         XTestFakeButtonEvent(display, 1, down ? True : False, CurrentTime);
-        XSync(display, False);
+        deliver();
     };
     const auto stroke = [&](double x0, double y0) {
         moveTo(x0, y0);
