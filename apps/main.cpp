@@ -7,6 +7,9 @@
 #include <tbb/global_control.h>
 
 #include <exception>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include <iostream>
 #include <memory>
 #include <new>
@@ -128,10 +131,24 @@ int run(int argc, char** argv)
     return kExitUsage;
 }
 
+/// Edits, re-meshing and undo allocate and free buffers of megabytes many times a second. By default
+/// glibc maps each of those afresh and unmaps it on free, and every page of a fresh mapping faults on
+/// its first touch: on the 2-core VMs we measure on, that was a third of a reshaping brush's time (a
+/// 7 MB copy took 25 ms). Served from the heap, and up to 64 MB of freed heap kept, they reuse pages
+/// already mapped (bench editor: smooth steps 496 -> 315 ms, flatten 871 -> 578 ms).
+void keepLargeBuffersMapped()
+{
+#ifdef __GLIBC__
+    mallopt(M_MMAP_THRESHOLD, 32 << 20); // glibc's largest
+    mallopt(M_TRIM_THRESHOLD, 64 << 20);
+#endif
+}
+
 } // namespace
 
 int main(int argc, char** argv)
 {
+    keepLargeBuffersMapped();
     try {
         return run(argc, argv);
     } catch (const UsageError& e) {
