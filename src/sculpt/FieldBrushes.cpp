@@ -19,6 +19,43 @@ namespace vdbclay {
 namespace {
 
 
+/// A box of a lattice grid's points, [lo, hi] per axis (indices into the grid).
+struct PointRange {
+    std::array<int32_t, 3> lo{}, hi{};
+
+    /// Grown by `by` points on every side, clamped to a grid of these dims.
+    PointRange grown(int32_t by, const std::array<int32_t, 3>& dims) const
+    {
+        PointRange out;
+        for (std::size_t a = 0; a < 3; ++a) {
+            out.lo[a] = std::max(0, lo[a] - by);
+            out.hi[a] = std::min(dims[a] - 1, hi[a] + by);
+        }
+        return out;
+    }
+    bool empty() const { return lo[0] > hi[0] || lo[1] > hi[1] || lo[2] > hi[2]; }
+};
+
+/// fn(i, j) for every row (i, j) of the range, slabs of i in parallel.
+template <typename Fn>
+void forEachRow(const PointRange& range, const Fn& fn)
+{
+    if (range.empty()) return;
+    tbb::parallel_for(tbb::blocked_range<int32_t>(range.lo[0], range.hi[0] + 1), [&](const tbb::blocked_range<int32_t>& slabs) {
+        for (int32_t i = slabs.begin(); i < slabs.end(); ++i)
+            for (int32_t j = range.lo[1]; j <= range.hi[1]; ++j) fn(i, j);
+    });
+}
+
+/// fn(i, j, k) for every point of the range.
+template <typename Fn>
+void forEachPoint(const PointRange& range, const Fn& fn)
+{
+    forEachRow(range, [&](int32_t i, int32_t j) {
+        for (int32_t k = range.lo[2]; k <= range.hi[2]; ++k) fn(i, j, k);
+    });
+}
+
 /// A dense field on a box of the volume's lattice (world units), trilinear between its points.
 struct LatticeGrid {
     std::array<int32_t, 3> origin{}, dims{};
@@ -63,15 +100,17 @@ struct LatticeGrid {
         return Vec3d(at(i + 1, j, k) - at(i - 1, j, k), at(i, j + 1, k) - at(i, j - 1, k), at(i, j, k + 1) - at(i, j, k - 1)) /
                (2.0 * voxelSize);
     }
-    /// The largest change per world unit between neighbouring points (bounds the interpolant's gradient).
-    double lipschitz() const
+    /// The largest change per world unit between neighbouring points of a range (bounds the
+    /// interpolant's gradient there).
+    double lipschitz(const PointRange& range) const
     {
+        if (range.empty()) return 0.0;
         const double worst = tbb::parallel_reduce(
-            tbb::blocked_range<int32_t>(0, dims[0]), 0.0,
-            [&](const tbb::blocked_range<int32_t>& range, double found) {
-                for (int32_t i = range.begin(); i < range.end(); ++i)
-                    for (int32_t j = 0; j < dims[1]; ++j)
-                        for (int32_t k = 0; k < dims[2]; ++k) {
+            tbb::blocked_range<int32_t>(range.lo[0], range.hi[0] + 1), 0.0,
+            [&](const tbb::blocked_range<int32_t>& rows, double found) {
+                for (int32_t i = rows.begin(); i < rows.end(); ++i)
+                    for (int32_t j = range.lo[1]; j <= range.hi[1]; ++j)
+                        for (int32_t k = range.lo[2]; k <= range.hi[2]; ++k) {
                             const float v = values[index(i, j, k)];
                             double g2 = 0.0;
                             for (const float n : {at(i + 1, j, k), at(i, j + 1, k), at(i, j, k + 1)}) g2 += double(n - v) * double(n - v);
@@ -82,6 +121,7 @@ struct LatticeGrid {
             [](double a, double b) { return std::max(a, b); });
         return std::sqrt(worst) / voxelSize;
     }
+    double lipschitz() const { return lipschitz(PointRange{{0, 0, 0}, {dims[0] - 1, dims[1] - 1, dims[2] - 1}}); }
 };
 
 /// max(a, b, ...) of a grid field and the brush (and optionally minus another grid): the CSG kernel's
@@ -112,30 +152,66 @@ private:
     double lipschitz_;
 };
 
-/// A separable box filter of radius r along one axis (running sums; the ends clamp).
-void boxBlurAxis(LatticeGrid& g, int axis, int r)
+/// The grid's points that world bounds hold (with the lattice points on their faces).
+PointRange pointsWithin(const LatticeGrid& g, const WorldBounds& bounds)
 {
-    const int32_t n = g.dims[std::size_t(axis)];
-    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-    const LatticeGrid source = g;
-    tbb::parallel_for(tbb::blocked_range<int32_t>(0, g.dims[std::size_t(u)]), [&](const tbb::blocked_range<int32_t>& range) {
-        std::array<int32_t, 3> c{};
-        for (int32_t a = range.begin(); a < range.end(); ++a)
-            for (int32_t b = 0; b < g.dims[std::size_t(v)]; ++b) {
-                c[std::size_t(u)] = a;
-                c[std::size_t(v)] = b;
-                const auto value = [&](int32_t t) {
-                    c[std::size_t(axis)] = std::clamp(t, 0, n - 1);
-                    return double(source.values[source.index(c[0], c[1], c[2])]);
-                };
-                double sum = 0.0;
-                for (int32_t t = -r; t <= r; ++t) sum += value(t);
-                for (int32_t t = 0; t < n; ++t) {
-                    c[std::size_t(axis)] = t;
-                    g.values[g.index(c[0], c[1], c[2])] = float(sum / double(2 * r + 1));
-                    sum += value(t + r + 1) - value(t - r);
+    PointRange out;
+    for (std::size_t a = 0; a < 3; ++a) {
+        const double lo = std::ceil(bounds.min[int(a)] / g.voxelSize) - g.origin[a];
+        const double hi = std::floor(bounds.max[int(a)] / g.voxelSize) - g.origin[a];
+        out.lo[a] = int32_t(std::clamp(lo, 0.0, double(g.dims[a])));
+        out.hi[a] = int32_t(std::clamp(hi, -1.0, double(g.dims[a] - 1)));
+    }
+    return out;
+}
+
+/// A box filter of radius r along one axis, written at the range's points (`to`, read from `from`;
+/// the ends of the grid clamp): running sums along the axis, a row of k at a time (the grid's
+/// contiguous axis, so that every pass walks memory in order). The sums of floats in double are
+/// exact, so a value does not depend on where the range starts.
+void boxBlurAxis(const LatticeGrid& from, LatticeGrid& to, int axis, int r, const PointRange& range)
+{
+    if (range.empty()) return;
+    const int32_t n = from.dims[std::size_t(axis)], k0 = range.lo[2], width = range.hi[2] - k0 + 1;
+    const double scale = 1.0 / double(2 * r + 1);
+    if (axis == 2) {
+        forEachRow(range, [&](int32_t i, int32_t j) {
+            const float* line = &from.values[from.index(i, j, 0)];
+            float* out = &to.values[to.index(i, j, 0)];
+            double sum = 0.0;
+            for (int32_t t = k0 - r; t <= k0 + r; ++t) sum += double(line[std::clamp(t, 0, n - 1)]);
+            for (int32_t t = k0; t <= range.hi[2]; ++t) {
+                out[t] = float(sum * scale);
+                sum += double(line[std::min(t + r + 1, n - 1)]) - double(line[std::max(t - r, 0)]);
+            }
+        });
+        return;
+    }
+    // Along i or j: one row of sums per line across the other of the two, the rows of k side by side.
+    const std::size_t across = axis == 0 ? 1 : 0;
+    tbb::parallel_for(tbb::blocked_range<int32_t>(range.lo[across], range.hi[across] + 1), [&](const tbb::blocked_range<int32_t>& lines) {
+        std::vector<double> sum(static_cast<std::size_t>(width));
+        for (int32_t c = lines.begin(); c < lines.end(); ++c) {
+            const auto row = [&](const LatticeGrid& g, int32_t t) {
+                t = std::clamp(t, 0, n - 1);
+                return axis == 0 ? g.index(t, c, k0) : g.index(c, t, k0);
+            };
+            std::fill(sum.begin(), sum.end(), 0.0);
+            const int32_t lo = range.lo[std::size_t(axis)], hi = range.hi[std::size_t(axis)];
+            for (int32_t t = lo - r; t <= lo + r; ++t) {
+                const float* in = &from.values[row(from, t)];
+                for (int32_t k = 0; k < width; ++k) sum[std::size_t(k)] += double(in[k]);
+            }
+            for (int32_t t = lo; t <= hi; ++t) {
+                float* out = &to.values[row(to, t)];
+                const float* enter = &from.values[row(from, t + r + 1)];
+                const float* leave = &from.values[row(from, t - r)];
+                for (int32_t k = 0; k < width; ++k) {
+                    out[k] = float(sum[std::size_t(k)] * scale);
+                    sum[std::size_t(k)] += double(enter[k]) - double(leave[k]);
                 }
             }
+        }
     });
 }
 
@@ -281,19 +357,21 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     old.voxelSize = h;
     old.values.resize(solid.distance.size());
     for (std::size_t n = 0; n < old.values.size(); ++n) old.values[n] = float(double(solid.distance[n]) * h);
+    // Only points inside the brush change (the weight is zero elsewhere, and the written-back field is
+    // clipped by the brush): the work below is done on the brush's points, not on the whole band.
+    const PointRange inBrush = pointsWithin(old, bounds);
+
     // The material of new voxels: the op's, else the most common solid one inside the brush.
     MaterialId material = op.material.value_or(kEmptyMaterial);
     if (material == kEmptyMaterial) {
         const std::size_t ids = volume.materials().size() + 1;
         tbb::enumerable_thread_specific<std::vector<uint64_t>> counts([&] { return std::vector<uint64_t>(ids, 0); });
-        tbb::parallel_for(tbb::blocked_range<int32_t>(0, old.dims[0]), [&](const tbb::blocked_range<int32_t>& range) {
+        forEachRow(inBrush, [&](int32_t i, int32_t j) {
             std::vector<uint64_t>& local = counts.local();
-            for (int32_t i = range.begin(); i < range.end(); ++i)
-                for (int32_t j = 0; j < old.dims[1]; ++j)
-                    for (int32_t k = 0; k < old.dims[2]; ++k) {
-                        const MaterialId m = solid.material[old.index(i, j, k)];
-                        if (m != kEmptyMaterial && m < ids && brush.distance(old.pointOf(i, j, k)) <= 0.0) ++local[m];
-                    }
+            for (int32_t k = inBrush.lo[2]; k <= inBrush.hi[2]; ++k) {
+                const MaterialId m = solid.material[old.index(i, j, k)];
+                if (m != kEmptyMaterial && m < ids && brush.distance(old.pointOf(i, j, k)) <= 0.0) ++local[m];
+            }
         });
         std::vector<uint64_t> total(ids, 0);
         for (const std::vector<uint64_t>& local : counts)
@@ -305,54 +383,53 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
 
     // Weights, once per point.
     std::vector<float> weight(old.values.size(), 0.0f);
-    tbb::parallel_for(tbb::blocked_range<int32_t>(0, old.dims[0]), [&](const tbb::blocked_range<int32_t>& range) {
-        for (int32_t i = range.begin(); i < range.end(); ++i)
-            for (int32_t j = 0; j < old.dims[1]; ++j)
-                for (int32_t k = 0; k < old.dims[2]; ++k) weight[old.index(i, j, k)] = float(weightAt(old.pointOf(i, j, k)));
-    });
+    forEachPoint(inBrush, [&](int32_t i, int32_t j, int32_t k) { weight[old.index(i, j, k)] = float(weightAt(old.pointOf(i, j, k))); });
 
     LatticeGrid next = old;
     switch (op.mode) {
     case FieldMode::Inflate:
     case FieldMode::Deflate: {
         const double d = op.mode == FieldMode::Inflate ? op.distance : -op.distance;
-        for (std::size_t i = 0; i < next.values.size(); ++i) next.values[i] = float(old.values[i] - weight[i] * d);
+        forEachPoint(inBrush, [&](int32_t i, int32_t j, int32_t k) {
+            const std::size_t n = old.index(i, j, k);
+            next.values[n] = float(old.values[n] - weight[n] * d);
+        });
         break;
     }
     case FieldMode::Smooth: {
-        LatticeGrid blurred = old;
-        const int r = smoothingRadiusVoxels(brush, h);
-        for (int pass = 0; pass < 2; ++pass) // two box passes per axis: a smooth, symmetric kernel
-            for (int a = 0; a < 3; ++a) boxBlurAxis(blurred, a, (r + 1) / 2);
-        for (std::size_t i = 0; i < next.values.size(); ++i)
-            next.values[i] = float(old.values[i] + weight[i] * (blurred.values[i] - old.values[i]));
+        // Two box passes per axis (a smooth, symmetric kernel), each written where a later pass reads
+        // it for a point of the brush: within the brush grown by the passes' reach.
+        const int r = (smoothingRadiusVoxels(brush, h) + 1) / 2;
+        const PointRange read = inBrush.grown(2 * r, old.dims);
+        LatticeGrid blurred = old, scratch = old;
+        for (int pass = 0; pass < 2; ++pass)
+            for (int a = 0; a < 3; ++a) {
+                boxBlurAxis(blurred, scratch, a, r, read);
+                std::swap(blurred, scratch);
+            }
+        forEachPoint(inBrush, [&](int32_t i, int32_t j, int32_t k) {
+            const std::size_t n = old.index(i, j, k);
+            next.values[n] = float(old.values[n] + weight[n] * (blurred.values[n] - old.values[n]));
+        });
         break;
     }
     case FieldMode::Flatten: {
-        tbb::parallel_for(tbb::blocked_range<int32_t>(0, old.dims[0]), [&](const tbb::blocked_range<int32_t>& range) {
-            for (int32_t i = range.begin(); i < range.end(); ++i)
-                for (int32_t j = 0; j < old.dims[1]; ++j)
-                    for (int32_t k = 0; k < old.dims[2]; ++k) {
-                        const std::size_t n = old.index(i, j, k);
-                        const double plane = (old.pointOf(i, j, k) - centroid).dot(normal);
-                        next.values[n] = float(old.values[n] + weight[n] * (plane - old.values[n]));
-                    }
+        forEachPoint(inBrush, [&](int32_t i, int32_t j, int32_t k) {
+            const std::size_t n = old.index(i, j, k);
+            const double plane = (old.pointOf(i, j, k) - centroid).dot(normal);
+            next.values[n] = float(old.values[n] + weight[n] * (plane - old.values[n]));
         });
         break;
     }
     case FieldMode::Move: {
         // Each surface point p moves to p + w(p) offset (w where the brush grabbed it); a lattice point x
         // takes the old field where it came from, p = x - w(p) offset, found by fixed-point steps (they
-        // converge while the offset is shorter than the falloff is wide).
-        tbb::parallel_for(tbb::blocked_range<int32_t>(0, old.dims[0]), [&](const tbb::blocked_range<int32_t>& range) {
-            for (int32_t i = range.begin(); i < range.end(); ++i)
-                for (int32_t j = 0; j < old.dims[1]; ++j)
-                    for (int32_t k = 0; k < old.dims[2]; ++k) {
-                        const Vec3d x = old.pointOf(i, j, k);
-                        Vec3d p = x - op.offset * double(weight[old.index(i, j, k)]);
-                        for (int step = 0; step < 8; ++step) p = x - op.offset * weightAt(p);
-                        next.values[old.index(i, j, k)] = float(old.sample(p));
-                    }
+        // converge while the offset is shorter than the falloff is wide). Outside the brush p = x.
+        forEachPoint(inBrush, [&](int32_t i, int32_t j, int32_t k) {
+            const Vec3d x = old.pointOf(i, j, k);
+            Vec3d p = x - op.offset * double(weight[old.index(i, j, k)]);
+            for (int step = 0; step < 8; ++step) p = x - op.offset * weightAt(p);
+            next.values[old.index(i, j, k)] = float(old.sample(p));
         });
         break;
     }
@@ -360,7 +437,7 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
 
     // Write back inside the brush: add what the new field holds and the old did not, then remove what the
     // new field leaves. Outside the brush nothing changes.
-    const double lipschitz = std::max({1.0, next.lipschitz(), old.lipschitz()});
+    const double lipschitz = std::max({1.0, next.lipschitz(inBrush.grown(1, next.dims)), old.lipschitz()});
     EditStats stats = applyCsg(volume, ClippedGridField(next, 1.0, brush, &old, lipschitz), CsgOp{CsgMode::Add, material, 1.0, {}});
     stats.append(applyCsg(volume, ClippedGridField(next, -1.0, brush, nullptr, lipschitz), CsgOp{CsgMode::Remove, material, 1.0, {}}));
     return stats;
