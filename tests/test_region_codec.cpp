@@ -9,6 +9,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <map>
 #include <random>
 
 using namespace vdbclay;
@@ -142,4 +143,56 @@ TEST_CASE("crafted region bodies under a valid seal are read whole or refused wi
     }
     CHECK(refused > 0);
     CHECK(decoded > 0); // flips in materials and normals keep a body well-formed
+}
+
+TEST_CASE("compareRegion: its bounds are those of the voxels whose materials or samples differ, on random stamps", "[store]")
+{
+    std::mt19937 rng(29);
+    const auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+    int identicalBoxes = 0, differingBoxes = 0;
+    for (int trial = 0; trial < 24; ++trial) {
+        Volume a(1.0);
+        const MaterialId second = defineMaterial(a, "second", 0.5f);
+        apply(a, CsgMode::Add, sphere(integer(6, 14)), at(Vec3d(integer(-4, 4), integer(-4, 4), integer(-4, 4))));
+        apply(a, CsgMode::Add, box(Vec3d(integer(2, 8), integer(2, 8), integer(2, 8))), at(Vec3d(integer(-8, 8), 0, integer(-8, 8))));
+        Volume b = a.clone();
+        // A small stamp at an integer position: solids that touch, faces on lattice planes, and some
+        // stamps that change nothing (inside the solid, or far away).
+        const CsgMode mode = std::array<CsgMode, 3>{CsgMode::Add, CsgMode::Remove, CsgMode::Paint}[std::size_t(trial % 3)];
+        const Vec3d where(integer(-16, 16), integer(-16, 16), integer(-16, 16));
+        if (trial % 2) apply(b, mode, sphere(integer(1, 4)), at(where), second);
+        else apply(b, mode, box(Vec3d(integer(1, 3), integer(1, 3), integer(1, 3))), at(where), second);
+
+        // The reference: per voxel, the materials (materialAt) and the samples of its positive edges.
+        std::map<std::pair<IndexCoord, int>, std::array<uint16_t, 3>> samplesA, samplesB;
+        for (const EdgeRecord& e : collectEdges(a)) samplesA[{e.voxel, e.axis}] = {e.sample.offset, e.sample.normalU, e.sample.normalV};
+        for (const EdgeRecord& e : collectEdges(b)) samplesB[{e.voxel, e.axis}] = {e.sample.offset, e.sample.normalU, e.sample.normalV};
+        for (int32_t bz = -24; bz < 24; bz += 16)
+            for (int32_t by = -24; by < 24; by += 16)
+                for (int32_t bx = -24; bx < 24; bx += 16) {
+                    const LeafAlignedBox region{{bx, by, bz}, 16};
+                    IndexCoord lo{INT32_MAX, INT32_MAX, INT32_MAX}, hi{INT32_MIN, INT32_MIN, INT32_MIN};
+                    for (int32_t z = bz; z < bz + 16; ++z)
+                        for (int32_t y = by; y < by + 16; ++y)
+                            for (int32_t x = bx; x < bx + 16; ++x) {
+                                const IndexCoord v{x, y, z};
+                                bool differs = a.materialAt(v) != b.materialAt(v);
+                                for (int axis = 0; axis < 3 && !differs; ++axis) {
+                                    const auto sa = samplesA.find({v, axis}), sb = samplesB.find({v, axis});
+                                    differs = (sa == samplesA.end()) != (sb == samplesB.end()) ||
+                                              (sa != samplesA.end() && sa->second != sb->second);
+                                }
+                                if (!differs) continue;
+                                for (std::size_t k = 0; k < 3; ++k) lo[k] = std::min(lo[k], v[k]), hi[k] = std::max(hi[k], v[k]);
+                            }
+                    const RegionDifference d = compareRegion(a, b, region);
+                    INFO("trial " << trial << ", box at " << bx << "," << by << "," << bz);
+                    CHECK(d.any() == (lo[0] <= hi[0]));
+                    CHECK(d.lo == lo);
+                    CHECK(d.hi == hi);
+                    (d.any() ? differingBoxes : identicalBoxes)++;
+                }
+    }
+    CHECK(differingBoxes > 20);
+    CHECK(identicalBoxes > 20);
 }

@@ -15,6 +15,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <deque>
+#include <map>
 #include <set>
 #include <unordered_map>
 #include <unordered_set>
@@ -46,6 +47,9 @@ int directionIndex(const std::array<int, 3>& d) { return (d[0] + 1) + 3 * (d[1] 
 /// The leaf changes StreamingScene remembers for re-meshing only what an edit reached; a brick's mesh
 /// older than the oldest one kept is made whole again.
 constexpr std::size_t kLeafLogLength = 1 << 16;
+/// How far beyond a chunk's cells its vertices' occlusion reads the volume's materials, in whole voxels
+/// (samples 3.5 out, rounded to voxels, and a voxel to spare for a vertex on its cell's face).
+constexpr int32_t kOcclusionReach = 5;
 
 /// One leaf's part of a level-0 brick's mesh.
 struct LeafMesh {
@@ -104,8 +108,9 @@ struct StreamingScene::Impl {
     uint64_t edits = 0;
     uint64_t lodBricksWritten = 0;
     uint64_t versions = 0; // the last content version handed out
-    // Level-0 leaves edits changed, each with a number; numbers up to leafLogFloor are forgotten.
-    std::deque<std::pair<uint64_t, IndexCoord>> leafLog;
+    // Level-0 leaves edits changed (with the bounds of what changed in them), each with a number;
+    // numbers up to leafLogFloor are forgotten.
+    std::deque<std::pair<uint64_t, BlockChange>> leafLog;
     uint64_t leafLogSeq = 0, leafLogFloor = 0;
     std::vector<BrickKey> shown;
     LodCut cut; // the shown bricks and the rest of the split bricks' children
@@ -290,23 +295,39 @@ struct StreamingScene::Impl {
         const bool reuse = old && old->inputs == next->inputs && old->leafLogSeq >= leafLogFloor;
         // The leaves edits changed since `old`, near enough for this brick's cells or occlusion to read
         // (edits change level 0; the levels above change by loads).
-        std::vector<IndexCoord> changed;
+        std::map<IndexCoord, BlockChange> changedAt; // per leaf, the bounds of all its changes
         if (reuse && key.level == 0)
-            for (auto it = leafLog.rbegin(); it != leafLog.rend() && it->first > old->leafLogSeq; ++it)
-                if (inBox(it->second, 2 * kLeafDim)) changed.push_back(it->second);
-        std::sort(changed.begin(), changed.end());
-        changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+            for (auto it = leafLog.rbegin(); it != leafLog.rend() && it->first > old->leafLogSeq; ++it) {
+                const BlockChange& c = it->second;
+                if (!inBox(c.origin, 2 * kLeafDim)) continue;
+                const auto [at, added] = changedAt.emplace(c.origin, c);
+                if (!added)
+                    for (std::size_t a = 0; a < 3; ++a) {
+                        at->second.min[a] = std::min(at->second.min[a], c.min[a]);
+                        at->second.max[a] = std::max(at->second.max[a], c.max[a]);
+                    }
+            }
+        std::vector<BlockChange> changed;
+        for (const auto& entry : changedAt) changed.push_back(entry.second);
         std::vector<IndexCoord> remesh; // sorted
         if (reuse) {
             for (const IndexCoord& leaf : leavesAffectedBy(changed, options.meshing))
                 if (inBox(leaf, 0)) remesh.push_back(leaf);
         }
         std::vector<MeshChunk> fresh = meshLodBrickChunks(levelsOf, cut, brick, options.meshing, reuse ? &remesh : nullptr);
-        // Occlusion samples reach 3.5 voxels beyond a chunk's cells: the leaves around a change.
+        // Occlusion samples reach 3.5 voxels beyond a chunk's cells (which end a voxel past its leaf): the
+        // leaves whose reach meets a change.
         std::set<IndexCoord> occludedAgain;
-        for (const IndexCoord& c : changed)
-            for (int d = 0; d < 27; ++d)
-                occludedAgain.insert({c[0] + (d % 3 - 1) * kLeafDim, c[1] + ((d / 3) % 3 - 1) * kLeafDim, c[2] + (d / 9 - 1) * kLeafDim});
+        for (const BlockChange& c : changed)
+            for (int d = 0; d < 27; ++d) {
+                const IndexCoord leaf{c.origin[0] + (d % 3 - 1) * kLeafDim, c.origin[1] + ((d / 3) % 3 - 1) * kLeafDim,
+                                      c.origin[2] + (d / 9 - 1) * kLeafDim};
+                bool meets = true;
+                for (std::size_t a = 0; a < 3; ++a)
+                    meets = meets && c.origin[a] + c.max[a] >= leaf[a] - kOcclusionReach &&
+                            c.origin[a] + c.min[a] <= leaf[a] + kLeafDim + kOcclusionReach;
+                if (meets) occludedAgain.insert(leaf);
+            }
         std::vector<std::shared_ptr<const LeafMesh>> kept;
         if (reuse)
             for (const auto& leaf : old->leaves)
@@ -336,9 +357,9 @@ struct StreamingScene::Impl {
     }
 
     /// Remembers level-0 leaves an edit changed. Lock held.
-    void logLeafChanges(const std::vector<IndexCoord>& leaves)
+    void logLeafChanges(const std::vector<BlockChange>& leaves)
     {
-        for (const IndexCoord& leaf : leaves) leafLog.emplace_back(++leafLogSeq, leaf);
+        for (const BlockChange& leaf : leaves) leafLog.emplace_back(++leafLogSeq, leaf);
         while (leafLog.size() > kLeafLogLength) {
             leafLogFloor = leafLog.front().first;
             leafLog.pop_front();
@@ -469,11 +490,11 @@ struct StreamingScene::Impl {
         return work;
     }
 
-    /// The origins of the leaf boxes of brick `b` where `work` differs from the resident data; only boxes
-    /// some range reaches are compared. Lock held.
-    std::vector<IndexCoord> changedLeaves(const IndexCoord& b, const Volume& work, const std::vector<VoxelRange>& reached) const
+    /// The leaf boxes of brick `b` where `work` differs from the resident data, with the bounds of what
+    /// differs; only boxes some range reaches are compared. Lock held.
+    std::vector<BlockChange> changedLeaves(const IndexCoord& b, const Volume& work, const std::vector<VoxelRange>& reached) const
     {
-        std::vector<IndexCoord> out;
+        std::vector<BlockChange> out;
         const Volume& fine = levelVolumes[0];
         const LeafAlignedBox box = brickBox(b);
         if (!compareRegion(fine, work, box).any()) return out;
@@ -487,24 +508,32 @@ struct StreamingScene::Impl {
                             if (r->second[a] < leaf.min[a] || r->first[a] > leaf.min[a] + kLeafDim - 1) return false;
                         return true;
                     });
-                    if (inReach && compareRegion(fine, work, leaf).any()) out.push_back(leaf.min);
+                    if (!inReach) continue;
+                    const RegionDifference difference = compareRegion(fine, work, leaf);
+                    if (!difference.any()) continue;
+                    BlockChange& change = out.emplace_back();
+                    change.origin = leaf.min;
+                    for (std::size_t a = 0; a < 3; ++a) {
+                        change.min[a] = uint8_t(difference.lo[a] - leaf.min[a]);
+                        change.max[a] = uint8_t(difference.hi[a] - leaf.min[a]);
+                    }
                 }
         return out;
     }
 
     /// The leaves of the resident data and of `work` at the origins given, before and after. Lock held.
-    void recordLeafChanges(const std::vector<IndexCoord>& leaves, const Volume& work, std::vector<LeafChange>& out) const
+    void recordLeafChanges(const std::vector<BlockChange>& leaves, const Volume& work, std::vector<LeafChange>& out) const
     {
-        for (const IndexCoord& origin : leaves) {
-            const LeafAlignedBox leaf{origin, kLeafDim};
-            out.push_back({origin, encodeRegion(levelVolumes[0], leaf), encodeRegion(work, leaf)});
+        for (const BlockChange& change : leaves) {
+            const LeafAlignedBox leaf{change.origin, kLeafDim};
+            out.push_back({change.origin, encodeRegion(levelVolumes[0], leaf), encodeRegion(work, leaf)});
         }
     }
 
     /// Takes brick `b`'s content from `work` when it changed (at `leaves`, changedLeaves): dirty, a new
     /// version, the leaves logged, and the sides whose neighbours read what changed (those `reached` came
     /// within reach of) bumped. Lock held.
-    bool commitBrick(const IndexCoord& b, const Volume& work, const std::vector<VoxelRange>& reached, const std::vector<IndexCoord>& leaves)
+    bool commitBrick(const IndexCoord& b, const Volume& work, const std::vector<VoxelRange>& reached, const std::vector<BlockChange>& leaves)
     {
         Volume& fine = levelVolumes[0];
         Resident& r = resident.at({0, b});
@@ -793,7 +822,7 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
     std::vector<Impl::VoxelRange> reached;
     for (const ScriptOp& op : script.ops) reached.push_back(voxelsReachedBy(op, s.scene.voxelSize()));
     for (const IndexCoord& b : bricks) {
-        const std::vector<IndexCoord> leaves = s.changedLeaves(b, work, reached);
+        const std::vector<BlockChange> leaves = s.changedLeaves(b, work, reached);
         if (changes) s.recordLeafChanges(leaves, work, *changes);
         report.bricksChanged += s.commitBrick(b, work, reached, leaves);
     }

@@ -109,6 +109,12 @@ RegionDifference compareRegion(const Volume& a, const Volume& b, const LeafAlign
     const HermiteTree& ta = a.impl().grid->constTree();
     const HermiteTree& tb = b.impl().grid->constTree();
     RegionDifference d;
+    const auto include = [&](const Coord& lo, const Coord& hi) {
+        for (int axis = 0; axis < 3; ++axis) {
+            d.lo[std::size_t(axis)] = std::min(d.lo[std::size_t(axis)], lo[axis]);
+            d.hi[std::size_t(axis)] = std::max(d.hi[std::size_t(axis)], hi[axis]);
+        }
+    };
     forEachBlock(box, [&](const Coord& o) {
         const HermiteLeaf* la = ta.probeConstLeaf(o);
         const HermiteLeaf* lb = tb.probeConstLeaf(o);
@@ -116,20 +122,26 @@ RegionDifference compareRegion(const Volume& a, const Volume& b, const LeafAlign
             const MaterialValue va = ta.getValue(o), vb = tb.getValue(o);
             if (va == vb) return;
             (va.solid() && vb.solid() ? d.materials : d.occupancy) += uint64_t(kLeafVoxels);
+            include(o, o.offsetBy(kLeafDim - 1));
             return;
         }
         if (la && lb && *la == *lb) return;
         const MaterialValue tileA = la ? MaterialValue{} : ta.getValue(o), tileB = lb ? MaterialValue{} : tb.getValue(o);
         for (Index i = 0; i < Index(kLeafVoxels); ++i) {
             const MaterialValue va = la ? la->getValue(i) : tileA, vb = lb ? lb->getValue(i) : tileB;
+            const Coord voxel = o + HermiteLeaf::offsetToLocalCoord(i);
             if (va != vb) {
                 (va.solid() && vb.solid() ? d.materials : d.occupancy)++;
+                include(voxel, voxel);
                 continue;
             }
             for (int axis = 0; axis < 3; ++axis) {
                 const PackedSample* sa = la ? la->sample(i, axis) : nullptr;
                 const PackedSample* sb = lb ? lb->sample(i, axis) : nullptr;
-                if ((sa == nullptr) != (sb == nullptr) || (sa && !(*sa == *sb))) ++d.samples;
+                if ((sa == nullptr) != (sb == nullptr) || (sa && !(*sa == *sb))) {
+                    ++d.samples;
+                    include(voxel, voxel);
+                }
             }
         }
     });

@@ -44,6 +44,9 @@ struct RegionDifference {
     uint64_t occupancy = 0; // voxels solid in one and empty in the other
     uint64_t materials = 0; // voxels solid in both, of different materials
     uint64_t samples = 0;   // voxel edges whose Hermite samples differ where the materials agree
+    /// The bounds (inclusive) of the voxels that differ in material or in the samples of their
+    /// positive edges; lo > hi where none does.
+    IndexCoord lo{INT32_MAX, INT32_MAX, INT32_MAX}, hi{INT32_MIN, INT32_MIN, INT32_MIN};
     bool any() const { return occupancy || materials || samples; }
 };
 RegionDifference compareRegion(const Volume& a, const Volume& b, const LeafAlignedBox& box);
