@@ -129,10 +129,13 @@ RegionDifference compareRegion(const Volume& a, const Volume& b, const LeafAlign
         const MaterialValue tileA = la ? MaterialValue{} : ta.getValue(o), tileB = lb ? MaterialValue{} : tb.getValue(o);
         for (Index i = 0; i < Index(kLeafVoxels); ++i) {
             const MaterialValue va = la ? la->getValue(i) : tileA, vb = lb ? lb->getValue(i) : tileB;
-            const Coord voxel = o + HermiteLeaf::offsetToLocalCoord(i);
+            const auto includeVoxel = [&] {
+                const Coord voxel = o + HermiteLeaf::offsetToLocalCoord(i);
+                include(voxel, voxel);
+            };
             if (va != vb) {
                 (va.solid() && vb.solid() ? d.materials : d.occupancy)++;
-                include(voxel, voxel);
+                includeVoxel();
                 continue;
             }
             for (int axis = 0; axis < 3; ++axis) {
@@ -140,7 +143,7 @@ RegionDifference compareRegion(const Volume& a, const Volume& b, const LeafAlign
                 const PackedSample* sb = lb ? lb->sample(i, axis) : nullptr;
                 if ((sa == nullptr) != (sb == nullptr) || (sa && !(*sa == *sb))) {
                     ++d.samples;
-                    include(voxel, voxel);
+                    includeVoxel();
                 }
             }
         }
