@@ -160,8 +160,17 @@ TEST_CASE("compareRegion: its bounds are those of the voxels whose materials or 
         // stamps that change nothing (inside the solid, or far away).
         const CsgMode mode = std::array<CsgMode, 3>{CsgMode::Add, CsgMode::Remove, CsgMode::Paint}[std::size_t(trial % 3)];
         const Vec3d where(integer(-16, 16), integer(-16, 16), integer(-16, 16));
-        if (trial % 2) apply(b, mode, sphere(integer(1, 4)), at(where), second);
-        else apply(b, mode, box(Vec3d(integer(1, 3), integer(1, 3), integer(1, 3))), at(where), second);
+        const EditStats stamp = trial % 2 ? apply(b, mode, sphere(integer(1, 4)), at(where), second)
+                                          : apply(b, mode, box(Vec3d(integer(1, 3), integer(1, 3), integer(1, 3))), at(where), second);
+        // The kernel's own account of what it changed, per leaf, holds what the comparison finds.
+        for (const BlockChange& change : stamp.blockChanges) {
+            const RegionDifference d = compareRegion(a, b, {change.origin, kLeafDim});
+            if (!d.any()) continue;
+            for (std::size_t k = 0; k < 3; ++k) {
+                CHECK(d.lo[k] >= change.origin[k] + change.min[k]);
+                CHECK(d.hi[k] <= change.origin[k] + change.max[k]);
+            }
+        }
 
         // The reference: per voxel, the materials (materialAt) and the samples of its positive edges.
         std::map<std::pair<IndexCoord, int>, std::array<uint16_t, 3>> samplesA, samplesB;
