@@ -7,12 +7,14 @@
 #include "support/HermiteProbe.h"
 #include "support/Sculpt.h"
 #include "support/TestUtil.h"
+#include "vdb_hermite/VolumeRegions.h"
 
 #include <catch2/catch.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <numeric>
 #include <random>
 #include <set>
@@ -614,4 +616,72 @@ TEST_CASE("boxes far from the origin at odd voxel sizes keep their edges and cor
             }
         }
     }
+}
+
+TEST_CASE("the leaves an edit's compared bounds reach hold every chunk the edit changed, on random integer stamps", "[cms][incremental]")
+{
+    // What the streaming scene's re-mesh relies on: compareRegion's bounds per changed leaf, through
+    // leavesAffectedBy, reach every leaf whose chunk a full re-mesh makes differently. Small stamps at
+    // integer positions beside leaf borders change a voxel or two next to a neighbour's cells.
+    const MeshOptions options = optionsFor(MesherKind::CubicalMarchingSquares, GENERATE(Cells::Uniform, Cells::Adaptive));
+    std::mt19937 rng(41);
+    const auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+    Volume v(1.0);
+    const MaterialId moss = defineMaterial(v, "moss", 0.2f);
+    apply(v, CsgMode::Add, box(Vec3d(12.0, 10.0, 9.0)), at(Vec3d(0.0)));
+    apply(v, CsgMode::Add, sphere(9.0), at(Vec3d(8.0, 8.0, 0.0)));
+    const auto chunksOf = [&](const Volume& volume) {
+        std::map<std::array<int32_t, 3>, Mesh> out;
+        for (MeshChunk& chunk : meshVolumeChunks(volume, options)) out[chunk.leafOrigin] = std::move(chunk.mesh);
+        return out;
+    };
+    std::map<std::array<int32_t, 3>, Mesh> before = chunksOf(v);
+    std::size_t changedChunks = 0, affectedLeaves = 0;
+    for (int i = 0; i < 20; ++i) {
+        Volume edited = v.clone();
+        // Near a leaf border (multiples of 8) on the solids' surfaces, or anywhere.
+        // Each draw on its own (braces evaluate in order; a call's arguments do not).
+        Vec3d where{double(integer(-16, 20)), double(integer(-12, 18)), double(integer(-12, 12))};
+        if (i % 2) {
+            const int border = 8 * integer(-1, 2);
+            where[i % 3] = border + integer(-1, 1);
+        }
+        const double size = integer(1, 2);
+        const CsgMode mode = std::array<CsgMode, 3>{CsgMode::Add, CsgMode::Remove, CsgMode::Paint}[std::size_t(i % 3)];
+        if (i % 4 < 2) apply(edited, mode, sphere(size), at(where), mode == CsgMode::Paint ? moss : 1);
+        else apply(edited, mode, box(Vec3d(1.0, size, 1.0)), at(where), mode == CsgMode::Paint ? moss : 1);
+
+        std::vector<BlockChange> changes;
+        for (int32_t z = -32; z < 32; z += kLeafDim)
+            for (int32_t y = -32; y < 32; y += kLeafDim)
+                for (int32_t x = -32; x < 32; x += kLeafDim) {
+                    const RegionDifference d = compareRegion(v, edited, {{x, y, z}, kLeafDim});
+                    if (!d.any()) continue;
+                    BlockChange& c = changes.emplace_back();
+                    c.origin = {x, y, z};
+                    for (std::size_t a = 0; a < 3; ++a) {
+                        c.min[a] = uint8_t(d.lo[a] - c.origin[a]);
+                        c.max[a] = uint8_t(d.hi[a] - c.origin[a]);
+                    }
+                }
+        const std::vector<std::array<int32_t, 3>> affected = leavesAffectedBy(changes, options);
+        affectedLeaves += affected.size();
+        std::map<std::array<int32_t, 3>, Mesh> after = chunksOf(edited);
+        std::set<std::array<int32_t, 3>> leaves;
+        for (const auto& entry : before) leaves.insert(entry.first);
+        for (const auto& entry : after) leaves.insert(entry.first);
+        for (const auto& leaf : leaves) {
+            const auto b = before.find(leaf), a = after.find(leaf);
+            const bool same = b != before.end() && a != after.end() && b->second.positions == a->second.positions &&
+                              b->second.triangles == a->second.triangles && b->second.triangleMaterials == a->second.triangleMaterials;
+            if (same) continue;
+            ++changedChunks;
+            INFO("stamp " << i << " at " << where << ": the chunk of leaf " << leaf[0] << "," << leaf[1] << "," << leaf[2] << " changed");
+            CHECK(std::binary_search(affected.begin(), affected.end(), leaf));
+        }
+        v = std::move(edited);
+        before = std::move(after);
+    }
+    CHECK(changedChunks > 20);
+    CHECK(affectedLeaves > changedChunks);
 }

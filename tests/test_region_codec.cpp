@@ -153,15 +153,21 @@ TEST_CASE("compareRegion: its bounds are those of the voxels whose materials or 
     for (int trial = 0; trial < 24; ++trial) {
         Volume a(1.0);
         const MaterialId second = defineMaterial(a, "second", 0.5f);
-        apply(a, CsgMode::Add, sphere(integer(6, 14)), at(Vec3d(integer(-4, 4), integer(-4, 4), integer(-4, 4))));
-        apply(a, CsgMode::Add, box(Vec3d(integer(2, 8), integer(2, 8), integer(2, 8))), at(Vec3d(integer(-8, 8), 0, integer(-8, 8))));
+        // Each draw on its own (braces evaluate in order; a call's arguments do not), so every compiler
+        // makes the same scenes.
+        const double radius = integer(6, 14);
+        const Vec3d centre{double(integer(-4, 4)), double(integer(-4, 4)), double(integer(-4, 4))};
+        const Vec3d half{double(integer(2, 8)), double(integer(2, 8)), double(integer(2, 8))};
+        const Vec3d boxAt{double(integer(-8, 8)), 0.0, double(integer(-8, 8))};
+        apply(a, CsgMode::Add, sphere(radius), at(centre));
+        apply(a, CsgMode::Add, box(half), at(boxAt));
         Volume b = a.clone();
         // A small stamp at an integer position: solids that touch, faces on lattice planes, and some
         // stamps that change nothing (inside the solid, or far away).
         const CsgMode mode = std::array<CsgMode, 3>{CsgMode::Add, CsgMode::Remove, CsgMode::Paint}[std::size_t(trial % 3)];
-        const Vec3d where(integer(-16, 16), integer(-16, 16), integer(-16, 16));
-        const EditStats stamp = trial % 2 ? apply(b, mode, sphere(integer(1, 4)), at(where), second)
-                                          : apply(b, mode, box(Vec3d(integer(1, 3), integer(1, 3), integer(1, 3))), at(where), second);
+        const Vec3d where{double(integer(-16, 16)), double(integer(-16, 16)), double(integer(-16, 16))};
+        const Vec3d size{double(integer(1, 4)), double(integer(1, 3)), double(integer(1, 3))};
+        const EditStats stamp = trial % 2 ? apply(b, mode, sphere(size[0]), at(where), second) : apply(b, mode, box(size), at(where), second);
         // The kernel's own account of what it changed, per leaf, holds what the comparison finds.
         for (const BlockChange& change : stamp.blockChanges) {
             const RegionDifference d = compareRegion(a, b, {change.origin, kLeafDim});
