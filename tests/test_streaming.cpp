@@ -77,6 +77,14 @@ StreamingOptions roomyOptions()
     return options;
 }
 
+/// A roomy budget, and edits allowed.
+StreamingOptions roomyEditableOptions()
+{
+    StreamingOptions options = roomyOptions();
+    options.access = StoreAccess::ReadWrite;
+    return options;
+}
+
 std::string stampScript(int count, uint64_t seed, double from = 8.0, double to = 248.0)
 {
     std::mt19937 rng{unsigned(seed)};
@@ -463,8 +471,7 @@ TEST_CASE("after stamps anywhere (across brick faces too), every kept mesh is th
 {
     TempDir dir;
     const std::string path = makeTerrain(dir);
-    StreamingOptions options = roomyOptions();
-    options.access = StoreAccess::ReadWrite;
+    StreamingOptions options = roomyEditableOptions();
     StreamingScene scene(path, options);
     const Viewer view = lookingAt({30, 70, 30}, {128, 30, 128}); // near bricks at level 0, far ones coarser
     settleView(scene, view);
@@ -554,8 +561,7 @@ TEST_CASE("an edit where the view shows a coarse level shows at level 0 until it
 {
     TempDir dir;
     const std::string path = makeTerrain(dir);
-    StreamingOptions options = roomyOptions();
-    options.access = StoreAccess::ReadWrite;
+    StreamingOptions options = roomyEditableOptions();
     options.pixelTolerance = 4.0; // from afar: the terrain shows at a coarse level
     StreamingScene scene(path, options);
     const Viewer view = lookingAt({-500, 200, -500}, {128, 30, 128});
@@ -585,8 +591,7 @@ TEST_CASE("an edit in empty space, where no brick was stored, shows at once", "[
 {
     TempDir dir;
     const std::string path = makeTerrain(dir);
-    StreamingOptions options = roomyOptions();
-    options.access = StoreAccess::ReadWrite;
+    StreamingOptions options = roomyEditableOptions();
     StreamingScene scene(path, options);
     // High above the terrain: the bricks there were never stored, at any level.
     const std::array<double, 3> at{100.0, 230.0, 100.0};

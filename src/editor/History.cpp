@@ -61,10 +61,10 @@ History::~History()
     if (spill_) std::fclose(spill_);
 }
 
-bool History::push(std::vector<LeafChange> changes, nlohmann::json ops)
+void History::push(std::vector<LeafChange> changes, nlohmann::json ops)
 {
     changes.erase(std::remove_if(changes.begin(), changes.end(), [](const LeafChange& c) { return c.before == c.after; }), changes.end());
-    if (changes.empty()) return false;
+    if (changes.empty()) return;
     for (Entry& e : redo_) release(e);
     redo_.clear();
     Entry entry;
@@ -79,7 +79,6 @@ bool History::push(std::vector<LeafChange> changes, nlohmann::json ops)
         fileEnd_ = spilledBytes_ = 0;
     }
     spillOver();
-    return true;
 }
 
 nlohmann::json History::opsInEffect() const

@@ -29,9 +29,8 @@ public:
     History& operator=(const History&) = delete;
 
     /// Records an edit and the stroke-script ops that made it (changes with equal before and after are
-    /// dropped; nothing is recorded when none remain) and forgets what could be redone. Returns whether
-    /// it was recorded.
-    bool push(std::vector<LeafChange> changes, nlohmann::json ops = nlohmann::json::array());
+    /// dropped; nothing is recorded when none remain) and forgets what could be redone.
+    void push(std::vector<LeafChange> changes, nlohmann::json ops = nlohmann::json::array());
     /// The leaf images that take the scene back before the latest edit; the edit moves to the redo side.
     std::optional<std::vector<LeafImage>> undo();
     /// The leaf images that apply the latest undone edit again.

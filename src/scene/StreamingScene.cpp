@@ -497,7 +497,6 @@ struct StreamingScene::Impl {
         std::vector<BlockChange> out;
         const Volume& fine = levelVolumes[0];
         const LeafAlignedBox box = brickBox(b);
-        if (!compareRegion(fine, work, box).any()) return out;
         for (int32_t z = 0; z < box.edge; z += kLeafDim)
             for (int32_t y = 0; y < box.edge; y += kLeafDim)
                 for (int32_t x = 0; x < box.edge; x += kLeafDim) {

@@ -95,11 +95,6 @@ struct LatticeGrid {
         }
         return out;
     }
-    Vec3d gradient(int32_t i, int32_t j, int32_t k) const
-    {
-        return Vec3d(at(i + 1, j, k) - at(i - 1, j, k), at(i, j + 1, k) - at(i, j - 1, k), at(i, j, k + 1) - at(i, j, k - 1)) /
-               (2.0 * voxelSize);
-    }
     /// The largest change per world unit between neighbouring points of a range (bounds the
     /// interpolant's gradient there).
     double lipschitz(const PointRange& range) const
