@@ -3,6 +3,7 @@
 #include "Cli.h"
 
 #include "editor/DesktopEditor.h"
+#include "editor/EditedScene.h"
 #include "editor/EditingSession.h"
 #include "render/ImageFile.h"
 #include "render/ScenePicture.h"
@@ -42,9 +43,31 @@ CLI::App* addEditCommand(CLI::App& parent, EditOptions& o)
     return cmd;
 }
 
+namespace {
+
+/// Every file the editor writes goes through the check all commands make, before any work: never one of
+/// its inputs (the scene, its working store, the session replayed; through links), the extension names
+/// the kind, an existing file of another kind is never replaced, and no two outputs name one file. A
+/// replay never writes the scene's own file, however it is spelled.
+void checkEditOutputs(const EditOptions& o)
+{
+    std::vector<std::string> inputs{o.scene, o.replay};
+    if (!isStorePath(o.scene)) inputs.push_back(workingStorePath(o.scene));
+    if (!o.output.empty()) {
+        requireSceneExtension(o.output);
+        checkOutput(o.output, isStorePath(o.output) ? OutputForm::Store : OutputForm::NativeVolume, inputs);
+    }
+    if (!o.screenshot.empty()) checkOutput(o.screenshot, OutputForm::Png, inputs);
+    if (!o.exportScript.empty()) checkOutput(o.exportScript, OutputForm::Json, inputs);
+    if (!o.record.empty()) checkOutput(o.record, OutputForm::Json, inputs);
+    checkDistinctOutputs({{"-o", o.output}, {"--screenshot", o.screenshot}, {"--export-script", o.exportScript}, {"--record", o.record}});
+}
+
+} // namespace
+
 int runEdit(const EditOptions& o)
 {
-    if (!o.output.empty()) requireSceneExtension(o.output);
+    checkEditOutputs(o);
     if (!o.headless && (!o.output.empty() || !o.screenshot.empty() || !o.exportScript.empty() || o.frames))
         throw UsageError("-o, --screenshot, --export-script and --frames go with --headless");
     if (!o.size.empty() && o.screenshot.empty()) throw UsageError("--size goes with --screenshot");
@@ -62,6 +85,10 @@ int runEdit(const EditOptions& o)
     options.memoryBudgetBytes = uint64_t(o.memoryBudgetMB * 1048576.0);
     options.recordPath = o.record;
     options.discardRecovery = o.discardRecovery;
+    // A headless replay is a reproducible run: it starts from the scene as saved, and what it does to a
+    // .vdb's working store is dropped at the end (it never writes the .vdb; -o keeps its result).
+    const bool replayOnly = o.headless && !o.replay.empty();
+    options.refuseUnsaved = replayOnly;
     options.autosaveSeconds = o.autosaveSeconds;
     options.message = [](const std::string& text) { std::cerr << "vdbclay: " << text << "\n"; };
     std::unique_ptr<EditingSession> session;
@@ -77,6 +104,23 @@ int runEdit(const EditOptions& o)
                   << ")\n";
 
     if (!o.headless) return runDesktopEditor(options, std::move(session), replay ? &*replay : nullptr);
+
+    // Whatever way the run ends, a replay's edits leave the .vdb's working store with the session.
+    struct DropReplayEdits {
+        std::unique_ptr<EditingSession>& session;
+        const std::string& scene;
+        bool enabled;
+        ~DropReplayEdits()
+        {
+            if (!enabled) return;
+            session.reset(); // its last autosave first
+            try {
+                dropUnsavedWorkingStore(scene);
+            } catch (const std::exception& e) {
+                printError(std::string("could not drop the replay's edits from the working store: ") + e.what());
+            }
+        }
+    } dropReplayEdits{session, o.scene, replayOnly && !isStorePath(o.scene)};
 
     const auto start = std::chrono::steady_clock::now();
     uint64_t frames = 0;

@@ -181,7 +181,8 @@ public:
         std::error_code ec;
         if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec))
             throw UsageError("--frames '" + dir_ + "' is a file, not a folder");
-        fs::create_directories(dir_, ec);
+        checkOutputFolder(dir_);
+        fs::create_directory(dir_, ec);
         if (!fs::is_directory(dir_, ec)) throw std::runtime_error("cannot create the folder '" + dir_ + "'" + (ec ? ": " + ec.message() : ""));
         if (!o.frameSize.empty()) {
             std::tie(width_, height_) = parsePictureSize(o.frameSize, "--frame-size");
@@ -191,9 +192,21 @@ public:
             width_ = std::max(1, int(std::lround(w * scale)));
             height_ = std::max(1, int(std::lround(h * scale)));
         }
-        // Every picture is checked before the flight: a folder of other files is never overwritten.
-        for (std::size_t i = 0; i < flight.size(); i += every_) checkOutput(pathOf(i, flight.size()), OutputForm::Png);
-        checkOutput(pathOf(flight.size(), flight.size()), OutputForm::Png);
+        // Every picture is checked before the flight: a folder of other files is never overwritten, nor
+        // the flight's other outputs (a --plot or --csv inside the folder under a picture's name).
+        std::vector<std::pair<std::string, std::string>> others;
+        for (const auto& [option, path] : {std::pair{"--plot", o.plot}, std::pair{"--csv", o.csv}})
+            if (!path.empty() && samePlace(fs::path(path).parent_path().empty() ? "." : fs::path(path).parent_path().string(), dir_))
+                others.emplace_back(option, fs::path(path).filename().string());
+        const auto check = [&](std::size_t index) {
+            const std::string picture = pathOf(index, flight.size());
+            for (const auto& [option, name] : others)
+                if (fs::path(picture).filename() == name)
+                    throw UsageError(std::string(option) + " names '" + picture + "', a picture of --frames: one would write over the other");
+            checkOutput(picture, OutputForm::Png);
+        };
+        for (std::size_t i = 0; i < flight.size(); i += every_) check(i);
+        check(flight.size());
         total_ = flight.size();
         try {
             context_ = std::make_unique<render::VulkanContext>();
@@ -252,7 +265,7 @@ private:
     std::unique_ptr<render::VulkanContext> context_;
     std::unique_ptr<render::Renderer> renderer_;
     std::unique_ptr<render::OffscreenTarget> target_;
-    render::StreamedSceneChunks chunks_;
+    render::StreamedSceneChunks chunks_{render::StreamedSceneChunks::Meshes::Apart}; // the flight's figures stay its own
 };
 
 } // namespace
@@ -274,6 +287,7 @@ int runLodInspect(const LodOptions& o)
     // The outputs are checked before the flight, which replays in real time.
     if (!o.csv.empty()) checkOutput(o.csv, OutputForm::Csv, {o.scene, o.cameraPath});
     if (!o.plot.empty()) checkOutput(o.plot, OutputForm::Png, {o.scene, o.cameraPath});
+    checkDistinctOutputs({{"--csv", o.csv}, {"--plot", o.plot}});
     std::unique_ptr<FlightPictures> pictures;
     if (!o.framesDir.empty()) pictures = std::make_unique<FlightPictures>(o, flight, *scene);
     else if (o.every != 1 || o.frameView != "lod" || !o.frameSize.empty())

@@ -23,14 +23,14 @@ namespace {
 std::pair<int, int> parsePictureSize(const std::string& text, const std::string& option)
 {
     const auto x = text.find('x');
-    const auto bad = [&] { return UsageError(option + " '" + text + "' is not WIDTHxHEIGHT in pixels, each 1 .. 8192 (e.g. 1280x720)"); };
+    const auto bad = [&] { return UsageError(option + " '" + text + "' is not WIDTHxHEIGHT in pixels, each 1 .. " + std::to_string(render::kMaxViewportSide) + " (e.g. 1280x720)"); };
     if (x == std::string::npos || x == 0 || x + 1 >= text.size()) throw bad();
     const std::string w = text.substr(0, x), h = text.substr(x + 1);
     if (w.size() > 5 || h.size() > 5 || w.find_first_not_of("0123456789") != std::string::npos ||
         h.find_first_not_of("0123456789") != std::string::npos)
         throw bad();
     const int width = std::stoi(w), height = std::stoi(h);
-    if (width < 1 || height < 1 || width > 8192 || height > 8192) throw bad();
+    if (width < 1 || height < 1 || width > render::kMaxViewportSide || height > render::kMaxViewportSide) throw bad();
     return {width, height};
 }
 

@@ -17,6 +17,8 @@ if(NOT TARGET Blosc::blosc)
 endif()
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(PLplot REQUIRED IMPORTED_TARGET plplot)
+# The editor tells whether a .vdb changed under its working store by a hash of its content (XXH3).
+pkg_check_modules(XXHASH REQUIRED IMPORTED_TARGET libxxhash)
 # The renderer: Vulkan (glslc compiles the shaders at build time), GLM, stb for pictures.
 find_package(Vulkan REQUIRED COMPONENTS glslc)
 find_package(glm REQUIRED)

@@ -14,11 +14,14 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
+#include <optional>
 #include <random>
 
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -445,4 +448,178 @@ TEST_CASE("editor: a material defined and not used yet survives an autosave, a c
         reopened.apply(save);
     }
     CHECK(loadVolume(ball).materials().find("jade"));
+}
+
+namespace {
+
+/// A session of two add strokes on the ball and a smoothing one, as the window records it.
+SessionRecord ballStrokes()
+{
+    SessionRecord record;
+    record.viewport = {320, 240};
+    record.commands = {{0, 0.0, brushCommand("add", 4.0)},
+                       {1, 0.1, strokeCommand(Command::Kind::StrokeBegin, {0, 20, 0})},
+                       {2, 0.2, strokeCommand(Command::Kind::StrokeMove, {8, 18, 0})},
+                       {3, 0.3, simple(Command::Kind::StrokeEnd)},
+                       {4, 0.4, brushCommand("smooth", 5.0)},
+                       {5, 0.5, strokeCommand(Command::Kind::StrokeBegin, {0, 0, 20})},
+                       {6, 0.6, simple(Command::Kind::StrokeEnd)}};
+    record.frames = 7;
+    return record;
+}
+
+/// The edits a .vdb's working store holds beyond the last save (0 when it has none, or no working store).
+uint64_t unsavedEditsOf(const std::string& vdb)
+{
+    SessionOptions o = quietOptions();
+    EditingSession session(vdb, o);
+    return session.recoveredEdits();
+}
+
+} // namespace
+
+TEST_CASE("replay: the same session replayed twice gives the same scene; unsaved edits are refused, not replayed over", "[editor][replay][cli]")
+{
+    TempDir dir;
+    const std::string ball = makeBall(dir);
+    const std::vector<char> original = readBytes(ball);
+    saveSessionRecord(ballStrokes(), dir.file("s.json"));
+    for (const char* out : {"a.vdb", "b.vdb"}) {
+        const nlohmann::json j = parseJsonOutput(runCli(dir, std::string("edit ball.vdb --replay s.json --headless --json -o ") + out));
+        CHECK(j.at("recovered_edits") == 0);
+        CHECK(j.at("stamps") == 3);
+    }
+    CHECK(runCli(dir, "diff a.vdb b.vdb").exitCode == 0);
+    CHECK(readBytes(ball) == original);
+    CHECK(unsavedEditsOf(ball) == 0); // the replay's edits left with it
+
+    // Edits autosaved and never saved (a crash): a replay says so and changes nothing.
+    {
+        EditingSession session(ball, quietOptions());
+        for (const RecordedCommand& rc : ballStrokes().commands) session.apply(rc.command);
+    }
+    const uint64_t unsaved = unsavedEditsOf(ball);
+    REQUIRE(unsaved > 0);
+    const CommandResult refused = runCli(dir, "edit ball.vdb --replay s.json --headless -o c.vdb");
+    checkCleanFailure(refused);
+    CHECK(refused.err.find("a replay starts from the scene as saved") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir.file("c.vdb")));
+    CHECK(unsavedEditsOf(ball) == unsaved);
+    // Dropping them, the replay starts from the saved scene again.
+    REQUIRE(runCli(dir, "edit ball.vdb --replay s.json --headless --discard-recovery -o c.vdb").exitCode == 0);
+    CHECK(runCli(dir, "diff a.vdb c.vdb").exitCode == 0);
+    CHECK(readBytes(ball) == original);
+}
+
+TEST_CASE("editor: a working store knows its .vdb by content: touch changes nothing, a same-size change with its time kept is seen", "[editor]")
+{
+    TempDir dir;
+    const std::string ball = makeBall(dir);
+    {
+        EditingSession session(ball, quietOptions());
+        for (const RecordedCommand& rc : ballStrokes().commands) session.apply(rc.command);
+    }
+    const uint64_t unsaved = unsavedEditsOf(ball);
+    REQUIRE(unsaved > 0);
+    std::filesystem::last_write_time(ball, std::filesystem::file_time_type::clock::now() + std::chrono::hours(1));
+    CHECK(unsavedEditsOf(ball) == unsaved); // the same bytes: the same scene
+
+    // One byte changed in place, the size and the time as they were.
+    const auto time = std::filesystem::last_write_time(ball);
+    std::vector<char> bytes = readBytes(ball);
+    bytes[bytes.size() / 2] = char(bytes[bytes.size() / 2] ^ 0x5A);
+    writeText(ball, std::string(bytes.begin(), bytes.end()));
+    std::filesystem::last_write_time(ball, time);
+    try {
+        EditingSession session(ball, quietOptions());
+        FAIL("the changed .vdb was hidden by the old working store");
+    } catch (const std::runtime_error& e) {
+        CHECK(std::string(e.what()).find("which was changed since") != std::string::npos);
+    }
+}
+
+TEST_CASE("replay: a session is checked whole before its first command, and refusals are decided by the op", "[editor][replay][cli]")
+{
+    TempDir dir;
+    const std::string ball = makeBall(dir);
+    // A bad material or op at the end: refused naming the file and the command, nothing applied.
+    nlohmann::json session = sessionRecordJson(ballStrokes());
+    session["commands"].push_back({{"frame", 7}, {"command", "material"}, {"material", {{"name", "red"}, {"color", {2, 0, 0}}}}});
+    writeText(dir.file("bad-material.json"), session.dump());
+    session["commands"].back() = {{"frame", 7}, {"command", "op"}, {"op", {{"mode", "melt"}}}};
+    writeText(dir.file("bad-op.json"), session.dump());
+    for (const auto& [file, place] : {std::pair{"bad-material.json", "'bad-material.json'.commands[7].material.color"},
+                                      std::pair{"bad-op.json", "'bad-op.json'.commands[7].op"}}) {
+        const CommandResult r = runCli(dir, std::string("edit ball.vdb --headless --replay ") + file);
+        checkCleanFailure(r);
+        CHECK(r.err.find(place) != std::string::npos);
+        CHECK(unsavedEditsOf(ball) == 0);
+    }
+
+    // A stamp whose leaves alone would pass the budget, and one mirrored about a far centre, are refused
+    // before anything is paged in, by the op and not by what happens to be resident.
+    SessionRecord huge;
+    huge.commands = {{0, 0.0, brushCommand("add", 1000.0)},
+                     {1, 0.1, strokeCommand(Command::Kind::StrokeBegin, {0, 20, 0})},
+                     {2, 0.2, simple(Command::Kind::StrokeEnd)},
+                     {3, 0.3, brushCommand("add", 4.0, {{"mirror", {"x"}}, {"center", {1e6, 0, 0}}})},
+                     {4, 0.4, strokeCommand(Command::Kind::StrokeBegin, {0, 20, 0})},
+                     {5, 0.5, simple(Command::Kind::StrokeEnd)}};
+    saveSessionRecord(huge, dir.file("huge.json"));
+    const CommandResult r = runCli(dir, "edit ball.vdb --headless --replay huge.json --json");
+    const nlohmann::json j = parseJsonOutput(r);
+    CHECK(j.at("refused") == 2);
+    CHECK(j.at("stamps") == 0);
+    CHECK(r.err.find("more than the memory budget of 1024 MB holds") != std::string::npos);
+    CHECK(r.err.find("the brush reaches 2e+06 voxels from the origin") != std::string::npos);
+
+    // A budget that holds the strokes only if the view's bricks make way: the same refusals every run.
+    const std::string terrain = makeTerrain(dir);
+    SessionRecord strokes;
+    strokes.viewport = {640, 480};
+    strokes.commands.push_back({0, 0.0, brushCommand("add", 6.0)});
+    for (int i = 0; i < 6; ++i) {
+        strokes.commands.push_back({uint64_t(2 * i + 1), 0.0, strokeCommand(Command::Kind::StrokeBegin, {30.0 + 35.0 * i, 40, 60.0 + 25.0 * i})});
+        strokes.commands.push_back({uint64_t(2 * i + 2), 0.0, simple(Command::Kind::StrokeEnd)});
+    }
+    strokes.frames = 14;
+    saveSessionRecord(strokes, dir.file("strokes.json"));
+    std::optional<nlohmann::json> first;
+    for (int run = 0; run < 3; ++run) {
+        std::filesystem::copy_file(terrain, dir.file("run.vdbclay"), std::filesystem::copy_options::overwrite_existing);
+        const nlohmann::json report = parseJsonOutput(runCli(dir, "edit run.vdbclay --headless --replay strokes.json --memory-budget 1 --json"));
+        if (!first) first = report;
+        CHECK(report.at("refused") == first->at("refused"));
+        CHECK(report.at("stamps") == first->at("stamps"));
+        CHECK(report.at("edits") == first->at("edits"));
+    }
+}
+
+TEST_CASE("editor: hostile session files are refused before any work; a move without a stroke is recorded as its beginning", "[editor][replay]")
+{
+    TempDir dir;
+    const auto refusedWith = [&](const std::string& path, const std::string& expected) {
+        try {
+            loadSessionRecord(path);
+            FAIL("accepted: " << path);
+        } catch (const SessionError& e) {
+            CHECK_THAT(e.what(), Catch::Contains(expected));
+        }
+    };
+    refusedWith("/dev/zero", "not a regular file");
+    REQUIRE(::mkfifo(dir.file("pipe.json").c_str(), 0644) == 0);
+    refusedWith(dir.file("pipe.json"), "not a regular file");
+    writeText(dir.file("wide.json"), R"({"vdbclay_session": 1, "viewport": [16384, 16384], "commands": []})");
+    refusedWith(dir.file("wide.json"), "1 to 8192");
+    writeText(dir.file("up.json"), R"({"vdbclay_session": 1, "commands": [{"frame": 0, "command": "camera", "eye": [0, 9, 0], "target": [0, 0, 0], "up": [0, 0, 0]}]})");
+    refusedWith(dir.file("up.json"), "commands[0].up: must not be [0, 0, 0]");
+
+    const std::string ball = makeBall(dir);
+    EditingSession session(ball, quietOptions());
+    session.apply(strokeCommand(Command::Kind::StrokeMove, {0, 20, 0}));
+    session.apply(strokeCommand(Command::Kind::StrokeMove, {4, 19, 0}));
+    session.apply(simple(Command::Kind::StrokeEnd));
+    REQUIRE(session.record().commands.size() == 3);
+    CHECK(session.record().commands[0].command.kind == Command::Kind::StrokeBegin);
+    CHECK(session.record().commands[1].command.kind == Command::Kind::StrokeMove);
 }

@@ -65,6 +65,12 @@ struct Victims {
         std::filesystem::copy_file(dir.file("m.obj"), dir.file("notes.obj"));
         std::filesystem::create_symlink("s.vdb", dir.file("link-to-s.vdb"));
         std::filesystem::create_symlink("c.vdbclay", dir.file("link-to-c.vdbclay"));
+        // A session that edits nothing: the replay leaves s.vdb's working store beside it, an input of
+        // every later edit of s.vdb.
+        writeText(dir.file("session.json"),
+                  R"({"vdbclay_session": 1, "commands": [{"frame": 0, "command": "camera", "eye": [9, 9, 9], "target": [0, 0, 0]}]})");
+        REQUIRE(runCli(dir, "edit s.vdb --replay session.json --headless").exitCode == 0);
+        REQUIRE(std::filesystem::exists(dir.file("s.vdb.edit.vdbclay")));
     }
 };
 
@@ -121,14 +127,21 @@ TEST_CASE("cli: no command writes over its inputs or over a file of another kind
         {"lod inspect c.vdbclay --camera-path path.json --memory-budget 64 --plot OUT", {"c.vdbclay", "path.json"}, {"f.png"}},
         {"synth csg-stack --extent 64 -o OUT", {}, {"c.vdbclay"}},
         {"tool make s.vdb -o OUT", {"s.vdb", "link-to-s.vdb"}, {}},
-        {"selftest --scenes 1 --save-failure OUT", {}, {"script.json", "path.json"}},
+        {"selftest --scenes 1 --save-failure OUT", {}, {"script.json", "path.json", "session.json"}},
+        // Every output of the editor: never the scene (however spelled), its working store, the session
+        // replayed, nor a file of another kind.
+        {"edit s.vdb --replay session.json --headless -o OUT", {"s.vdb", "link-to-s.vdb", "session.json", "s.vdb.edit.vdbclay"}, {"c.vdbclay"}},
+        {"edit s.vdb --replay session.json --headless --screenshot OUT", {"session.json"}, {"f.png"}},
+        {"edit s.vdb --replay session.json --headless --export-script OUT", {"session.json"}, {"script.json", "path.json"}},
+        {"edit s.vdb --replay session.json --headless --record OUT", {"session.json"}, {"script.json", "path.json"}},
+        {"edit c.vdbclay --replay session.json --headless -o OUT", {"c.vdbclay", "link-to-c.vdbclay", "session.json"}, {"s.vdb"}},
     };
     // Files of every kind, some under other kinds' extensions.
     const std::vector<std::string> files{"s.vdb",           "c.vdbclay",        "script.json",      "path.json",
                                          "m.obj",           "m.ply",            "m.glb",            "foreign.vdb",
                                          "ls.vdb",          "f.csv",            "f.png",            "store-named.vdb",
                                          "script-named.obj", "script-named.csv", "ply-named.glb",   "csv-named.json",
-                                         "volume-named.png", "notes.obj"};
+                                         "volume-named.png", "notes.obj", "session.json", "s.vdb.edit.vdbclay"};
     const auto before = snapshot(v.dir);
     for (const Writer& w : writers) {
         std::vector<std::string> targets = w.inputs;
@@ -163,4 +176,35 @@ TEST_CASE("cli: no command writes over its inputs or over a file of another kind
     CHECK(runCli(v.dir, "mesh s.vdb -o m.ply").exitCode == 0);
     CHECK(runCli(v.dir, "sculpt s.vdb script.json -o s.vdb").exitCode == 0);
     CHECK(runCli(v.dir, "lod inspect c.vdbclay --camera-path path.json --memory-budget 64 --csv f.csv").exitCode == 0);
+}
+
+TEST_CASE("cli: a command's outputs never name one file, nor make more than their own folder", "[outputs][cli]")
+{
+    if (std::string(kCli).empty()) return;
+    Victims v;
+    const auto before = snapshot(v.dir);
+    // Two outputs of one command on the same file, however spelled.
+    const std::string folder = v.dir.path().filename().string();
+    for (const std::string& line : {std::string("edit s.vdb --replay session.json --headless --record out.json --export-script ./out.json"),
+                                    "edit s.vdb --replay session.json --headless --record ../" + folder + "/out.json --export-script out.json"}) {
+        INFO(line);
+        const CommandResult r = runCli(v.dir, line);
+        CHECK(r.exitCode == 2);
+        CHECK(r.err.find("name the same file") != std::string::npos);
+    }
+    std::filesystem::create_directory(v.dir.file("shots"));
+    for (const char* command : {"lod inspect c.vdbclay --camera-path path.json --memory-budget 64 --frames shots --plot shots/frame-00000.png",
+                                "lod inspect c.vdbclay --camera-path path.json --memory-budget 64 --frames shots --plot shots/settled.png"}) {
+        INFO(command);
+        const CommandResult r = runCli(v.dir, command);
+        CHECK(r.exitCode == 2);
+        CHECK(r.err.find("a picture of --frames") != std::string::npos);
+    }
+    // --frames makes its own folder at most: not a chain of them.
+    const CommandResult deep = runCli(v.dir, "lod inspect c.vdbclay --camera-path path.json --memory-budget 64 --frames no/such/folder");
+    CHECK(deep.exitCode == 2);
+    CHECK(deep.err.find("does not exist") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(v.dir.file("no")));
+    std::filesystem::remove(v.dir.file("shots"));
+    CHECK(snapshot(v.dir) == before);
 }

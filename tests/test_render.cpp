@@ -29,6 +29,9 @@
 #include <memory>
 #include <set>
 
+#include <sys/stat.h>
+#include <zlib.h>
+
 using namespace vdbclay;
 using namespace vdbclay::test;
 using namespace vdbclay::render;
@@ -650,4 +653,182 @@ TEST_CASE("render: a material's picture lands where the tri-planar projection pu
     const uint8_t* centre = plain.pixel(size / 2, size / 2);
     CHECK(std::abs(int(centre[0]) - int(centre[2])) < 8); // white, not red or blue
     requireNoValidationMessages(*context);
+}
+
+namespace {
+
+/// The picture's pixels that differ from its top-left corner (the background there), and whether any
+/// of them lies on the picture's border (the scene cut off by the frame).
+struct Foreground {
+    int pixels = 0;
+    bool touchesBorder = false;
+};
+
+Foreground foreground(const Image& image)
+{
+    const uint8_t* bg = image.pixel(0, 0);
+    Foreground f;
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x) {
+            const uint8_t* p = image.pixel(x, y);
+            if (p[0] == bg[0] && p[1] == bg[1] && p[2] == bg[2]) continue;
+            ++f.pixels;
+            f.touchesBorder = f.touchesBorder || x == 0 || y == 0 || x == image.width - 1 || y == image.height - 1;
+        }
+    return f;
+}
+
+/// A palette PNG of `indices` (one row) whose palette holds `palette` (RGB) entries only.
+std::string palettePng(const std::vector<uint8_t>& palette, const std::vector<uint8_t>& indices)
+{
+    std::string png("\x89PNG\r\n\x1a\n", 8);
+    const auto chunk = [&](const std::string& type, const std::string& data) {
+        const uint32_t length = uint32_t(data.size());
+        for (int s = 24; s >= 0; s -= 8) png.push_back(char((length >> s) & 0xFF));
+        const std::string body = type + data;
+        png += body;
+        const uint32_t crc = uint32_t(crc32(0L, reinterpret_cast<const Bytef*>(body.data()), uInt(body.size())));
+        for (int s = 24; s >= 0; s -= 8) png.push_back(char((crc >> s) & 0xFF));
+    };
+    std::string header;
+    for (uint32_t v : {uint32_t(indices.size()), uint32_t(1)})
+        for (int s = 24; s >= 0; s -= 8) header.push_back(char((v >> s) & 0xFF));
+    header += std::string("\x08\x03\x00\x00\x00", 5); // 8 bits, palette, no interlace
+    chunk("IHDR", header);
+    chunk("PLTE", std::string(palette.begin(), palette.end()));
+    std::string raw(1, '\0'); // the row's filter: none
+    raw.append(indices.begin(), indices.end());
+    std::vector<Bytef> packed(compressBound(uLong(raw.size())));
+    uLongf packedSize = uLongf(packed.size());
+    REQUIRE(compress(packed.data(), &packedSize, reinterpret_cast<const Bytef*>(raw.data()), uLong(raw.size())) == Z_OK);
+    chunk("IDAT", std::string(packed.begin(), packed.begin() + std::ptrdiff_t(packedSize)));
+    chunk("IEND", "");
+    return png;
+}
+
+} // namespace
+
+TEST_CASE("render: a camera looking straight along Y draws the scene; a degenerate up gives way to one that is not", "[render][cli]")
+{
+    // The view direction and its up: a usable up is never along the view.
+    Camera down;
+    down.eye = {0, 50, 0};
+    down.target = {0, 0, 0};
+    CHECK(usableUp(down) == std::array<double, 3>{0, 0, -1});
+    Camera up = down;
+    up.eye = {0, -50, 0};
+    CHECK(usableUp(up) == std::array<double, 3>{0, 0, 1});
+    Camera tilted = down;
+    tilted.up = {1, 0, 0};
+    CHECK(usableUp(tilted) == tilted.up);
+    Camera zero;
+    zero.up = {0, 0, 0};
+    CHECK(usableUp(zero) == std::array<double, 3>{0, 1, 0});
+
+    TempDir dir;
+    REQUIRE(runCli(dir, "new s.vdb --shape sphere --size 12").exitCode == 0);
+    for (const char* camera : {"0,60,0,0,0,0", "0,-60,0,0,0,0", "0,60,0,0,-5,0"}) {
+        INFO(camera);
+        REQUIRE(runCli(dir, std::string("render s.vdb -o top.png --size 120x90 --camera ") + camera).exitCode == 0);
+        const Foreground f = foreground(readImage(dir.file("top.png")));
+        CHECK(f.pixels > 120 * 90 / 10);
+        CHECK_FALSE(f.touchesBorder);
+    }
+}
+
+TEST_CASE("render: the default view frames the content whole: a one-voxel scene, a small sphere in a store as in its .vdb", "[render][cli]")
+{
+    TempDir dir;
+    REQUIRE(runCli(dir, "new one.vdb --shape box --size 0.5").exitCode == 0);
+    REQUIRE(runCli(dir, "render one.vdb -o one.png --size 160x120").exitCode == 0);
+    const Foreground one = foreground(readImage(dir.file("one.png")));
+    CHECK(one.pixels > 160 * 120 / 8);
+    CHECK_FALSE(one.touchesBorder);
+
+    REQUIRE(runCli(dir, "new small.vdb --shape sphere --size 6").exitCode == 0);
+    REQUIRE(runCli(dir, "import small.vdb -o small.vdbclay").exitCode == 0);
+    REQUIRE(runCli(dir, "render small.vdb -o from-vdb.png --size 160x120").exitCode == 0);
+    REQUIRE(runCli(dir, "render small.vdbclay -o from-store.png --size 160x120").exitCode == 0);
+    const Foreground vdb = foreground(readImage(dir.file("from-vdb.png"))), store = foreground(readImage(dir.file("from-store.png")));
+    CHECK_FALSE(store.touchesBorder);
+    CHECK(std::abs(store.pixels - vdb.pixels) < vdb.pixels / 10);
+}
+
+TEST_CASE("render: pictures are read from regular files only; a palette's missing entries read one colour", "[render]")
+{
+    TempDir dir;
+    REQUIRE(::mkfifo(dir.file("pipe.png").c_str(), 0644) == 0);
+    CHECK_THROWS_WITH(readImage(dir.file("pipe.png")), Catch::Contains("not a regular file"));
+    CHECK_THROWS_WITH(readImage("/dev/zero"), Catch::Contains("not a regular file"));
+    // Index 0 is red; 1 and 200 name no entry: opaque black, the same each time it is read.
+    writeText(dir.file("palette.png"), palettePng({255, 0, 0}, {0, 1, 200}));
+    for (int read = 0; read < 2; ++read) {
+        const Image image = readImage(dir.file("palette.png"));
+        REQUIRE(image.width == 3);
+        CHECK(std::vector<uint8_t>(image.pixel(0, 0), image.pixel(0, 0) + 4) == std::vector<uint8_t>{255, 0, 0, 255});
+        CHECK(std::vector<uint8_t>(image.pixel(1, 0), image.pixel(1, 0) + 4) == std::vector<uint8_t>{0, 0, 0, 255});
+        CHECK(std::vector<uint8_t>(image.pixel(2, 0), image.pixel(2, 0) + 4) == std::vector<uint8_t>{0, 0, 0, 255});
+    }
+    // A full palette is left as it is.
+    std::string full = palettePng(std::vector<uint8_t>(768, 7), {0, 1, 200});
+    const std::string copy = full;
+    padPngPalette(full);
+    CHECK(full == copy);
+}
+
+TEST_CASE("render: a flight's pictures mesh apart from the scene: its resident bytes stay its own", "[render]")
+{
+    TempDir dir;
+    const std::string path = dir.file("t.vdbclay");
+    REQUIRE(runCli(dir, "synth terrain --extent 128 --seed 3 -o t.vdbclay").exitCode == 0);
+    StreamingOptions options;
+    options.memoryBudgetBytes = 64ull << 20;
+    StreamingScene scene(path, options);
+    Viewer viewer;
+    viewer.position = {-40, 120, -40};
+    viewer.target = {64, 10, 64};
+    viewer.viewport = {320, 240};
+    FrameReport report;
+    for (int i = 0; i < 50 && !(report.settled && report.pending == 0); ++i) {
+        report = scene.frame(viewer);
+        scene.waitForLoads();
+    }
+    const uint64_t resident = scene.frame(viewer).residentBytes;
+    auto context = validatedContext();
+    Renderer renderer(*context);
+    StreamedSceneChunks apart(StreamedSceneChunks::Meshes::Apart);
+    CHECK(apart.sync(scene, renderer).uploaded > 0);
+    CHECK(scene.frame(viewer).residentBytes == resident);
+    // Kept by the scene, the meshes count against its budget.
+    Renderer kept(*context);
+    StreamedSceneChunks inScene;
+    inScene.sync(scene, kept);
+    CHECK(scene.frame(viewer).residentBytes > resident);
+    requireNoValidationMessages(*context);
+}
+
+TEST_CASE("edit: a headless screenshot draws a material defined in the session with its picture, saved or not", "[render][editor][cli]")
+{
+    TempDir dir;
+    Image red;
+    red.width = red.height = 8;
+    for (int i = 0; i < 64; ++i) red.rgba.insert(red.rgba.end(), {230, 20, 20, 255});
+    writePng(red, dir.file("red.png"));
+    REQUIRE(runCli(dir, "new ball.vdb --shape sphere --size 16").exitCode == 0);
+    writeText(dir.file("s.json"), R"({"vdbclay_session": 1, "viewport": [160, 120], "commands": [
+        {"frame": 0, "command": "material", "material": {"name": "brick", "color": [1, 1, 1], "texture": "red.png"}},
+        {"frame": 0, "command": "brush", "brush": {"mode": "paint", "radius": 40, "material": "brick"}},
+        {"frame": 1, "command": "stroke_begin", "point": [0, 16, 0]},
+        {"frame": 2, "command": "stroke_end"}]})");
+    REQUIRE(runCli(dir, "edit ball.vdb --replay s.json --headless --screenshot unsaved.png").exitCode == 0);
+    REQUIRE(runCli(dir, "edit ball.vdb --replay s.json --headless --screenshot saved.png -o out.vdb").exitCode == 0);
+    const Image unsaved = readImage(dir.file("unsaved.png")), saved = readImage(dir.file("saved.png"));
+    const uint8_t* centre = unsaved.pixel(80, 60);
+    INFO("centre " << int(centre[0]) << " " << int(centre[1]) << " " << int(centre[2]));
+    CHECK(centre[0] > 2 * centre[1]); // the picture's red, not black
+    int differing = 0;
+    for (int y = 0; y < 120; ++y)
+        for (int x = 0; x < 160; ++x)
+            for (int c = 0; c < 3; ++c) differing += std::abs(int(unsaved.pixel(x, y)[c]) - int(saved.pixel(x, y)[c])) > 2;
+    CHECK(differing < 160 * 120 / 100);
 }

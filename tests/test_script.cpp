@@ -1,6 +1,11 @@
 // Stroke scripts: parsing the issue's example, rejecting malformed scripts with a message that names
 // the place, and running scripts (unknown materials leave the volume untouched).
+#include "scene/CameraPath.h"
+#include "scene/SceneDiff.h"
+#include "sculpt/StrokePath.h"
 #include "sculpt/StrokeScript.h"
+#include "support/CliRun.h"
+#include "support/HermiteProbe.h"
 #include "support/ExampleScript.h"
 #include "support/Sculpt.h"
 #include "support/TestUtil.h"
@@ -10,6 +15,8 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
+#include <random>
 #include <limits>
 #include <string>
 #include <sys/stat.h>
@@ -338,4 +345,111 @@ TEST_CASE("scripts name material textures, empty or unprintable paths are refuse
     CHECK_THROWS_AS(parseStrokeScript(R"({"materials": [{"name": "brick", "texture": ""}], "ops": []})"), ScriptError);
     CHECK_THROWS_AS(parseStrokeScript(R"({"materials": [{"name": "brick", "texture": "a\u001bb"}], "ops": []})"), ScriptError);
     CHECK_THROWS_AS(parseStrokeScript(R"({"materials": [{"name": "brick", "texture": 3}], "ops": []})"), ScriptError);
+}
+
+namespace {
+
+double distanceToPolyline(const Vec3d& p, const std::vector<Vec3d>& line)
+{
+    double best = (p - line.front()).length();
+    for (std::size_t i = 0; i + 1 < line.size(); ++i) {
+        const Vec3d ab = line[i + 1] - line[i];
+        const double t = ab.lengthSqr() > 0.0 ? std::clamp((p - line[i]).dot(ab) / ab.lengthSqr(), 0.0, 1.0) : 0.0;
+        best = std::min(best, (p - (line[i] + ab * t)).length());
+    }
+    return best;
+}
+
+} // namespace
+
+TEST_CASE("strokes: a dense path is simplified within its tolerance; the stroke costs its voxels, not its points", "[script][stroke]")
+{
+    std::mt19937_64 random(7);
+    std::uniform_real_distribution<double> step(-0.02, 0.02), turn(-1.0, 1.0);
+    for (int trial = 0; trial < 20; ++trial) {
+        // A pointer's samples: a wandering path of a few thousand points a fraction of a voxel apart.
+        std::vector<Vec3d> path{Vec3d(0.0)};
+        Vec3d heading(1.0, 0.0, 0.0);
+        const int points = 1000 + 300 * trial;
+        for (int i = 1; i < points; ++i) {
+            const double dx = turn(random), dy = turn(random), dz = turn(random);
+            heading = (heading + Vec3d(dx, dy, dz) * 0.05).unit();
+            path.push_back(path.back() + heading * (0.01 + std::fabs(step(random))) + Vec3d(step(random), 0.0, 0.0) * 0.1);
+        }
+        const double tolerance = 1.0 / 64.0;
+        const std::vector<Vec3d> simple = simplifyStrokePath(path, tolerance);
+        CAPTURE(trial);
+        CHECK(simple.front() == path.front());
+        CHECK(simple.back() == path.back());
+        CHECK(simple.size() < path.size() / 4);
+        // Every kept point is a point of the path, in order; every point lies within twice the tolerance.
+        std::size_t at = 0;
+        for (const Vec3d& p : simple) {
+            while (at < path.size() && !(path[at] == p)) ++at;
+            CHECK(at < path.size());
+        }
+        double worst = 0.0;
+        for (const Vec3d& p : path) worst = std::max(worst, distanceToPolyline(p, simple));
+        CHECK(worst <= 2.0 * tolerance);
+    }
+    // Straight runs collapse to their ends; a path of distinct far points is kept as it is.
+    std::vector<Vec3d> line;
+    for (int i = 0; i <= 100000; i += 7) line.push_back(Vec3d(i * 1e-3, 2.0 * i * 1e-3, 0.0));
+    CHECK(simplifyStrokePath(line, 1.0 / 64.0).size() == 2);
+    const std::vector<Vec3d> corners{Vec3d(0, 0, 0), Vec3d(5, 0, 0), Vec3d(5, 5, 0), Vec3d(0, 5, 3)};
+    CHECK(simplifyStrokePath(corners, 1.0 / 64.0) == corners);
+
+    // A stroke of 100,000 points makes what the same stroke of 600 points makes, within the tolerance.
+    const auto arc = [](int n) {
+        json points = json::array();
+        for (int i = 0; i < n; ++i) {
+            const double a = M_PI * i / (n - 1);
+            points.push_back({30.0 * std::cos(a), 30.0 * std::sin(a), 4.0});
+        }
+        return points;
+    };
+    for (const char* mode : {"add", "smooth"}) {
+        CAPTURE(mode);
+        Volume dense(1.0), sparse(1.0);
+        for (Volume* v : {&dense, &sparse}) apply(*v, CsgMode::Add, box(Vec3d(36.0, 36.0, 4.0)), at(Vec3d(0.0)));
+        const auto script = [&](int n) {
+            return json{{"ops", {{{"mode", mode}, {"brush", {{"shape", "sphere"}, {"radius", 3}}}, {"path", arc(n)}}}}}.dump();
+        };
+        runStrokeScript(dense, parseStrokeScript(script(100000)));
+        runStrokeScript(sparse, parseStrokeScript(script(600)));
+        TempDir dir;
+        saveVolume(dense, dir.file("dense.vdb"));
+        saveVolume(sparse, dir.file("sparse.vdb"));
+        const SceneDiff d = diffScenes(dir.file("dense.vdb"), dir.file("sparse.vdb"));
+        // Each simplified path lies within 2 x 1/256 voxel of the arc, so the two within 1/64: only voxels
+        // whose centres lie that close to the surface may change sides, and the meshes (whose vertices
+        // a feature's normals place) stay within a tenth of a voxel.
+        CHECK(d.occupancyDifferences <= 8);
+        CHECK(d.surfaceDistance <= 0.1);
+    }
+}
+
+TEST_CASE("scripts: limits are reported in their own words", "[script][limits]")
+{
+    const auto error = [](const json& op) {
+        try {
+            Volume v(1.0);
+            runStrokeScript(v, parseStrokeScript(json{{"ops", {op}}}.dump()));
+        } catch (const ScriptError& e) {
+            return std::string(e.what());
+        }
+        return std::string("accepted");
+    };
+    CHECK_THAT(error({{"mode", "inflate"}, {"brush", {{"shape", "sphere"}, {"radius", 3}}}, {"distance", 1e9}}),
+               Catch::Contains("must be positive and below 1e6"));
+    // A store is sculpted brick by brick: an op reaching past the limits says so, not "reaches 0 bricks".
+    TempDir dir;
+    REQUIRE(runCli(dir, "new s.vdb --shape sphere --size 4").exitCode == 0);
+    REQUIRE(runCli(dir, "import s.vdb -o s.vdbclay").exitCode == 0);
+    writeText(dir.file("huge.json"), json{{"ops", {{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 1e9}}}}}}}.dump());
+    const CommandResult huge = runCli(dir, "sculpt s.vdbclay huge.json -o s.vdbclay");
+    checkCleanFailure(huge);
+    CHECK_THAT(huge.err, Catch::Contains("the brush reaches 1e+09 voxels"));
+    CHECK_THROWS_WITH(parseCameraPath(R"({"fov_degrees": 500, "frames": [{"position": [0, 0, 9], "target": [0, 0, 0]}]})"),
+                      Catch::Contains("fov_degrees"));
 }

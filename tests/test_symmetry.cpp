@@ -1,5 +1,6 @@
 // Symmetry in stroke scripts: mirrors and radial copies equal the copied ops applied one by one (bit for
-// bit where the brush's gradient is analytic, normals within one quantization step for boxes), for
+// bit, for every shape: the gradients' stencils are mirror-symmetric; turned copies within one
+// quantization step), for
 // every kind of op (add, remove, paint, reshaping brushes); malformed symmetry is refused naming the place.
 #include "sculpt/StrokeScript.h"
 #include "selftest/ExactScene.h"
@@ -67,8 +68,17 @@ TEST_CASE("symmetry: a mirrored op equals the op and its mirror image applied on
     json twice = op("remove", cube, {9, 5, -6});
     twice["symmetry"] = {{"mirror", {"x", "z"}}};
     const Volume four = run({twice});
-    CHECK(sameShape(four, run({op("remove", cube, {9, 5, -6}), op("remove", cube, {-9, 5, -6}), op("remove", cube, {9, 5, 6}),
-                               op("remove", cube, {-9, 5, 6})})));
+    // Bit for bit for a box too: its gradient's stencil is mirror-symmetric.
+    CHECK(changedBlocks(four, run({op("remove", cube, {9, 5, -6}), op("remove", cube, {-9, 5, -6}), op("remove", cube, {9, 5, 6}),
+                                   op("remove", cube, {-9, 5, 6})}))
+              .empty());
+    for (const json& shape : {json{{"shape", "cylinder"}, {"radius", 3}, {"height", 5}}, json{{"shape", "torus"}, {"radius", 4}, {"minor_radius", 1.5}},
+                              json{{"shape", "cone"}, {"radius", 3}, {"height", 5}}}) {
+        CAPTURE(shape.dump());
+        json mirrorX = op("add", shape, {7, 8, 2});
+        mirrorX["symmetry"] = {{"mirror", {"x"}}};
+        CHECK(changedBlocks(run({mirrorX}), run({op("add", shape, {7, 8, 2}), op("add", shape, {-7, 8, 2})})).empty());
+    }
     CHECK_FALSE(sameShape(four, run({op("remove", cube, {9, 5, -6}), op("remove", cube, {-9, 5, -6})})));
     // Paint follows: both sides painted, the shape unchanged.
     const json red = json::array({{{"name", "red"}, {"color", {0.9, 0.1, 0.1}}}});

@@ -19,6 +19,7 @@
 #include <cmath>
 #include <functional>
 #include <iterator>
+#include <map>
 #include <set>
 #include <thread>
 #include <fstream>
@@ -732,17 +733,88 @@ TEST_CASE("a glTF reads its buffers from inside its own folder only", "[voxelize
     }
 }
 
-TEST_CASE("a PLY of triangle strips is refused naming the strips, not read as an empty or wrong surface", "[voxelize]")
+namespace {
+
+/// Whether every directed edge of the soup has its reverse exactly once and appears once itself: a closed
+/// surface whose triangles all turn the same way.
+bool closedAndConsistent(const TriangleSoup& soup)
+{
+    std::map<std::pair<uint32_t, uint32_t>, int> edges;
+    for (const auto& t : soup.triangles)
+        for (int k = 0; k < 3; ++k) ++edges[{t[std::size_t(k)], t[std::size_t((k + 1) % 3)]}];
+    for (const auto& [edge, count] : edges) {
+        const auto reverse = edges.find({edge.second, edge.first});
+        if (count != 1 || reverse == edges.end() || reverse->second != 1) return false;
+    }
+    return !edges.empty();
+}
+
+/// Six times the signed volume the soup encloses.
+double signedVolume6(const TriangleSoup& soup)
+{
+    double v = 0.0;
+    for (const auto& t : soup.triangles) {
+        const auto& a = soup.positions[t[0]];
+        const auto& b = soup.positions[t[1]];
+        const auto& c = soup.positions[t[2]];
+        v += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+    }
+    return v;
+}
+
+} // namespace
+
+TEST_CASE("a PLY of triangle strips is read: -1 restarts a strip, every other triangle turns back, the surface is closed", "[voxelize]")
 {
     TempDir dir;
+    // A tetrahedron as four one-triangle strips (binary, little-endian), as one strip of six corners whose
+    // triangles alternate (ASCII), and as that strip in big-endian with 16-bit indices and a stitch.
     const float vertices[12] = {0, 0, 0, 4, 0, 0, 0, 4, 0, 0, 0, 4};
     const int32_t strip[16] = {0, 2, 1, -1, 0, 1, 3, -1, 1, 2, 3, -1, 0, 3, 2, -1};
-    std::string ply = "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
-                      "element tristrips 1\nproperty list int int vertex_indices\nend_header\n";
+    const std::string header = "format binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n";
+    std::string ply = "ply\n" + header + "element tristrips 1\nproperty list int int vertex_indices\nend_header\n";
     ply.append(reinterpret_cast<const char*>(vertices), sizeof vertices);
     const int32_t count = 16;
     ply.append(reinterpret_cast<const char*>(&count), sizeof count);
     ply.append(reinterpret_cast<const char*>(strip), sizeof strip);
-    writeText(dir.file("strip.ply"), ply);
-    CHECK_THROWS_WITH(loadTriangleMesh(dir.file("strip.ply")), Catch::Contains("triangle strips"));
+    writeText(dir.file("strips.ply"), ply);
+    writeText(dir.file("one.ply"), "ply\nformat ascii 1.0\ncomment one strip\nelement vertex 4\nproperty float x\nproperty float y\n"
+                                    "property float z\nproperty uchar red\nelement tristrips 1\nproperty list uchar int vertex_indices\n"
+                                    "end_header\n0 0 0 9\n4 0 0 9\n0 4 0 9\n0 0 4 9\n6 0 2 1 3 0 2\n");
+    std::string big = "ply\nformat binary_big_endian 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\n"
+                      "element tristrips 1\nproperty list uchar short vertex_indices\nend_header\n";
+    const auto putBig = [&](const void* value, std::size_t bytes) {
+        const auto* p = static_cast<const char*>(value);
+        for (std::size_t i = bytes; i-- > 0;) big.push_back(p[i]);
+    };
+    for (float v : vertices) {
+        const double d = v;
+        putBig(&d, 8);
+    }
+    const int16_t stitched[] = {0, 2, 1, 3, 0, 2, 2, -1}; // the last corner repeats (a stitch), then the strip ends
+    big.push_back(char(std::size(stitched)));
+    for (int16_t i : stitched) putBig(&i, 2);
+    writeText(dir.file("big.ply"), big);
+
+    double volume = 0.0;
+    for (const char* name : {"strips.ply", "one.ply", "big.ply"}) {
+        CAPTURE(name);
+        const TriangleSoup soup = loadTriangleMesh(dir.file(name));
+        CHECK(soup.triangles.size() == 4);
+        CHECK(soup.droppedTriangles == 0);
+        CHECK(closedAndConsistent(soup));
+        // The same orientation whatever the form: the tetrahedron's volume (4^3 / 6), outward-facing.
+        const double v = signedVolume6(soup);
+        CHECK(std::fabs(std::fabs(v) - 64.0) < 1e-9);
+        if (volume == 0.0) volume = v;
+        CHECK(v == volume);
+    }
+    // The strip file voxelizes into a solid as the same tetrahedron given as faces does.
+    writeText(dir.file("faces.obj"), "v 0 0 0\nv 4 0 0\nv 0 4 0\nv 0 0 4\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n");
+    REQUIRE(runCli(dir, "import strips.ply -o a.vdb --voxel-size 0.25").exitCode == 0);
+    REQUIRE(runCli(dir, "import faces.obj -o b.vdb --voxel-size 0.25").exitCode == 0);
+    CHECK(runCli(dir, "diff a.vdb b.vdb").exitCode == 0);
+    // A damaged strip file is refused in one line.
+    writeText(dir.file("short.ply"), ply.substr(0, ply.size() - 8));
+    CHECK_THROWS_AS(loadTriangleMesh(dir.file("short.ply")), MeshImportError);
 }

@@ -24,7 +24,7 @@ Frame frameOf(const render::Camera& c)
     const glm::dvec3 d = vec(c.target) - vec(c.eye);
     f.distance = glm::length(d);
     f.forward = d / f.distance;
-    f.right = glm::normalize(glm::cross(f.forward, vec(c.up)));
+    f.right = glm::normalize(glm::cross(f.forward, vec(render::usableUp(c))));
     f.up = glm::cross(f.right, f.forward);
     return f;
 }

@@ -28,7 +28,15 @@ struct PreparedScene {
 /// unsaved edits first. A working store whose .vdb changed since (another program wrote it) while it holds
 /// unsaved edits is refused with std::runtime_error naming both files. Throws StoreError, VolumeIOError for
 /// unreadable scenes; std::invalid_argument for discarding a store's own edits.
-PreparedScene prepareScene(const std::string& scenePath, bool discardRecovery, const Progress& progress = {});
+/// With `refuseUnsaved` (a replay, which starts from the scene as saved), edits autosaved after the last
+/// save are refused instead of recovered (std::runtime_error saying how to keep or drop them), before any
+/// file is touched.
+PreparedScene prepareScene(const std::string& scenePath, bool discardRecovery, const Progress& progress = {}, bool refuseUnsaved = false);
+
+/// Drops a .vdb's working store when it holds edits autosaved after the last save (what a headless replay
+/// leaves: the replay never writes the .vdb, so its edits are not the scene's). Returns whether it did;
+/// the next session builds the working store again from the .vdb.
+bool dropUnsavedWorkingStore(const std::string& vdbPath);
 
 /// Autosaves, then writes the scene to `target`: the opened scene (`scenePath`, marking its edits saved),
 /// or another .vdb or store (a copy; the opened scene stays as it is). Atomic: a crash leaves the old

@@ -35,7 +35,7 @@ render::Camera initialCamera(const StreamingScene& scene)
 EditingSession::EditingSession(const std::string& scenePath, const SessionOptions& options)
     : scenePath_(scenePath), options_(options), history_(options.history)
 {
-    prepared_ = prepareScene(scenePath, options.discardRecovery);
+    prepared_ = prepareScene(scenePath, options.discardRecovery, {}, options.refuseUnsaved);
     StreamingOptions streaming;
     streaming.memoryBudgetBytes = options.memoryBudgetBytes;
     streaming.loaderThreads = options.loaderThreads;
@@ -65,6 +65,8 @@ void EditingSession::notify(const std::string& text) const
 void EditingSession::apply(const Command& command)
 {
     record_.commands.push_back({frameNumber_, time_, command});
+    // A move with no stroke begins one: the record says so, so that it reads as what happened.
+    if (command.kind == Command::Kind::StrokeMove && !stroke_.active) record_.commands.back().command.kind = Command::Kind::StrokeBegin;
     lastCommand_ = time_;
     switch (command.kind) {
     case Command::Kind::StrokeBegin: beginStroke(command.point, command.pressure); break;

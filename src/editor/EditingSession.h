@@ -29,6 +29,7 @@ struct SessionOptions {
     double idleAutosaveSeconds = 1.0; // and once no command came for this long
     int loaderThreads = 2;
     bool discardRecovery = false;  // a .vdb's working store: drop unsaved edits instead of recovering them
+    bool refuseUnsaved = false;    // a .vdb's working store with unsaved edits is refused (a replay starts from the saved scene)
     std::string recordPath;        // written at every autosave and by saveRecord(): the session so far
     std::function<void(const std::string&)> message; // one-line notices (autosaves, refused strokes)
 };

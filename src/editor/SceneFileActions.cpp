@@ -4,6 +4,7 @@
 #include "interop/LevelSetImport.h"
 #include "mesher/MeshIO.h"
 #include "mesher/Mesher.h"
+#include "scene/OutputCheck.h"
 #include "scene/SceneStore.h"
 #include "sculpt/GridTool.h"
 #include "vdb_hermite/VolumeIO.h"
@@ -26,6 +27,9 @@ Volume committedScene(EditingSession& session)
     session.autosave();
     return session.scene().store().loadLevel(0);
 }
+
+/// The files an export must never replace: the scene and the store it is edited through.
+std::vector<std::string> sessionInputs(const EditingSession& session) { return {session.scenePath(), session.scene().store().path()}; }
 
 } // namespace
 
@@ -58,6 +62,7 @@ nlohmann::json importIntoScene(const EditingSession& session, const std::string&
 
 void exportSceneMesh(EditingSession& session, const std::string& path)
 {
+    checkOutput(path, meshFormOf(path), sessionInputs(session));
     const Volume volume = committedScene(session);
     MeshOptions options;
     options.kind = MesherKind::CubicalMarchingSquares;
@@ -66,6 +71,7 @@ void exportSceneMesh(EditingSession& session, const std::string& path)
 
 void exportSceneLevelSet(EditingSession& session, const std::string& path)
 {
+    checkOutput(path, OutputForm::StandardVdb, sessionInputs(session));
     exportLevelSet(committedScene(session), path, LevelSetExportOptions{});
 }
 
@@ -74,6 +80,7 @@ nlohmann::json makeToolFromBox(EditingSession& session, const WorldBounds& box, 
     for (int a = 0; a < 3; ++a)
         if (!(box.max[a] > box.min[a]) || !std::isfinite(box.min[a]) || !std::isfinite(box.max[a]))
             throw std::invalid_argument("a tool's box needs finite corners, each minimum below its maximum");
+    checkOutput(path, OutputForm::NativeVolume, sessionInputs(session));
     session.autosave();
     const SceneStore& store = session.scene().store();
     const double vs = store.voxelSize();

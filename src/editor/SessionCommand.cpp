@@ -1,6 +1,9 @@
 #include "editor/SessionCommand.h"
 
+#include "sculpt/StrokeScript.h"
+
 #include "vdb_hermite/AtomicFile.h"
+#include "vdb_hermite/FileStatus.h"
 #include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/StrictJson.h"
 
@@ -25,6 +28,8 @@ constexpr KindName kKinds[] = {
     {Command::Kind::DefineMaterial, "material"}, {Command::Kind::ApplyOp, "op"},
 };
 
+constexpr uint64_t kMaxSessionBytes = 256ull << 20;
+
 [[noreturn]] void fail(const std::string& where, const std::string& message) { throw SessionError(where + ": " + message); }
 
 std::array<double, 3> vec3(const nlohmann::json& json, const std::string& where)
@@ -48,6 +53,22 @@ const nlohmann::json& required(const nlohmann::json& json, const char* key, cons
 {
     if (!json.contains(key)) fail(where + "." + key, "missing");
     return json.at(key);
+}
+
+/// A material or op is checked as a stroke script would check it, so that a session is refused whole,
+/// naming the command, before any of it is applied. `part` is "materials" or "ops".
+void checkAsScript(const char* part, const nlohmann::json& value, const std::string& where)
+{
+    nlohmann::json script{{"ops", nlohmann::json::array()}};
+    script[part] = nlohmann::json::array({value});
+    try {
+        (void)parseStrokeScript(script.dump());
+    } catch (const ScriptError& e) {
+        // "materials[0].color: must be ..." -> "WHERE.color: must be ..."
+        const std::string message = e.what(), prefix = std::string(part) + "[0]";
+        if (message.rfind(prefix, 0) == 0) throw SessionError(where + message.substr(prefix.size()));
+        fail(where, message);
+    }
 }
 
 } // namespace
@@ -125,6 +146,7 @@ Command parseCommand(const nlohmann::json& j, const std::string& where)
         c.camera.eye = vec3(required(j, "eye", where), where + ".eye");
         c.camera.target = vec3(required(j, "target", where), where + ".target");
         if (j.contains("up")) c.camera.up = vec3(j.at("up"), where + ".up");
+        if (c.camera.up == std::array<double, 3>{0.0, 0.0, 0.0}) fail(where + ".up", "must not be [0, 0, 0]");
         if (j.contains("fov")) c.camera.fovYDegrees = finite(j.at("fov"), where + ".fov");
         if (!(c.camera.fovYDegrees > 1.0 && c.camera.fovYDegrees < 179.0)) fail(where + ".fov", "must be between 1 and 179 degrees");
         if (c.camera.eye == c.camera.target) fail(where, "the eye and the target must differ");
@@ -133,11 +155,13 @@ Command parseCommand(const nlohmann::json& j, const std::string& where)
     case Command::Kind::DefineMaterial:
         c.material = required(j, "material", where);
         if (!c.material.is_object()) fail(where + ".material", "must be a material object");
+        checkAsScript("materials", c.material, where + ".material");
         keys.push_back("material");
         break;
     case Command::Kind::ApplyOp:
         c.op = required(j, "op", where);
         if (!c.op.is_object()) fail(where + ".op", "must be a stroke-script op");
+        checkAsScript("ops", c.op, where + ".op");
         keys.push_back("op");
         break;
     default: break;
@@ -161,11 +185,13 @@ nlohmann::json sessionRecordJson(const SessionRecord& record)
 
 SessionRecord loadSessionRecord(const std::string& path)
 {
+    // Checked before reading: /dev/zero or a FIFO would be read without end.
+    if (const auto why = unreadableAsFile(path, kMaxSessionBytes)) throw SessionError("session file: " + printableText(*why, 400));
     std::ifstream in(path, std::ios::binary);
     if (!in) throw SessionError("cannot read the session file '" + printableText(path, 200) + "'");
     std::ostringstream text;
     text << in.rdbuf();
-    if (text.str().size() > (256u << 20)) throw SessionError("'" + printableText(path, 200) + "' is too large for a session file (over 256 MB)");
+    if (in.bad()) throw SessionError("cannot read the session file '" + printableText(path, 200) + "'");
     return parseSessionRecord(text.str(), path);
 }
 
@@ -187,8 +213,8 @@ SessionRecord parseSessionRecord(const std::string& text, const std::string& nam
     if (root.contains("viewport")) {
         const nlohmann::json& v = root.at("viewport");
         if (!v.is_array() || v.size() != 2 || !v[0].is_number_integer() || !v[1].is_number_integer() || v[0] < 1 || v[1] < 1 ||
-            v[0] > 16384 || v[1] > 16384)
-            fail(where + ".viewport", "must be [width, height] in pixels, 1 to 16384");
+            v[0] > render::kMaxViewportSide || v[1] > render::kMaxViewportSide)
+            fail(where + ".viewport", "must be [width, height] in pixels, 1 to " + std::to_string(render::kMaxViewportSide));
         record.viewport = {v[0].get<int>(), v[1].get<int>()};
     }
     const nlohmann::json& commands = required(root, "commands", where);

@@ -87,4 +87,33 @@ Camera framingCamera(const std::vector<std::array<float, 3>>& points, const std:
     });
 }
 
+void appendOutline(const std::vector<std::array<float, 3>>& positions, std::vector<std::array<float, 3>>& outline)
+{
+    // A small mesh whole; a larger one sampled, with its vertices farthest along the axes and the
+    // diagonals (a box's corners), where a sample would miss what sticks out.
+    if (positions.size() <= 64) {
+        outline.insert(outline.end(), positions.begin(), positions.end());
+        return;
+    }
+    constexpr int kDirections = 13;
+    static const int kDirection[kDirections][3] = {{1, 0, 0},  {0, 1, 0},  {0, 0, 1},  {1, 1, 1},  {1, 1, -1}, {1, -1, 1}, {1, -1, -1},
+                                                   {-1, 1, 1}, {-1, 1, -1}, {-1, -1, 1}, {-1, -1, -1}, {1, 1, 0}, {1, -1, 0}};
+    std::size_t lowest[kDirections] = {}, highest[kDirections] = {};
+    double low[kDirections], high[kDirections];
+    std::fill(std::begin(low), std::end(low), 1e300);
+    std::fill(std::begin(high), std::end(high), -1e300);
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+        if (i % 8 == 0) outline.push_back(positions[i]);
+        for (int d = 0; d < kDirections; ++d) {
+            const double along = kDirection[d][0] * positions[i][0] + kDirection[d][1] * positions[i][1] + kDirection[d][2] * positions[i][2];
+            if (along < low[d]) low[d] = along, lowest[d] = i;
+            if (along > high[d]) high[d] = along, highest[d] = i;
+        }
+    }
+    for (int d = 0; d < kDirections; ++d) {
+        outline.push_back(positions[lowest[d]]);
+        outline.push_back(positions[highest[d]]);
+    }
+}
+
 } // namespace vdbclay::render

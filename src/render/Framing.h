@@ -17,6 +17,10 @@ Camera framingCamera(const std::array<double, 3>& lo, const std::array<double, 3
 Camera framingCamera(const std::vector<std::array<float, 3>>& points, const std::array<double, 3>& lo,
                      const std::array<double, 3>& hi, double aspect, double fovYDegrees = 40.0);
 
+/// Adds what frames a mesh to `outline`: a mesh of at most 64 vertices whole (one voxel's), a larger one's
+/// every 8th vertex and those farthest along the axes and diagonals both ways (a box's corners).
+void appendOutline(const std::vector<std::array<float, 3>>& positions, std::vector<std::array<float, 3>>& outline);
+
 /// Chooses near and far planes for `camera` that hold the box [lo, hi] (near at least 1e-4 of far).
 void fitDepthRange(Camera& camera, const std::array<double, 3>& lo, const std::array<double, 3>& hi);
 

@@ -11,8 +11,14 @@ namespace vdbclay::render {
 /// Throws std::runtime_error naming the path when it cannot.
 void writePng(const Image& image, const std::string& path);
 constexpr int kMaxPictureSide = 16384;
-/// Reads a PNG (or any picture stb reads) as RGBA; throws std::runtime_error when it cannot, or when it
-/// is larger than kMaxPictureSide a side.
+/// Reads a PNG (or any picture stb reads) as RGBA; throws std::runtime_error when it cannot, when it is
+/// not a regular file, or when it is larger than kMaxPictureSide a side. A palette PNG's indices past its
+/// palette read opaque black (padPngPalette).
 Image readImage(const std::string& path);
+
+/// Pads the palette of a palette PNG (in memory) with opaque black up to the 2^depth entries its indices
+/// can name: stb_image reads such indices from memory the palette never filled, a random colour. Other
+/// files are left as they are.
+void padPngPalette(std::string& png);
 
 } // namespace vdbclay::render

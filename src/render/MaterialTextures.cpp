@@ -6,6 +6,9 @@
 
 #include <stb_image_resize.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -15,19 +18,68 @@ namespace vdbclay::render {
 
 namespace {
 
-/// `image` scaled to size x size, then halved down to one pixel (each level from the finest, in linear
-/// light: sRGB pictures average correctly).
-std::vector<Image> mipChain(const Image& image, int size)
-{
-    std::vector<Image> chain;
-    for (int s = size; s >= 1; s /= 2) {
-        Image level;
-        level.width = level.height = s;
-        level.rgba.resize(std::size_t(s) * std::size_t(s) * 4);
-        if (!stbir_resize_uint8_srgb(image.rgba.data(), image.width, image.height, 0, level.rgba.data(), s, s, 0, 4, 3, 0))
-            throw std::runtime_error("cannot scale the picture");
-        chain.push_back(std::move(level));
+/// sRGB bytes to linear light and back (tables: a texture's halvings touch every pixel).
+struct SrgbTables {
+    float toLinear[256];
+    uint8_t toSrgb[4096]; // by linear value x 4095
+    SrgbTables()
+    {
+        for (int i = 0; i < 256; ++i) {
+            const double c = i / 255.0;
+            toLinear[i] = float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
+        }
+        for (int i = 0; i < 4096; ++i) {
+            const double l = i / 4095.0;
+            const double c = l <= 0.0031308 ? l * 12.92 : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055;
+            toSrgb[i] = uint8_t(std::lround(std::clamp(c, 0.0, 1.0) * 255.0));
+        }
     }
+};
+
+const SrgbTables& srgbTables()
+{
+    static const SrgbTables tables;
+    return tables;
+}
+
+/// Half the size (rounded down, at least 1): each pixel the mean of a 2x2 box, colour in linear light,
+/// alpha as it is. An odd last row or column is left out (the next halving loses less than a pixel).
+Image halved(const Image& image)
+{
+    const SrgbTables& t = srgbTables();
+    Image out;
+    out.width = std::max(1, image.width / 2);
+    out.height = std::max(1, image.height / 2);
+    out.rgba.resize(std::size_t(out.width) * std::size_t(out.height) * 4);
+    const auto texel = [&](int x, int y) { return &image.rgba[(std::size_t(std::min(y, image.height - 1)) * std::size_t(image.width) + std::size_t(std::min(x, image.width - 1))) * 4]; };
+    for (int y = 0; y < out.height; ++y)
+        for (int x = 0; x < out.width; ++x) {
+            const uint8_t* p[4] = {texel(2 * x, 2 * y), texel(2 * x + 1, 2 * y), texel(2 * x, 2 * y + 1), texel(2 * x + 1, 2 * y + 1)};
+            uint8_t* o = &out.rgba[(std::size_t(y) * std::size_t(out.width) + std::size_t(x)) * 4];
+            for (int c = 0; c < 3; ++c) {
+                const float linear = 0.25f * (t.toLinear[p[0][c]] + t.toLinear[p[1][c]] + t.toLinear[p[2][c]] + t.toLinear[p[3][c]]);
+                o[c] = t.toSrgb[std::size_t(std::lround(linear * 4095.0f))];
+            }
+            o[3] = uint8_t((p[0][3] + p[1][3] + p[2][3] + p[3][3] + 2) / 4);
+        }
+    return out;
+}
+
+/// `image` scaled to size x size, then halved down to one pixel, all in linear light (sRGB pictures
+/// average correctly). A large picture is first halved in 2x2 boxes while it is at least twice the size,
+/// so the filter only ever reads a picture at most twice the layer's size: a 16384^2 picture costs about
+/// a third more than its own pixels, not a full-size filter per level.
+std::vector<Image> mipChain(Image image, int size)
+{
+    while (image.width >= 2 * size && image.height >= 2 * size) image = halved(image);
+    std::vector<Image> chain;
+    Image level;
+    level.width = level.height = size;
+    level.rgba.resize(std::size_t(size) * std::size_t(size) * 4);
+    if (!stbir_resize_uint8_srgb(image.rgba.data(), image.width, image.height, 0, level.rgba.data(), size, size, 0, 4, 3, 0))
+        throw std::runtime_error("cannot scale the picture");
+    chain.push_back(std::move(level));
+    while (chain.back().width > 1) chain.push_back(halved(chain.back()));
     return chain;
 }
 

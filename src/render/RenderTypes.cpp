@@ -1,5 +1,6 @@
 #include "render/RenderTypes.h"
 
+#include <cmath>
 #include <stdexcept>
 
 namespace vdbclay::render {
@@ -23,6 +24,25 @@ ViewMode parseViewMode(const std::string& name)
     for (const auto& e : kViewModes)
         if (name == e.name) return e.mode;
     throw std::invalid_argument("unknown view '" + name + "' (expected shaded, lod, toughness or normals)");
+}
+
+std::array<double, 3> usableUp(const Camera& camera)
+{
+    std::array<double, 3> f{};
+    double fLength2 = 0.0;
+    for (std::size_t a = 0; a < 3; ++a) {
+        f[a] = camera.target[a] - camera.eye[a];
+        fLength2 += f[a] * f[a];
+    }
+    const auto alongView = [&](const std::array<double, 3>& up) {
+        const double c[3] = {f[1] * up[2] - f[2] * up[1], f[2] * up[0] - f[0] * up[2], f[0] * up[1] - f[1] * up[0]};
+        const double upLength2 = up[0] * up[0] + up[1] * up[1] + up[2] * up[2];
+        const double sin2 = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) / (fLength2 * upLength2);
+        return !std::isfinite(sin2) || !(sin2 > 1e-12);
+    };
+    if (!alongView(camera.up)) return camera.up;
+    if (!alongView({0.0, 1.0, 0.0})) return {0.0, 1.0, 0.0};
+    return {0.0, 0.0, f[1] < 0.0 ? -1.0 : 1.0};
 }
 
 } // namespace vdbclay::render

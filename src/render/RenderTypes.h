@@ -12,6 +12,9 @@ namespace vdbclay::render {
 using Vec3f = std::array<float, 3>;
 
 /// A pinhole camera in world units, looking from `eye` at `target`, +Y up unless `up` says otherwise.
+/// The largest picture or viewport side drawn, in pixels (render --size, a session's viewport).
+constexpr int kMaxViewportSide = 8192;
+
 struct Camera {
     std::array<double, 3> eye{0.0, 0.0, 5.0};
     std::array<double, 3> target{0.0, 0.0, 0.0};
@@ -20,6 +23,11 @@ struct Camera {
     double nearPlane = 0.05; // world units; 0: chosen from the scene's bounds
     double farPlane = 1000.0;
 };
+
+/// The camera's up vector as the view uses it: `up` unless it is zero, not finite or along the view
+/// direction (a camera looking straight down with up +Y); then world +Y, or for a view along Y the Z
+/// axis that puts -Z at the top of a view looking down (as a plan is drawn). Not normalized.
+std::array<double, 3> usableUp(const Camera& camera);
 
 /// What the surface's colour shows.
 enum class ViewMode : uint32_t {

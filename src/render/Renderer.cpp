@@ -47,8 +47,8 @@ constexpr int kMaxViews = 8;
 
 glm::dmat4 viewProjectionMatrix(const Camera& c, double aspect)
 {
-    const glm::dvec3 eye(c.eye[0], c.eye[1], c.eye[2]), target(c.target[0], c.target[1], c.target[2]),
-        up(c.up[0], c.up[1], c.up[2]);
+    const std::array<double, 3> u = usableUp(c); // a given up along the view would make lookAt's matrix NaN
+    const glm::dvec3 eye(c.eye[0], c.eye[1], c.eye[2]), target(c.target[0], c.target[1], c.target[2]), up(u[0], u[1], u[2]);
     glm::dmat4 proj = glm::perspective(glm::radians(c.fovYDegrees), aspect, c.nearPlane, c.farPlane);
     proj[1][1] *= -1.0; // Vulkan's framebuffer Y points down
     return proj * glm::lookAt(eye, target, up);

@@ -1,6 +1,7 @@
 #include "render/SceneChunks.h"
 
 #include "mesher/VertexOcclusion.h"
+#include "render/Framing.h"
 
 #include <algorithm>
 #include <chrono>
@@ -44,7 +45,7 @@ VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOp
     out.warnings = renderer.setMaterials(volume.materials(), look);
     for (const MeshChunk& chunk : meshVolumeChunks(volume, options)) {
         if (chunk.mesh.triangles.empty()) continue;
-        for (std::size_t i = 0; i < chunk.mesh.positions.size(); i += 8) out.outline.push_back(chunk.mesh.positions[i]);
+        appendOutline(chunk.mesh.positions, out.outline);
         for (const auto& p : chunk.mesh.positions)
             for (std::size_t a = 0; a < 3; ++a) {
                 out.lo[a] = std::min(out.lo[a], double(p[a]));
@@ -84,7 +85,8 @@ StreamedSceneChunks::SyncReport StreamedSceneChunks::sync(const StreamingScene& 
         const uint64_t version = scene.brickVersion(key);
         const auto it = uploaded_.find(key);
         if (it != uploaded_.end() && it->second.version == version) continue;
-        const std::shared_ptr<const StreamingScene::BrickMesh> m = scene.meshBrick(key);
+        const std::shared_ptr<const StreamingScene::BrickMesh> m =
+            meshes_ == Meshes::KeptByScene ? scene.meshBrick(key) : scene.meshBrickAfresh(key);
         if (!m) continue;
         ++report.meshed;
         if (it != uploaded_.end() && it->second.meshHash == m->hash) {

@@ -16,7 +16,7 @@ ChunkId leafChunkId(const std::array<int32_t, 3>& leafOrigin);
 
 struct VolumeUpload {
     std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0}; // the meshes' bounds, world units
-    std::vector<std::array<float, 3>> outline;       // every 8th vertex: enough to frame the meshes
+    std::vector<std::array<float, 3>> outline;       // appendOutline of each mesh: enough to frame them
     uint64_t chunks = 0;
     uint64_t triangles = 0;
     double meshSeconds = 0.0;
@@ -29,6 +29,12 @@ VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOp
 /// Keeps the renderer's chunks equal to a streaming scene's shown bricks.
 class StreamedSceneChunks {
 public:
+    /// Where the meshes live: kept by the scene under its budget (a view that draws every frame), or made
+    /// apart and dropped once uploaded, so that drawing changes nothing the scene reports (its resident
+    /// bytes, what its budget lets it refine: pictures of a flight that is being measured).
+    enum class Meshes { KeptByScene, Apart };
+    explicit StreamedSceneChunks(Meshes meshes = Meshes::KeptByScene) : meshes_(meshes) {}
+
     struct SyncReport {
         uint64_t meshed = 0;   // bricks whose mesh was taken again (their content or their neighbourhood changed)
         uint64_t uploaded = 0; // of those, the ones whose mesh changed: queued for upload
@@ -49,6 +55,7 @@ private:
         uint64_t version;  // StreamingScene::brickVersion the chunk was made at
         uint64_t meshHash; // of its mesh: a brick meshed again to the same mesh is not uploaded again
     };
+    Meshes meshes_;
     std::map<BrickKey, Uploaded> uploaded_;
     ChunkId nextId_ = ChunkId(1) << 62; // apart from leaf ids
 };

@@ -87,7 +87,7 @@ Picture renderStreamed(VulkanContext& context, const StreamingScene& scene, cons
     Renderer renderer(context);
     const std::string folder = std::filesystem::path(scene.store().path()).parent_path().string();
     const std::vector<std::string> warnings =
-        renderer.setMaterials(scene.store().materials(), materialLook(scene.store().voxelSize(), folder));
+        renderer.setMaterials(scene.materials(), materialLook(scene.store().voxelSize(), folder)); // edits define materials before an autosave stores them
     StreamedSceneChunks chunks;
     const StreamedSceneChunks::SyncReport sync = chunks.sync(scene, renderer);
     Picture p = draw(context, renderer, camera, request);
@@ -114,13 +114,29 @@ Picture renderStore(VulkanContext& context, const std::string& path, const Pictu
     camera = request.camera.value_or(defaultCamera(lo, hi, request.width, request.height));
     fitDepthRange(camera, lo, hi);
     const auto start = Clock::now();
-    const Viewer viewer = viewerOf(camera, request.width, request.height);
-    FrameReport report;
-    do {
-        report = scene.frame(viewer);
-        if (report.settled && report.pending == 0) break;
-        scene.waitForLoads();
-    } while (msSince(start) < request.settleSeconds * 1000.0);
+    const auto settle = [&] {
+        const Viewer viewer = viewerOf(camera, request.width, request.height);
+        FrameReport report;
+        do {
+            report = scene.frame(viewer);
+            if (report.settled && report.pending == 0) break;
+            scene.waitForLoads();
+        } while (msSince(start) < request.settleSeconds * 1000.0);
+        return report;
+    };
+    FrameReport report = settle();
+    if (!request.camera && box) {
+        // The bounds' corners frame a box; the surface shown frames the content itself (a sphere fills the
+        // view as `render` of a .vdb frames it), then the view is streamed again from there.
+        std::vector<std::array<float, 3>> outline;
+        for (const BrickKey& key : scene.shownBricks())
+            if (const auto mesh = scene.meshBrick(key)) appendOutline(mesh->mesh.positions, outline);
+        if (!outline.empty()) {
+            camera = framingCamera(outline, lo, hi, double(request.width) / double(request.height));
+            fitDepthRange(camera, lo, hi);
+            report = settle();
+        }
+    }
     const double streamMs = msSince(start);
     Picture p = renderStreamed(context, scene, camera, request);
     p.streamMs = streamMs;

@@ -46,6 +46,7 @@ std::vector<CameraFrame> parseCameraPath(const std::string& text)
         if (key != "fov_degrees" && key != "viewport" && key != "frames") fail(printableText(key, 80), "unknown key");
     Viewer base;
     if (root.contains("fov_degrees")) base.fovDegrees = number(root["fov_degrees"], "fov_degrees");
+    if (!(base.fovDegrees > 0.0 && base.fovDegrees < 180.0)) fail("fov_degrees", "the field of view must lie in (0, 180) degrees");
     if (root.contains("viewport")) {
         const json& v = root["viewport"];
         if (!v.is_array() || v.size() != 2 || !v[0].is_number_integer() || !v[1].is_number_integer())

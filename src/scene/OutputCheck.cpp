@@ -1,5 +1,7 @@
 #include "scene/OutputCheck.h"
 
+#include "scene/SceneStore.h"
+
 #include "interop/LevelSetExport.h"
 #include "mesher/MeshIO.h"
 #include "vdb_hermite/AtomicFile.h"
@@ -101,10 +103,15 @@ void checkOne(const std::string& output, OutputForm form, const std::vector<std:
         throw OutputRefused("'" + output + "': this command writes " + formName(form) + "; the file name must end in " +
                             formExtension(form));
     for (const std::string& input : inputs)
-        if (sameFile(output, input))
+        if (!input.empty() && samePlace(output, input)) // a missing input may be made before the output is written
             throw OutputRefused("'" + output + "' is an input of this command ('" + input +
                                 "'); write the output to another file");
     const FileContent existing = sniffFileContent(output);
+    const std::string name = fs::path(output).filename().string();
+    const std::size_t suffix = std::strlen(kWorkingStoreSuffix);
+    if (existing == FileContent::Store && name.size() > suffix && name.compare(name.size() - suffix, suffix, kWorkingStoreSuffix) == 0)
+        throw OutputRefused("'" + output + "' is the editor's working store of '" + name.substr(0, name.size() - suffix) +
+                            "' (the edits autosaved there would be lost); write the output to another file");
     if (existing != FileContent::Missing && existing != FileContent::Empty && !mayReplace(form, existing))
         throw OutputRefused("'" + output + "' exists and holds " + describeContent(existing) + ", not " + formName(form) +
                             "; not replacing it (remove it first, or choose another name)");
@@ -118,6 +125,37 @@ bool sameFile(const std::string& a, const std::string& b)
     struct stat sa {}, sb {};
     if (::stat(a.c_str(), &sa) != 0 || ::stat(b.c_str(), &sb) != 0) return false;
     return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+bool samePlace(const std::string& a, const std::string& b)
+{
+    if (sameFile(a, b)) return true;
+    std::error_code ec1, ec2;
+    const fs::path pa = fs::weakly_canonical(fs::absolute(a), ec1), pb = fs::weakly_canonical(fs::absolute(b), ec2);
+    return !ec1 && !ec2 && pa.lexically_normal() == pb.lexically_normal();
+}
+
+void checkDistinctOutputs(const std::vector<std::pair<std::string, std::string>>& optionAndPath)
+{
+    for (std::size_t i = 0; i < optionAndPath.size(); ++i)
+        for (std::size_t j = i + 1; j < optionAndPath.size(); ++j) {
+            const auto& [optionA, a] = optionAndPath[i];
+            const auto& [optionB, b] = optionAndPath[j];
+            if (!a.empty() && !b.empty() && samePlace(a, b))
+                throw OutputRefused(optionA + " '" + a + "' and " + optionB + " '" + b + "' name the same file: one would write over the other");
+        }
+}
+
+void checkOutputFolder(const std::string& folder)
+{
+    std::error_code ec;
+    const fs::path path = fs::absolute(folder, ec).lexically_normal();
+    if (fs::is_directory(path, ec)) return;
+    fs::path parent = path.parent_path();
+    if (path.filename().empty()) parent = parent.parent_path(); // "dir/" names dir itself
+    if (!fs::is_directory(parent, ec))
+        throw OutputRefused("'" + folder + "': its parent folder '" + parent.string() +
+                            "' does not exist; an output makes at most its own folder (create the parent first)");
 }
 
 FileContent sniffFileContent(const std::string& path)

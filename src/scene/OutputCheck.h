@@ -6,6 +6,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace vdbclay {
@@ -64,12 +65,24 @@ const char* formExtension(OutputForm form);
 OutputForm meshFormOf(const std::string& path);
 
 /// Throws OutputRefused unless `output` may receive `form`: its extension names the form, it is not
-/// the same file as any of `inputs` (missing inputs are skipped), and, when it exists, it holds the
+/// the same file as any of `inputs` (through links, or by its path when missing: an input a command makes), and, when it exists, it holds the
 /// same form (or is empty). Then makes requireReplaceable's checks (FileWriteError). An OBJ's .mtl
 /// beside it is checked the same way.
 void checkOutput(const std::string& output, OutputForm form, const std::vector<std::string>& inputs = {});
 
 /// Whether two paths name the same file once links are followed (false when either does not exist).
 bool sameFile(const std::string& a, const std::string& b);
+
+/// Whether two paths name the same file, existing or not: the same file once links are followed, or the
+/// same place once made absolute and normalized (through the links of the folders that exist).
+bool samePlace(const std::string& a, const std::string& b);
+
+/// Throws OutputRefused when two of a command's outputs (empty ones skipped) name the same file: one would
+/// write over the other.
+void checkDistinctOutputs(const std::vector<std::pair<std::string, std::string>>& optionAndPath);
+
+/// Throws OutputRefused unless `folder` exists or only its last part is missing: an output makes at most
+/// its own folder, never a chain of them (a typo in a parent would scatter folders anywhere).
+void checkOutputFolder(const std::string& folder);
 
 } // namespace vdbclay

@@ -33,6 +33,9 @@ inline LeafAlignedBox brickBox(const IndexCoord& brick)
 constexpr const char* kStoreExtension = ".vdbclay";
 /// Whether a path names a store (by its extension, any case).
 bool isStorePath(const std::string& path);
+/// The end of the name of a .vdb's working store (SCENE.vdb.edit.vdbclay), where the editor autosaves the
+/// edits made to it: no command's output replaces one.
+constexpr const char* kWorkingStoreSuffix = ".edit.vdbclay";
 
 struct LevelSummary {
     int level = 0;

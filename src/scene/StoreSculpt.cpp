@@ -4,6 +4,7 @@
 #include "sculpt/Brush.h"
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <set>
 
@@ -56,7 +57,11 @@ std::vector<IndexCoord> bricksReachedBy(const StrokeScript& script, double voxel
         // The limits (checked again by runStrokeScript) keep a brush within +-250,000 voxels; this
         // guard keeps a brush that fails them from enumerating billions of bricks first.
         const double count = double(hi[0] - lo[0] + 1) * double(hi[1] - lo[1] + 1) * double(hi[2] - lo[2] + 1);
-        if (count > 5e7) throw ScriptError("an op reaches " + std::to_string(uint64_t(count)) + " bricks of the store");
+        if (count > 5e7) {
+            char text[32];
+            std::snprintf(text, sizeof text, "%.3g", count); // beyond 2^64 a cast to an integer would read 0
+            throw ScriptError(std::string("an op reaches ") + text + " bricks of the store, more than the 5e+07 an edit may read");
+        }
         for (int32_t x = lo[0]; x <= hi[0]; ++x)
             for (int32_t y = lo[1]; y <= hi[1]; ++y)
                 for (int32_t z = lo[2]; z <= hi[2]; ++z) bricks.insert({x, y, z});
@@ -67,6 +72,7 @@ std::vector<IndexCoord> bricksReachedBy(const StrokeScript& script, double voxel
 StoreSculptReport sculptStore(SceneStore& scene, const StrokeScript& script,
                               const std::function<void(const ScriptOpReport&)>& onOp)
 {
+    checkStrokeScript(script, scene.voxelSize(), scene.materials()); // before anything is read
     const std::vector<IndexCoord> order = bricksReachedBy(script, scene.voxelSize(), [&] { return scene.brickCoords(0); });
     Volume part(scene.voxelSize());
     part.materials() = scene.materials();

@@ -5,6 +5,7 @@
 #include "mesher/VertexOcclusion.h"
 #include "scene/StoreLod.h"
 #include "scene/StoreSculpt.h"
+#include "sculpt/Csg.h"
 #include "vdb_hermite/RegionCodec.h"
 #include "vdb_hermite/VolumeRegions.h"
 
@@ -459,8 +460,13 @@ struct StreamingScene::Impl {
         for (const IndexCoord& b : bricks) wanted.insert({0, b});
         const auto makeRoomForEdit = [&](uint64_t bytes) {
             if (makeRoom(bytes, lock)) return true;
+            // Only the edit's bricks are wanted now. The loads under way finish first (they are then
+            // dropped): what they would take must not decide whether the edit fits, or the same session
+            // would refuse different edits from run to run.
             wanted.clear();
             for (const IndexCoord& b : bricks) wanted.insert({0, b});
+            queue.clear();
+            idle.wait(lock, [&] { return inFlight.empty(); });
             return makeRoom(bytes, lock);
         };
         uint64_t pagedIn = 0;
@@ -808,6 +814,14 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
     Impl& s = *impl_;
     if (s.options.access == StoreAccess::ReadOnly) throw std::logic_error("sculpting a scene opened read-only");
     const auto start = std::chrono::steady_clock::now();
+    // An op the limits refuse is refused before anything it reaches is paged in (a brush mirrored about a
+    // far centre reaches a long row of bricks).
+    const double surfaceVoxels = checkStrokeScript(script, s.scene.voxelSize(), materials());
+    // So is one whose leaves alone would pass the budget, whatever is resident: decided from the op.
+    if (surfaceVoxels * kBytesPerSurfaceVoxel > double(s.options.memoryBudgetBytes))
+        throw std::runtime_error("the edit would make about " + std::to_string(uint64_t(surfaceVoxels * kBytesPerSurfaceVoxel) >> 20) +
+                                 " MB of leaves, more than the memory budget of " + std::to_string(s.options.memoryBudgetBytes >> 20) +
+                                 " MB holds (use a smaller brush, or a larger --memory-budget)");
     const std::vector<IndexCoord> bricks = bricksReachedBy(script, s.scene.voxelSize(), [&] {
         std::lock_guard<std::mutex> lock(s.mutex);
         return std::vector<IndexCoord>(s.present[0].begin(), s.present[0].end());

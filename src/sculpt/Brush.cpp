@@ -368,10 +368,15 @@ double SweptBrush::surfaceAreaBound() const
 
 Vec3d SdfField::gradient(const Vec3d& p, double h) const
 {
-    const Vec3d points[4] = {p + Vec3d(h, -h, -h), p + Vec3d(-h, -h, h), p + Vec3d(-h, h, -h), p + Vec3d(h, h, h)};
-    double d[4];
-    for (int i = 0; i < 4; ++i) d[i] = distance(points[i]);
-    const Vec3d g(d[0] - d[1] - d[2] + d[3], -d[0] - d[1] + d[2] + d[3], -d[0] + d[1] - d[2] + d[3]);
+    // Central differences along each axis: a mirror maps this stencil onto itself (p + h e_x and p - h e_x
+    // trade places), so a mirrored field's gradient is the field's own turned, bit for bit. A tetrahedral
+    // stencil, one evaluation cheaper, turns into another tetrahedron and differs at edges and corners.
+    Vec3d g;
+    for (int a = 0; a < 3; ++a) {
+        Vec3d step(0.0);
+        step[a] = h;
+        g[a] = distance(p + step) - distance(p - step);
+    }
     const double len = g.length();
     return len > 0.0 && std::isfinite(len) ? g / len : Vec3d(0.0);
 }

@@ -100,7 +100,7 @@ public:
     /// Distances at a patch's points (patch.size() of them, in its order) with one virtual call.
     virtual void distances(const LatticePatch& patch, double* out) const;
     /// Unit gradient of the distance (pointing out of the brush), or zero where it is undefined.
-    /// The default is a second-order tetrahedral finite difference with the given step.
+    /// The default is a central difference along each axis with the given step (mirror-exact).
     virtual Vec3d gradient(const Vec3d& world, double step) const;
     virtual WorldBounds bounds() const = 0;
     /// Depth of the deepest inside point (world units): erosion scales with it.

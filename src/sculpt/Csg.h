@@ -62,6 +62,8 @@ struct EditStats {
 ///   (about half a minute on one core).
 constexpr double kMaxReachVoxels = 250000.0;
 constexpr double kMaxSurfaceVoxels = 6e7;
+/// What the leaves of one square voxel of new surface take in memory (kMaxSurfaceVoxels: about 9 GB).
+constexpr double kBytesPerSurfaceVoxel = 150.0;
 constexpr double kMaxDistanceEvaluations = 5e9;
 
 /// Throws std::invalid_argument, naming the limit, when the edit exceeds one of the limits above or

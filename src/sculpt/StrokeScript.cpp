@@ -1,5 +1,7 @@
 #include "sculpt/StrokeScript.h"
 
+#include "sculpt/StrokePath.h"
+
 #include "vdb_hermite/StrictJson.h"
 
 #include "vdb_hermite/FileExtension.h"
@@ -248,7 +250,7 @@ ScriptOp parseOp(const json& o, const std::string& where)
         if (moves != o.contains("distance")) fail(where + ".distance", moves ? "inflate and deflate need a 'distance' (world units)" : "belongs to inflate and deflate");
         if (moves) {
             op.field->distance = number(o, "distance", where);
-            if (!(op.field->distance > 0.0 && op.field->distance < 1e6)) fail(where + ".distance", "must be positive (world units)");
+            if (!(op.field->distance > 0.0 && op.field->distance < 1e6)) fail(where + ".distance", "must be positive and below 1e6 (world units)");
         }
         if ((m == FieldMode::Move) != o.contains("offset")) fail(where + ".offset", m == FieldMode::Move ? "move needs an 'offset' [dx, dy, dz]" : "belongs to move");
         if (m == FieldMode::Move) {
@@ -453,13 +455,16 @@ struct OpStep {
     std::optional<FieldBrushOp> reshape; // a reshaping brush instead of the CSG op
 };
 
-/// The field an op carves with, with the tool's region `region` where it uses a tool.
-std::shared_ptr<const SdfField> opField(const ScriptOp& s, MaterialId region)
+/// The field an op carves with, with the tool's region `region` where it uses a tool. A stroke follows its
+/// path simplified within a small fraction of a voxel: its cost follows the voxels it covers, not how
+/// densely its points were sampled.
+std::shared_ptr<const SdfField> opField(const ScriptOp& s, MaterialId region, double voxelSize)
 {
     std::shared_ptr<const PlaceableField> placed;
     if (s.tool) placed = std::make_shared<PlacedTool>(s.tool, s.placement, region);
     else placed = std::make_shared<Brush>(s.brush);
-    if (s.path.size() > 1) return std::make_shared<SweptBrush>(std::move(placed), s.path);
+    if (s.path.size() > 1)
+        return std::make_shared<SweptBrush>(std::move(placed), simplifyStrokePath(s.path, kStrokePathToleranceVoxels * voxelSize));
     return placed;
 }
 
@@ -480,7 +485,7 @@ std::vector<OpStep> withSymmetry(std::vector<OpStep> steps, const Symmetry& symm
     return steps;
 }
 
-std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTable& table)
+std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTable& table, double voxelSize)
 {
     const std::string where = "ops[" + std::to_string(index) + "]";
     if (!s.toolFile.empty() && !s.tool) throw ScriptError(where + ".brush.file: the tool '" + s.toolFile + "' is not loaded");
@@ -497,11 +502,11 @@ std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTabl
     if (s.field) {
         FieldBrushOp reshape = *s.field;
         if (!s.material.empty()) reshape.material = op.material;
-        plain = {{opField(s, kEmptyMaterial), op, reshape}};
+        plain = {{opField(s, kEmptyMaterial, voxelSize), op, reshape}};
     }
     const bool toolMaterials = s.tool && s.material.empty() && (s.mode == CsgMode::Add || s.mode == CsgMode::Paint);
     try {
-        if (!s.field && !toolMaterials) plain = {{opField(s, kEmptyMaterial), op, std::nullopt}};
+        if (!s.field && !toolMaterials) plain = {{opField(s, kEmptyMaterial, voxelSize), op, std::nullopt}};
         if (!plain.empty()) return withSymmetry(std::move(plain), s.symmetry);
         // Each material of the tool over its own region: regions share their boundaries, so each
         // material boundary of the tool becomes one in the volume, with its crossings and normals.
@@ -510,7 +515,7 @@ std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTabl
             const Material& m = s.tool->materials().at(region);
             const auto existing = table.find(m.name);
             op.material = existing ? *existing : table.define(m);
-            steps.push_back({opField(s, region), op, std::nullopt});
+            steps.push_back({opField(s, region, voxelSize), op, std::nullopt});
         }
         return withSymmetry(std::move(steps), s.symmetry);
     } catch (const std::invalid_argument& e) {
@@ -520,29 +525,56 @@ std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTabl
 
 } // namespace
 
-std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& script,
-                                            const std::function<void(const ScriptOpReport&)>& onOp)
+namespace {
+
+/// The script's ops compiled into steps, each checked against the limits (on `table`, the materials once
+/// the script's are defined; a tool's materials are added to it): a script is refused whole, before the
+/// first op runs.
+std::vector<std::vector<OpStep>> compileChecked(const StrokeScript& script, double voxelSize, MaterialTable& table)
 {
-    MaterialTable table = volume.materials();
-    for (const Material& m : script.materials) table.define(m);
-    // Every op's limits are checked before the first one runs: a script is refused whole, not half done.
     std::vector<std::vector<OpStep>> steps;
     for (std::size_t i = 0; i < script.ops.size(); ++i) {
-        steps.push_back(compileOp(script.ops[i], i, table));
+        steps.push_back(compileOp(script.ops[i], i, table, voxelSize));
         for (const OpStep& step : steps.back()) {
             try {
                 if (step.reshape) {
-                    Volume probe(volume.voxelSize()); // the checks read the voxel size and the materials only
+                    Volume probe(voxelSize); // the checks read the voxel size and the materials only
                     probe.materials() = table;
                     checkFieldBrush(probe, *step.field, *step.reshape);
                 } else {
-                    checkCsgLimits(volume.voxelSize(), table, *step.field, step.op);
+                    checkCsgLimits(voxelSize, table, *step.field, step.op);
                 }
             } catch (const std::invalid_argument& e) {
                 throw ScriptError("ops[" + std::to_string(i) + "]: " + e.what());
             }
         }
     }
+    return steps;
+}
+
+MaterialTable withScriptMaterials(MaterialTable table, const StrokeScript& script)
+{
+    for (const Material& m : script.materials) table.define(m);
+    return table;
+}
+
+} // namespace
+
+double checkStrokeScript(const StrokeScript& script, double voxelSize, const MaterialTable& materials)
+{
+    double surface = 0.0;
+    MaterialTable table = withScriptMaterials(materials, script);
+    for (const auto& steps : compileChecked(script, voxelSize, table))
+        for (const OpStep& step : steps)
+            if (step.field->bounds().bounded()) surface += step.field->surfaceAreaBound() / (voxelSize * voxelSize);
+    return surface;
+}
+
+std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& script,
+                                            const std::function<void(const ScriptOpReport&)>& onOp)
+{
+    MaterialTable table = withScriptMaterials(volume.materials(), script);
+    const std::vector<std::vector<OpStep>> steps = compileChecked(script, volume.voxelSize(), table);
     volume.materials() = table;
 
     std::vector<ScriptOpReport> reports;

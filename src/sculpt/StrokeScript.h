@@ -81,6 +81,10 @@ struct ScriptOpReport {
 /// an op names an unknown material, asks for more than the limits allow or names a tool not loaded.
 /// A tool that adds or paints without a `material` brings its own: each of its materials is defined in
 /// the volume (by name, unless the volume has it already) and applied over its region of the tool.
+/// runStrokeScript's checks alone, on a lattice of `voxelSize` holding `materials`: throws ScriptError
+/// as it would, without touching any volume (a caller that must page in what an op reaches checks first).
+/// Returns a bound on the surface the script's brushes make, in square voxels (all ops and copies).
+double checkStrokeScript(const StrokeScript& script, double voxelSize, const MaterialTable& materials);
 std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& script,
                                             const std::function<void(const ScriptOpReport&)>& onOp = {});
 

@@ -2,6 +2,9 @@
 
 #include "vdb_hermite/PrintableText.h"
 #include "voxelize/MeshHeaderCheck.h"
+#include "voxelize/PlyStrips.h"
+
+#include <optional>
 
 #include <assimp/DefaultIOSystem.h>
 #include <assimp/Importer.hpp>
@@ -119,6 +122,7 @@ void coloursToMaterials(TriangleSoup& soup, const std::vector<std::pair<std::siz
 TriangleSoup readMeshWithAssimp(const std::string& path)
 {
     refuseImplausibleMeshHeader(path);
+    if (std::optional<TriangleSoup> strips = readPlyTriangleStrips(path)) return std::move(*strips);
     Assimp::Importer importer;
     importer.SetIOHandler(new ModelFolderIOSystem(path)); // the importer owns it
     // Points and lines are no surface. No normals are asked for: the voxelizer takes each triangle's own.

@@ -91,10 +91,6 @@ void checkPly(const std::string& path, std::ifstream& in, uint64_t fileBytes)
             words >> name >> count;
             const std::optional<uint64_t> parsed = parseCount(count);
             if (!parsed) return; // Assimp's own error says what is wrong
-            // Assimp reads strips as loose vertices: the surface would come out empty or wrong.
-            if (lowerCase(name) == "tristrips" && *parsed > 0)
-                throw MeshImportError("'" + path + "' stores its surface as triangle strips (element tristrips), which the "
-                                      "importer cannot read; save it with faces (element face), as MeshLab or Blender do");
             elements.push_back({name, *parsed, 0});
         } else if (keyword == "property" && !elements.empty()) {
             std::string type;
