@@ -37,6 +37,9 @@ CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& o)
                 "editor  a stroke-heavy session (r=32 strokes of every mode, mirrored) replayed frame by frame on a terrain\n"
                 "        of extent 1024 (512 with --quick): CPU frame p50/p99, edit-to-visible frames, triangles, uploads,\n"
                 "        resident memory vs the budget, the rotated 64^3 tool stamp vs OpenVDB's csgUnion + volumeToMesh\n"
+                "inputs  large and hostile inputs: sessions of 400,000 objects vs nlohmann's plain parse, a stroke of\n"
+                "        100,000 points vs 600 and vs OpenVDB sphere stamps, a tangled 2,000-point stroke, an 8192^2\n"
+                "        material picture to its mipmaps vs a full-size filter per level\n"
                 "Build in Release for meaningful figures; docs/BENCHMARKS.md has measured tables.");
     return cmd;
 }
@@ -45,7 +48,7 @@ int runBenchCommand(const BenchCommandOptions& o)
 {
     bool known = false;
     for (const auto& n : bench::benchNames()) known = known || n == o.which;
-    if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool, render or editor)");
+    if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool, render, editor or inputs)");
     if (o.memoryBudgetMb > 0.0 && o.which != "stream" && o.which != "render" && o.which != "editor")
         throw UsageError("--memory-budget is for 'bench stream', 'bench render' and 'bench editor'");
     return bench::runBench(o.which, o.json, o.quick, o.memoryBudgetMb);

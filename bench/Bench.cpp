@@ -8,7 +8,7 @@
 
 namespace vdbclay::bench {
 
-std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream", "import", "tool", "render", "editor"}; }
+std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream", "import", "tool", "render", "editor", "inputs"}; }
 
 int runBench(const std::string& which, bool json, bool quick, double memoryBudgetMb)
 {
@@ -23,7 +23,8 @@ int runBench(const std::string& which, bool json, bool quick, double memoryBudge
     if (which == "tool") return benchTool(json, quick);
     if (which == "render") return benchRender(json, quick, memoryBudgetMb);
     if (which == "editor") return benchEditor(json, quick, memoryBudgetMb);
-    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool, render or editor)");
+    if (which == "inputs") return benchInputs(json, quick);
+    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool, render, editor or inputs)");
 }
 
 } // namespace vdbclay::bench

@@ -13,5 +13,6 @@ int benchImport(bool json, bool quick);
 int benchTool(bool json, bool quick);
 int benchRender(bool json, bool quick, double memoryBudgetMb);
 int benchEditor(bool json, bool quick, double memoryBudgetMb);
+int benchInputs(bool json, bool quick);
 
 } // namespace vdbclay::bench

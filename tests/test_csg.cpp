@@ -14,7 +14,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
+#include <random>
 #include <set>
 #include <tuple>
 
@@ -830,4 +832,40 @@ TEST_CASE("applyCsg rejects ops that make no sense", "[csg]")
     CHECK_THROWS_AS(applyCsg(v, Brush(halfSpace({1.0, 0.0, 0.0}), at(Vec3d(0.0))), op(CsgMode::Add)),
                     std::invalid_argument);
     CHECK(identical(before, v));
+}
+
+TEST_CASE("a tangled stroke's distance is the nearest segment's where it matters, a bound below it elsewhere", "[csg][stroke]")
+{
+    // Long random segments crossing one region many times: its cells hold hundreds of pieces and are split.
+    std::mt19937_64 random(5);
+    std::uniform_real_distribution<double> coordinate(-40.0, 40.0);
+    std::vector<Vec3d> path;
+    for (int i = 0; i < 300; ++i) path.emplace_back(coordinate(random), coordinate(random), coordinate(random));
+    const double radius = 3.0;
+    const SweptBrush swept(Brush(sphere(radius), at(Vec3d(0.0))), path);
+    const auto exact = [&](const Vec3d& x) {
+        double best = std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+            const Vec3d ab = path[i + 1] - path[i];
+            const double t = std::clamp((x - path[i]).dot(ab) / ab.lengthSqr(), 0.0, 1.0);
+            best = std::min(best, (x - (path[i] + ab * t)).length() - radius);
+        }
+        return best;
+    };
+    // Below the smallest distance the grid may stop at: half a sub-cell (a sixth of the two-reach cell).
+    const double floorDistance = 0.25 * radius;
+    int near = 0;
+    for (int n = 0; n < 20000; ++n) {
+        const Vec3d x(coordinate(random), coordinate(random), coordinate(random));
+        const double d = swept.distance(x), e = exact(x);
+        INFO("at " << x << ": " << d << " against " << e);
+        if (e < floorDistance) {
+            CHECK(std::fabs(d - e) < 1e-9);
+            ++near;
+        } else {
+            CHECK(d <= e + 1e-9);
+            CHECK(d >= floorDistance - 1e-9);
+        }
+    }
+    CHECK(near > 5000);
 }

@@ -478,7 +478,7 @@ uint64_t unsavedEditsOf(const std::string& vdb)
 
 } // namespace
 
-TEST_CASE("replay: the same session replayed twice gives the same scene; unsaved edits are refused, not replayed over", "[editor][replay][cli]")
+TEST_CASE("replay: the same session replayed twice gives the same scene, and unsaved edits are refused, not replayed over", "[editor][replay][cli]")
 {
     TempDir dir;
     const std::string ball = makeBall(dir);
@@ -595,7 +595,7 @@ TEST_CASE("replay: a session is checked whole before its first command, and refu
     }
 }
 
-TEST_CASE("editor: hostile session files are refused before any work; a move without a stroke is recorded as its beginning", "[editor][replay]")
+TEST_CASE("editor: hostile session files are refused before any work, and a move without a stroke is recorded as its beginning", "[editor][replay]")
 {
     TempDir dir;
     const auto refusedWith = [&](const std::string& path, const std::string& expected) {

@@ -22,6 +22,8 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <chrono>
+#include <thread>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -708,7 +710,7 @@ std::string palettePng(const std::vector<uint8_t>& palette, const std::vector<ui
 
 } // namespace
 
-TEST_CASE("render: a camera looking straight along Y draws the scene; a degenerate up gives way to one that is not", "[render][cli]")
+TEST_CASE("render: a camera looking straight along Y draws the scene, and a degenerate up gives way to one that is not", "[render][cli]")
 {
     // The view direction and its up: a usable up is never along the view.
     Camera down;
@@ -754,7 +756,7 @@ TEST_CASE("render: the default view frames the content whole: a one-voxel scene,
     CHECK(std::abs(store.pixels - vdb.pixels) < vdb.pixels / 10);
 }
 
-TEST_CASE("render: pictures are read from regular files only; a palette's missing entries read one colour", "[render]")
+TEST_CASE("render: pictures are read from regular files only, and a palette's missing entries read one colour", "[render]")
 {
     TempDir dir;
     REQUIRE(::mkfifo(dir.file("pipe.png").c_str(), 0644) == 0);
@@ -831,4 +833,45 @@ TEST_CASE("edit: a headless screenshot draws a material defined in the session w
         for (int x = 0; x < 160; ++x)
             for (int c = 0; c < 3; ++c) differing += std::abs(int(unsaved.pixel(x, y)[c]) - int(saved.pixel(x, y)[c])) > 2;
     CHECK(differing < 160 * 120 / 100);
+}
+
+TEST_CASE("render: a window's pictures load on a worker: procedural until ready, then the picture", "[render]")
+{
+    TempDir dir;
+    Image red;
+    red.width = red.height = 2048; // large enough that reading it takes a while
+    red.rgba.reserve(std::size_t(2048) * 2048 * 4);
+    for (int i = 0; i < 2048 * 2048; ++i) red.rgba.insert(red.rgba.end(), {uint8_t(200 + i % 31), 20, 20, 255});
+    writePng(red, dir.file("red.png"));
+    auto context = validatedContext();
+    Volume volume = slab();
+    Material pictured;
+    pictured.name = "pictured";
+    pictured.color = {1.0f, 1.0f, 1.0f, 1.0f};
+    const MaterialId id = volume.materials().define(pictured);
+    apply(volume, CsgMode::Paint, box(Vec3d(50.0, 50.0, 20.0)), at(Vec3d(0.0)), id);
+    Renderer renderer(*context);
+    const MaterialLook look = materialLook(1.0, dir.path().string());
+    uploadVolume(renderer, volume, cmsOptions(), look); // no picture yet
+    pictured.texture = "red.png"; // then the material is given one, as a session's material command does
+    volume.materials().define(pictured);
+    const int size = 64;
+    OffscreenTarget target(*context, size, size);
+    const RenderView view{frontCamera(120.0), &target, {}};
+    const auto centreIsRed = [&] {
+        renderer.render({view});
+        const uint8_t* p = target.colour().pixel(size / 2, size / 2);
+        return p[0] > 2 * p[2] && p[0] > 2 * p[1];
+    };
+    // Asked for in the background, the call returns at once: the first frame has no picture yet.
+    const auto start = std::chrono::steady_clock::now();
+    CHECK(renderer.setMaterials(volume.materials(), look, Renderer::PictureLoading::Background).empty());
+    if (!renderer.picturesReady()) CHECK_FALSE(centreIsRed());
+    while (!renderer.picturesReady() && std::chrono::steady_clock::now() - start < std::chrono::seconds(60))
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    REQUIRE(renderer.picturesReady());
+    CHECK(renderer.setMaterials(volume.materials(), look, Renderer::PictureLoading::Background).empty());
+    CHECK_FALSE(renderer.picturesReady());
+    CHECK(centreIsRed());
+    requireNoValidationMessages(*context);
 }

@@ -362,7 +362,7 @@ double distanceToPolyline(const Vec3d& p, const std::vector<Vec3d>& line)
 
 } // namespace
 
-TEST_CASE("strokes: a dense path is simplified within its tolerance; the stroke costs its voxels, not its points", "[script][stroke]")
+TEST_CASE("strokes: a dense path is simplified within its tolerance, and a stroke costs its voxels, not its points", "[script][stroke]")
 {
     std::mt19937_64 random(7);
     std::uniform_real_distribution<double> step(-0.02, 0.02), turn(-1.0, 1.0);

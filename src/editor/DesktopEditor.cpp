@@ -341,7 +341,8 @@ struct DesktopEditor::Impl {
         ro.colourFormat = swapchain->format();
         renderer = std::make_unique<render::Renderer>(*context, ro);
         drawnMaterials = session.scene().materials();
-        for (const std::string& w : renderer->setMaterials(drawnMaterials, look())) std::cerr << "vdbclay: warning: " << w << "\n";
+        for (const std::string& w : renderer->setMaterials(drawnMaterials, look(), render::Renderer::PictureLoading::Background))
+            std::cerr << "vdbclay: warning: " << w << "\n";
 
         IMGUI_CHECKVERSION();
         ImGui::CreateContext();
@@ -422,8 +423,10 @@ struct DesktopEditor::Impl {
         chunks.sync(session.scene(), *renderer);
         figures.bricksShown = session.scene().shownBricks().size();
         MaterialTable materials = session.scene().materials();
-        if (!(materials == drawnMaterials)) { // a material defined or changed: its colour and picture
-            for (const std::string& w : renderer->setMaterials(materials, look())) std::cerr << "vdbclay: warning: " << w << "\n";
+        // A material defined or changed: its colour at once, its picture once a worker has read it.
+        if (!(materials == drawnMaterials) || renderer->picturesReady()) {
+            for (const std::string& w : renderer->setMaterials(materials, look(), render::Renderer::PictureLoading::Background))
+                std::cerr << "vdbclay: warning: " << w << "\n";
             drawnMaterials = std::move(materials);
         }
         if (drag == Drag::None) hover = pickAt(cursorX, cursorY);

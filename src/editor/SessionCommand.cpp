@@ -220,6 +220,7 @@ SessionRecord parseSessionRecord(const std::string& text, const std::string& nam
     const nlohmann::json& commands = required(root, "commands", where);
     if (!commands.is_array()) fail(where + ".commands", "must be an array");
     uint64_t lastFrame = 0;
+    record.commands.reserve(commands.size()); // a command is large: growing the list would copy each many times
     for (std::size_t i = 0; i < commands.size(); ++i) {
         const std::string at = where + ".commands[" + std::to_string(i) + "]";
         RecordedCommand rc;

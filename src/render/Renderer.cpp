@@ -14,7 +14,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <future>
 #include <map>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <unordered_map>
@@ -122,6 +124,7 @@ struct Renderer::Impl {
     std::unique_ptr<HostBuffer> staging, uniforms, materialBuffer;
     std::unique_ptr<TextureArray> textures;
     std::string textureKey;               // what the textures were loaded for
+    bool texturesFinal = false;           // false: a stand-in while the pictures load
     std::vector<uint32_t> textureLayers;  // per material id: layer + 1, 0 = none
     std::vector<std::string> textureErrors;
     VkDeviceSize uniformStride = 0;
@@ -164,7 +167,7 @@ struct Renderer::Impl {
         setAlloc.descriptorSetCount = 1;
         setAlloc.pSetLayouts = &layout;
         check(vkAllocateDescriptorSets(device, &setAlloc, &descriptorSet), "vkAllocateDescriptorSets");
-        setMaterials(MaterialTable(), {});
+        setMaterials(MaterialTable(), {}, PictureLoading::Wait);
 
         VkCommandBufferAllocateInfo cmdAlloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
         cmdAlloc.commandPool = c.commandPool();
@@ -194,7 +197,17 @@ struct Renderer::Impl {
         if (compatiblePass) vkDestroyRenderPass(device, compatiblePass, nullptr);
     }
 
-    std::vector<std::string> setMaterials(const MaterialTable& table, const MaterialLook& look)
+    /// The pictures of the key asked for last, read and scaled on a worker (MaterialTextureSet only: the
+    /// GPU upload stays on the thread that draws).
+    std::future<MaterialTextureSet> pendingTextures;
+    std::string pendingKey;
+
+    bool picturesReady() const
+    {
+        return pendingTextures.valid() && pendingTextures.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
+    }
+
+    std::vector<std::string> setMaterials(const MaterialTable& table, const MaterialLook& look, PictureLoading loading)
     {
         // Entry 0 (empty) is never drawn; it gets the default colour so a stray id still shows.
         const std::size_t count = table.size() + 1;
@@ -223,14 +236,27 @@ struct Renderer::Impl {
         std::string key = look.textureFolder;
         for (std::size_t id = 1; id <= table.size(); ++id) key += '\n' + table.at(MaterialId(id)).texture;
         VkDescriptorImageInfo imageInfo{};
-        if (!textures || key != textureKey) {
-            MaterialTextureSet set = loadMaterialTextures(table, look.textureFolder);
-            textures = std::make_unique<TextureArray>(context, set);
-            textureKey = key;
-            textureLayers = std::move(set.layerOfMaterial);
-            textureErrors = std::move(set.errors);
-            imageInfo = {textures->sampler(), textures->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-            write(2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER).pImageInfo = &imageInfo;
+        if (!textures || key != textureKey || !texturesFinal) {
+            if (!pendingTextures.valid() || pendingKey != key) {
+                pendingKey = key;
+                pendingTextures = std::async(std::launch::async, [table, folder = look.textureFolder] { return loadMaterialTextures(table, folder); });
+            }
+            std::optional<MaterialTextureSet> set;
+            if (loading == PictureLoading::Wait || picturesReady()) {
+                set = pendingTextures.get();
+                textureKey = key;
+                texturesFinal = true;
+            } else if (!textures) {
+                set = MaterialTextureSet{}; // the procedural patterns until the pictures come
+                texturesFinal = false;
+            }
+            if (set) {
+                textures = std::make_unique<TextureArray>(context, *set);
+                textureLayers = std::move(set->layerOfMaterial);
+                textureErrors = std::move(set->errors);
+                imageInfo = {textures->sampler(), textures->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+                write(2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER).pImageInfo = &imageInfo;
+            }
         }
         if (!writes.empty()) vkUpdateDescriptorSets(context.device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
         float* out = reinterpret_cast<float*>(materialBuffer->data());
@@ -477,10 +503,12 @@ Renderer::Renderer(VulkanContext& context, const RendererOptions& options)
 
 Renderer::~Renderer() = default;
 
-std::vector<std::string> Renderer::setMaterials(const MaterialTable& materials, const MaterialLook& look)
+std::vector<std::string> Renderer::setMaterials(const MaterialTable& materials, const MaterialLook& look, PictureLoading loading)
 {
-    return impl_->setMaterials(materials, look);
+    return impl_->setMaterials(materials, look, loading);
 }
+
+bool Renderer::picturesReady() const { return impl_->picturesReady(); }
 
 void Renderer::setChunk(ChunkId id, const Mesh& mesh, int level, const std::vector<uint8_t>* occlusion)
 {

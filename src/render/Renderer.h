@@ -44,7 +44,15 @@ public:
 
     /// Colours, toughness, texture patterns and pictures of the materials the meshes name. Returns one
     /// message per texture that could not be read (those materials are drawn with the procedural pattern).
-    std::vector<std::string> setMaterials(const MaterialTable& materials, const MaterialLook& look = {});
+    /// Pictures are read and scaled on a worker: with PictureLoading::Wait (pictures of a file) this
+    /// waits for them; with Background (a window's frame) the materials are drawn with their procedural
+    /// patterns until picturesReady(), when calling setMaterials again installs them and returns their
+    /// messages.
+    enum class PictureLoading { Wait, Background };
+    std::vector<std::string> setMaterials(const MaterialTable& materials, const MaterialLook& look = {},
+                                          PictureLoading loading = PictureLoading::Wait);
+    /// Whether pictures asked for with PictureLoading::Background are read and wait to be installed.
+    bool picturesReady() const;
     /// Queues `mesh` as chunk `id` (a new chunk, or a new version of one); uploaded by the next frame.
     /// `level` is what the lod view shows; `occlusion` (optional, one per vertex, 0 = fully occluded,
     /// 255 = open) darkens creases in the shaded view.

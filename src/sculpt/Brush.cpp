@@ -1,6 +1,7 @@
 #include "sculpt/Brush.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <cstdint>
@@ -357,6 +358,16 @@ double SdfField::surfaceAreaBound() const
 
 Vec3d SweptBrush::gradient(const Vec3d& world, double step) const
 {
+    if (capsuleRadius_ > 0.0 && path_.size() > 1) {
+        // A swept sphere's gradient points away from the nearest point of its path: one search, not six.
+        const PieceGrid& g = grid();
+        const Near near = piecesNear(g, world);
+        if (near.ids) {
+            Vec3d nearest;
+            const double length = std::sqrt(nearestOnPieces(g, *near.ids, world, nearest));
+            if (length - capsuleRadius_ < near.farther && length > 0.0 && std::isfinite(length)) return (world - nearest) / length;
+        }
+    }
     return SdfField::gradient(world, capsuleRadius_ > 0.0 ? step : std::max(step, 1e-3 * reach_));
 }
 
@@ -493,51 +504,115 @@ const SweptBrush::PieceGrid& SweptBrush::grid() const
             }
             for (int64_t i = lo[0]; i <= hi[0]; ++i)
                 for (int64_t j = lo[1]; j <= hi[1]; ++j)
-                    for (int64_t k = lo[2]; k <= hi[2]; ++k) g.cells[cellHash(i, j, k)].push_back(id);
+                    for (int64_t k = lo[2]; k <= hi[2]; ++k) {
+                        g.cells[{i, j, k}].pieces.push_back(id);
+                    }
         }
     });
     return *grid_;
 }
 
-uint64_t SweptBrush::cellHash(int64_t i, int64_t j, int64_t k) const
+std::size_t SweptBrush::CellHash::operator()(const std::array<int64_t, 3>& c) const
 {
-    // Cells collide only rarely, and a collision just adds pieces to look at.
-    return uint64_t(i) * 0x9E3779B97F4A7C15ull ^ uint64_t(j) * 0xC2B2AE3D27D4EB4Full ^ uint64_t(k) * 0x165667B19E3779F9ull;
-}
-
-uint64_t SweptBrush::cellHash(const Vec3d& p) const
-{
-    return cellHash(int64_t(std::floor(p.x() / cell_)), int64_t(std::floor(p.y() / cell_)), int64_t(std::floor(p.z() / cell_)));
+    // Each coordinate mixed in turn (splitmix64's finalizer): cells a few apart, with either sign, spread.
+    uint64_t h = 0x9E3779B97F4A7C15ull;
+    for (int64_t v : c) {
+        h ^= uint64_t(v) + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
+        h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ull;
+        h = (h ^ (h >> 27)) * 0x94D049BB133111EBull;
+        h ^= h >> 31;
+    }
+    return std::size_t(h);
 }
 
 double SweptBrush::distance(const Vec3d& x) const
 {
     if (path_.size() == 1) return brush_->distanceAt(x, path_.front());
     const PieceGrid& g = grid();
-    const auto found = g.cells.find(cellHash(x));
-    double best = 0.5 * cell_; // every piece not listed here lies farther away
-    if (found == g.cells.end()) return best;
+    const Near near = piecesNear(g, x);
+    double best = near.farther; // every piece not listed lies farther away
+    if (!near.ids) return best;
     if (capsuleRadius_ > 0.0) {
-        // A swept sphere: the nearest segment by squared distance, one square root at the end (a dense
-        // stroke lists hundreds of pieces in a cell; the root per piece was most of its cost).
-        // Consecutive pieces of one path segment listed together are one longer segment (a cell holds a
-        // run of several): one test for the run.
-        double nearestSq = std::numeric_limits<double>::infinity();
-        const std::vector<uint32_t>& ids = found->second;
-        for (std::size_t k = 0; k < ids.size();) {
-            const Piece& first = g.pieces[ids[k]];
-            std::size_t last = k;
-            while (last + 1 < ids.size() && ids[last + 1] == ids[last] + 1 && g.pieces[ids[last + 1]].segment == first.segment) ++last;
-            const Piece& end = g.pieces[ids[last]];
-            const double length = end.along + end.length - first.along;
-            const double along = std::clamp((x - first.start).dot(first.direction), 0.0, length);
-            nearestSq = std::min(nearestSq, (x - (first.start + first.direction * along)).lengthSqr());
-            k = last + 1;
-        }
-        return std::min(best, std::sqrt(nearestSq) - capsuleRadius_);
+        Vec3d nearest;
+        return std::min(best, std::sqrt(nearestOnPieces(g, *near.ids, x, nearest)) - capsuleRadius_);
     }
-    for (uint32_t id : found->second) best = std::min(best, pieceDistance(g.pieces[id], x, best));
+    for (uint32_t id : *near.ids) best = std::min(best, pieceDistance(g.pieces[id], x, best));
     return best;
+}
+
+double SweptBrush::nearestOnPieces(const PieceGrid& g, const std::vector<uint32_t>& ids, const Vec3d& x, Vec3d& nearest) const
+{
+    // By squared distance, one square root at the end (a dense stroke lists hundreds of pieces in a
+    // cell; the root per piece was most of its cost). Consecutive pieces of one path segment listed
+    // together are one longer segment (a cell holds a run of several): one test for the run.
+    double nearestSq = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < ids.size();) {
+        const Piece& first = g.pieces[ids[k]];
+        std::size_t last = k;
+        while (last + 1 < ids.size() && ids[last + 1] == ids[last] + 1 && g.pieces[ids[last + 1]].segment == first.segment) ++last;
+        const Piece& end = g.pieces[ids[last]];
+        const double length = end.along + end.length - first.along;
+        const double along = std::clamp((x - first.start).dot(first.direction), 0.0, length);
+        const Vec3d point = first.start + first.direction * along;
+        const double sq = (x - point).lengthSqr();
+        if (sq < nearestSq) nearestSq = sq, nearest = point;
+        k = last + 1;
+    }
+    return nearestSq;
+}
+
+uint64_t SweptBrush::nextGridId()
+{
+    static std::atomic<uint64_t> next{1};
+    return next.fetch_add(1, std::memory_order_relaxed);
+}
+
+SweptBrush::Near SweptBrush::piecesNear(const PieceGrid& g, const Vec3d& x) const
+{
+    struct Remembered {
+        uint64_t grid = 0;
+        Vec3d lo, hi; // the cell or sub-cell looked up last
+        Near near;
+    };
+    thread_local Remembered last;
+    if (last.grid == g.id && x.x() >= last.lo.x() && x.y() >= last.lo.y() && x.z() >= last.lo.z() && x.x() < last.hi.x() &&
+        x.y() < last.hi.y() && x.z() < last.hi.z())
+        return last.near;
+    const std::array<int64_t, 3> at{int64_t(std::floor(x.x() / cell_)), int64_t(std::floor(x.y() / cell_)), int64_t(std::floor(x.z() / cell_))};
+    const Vec3d origin = Vec3d(double(at[0]), double(at[1]), double(at[2])) * cell_;
+    last.grid = g.id;
+    last.lo = origin;
+    last.hi = origin + Vec3d(cell_);
+    const auto found = g.cells.find(at);
+    if (found == g.cells.end()) return last.near = {nullptr, 0.5 * cell_};
+    const Cell& cell = found->second;
+    if (cell.pieces.size() <= kDenseCell) return last.near = {&cell.pieces, 0.5 * cell_};
+    const double sub = cell_ / kSubCells;
+    std::call_once(cell.subCellsBuilt, [&] {
+        // A piece is listed in a sub-cell when it passes within the reach and half a sub-cell of some point
+        // of it: within that and the half-diagonal of the sub-cell's centre (its segment, not its box, so
+        // a long diagonal piece is listed along its line only).
+        cell.subCells.resize(std::size_t(kSubCells * kSubCells * kSubCells));
+        const double within = reach_ + 0.5 * sub + 0.5 * std::sqrt(3.0) * sub;
+        for (int k = 0; k < kSubCells; ++k)
+            for (int j = 0; j < kSubCells; ++j)
+                for (int i = 0; i < kSubCells; ++i) {
+                    const Vec3d centre = origin + Vec3d(i + 0.5, j + 0.5, k + 0.5) * sub;
+                    std::vector<uint32_t>& listed = cell.subCells[std::size_t((k * kSubCells + j) * kSubCells + i)];
+                    for (uint32_t id : cell.pieces) {
+                        const Piece& piece = g.pieces[id];
+                        const double along = std::clamp((centre - piece.start).dot(piece.direction), 0.0, piece.length);
+                        if ((centre - (piece.start + piece.direction * along)).lengthSqr() <= within * within) listed.push_back(id);
+                    }
+                }
+    });
+    int index[3];
+    for (int a = 0; a < 3; ++a) {
+        index[a] = std::clamp(int(std::floor((x[a] - origin[a]) / sub)), 0, kSubCells - 1);
+        last.lo[a] = origin[a] + index[a] * sub;
+        last.hi[a] = index[a] == kSubCells - 1 ? origin[a] + cell_ : origin[a] + (index[a] + 1) * sub;
+    }
+    return last.near = {&cell.subCells[std::size_t((index[2] * kSubCells + index[1]) * kSubCells + index[0])], 0.5 * sub};
 }
 
 double SweptBrush::pieceDistance(const Piece& piece, const Vec3d& x, double best) const

@@ -209,8 +209,8 @@ public:
     WorldBounds bounds() const override;
     double innerRadius() const override { return brush_->innerRadius(); }
     double lipschitz() const override { return brush_->lipschitz(); }
-    /// Finite differences no finer than the window search's precision (a thousandth of the reach), except
-    /// for a swept sphere, whose distance is exact.
+    /// A swept sphere's exact gradient (away from the nearest point of the path); for other brushes
+    /// finite differences no finer than the window search's precision (a thousandth of the reach).
     Vec3d gradient(const Vec3d& world, double step) const override;
     /// The tube around the path the brush's reach sweeps, or the bounds' box where that is smaller.
     double surfaceAreaBound() const override;
@@ -228,15 +228,39 @@ private:
         uint32_t segment; // of the path: consecutive pieces of one segment continue each other
         double along;     // where the piece starts on its segment
     };
+    /// The pieces within reach (and half a cell) of one cell. A cell a tangled stroke crosses many times
+    /// is split into sub-cells of a third of its width, each listing the pieces within reach (and half a
+    /// sub-cell) of it: a point there looks at the pieces near it, not at the hundreds the cell holds.
+    struct Cell {
+        std::vector<uint32_t> pieces;
+        mutable std::once_flag subCellsBuilt; // built on first use, by whichever thread asks first
+        mutable std::vector<std::vector<uint32_t>> subCells; // kSubCells^3, x fastest
+    };
+    struct CellHash {
+        std::size_t operator()(const std::array<int64_t, 3>& c) const;
+    };
+    static constexpr int kSubCells = 3;
+    static constexpr std::size_t kDenseCell = 16; // pieces above which a cell is split
     struct PieceGrid {
+        uint64_t id = nextGridId(); // names it in the threads' lookup caches (an address may be reused)
         std::once_flag built;
         std::vector<Piece> pieces;
-        std::unordered_map<uint64_t, std::vector<uint32_t>> cells; // cell hash -> pieces within reach of it
+        std::unordered_map<std::array<int64_t, 3>, Cell, CellHash> cells; // cell -> pieces within reach of it
     };
     double pieceDistance(const Piece& piece, const Vec3d& x, double best) const;
+    /// A swept sphere: the squared distance from x to the nearest of the pieces `ids` (runs of one
+    /// segment taken as one), and that nearest point.
+    double nearestOnPieces(const PieceGrid& g, const std::vector<uint32_t>& ids, const Vec3d& x, Vec3d& nearest) const;
     const PieceGrid& grid() const;
-    uint64_t cellHash(const Vec3d& p) const;
-    uint64_t cellHash(int64_t i, int64_t j, int64_t k) const;
+    static uint64_t nextGridId();
+    /// The pieces a point must look at (none: an empty cell), and the distance beyond which the ones left
+    /// out lie (half the width of the cell or sub-cell listing them). Each thread remembers the last
+    /// cell or sub-cell it looked up: the kernel's points come in blocks, mostly in the same one.
+    struct Near {
+        const std::vector<uint32_t>* ids = nullptr;
+        double farther = 0.0;
+    };
+    Near piecesNear(const PieceGrid& g, const Vec3d& x) const;
 
     std::shared_ptr<const PlaceableField> brush_;
     std::vector<Vec3d> path_;
