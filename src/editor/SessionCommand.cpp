@@ -118,14 +118,19 @@ Command parseCommand(const nlohmann::json& j, const std::string& where)
             known = true;
         }
     if (!known) fail(where + ".command", "unknown command (stroke_begin, stroke_move, stroke_end, brush, undo, redo, save, camera, material or op)");
-    std::vector<std::string> keys{"command", "frame", "time"};
+    // The keys a command may have (no allocation: a session may hold hundreds of thousands of commands).
+    std::array<const char*, 8> keys{"command", "frame", "time"};
+    std::size_t keyCount = 3;
+    const auto allow = [&](std::initializer_list<const char*> more) {
+        for (const char* k : more) keys[keyCount++] = k;
+    };
     switch (c.kind) {
     case Command::Kind::StrokeBegin:
     case Command::Kind::StrokeMove:
         c.point = vec3(required(j, "point", where), where + ".point");
         if (j.contains("pressure")) c.pressure = finite(j.at("pressure"), where + ".pressure");
         if (!(c.pressure > 0.0 && c.pressure <= 1.0)) fail(where + ".pressure", "must be in (0, 1]");
-        keys.insert(keys.end(), {"point", "pressure"});
+        allow({"point", "pressure"});
         break;
     case Command::Kind::SetBrush:
         try {
@@ -133,14 +138,14 @@ Command parseCommand(const nlohmann::json& j, const std::string& where)
         } catch (const std::invalid_argument& e) {
             fail(where, e.what());
         }
-        keys.push_back("brush");
+        allow({"brush"});
         break;
     case Command::Kind::Save:
         if (j.contains("path")) {
             if (!j.at("path").is_string() || j.at("path").get<std::string>().empty()) fail(where + ".path", "must be a file name");
             c.path = j.at("path").get<std::string>();
         }
-        keys.push_back("path");
+        allow({"path"});
         break;
     case Command::Kind::SetCamera:
         c.camera.eye = vec3(required(j, "eye", where), where + ".eye");
@@ -150,24 +155,24 @@ Command parseCommand(const nlohmann::json& j, const std::string& where)
         if (j.contains("fov")) c.camera.fovYDegrees = finite(j.at("fov"), where + ".fov");
         if (!(c.camera.fovYDegrees > 1.0 && c.camera.fovYDegrees < 179.0)) fail(where + ".fov", "must be between 1 and 179 degrees");
         if (c.camera.eye == c.camera.target) fail(where, "the eye and the target must differ");
-        keys.insert(keys.end(), {"eye", "target", "up", "fov"});
+        allow({"eye", "target", "up", "fov"});
         break;
     case Command::Kind::DefineMaterial:
         c.material = required(j, "material", where);
         if (!c.material.is_object()) fail(where + ".material", "must be a material object");
         checkAsScript("materials", c.material, where + ".material");
-        keys.push_back("material");
+        allow({"material"});
         break;
     case Command::Kind::ApplyOp:
         c.op = required(j, "op", where);
         if (!c.op.is_object()) fail(where + ".op", "must be a stroke-script op");
         checkAsScript("ops", c.op, where + ".op");
-        keys.push_back("op");
+        allow({"op"});
         break;
     default: break;
     }
     for (const auto& item : j.items())
-        if (std::find(keys.begin(), keys.end(), item.key()) == keys.end()) fail(where + "." + printableText(item.key(), 80), "unknown key");
+        if (std::none_of(keys.begin(), keys.begin() + std::ptrdiff_t(keyCount), [&](const char* k) { return item.key() == k; })) fail(where + "." + printableText(item.key(), 80), "unknown key");
     return c;
 }
 

@@ -80,7 +80,7 @@ void padPngPalette(std::string& png)
     }
 }
 
-Image readImage(const std::string& path)
+DecodedPicture decodePicture(const std::string& path)
 {
     // A FIFO would block forever and a device would never end: only regular files are read.
     if (const auto why = unreadableAsFile(path, kMaxPictureFileBytes)) throw std::runtime_error("cannot read the picture: " + *why);
@@ -90,18 +90,26 @@ Image readImage(const std::string& path)
     padPngPalette(bytes);
     const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
     const int length = int(std::min<std::size_t>(bytes.size(), std::size_t(INT32_MAX)));
-    int w = 0, h = 0, channels = 0;
+    DecodedPicture picture;
+    int channels = 0;
     // Sizes first: a forged header must not make stb allocate gigabytes.
-    if (stbi_info_from_memory(data, length, &w, &h, &channels) && (w > kMaxPictureSide || h > kMaxPictureSide))
-        throw std::runtime_error("the picture " + path + " is " + std::to_string(w) + "x" + std::to_string(h) +
+    if (stbi_info_from_memory(data, length, &picture.width, &picture.height, &channels) &&
+        (picture.width > kMaxPictureSide || picture.height > kMaxPictureSide))
+        throw std::runtime_error("the picture " + path + " is " + std::to_string(picture.width) + "x" + std::to_string(picture.height) +
                                  ": larger than " + std::to_string(kMaxPictureSide) + " pixels a side");
-    std::unique_ptr<stbi_uc, void (*)(void*)> pixels(stbi_load_from_memory(data, length, &w, &h, &channels, 4), stbi_image_free);
-    if (!pixels) throw std::runtime_error("cannot read the picture " + path + ": " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown error"));
-    bytes = std::string(); // the file's bytes go before the pixels are copied
+    picture.rgba = {stbi_load_from_memory(data, length, &picture.width, &picture.height, &channels, 4), stbi_image_free};
+    if (!picture.rgba)
+        throw std::runtime_error("cannot read the picture " + path + ": " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown error"));
+    return picture;
+}
+
+Image readImage(const std::string& path)
+{
+    const DecodedPicture picture = decodePicture(path);
     Image image;
-    image.width = w;
-    image.height = h;
-    image.rgba.assign(pixels.get(), pixels.get() + std::size_t(w) * std::size_t(h) * 4);
+    image.width = picture.width;
+    image.height = picture.height;
+    image.rgba.assign(picture.rgba.get(), picture.rgba.get() + std::size_t(picture.width) * std::size_t(picture.height) * 4);
     return image;
 }
 

@@ -3,6 +3,8 @@
 
 #include "render/OffscreenTarget.h"
 
+#include <cstdint>
+#include <memory>
 #include <string>
 
 namespace vdbclay::render {
@@ -11,6 +13,15 @@ namespace vdbclay::render {
 /// Throws std::runtime_error naming the path when it cannot.
 void writePng(const Image& image, const std::string& path);
 constexpr int kMaxPictureSide = 16384;
+/// A picture as stb decoded it (RGBA, rows from the top), held where stb put it: a 16384^2 picture is
+/// a gigabyte, not to be copied.
+struct DecodedPicture {
+    int width = 0, height = 0;
+    std::unique_ptr<uint8_t, void (*)(void*)> rgba{nullptr, [](void*) {}};
+};
+/// What readImage decodes, with its checks, without the copy into an Image.
+DecodedPicture decodePicture(const std::string& path);
+
 /// Reads a PNG (or any picture stb reads) as RGBA; throws std::runtime_error when it cannot, when it is
 /// not a regular file, or when it is larger than kMaxPictureSide a side. A palette PNG's indices past its
 /// palette read opaque black (padPngPalette).

@@ -44,14 +44,14 @@ const SrgbTables& srgbTables()
 
 /// Half the size (rounded down, at least 1): each pixel the mean of a 2x2 box, colour in linear light,
 /// alpha as it is. An odd last row or column is left out (the next halving loses less than a pixel).
-Image halved(const Image& image)
+Image halved(const uint8_t* rgba, int width, int height)
 {
     const SrgbTables& t = srgbTables();
     Image out;
-    out.width = std::max(1, image.width / 2);
-    out.height = std::max(1, image.height / 2);
+    out.width = std::max(1, width / 2);
+    out.height = std::max(1, height / 2);
     out.rgba.resize(std::size_t(out.width) * std::size_t(out.height) * 4);
-    const auto texel = [&](int x, int y) { return &image.rgba[(std::size_t(std::min(y, image.height - 1)) * std::size_t(image.width) + std::size_t(std::min(x, image.width - 1))) * 4]; };
+    const auto texel = [&](int x, int y) { return &rgba[(std::size_t(std::min(y, height - 1)) * std::size_t(width) + std::size_t(std::min(x, width - 1))) * 4]; };
     for (int y = 0; y < out.height; ++y)
         for (int x = 0; x < out.width; ++x) {
             const uint8_t* p[4] = {texel(2 * x, 2 * y), texel(2 * x + 1, 2 * y), texel(2 * x, 2 * y + 1), texel(2 * x + 1, 2 * y + 1)};
@@ -65,21 +65,29 @@ Image halved(const Image& image)
     return out;
 }
 
-/// `image` scaled to size x size, then halved down to one pixel, all in linear light (sRGB pictures
+/// A picture scaled to size x size, then halved down to one pixel, all in linear light (sRGB pictures
 /// average correctly). A large picture is first halved in 2x2 boxes while it is at least twice the size,
 /// so the filter only ever reads a picture at most twice the layer's size: a 16384^2 picture costs about
 /// a third more than its own pixels, not a full-size filter per level.
-std::vector<Image> mipChain(Image image, int size)
+std::vector<Image> mipChain(const DecodedPicture& picture, int size)
 {
-    while (image.width >= 2 * size && image.height >= 2 * size) image = halved(image);
+    Image image; // the picture halved while it is at least twice the size (the first halving reads stb's pixels)
+    const uint8_t* pixels = picture.rgba.get();
+    int width = picture.width, height = picture.height;
+    while (width >= 2 * size && height >= 2 * size) {
+        image = halved(pixels, width, height);
+        pixels = image.rgba.data();
+        width = image.width;
+        height = image.height;
+    }
     std::vector<Image> chain;
     Image level;
     level.width = level.height = size;
     level.rgba.resize(std::size_t(size) * std::size_t(size) * 4);
-    if (!stbir_resize_uint8_srgb(image.rgba.data(), image.width, image.height, 0, level.rgba.data(), size, size, 0, 4, 3, 0))
+    if (!stbir_resize_uint8_srgb(pixels, width, height, 0, level.rgba.data(), size, size, 0, 4, 3, 0))
         throw std::runtime_error("cannot scale the picture");
     chain.push_back(std::move(level));
-    while (chain.back().width > 1) chain.push_back(halved(chain.back()));
+    while (chain.back().width > 1) chain.push_back(halved(chain.back().rgba.data(), chain.back().width, chain.back().height));
     return chain;
 }
 
@@ -101,7 +109,7 @@ MaterialTextureSet loadMaterialTextures(const MaterialTable& table, const std::s
         if (found == layerOfPath.end()) {
             uint32_t layer = 0;
             try {
-                set.layers.push_back(mipChain(readImage(path), layerSize));
+                set.layers.push_back(mipChain(decodePicture(path), layerSize));
                 layer = uint32_t(set.layers.size());
             } catch (const std::exception& e) {
                 set.errors.push_back("material '" + printableText(m.name, 80) + "': texture " + printableText(path, 200) +
