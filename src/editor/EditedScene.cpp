@@ -46,15 +46,18 @@ std::string signatureOf(const std::string& path)
     return text;
 }
 
-/// Whether a working store's recorded signature is that of the .vdb now. Stores built before the hash
-/// recorded size and modification time; they are still recognised by those.
-bool sameSource(const std::optional<std::string>& recorded, const std::string& vdbPath, const std::string& signature)
+/// Whether a working store's recorded signature is that of the .vdb now: the bytes are hashed only when
+/// the size matches. Stores built before the hash recorded size and modification time; they are still
+/// recognised by those.
+bool sameSource(const std::optional<std::string>& recorded, const std::string& vdbPath)
 {
-    if (!recorded) return false;
-    if (recorded->rfind("xxh3:", 0) == 0) return *recorded == signature;
     namespace fs = std::filesystem;
+    if (!recorded) return false;
+    const std::string size = std::to_string(fs::file_size(vdbPath));
+    if (recorded->rfind("xxh3:", 0) == 0)
+        return recorded->compare(5, size.size() + 1, size + ":") == 0 && *recorded == signatureOf(vdbPath);
     const auto time = fs::last_write_time(vdbPath).time_since_epoch().count();
-    return *recorded == std::to_string(fs::file_size(vdbPath)) + ":" + std::to_string(time);
+    return *recorded == size + ":" + std::to_string(time);
 }
 
 uint64_t savedEdits(const BrickStore& store)
@@ -94,14 +97,13 @@ PreparedScene prepareScene(const std::string& scenePath, bool discardRecovery, c
     out.throughWorkingStore = true;
     out.storePath = workingStorePath(scenePath);
     if (!fs::exists(scenePath)) throw std::runtime_error("cannot open '" + scenePath + "': no such file");
-    const std::string signature = signatureOf(scenePath);
     if (fs::exists(out.storePath)) {
         bool reuse = false;
         {
             SceneStore store = SceneStore::open(out.storePath, StoreAccess::ReadOnly);
             const uint64_t edits = StreamingScene::committedEdits(store);
             const uint64_t unsaved = edits - std::min(edits, savedEdits(store.bricks()));
-            reuse = sameSource(store.bricks().meta(kSourceKey), scenePath, signature);
+            reuse = sameSource(store.bricks().meta(kSourceKey), scenePath);
             if (!reuse && unsaved > 0 && !discardRecovery)
                 throw std::runtime_error("'" + out.storePath + "' holds " + std::to_string(unsaved) + " edits autosaved from an earlier version of '" +
                                          scenePath + "', which was changed since: open the working store itself to keep them, or run again with "

@@ -177,6 +177,7 @@ std::optional<TriangleSoup> readPlyTriangleStrips(const std::string& path)
             if (axis[0] < 0 || axis[1] < 0 || axis[2] < 0) values.fail("its vertices have no x, y and z");
             sawVertices = true;
         }
+        if (e.properties.empty()) continue; // nothing to read, however many it claims
         for (uint64_t i = 0; i < e.count; ++i) {
             std::array<double, 3> position{};
             for (std::size_t k = 0; k < e.properties.size(); ++k) {
@@ -191,10 +192,11 @@ std::optional<TriangleSoup> readPlyTriangleStrips(const std::string& path)
                 if (!(n >= 0.0 && n <= 1e9)) values.fail("a list of " + std::to_string(n) + " entries");
                 const bool indices = (face || strip) && (p.name == "vertex_indices" || p.name == "vertex_index");
                 std::vector<int64_t> list;
-                if (indices) list.reserve(std::size_t(n));
                 for (uint64_t j = 0; j < uint64_t(n); ++j) {
                     const double v = values.next(p.bytes, p.isFloat, p.isSigned);
-                    if (indices) list.push_back(int64_t(v));
+                    if (!indices) continue;
+                    if (!(std::fabs(v) <= 4e9)) values.fail("a vertex index of " + std::to_string(v));
+                    list.push_back(int64_t(v));
                 }
                 if (!indices) continue;
                 if (face) // a polygon: a fan from its first corner
