@@ -25,7 +25,7 @@ render::Camera initialCamera(const StreamingScene& scene)
     if (const auto bounds = scene.store().bounds())
         for (std::size_t a = 0; a < 3; ++a) {
             lo[a] = double(bounds->first[a]) * h;
-            hi[a] = double(bounds->second[a]) * h;
+            hi[a] = double(bounds->second[a] + 1) * h; // the far side of the last voxel: a one-voxel scene is framed whole
         }
     return render::framingCamera(lo, hi, 16.0 / 9.0);
 }
