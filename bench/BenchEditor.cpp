@@ -58,11 +58,12 @@ Command brushCommand(const std::string& mode, double radius, const nlohmann::jso
 {
     Command c;
     c.kind = Command::Kind::SetBrush;
-    c.brush.mode = mode;
-    c.brush.radius = radius;
-    c.brush.strength = 0.6;
-    c.brush.distance = 4.0;
-    c.brush.symmetry = symmetry;
+    c.brush.emplace();
+    c.brush->mode = mode;
+    c.brush->radius = radius;
+    c.brush->strength = 0.6;
+    c.brush->distance = 4.0;
+    c.brush->symmetry = symmetry;
     return c;
 }
 

@@ -73,8 +73,9 @@ void EditingSession::apply(const Command& command)
     case Command::Kind::StrokeMove: moveStroke(command.point, command.pressure); break;
     case Command::Kind::StrokeEnd: endStroke(); break;
     case Command::Kind::SetBrush:
-        checkBrushSettings(command.brush);
-        brush_ = command.brush;
+        if (!command.brush) throw std::invalid_argument("a brush command carries no brush settings");
+        checkBrushSettings(*command.brush);
+        brush_ = *command.brush;
         break;
     case Command::Kind::Undo: undo(); break;
     case Command::Kind::Redo: redo(); break;

@@ -89,7 +89,7 @@ nlohmann::json commandJson(const Command& c)
         j["point"] = c.point;
         j["pressure"] = c.pressure;
         break;
-    case Command::Kind::SetBrush: j["brush"] = brushSettingsJson(c.brush); break;
+    case Command::Kind::SetBrush: j["brush"] = brushSettingsJson(c.brush.value_or(BrushSettings{})); break;
     case Command::Kind::Save:
         if (!c.path.empty()) j["path"] = c.path;
         break;

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include <array>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -37,7 +38,7 @@ struct Command {
     Kind kind = Kind::StrokeEnd;
     std::array<double, 3> point{0, 0, 0};
     double pressure = 1.0;
-    BrushSettings brush;
+    std::optional<BrushSettings> brush; // SetBrush only: a session holds many commands, few of them brushes
     render::Camera camera;
     std::string path;
     nlohmann::json material;
