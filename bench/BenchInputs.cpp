@@ -85,16 +85,19 @@ int benchInputs(bool json, bool quick)
     }
     empties += "]}";
     undos += "]}";
-    for (const auto& [name, text] : {std::pair{"session of " + std::to_string(objects) + " {} (refused)", &empties},
-                                     std::pair{"session of " + std::to_string(objects) + " undos", &undos}}) {
-        Row row{name};
+    for (const std::pair<std::string, const std::string*>& session :
+         {std::pair<std::string, const std::string*>{"session of " + std::to_string(objects) + " {} (refused)", &empties},
+          std::pair<std::string, const std::string*>{"session of " + std::to_string(objects) + " undos", &undos}}) {
+        const std::string& text = *session.second;
+        Row row;
+        row.what = session.first;
         row.oursMs = timeMs([&] {
             try {
-                parseSessionRecord(*text, "bench");
+                parseSessionRecord(text, "bench");
             } catch (const SessionError&) {
             }
         });
-        row.baselineMs = timeMs([&] { (void)nlohmann::json::parse(*text); });
+        row.baselineMs = timeMs([&] { (void)nlohmann::json::parse(text); });
         row.baseline = "nlohmann::json::parse alone";
         rows.push_back(row);
     }
@@ -127,7 +130,8 @@ int benchInputs(bool json, bool quick)
     m.name = "pictured";
     m.texture = "big.png";
     table.define(m);
-    Row texture{"material picture " + std::to_string(side) + "^2 to a 256^2 layer and mipmaps (read included)"};
+    Row texture;
+    texture.what = "material picture " + std::to_string(side) + "^2 to a 256^2 layer and mipmaps (read included)";
     texture.oursMs = timeMs([&] { (void)render::loadMaterialTextures(table, dir.path().string(), 256); });
     const render::Image read = render::readImage((dir.path() / "big.png").string());
     texture.baselineMs = timeMs([&] {

@@ -809,7 +809,7 @@ TEST_CASE("render: a flight's pictures mesh apart from the scene: its resident b
     requireNoValidationMessages(*context);
 }
 
-TEST_CASE("edit: a headless screenshot draws a material defined in the session with its picture, saved or not", "[render][editor][cli]")
+TEST_CASE("render: a headless edit's screenshot draws a material defined in the session with its picture, saved or not", "[render][editor][cli]")
 {
     TempDir dir;
     Image red;
