@@ -74,6 +74,42 @@ struct Victims {
     }
 };
 
+/// A command that writes, with OUT where its output goes, the files it reads (through links too), and the
+/// files of its own kind it may replace.
+struct Writer {
+    std::string command;
+    std::vector<std::string> inputs, replaceable;
+};
+
+/// Files of every kind in Victims, some under other kinds' extensions.
+const std::vector<std::string> kVictimFiles{"s.vdb",           "c.vdbclay",        "script.json",      "path.json",
+                                            "m.obj",           "m.ply",            "m.glb",            "foreign.vdb",
+                                            "ls.vdb",          "f.csv",            "f.png",            "store-named.vdb",
+                                            "script-named.obj", "script-named.csv", "ply-named.glb",   "csv-named.json",
+                                            "volume-named.png", "notes.obj",        "session.json",    "s.vdb.edit.vdbclay"};
+
+/// Each writer aimed at each of its inputs and at every file it may not replace: refused as a wrong
+/// command line, and nothing in the folder changes.
+void checkRefusedEverywhere(const Victims& v, const std::vector<Writer>& writers)
+{
+    const auto before = snapshot(v.dir);
+    for (const Writer& w : writers) {
+        std::vector<std::string> targets = w.inputs;
+        for (const std::string& f : kVictimFiles)
+            if (std::find(w.replaceable.begin(), w.replaceable.end(), f) == w.replaceable.end()) targets.push_back(f);
+        for (const std::string& target : targets) {
+            std::string command = w.command;
+            command.replace(command.find("OUT"), 3, target);
+            INFO(command);
+            const CommandResult r = runCli(v.dir, command);
+            INFO("stderr: " << r.err);
+            CHECK(r.exitCode == 2);
+            CHECK(r.err.find("vdbclay: error: ") != std::string::npos);
+            CHECK(snapshot(v.dir) == before);
+        }
+    }
+}
+
 } // namespace
 
 TEST_CASE("outputs: the content of an existing file is told from its first bytes", "[outputs]")
@@ -105,13 +141,7 @@ TEST_CASE("cli: no command writes over its inputs or over a file of another kind
 {
     if (std::string(kCli).empty()) return;
     Victims v;
-    // Each command that writes, with OUT where its output goes, the files it reads (through links too),
-    // and the files of its own kind it may replace.
-    struct Writer {
-        std::string command;
-        std::vector<std::string> inputs, replaceable;
-    };
-    const std::vector<Writer> writers{
+    checkRefusedEverywhere(v, {
         {"new OUT --shape sphere --size 3", {}, {"s.vdb"}},
         {"sculpt s.vdb script.json -o OUT", {"script.json"}, {"s.vdb", "c.vdbclay"}}, // in place is allowed
         {"sculpt c.vdbclay script.json -o OUT", {"script.json"}, {"c.vdbclay"}},
@@ -128,36 +158,8 @@ TEST_CASE("cli: no command writes over its inputs or over a file of another kind
         {"synth csg-stack --extent 64 -o OUT", {}, {"c.vdbclay"}},
         {"tool make s.vdb -o OUT", {"s.vdb", "link-to-s.vdb"}, {}},
         {"selftest --scenes 1 --save-failure OUT", {}, {"script.json", "path.json", "session.json"}},
-        // Every output of the editor: never the scene (however spelled), its working store, the session
-        // replayed, nor a file of another kind.
-        {"edit s.vdb --replay session.json --headless -o OUT", {"s.vdb", "link-to-s.vdb", "session.json", "s.vdb.edit.vdbclay"}, {"c.vdbclay"}},
-        {"edit s.vdb --replay session.json --headless --screenshot OUT", {"session.json"}, {"f.png"}},
-        {"edit s.vdb --replay session.json --headless --export-script OUT", {"session.json"}, {"script.json", "path.json"}},
-        {"edit s.vdb --replay session.json --headless --record OUT", {"session.json"}, {"script.json", "path.json"}},
-        {"edit c.vdbclay --replay session.json --headless -o OUT", {"c.vdbclay", "link-to-c.vdbclay", "session.json"}, {"s.vdb"}},
-    };
-    // Files of every kind, some under other kinds' extensions.
-    const std::vector<std::string> files{"s.vdb",           "c.vdbclay",        "script.json",      "path.json",
-                                         "m.obj",           "m.ply",            "m.glb",            "foreign.vdb",
-                                         "ls.vdb",          "f.csv",            "f.png",            "store-named.vdb",
-                                         "script-named.obj", "script-named.csv", "ply-named.glb",   "csv-named.json",
-                                         "volume-named.png", "notes.obj", "session.json", "s.vdb.edit.vdbclay"};
+    });
     const auto before = snapshot(v.dir);
-    for (const Writer& w : writers) {
-        std::vector<std::string> targets = w.inputs;
-        for (const std::string& f : files)
-            if (std::find(w.replaceable.begin(), w.replaceable.end(), f) == w.replaceable.end()) targets.push_back(f);
-        for (const std::string& target : targets) {
-            std::string command = w.command;
-            command.replace(command.find("OUT"), 3, target);
-            INFO(command);
-            const CommandResult r = runCli(v.dir, command);
-            INFO("stderr: " << r.err);
-            CHECK(r.exitCode == 2);
-            CHECK(r.err.find("vdbclay: error: ") != std::string::npos);
-            CHECK(snapshot(v.dir) == before);
-        }
-    }
     // An OBJ's materials file beside it is checked too: notes.obj would replace notes.mtl.
     CHECK(sniffFileContent(v.dir.file("notes.obj")) == FileContent::ObjMesh);
     const CommandResult notes = runCli(v.dir, "mesh s.vdb -o notes.obj");
@@ -176,6 +178,20 @@ TEST_CASE("cli: no command writes over its inputs or over a file of another kind
     CHECK(runCli(v.dir, "mesh s.vdb -o m.ply").exitCode == 0);
     CHECK(runCli(v.dir, "sculpt s.vdb script.json -o s.vdb").exitCode == 0);
     CHECK(runCli(v.dir, "lod inspect c.vdbclay --camera-path path.json --memory-budget 64 --csv f.csv").exitCode == 0);
+}
+
+TEST_CASE("cli: no output of the editor writes over its inputs or over a file of another kind", "[outputs][cli][editor]")
+{
+    if (std::string(kCli).empty()) return;
+    Victims v;
+    // Never the scene (however spelled), its working store, the session replayed, nor a file of another kind.
+    checkRefusedEverywhere(v, {
+        {"edit s.vdb --replay session.json --headless -o OUT", {"s.vdb", "link-to-s.vdb", "session.json", "s.vdb.edit.vdbclay"}, {"c.vdbclay"}},
+        {"edit s.vdb --replay session.json --headless --screenshot OUT", {"session.json"}, {"f.png"}},
+        {"edit s.vdb --replay session.json --headless --export-script OUT", {"session.json"}, {"script.json", "path.json"}},
+        {"edit s.vdb --replay session.json --headless --record OUT", {"session.json"}, {"script.json", "path.json"}},
+        {"edit c.vdbclay --replay session.json --headless -o OUT", {"c.vdbclay", "link-to-c.vdbclay", "session.json"}, {"s.vdb"}},
+    });
 }
 
 TEST_CASE("cli: a command's outputs never name one file, nor make more than their own folder", "[outputs][cli]")
