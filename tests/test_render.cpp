@@ -100,6 +100,18 @@ Volume slab()
     return v;
 }
 
+/// A white material named `name` with `texture` (none when empty) defined in `volume` and painted over
+/// the whole slab; returns the material.
+Material paintSlab(Volume& volume, const std::string& name, const std::string& texture)
+{
+    Material m;
+    m.name = name;
+    m.color = {1.0f, 1.0f, 1.0f, 1.0f};
+    m.texture = texture;
+    apply(volume, CsgMode::Paint, box(Vec3d(50.0, 50.0, 20.0)), at(Vec3d(0.0)), volume.materials().define(m));
+    return m;
+}
+
 void requireNoValidationMessages(const VulkanContext& context)
 {
     INFO("validation messages go to stderr");
@@ -605,12 +617,7 @@ TEST_CASE("render: a material's picture lands where the tri-planar projection pu
 
     auto context = validatedContext();
     Volume volume = slab();
-    Material tiled;
-    tiled.name = "tiled";
-    tiled.color = {1.0f, 1.0f, 1.0f, 1.0f};
-    tiled.texture = "checker.png"; // relative: from the scene's folder
-    const MaterialId id = volume.materials().define(tiled);
-    apply(volume, CsgMode::Paint, box(Vec3d(50.0, 50.0, 20.0)), at(Vec3d(0.0)), id);
+    const Material tiled = paintSlab(volume, "tiled", "checker.png"); // relative: from the scene's folder
     CHECK(MaterialTable::fromJson(volume.materials().toJson()) == volume.materials()); // saved with the scene
 
     Renderer renderer(*context);
@@ -845,11 +852,7 @@ TEST_CASE("render: a window's pictures load on a worker: procedural until ready,
     writePng(red, dir.file("red.png"));
     auto context = validatedContext();
     Volume volume = slab();
-    Material pictured;
-    pictured.name = "pictured";
-    pictured.color = {1.0f, 1.0f, 1.0f, 1.0f};
-    const MaterialId id = volume.materials().define(pictured);
-    apply(volume, CsgMode::Paint, box(Vec3d(50.0, 50.0, 20.0)), at(Vec3d(0.0)), id);
+    Material pictured = paintSlab(volume, "pictured", "");
     Renderer renderer(*context);
     const MaterialLook look = materialLook(1.0, dir.path().string());
     uploadVolume(renderer, volume, cmsOptions(), look); // no picture yet
