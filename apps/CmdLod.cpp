@@ -238,7 +238,7 @@ public:
         view.camera.eye = viewer.position;
         view.camera.target = viewer.target;
         view.camera.fovYDegrees = viewer.fovDegrees;
-        render::fitDepthRange(view.camera, lo_, hi_);
+        render::fitNearPlane(view.camera, lo_, hi_);
         view.target = target_.get();
         renderer_->render({view});
         render::writePng(target_->colour(), pathOf(index, total_));

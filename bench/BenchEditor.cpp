@@ -140,7 +140,6 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
     camera.camera.target = {cx, 20 * voxel, cz};
     camera.camera.fovYDegrees = 60.0;
     camera.camera.nearPlane = 0.5 * voxel;
-    camera.camera.farPlane = 4.0 * extent * voxel;
     session.apply(camera);
     for (int i = 0; i < 200; ++i) { // settle the view
         const FrameReport r = session.frame(0.0, kViewport);
@@ -231,7 +230,7 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
         if (session.stats().bricksChangedLastFrame > 0) {
             if (editWaiting < 0) editWaiting = int64_t(i);
             for (const Command& c : plan[i]) {
-                std::array<double, 3> at = c.point;
+                std::array<double, 3> at = c.point.value_or(std::array<double, 3>{0, 0, 0});
                 if (c.kind == Command::Kind::ApplyOp) at = c.op.at("at").get<std::array<double, 3>>();
                 else if (c.kind != Command::Kind::StrokeBegin && c.kind != Command::Kind::StrokeMove) continue;
                 waitingAt.push_back(at);
@@ -251,7 +250,7 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
             f.toolBricks = session.stats().bricksChangedLastFrame;
         }
         if (!baselineDone && planMode[i] == "add" && plan[i].size() == 2) {
-            const auto [stamp, mesh] = openvdbStampAndRemesh(session.scene(), plan[i][1].point);
+            const auto [stamp, mesh] = openvdbStampAndRemesh(session.scene(), *plan[i][1].point);
             f.openvdbStampMs = stamp;
             f.openvdbMeshMs = mesh;
             baselineDone = true;

@@ -45,14 +45,13 @@ Viewer viewerAt(double x, double z, double height, double lookAhead)
     return v;
 }
 
-render::Camera cameraOf(const Viewer& v, double far)
+render::Camera cameraOf(const Viewer& v)
 {
     render::Camera c;
     c.eye = v.position;
     c.target = v.target;
     c.fovYDegrees = v.fovDegrees;
     c.nearPlane = 0.5;
-    c.farPlane = far;
     return c;
 }
 
@@ -120,7 +119,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     render::StreamedSceneChunks chunks;
     // Fill costs on lavapipe grow with the pixels; the selection is the 1080p view's whatever the target.
     render::OffscreenTarget small(context, 480, 270);
-    const double height = 80.0, lookAhead = 200.0, far = 4.0 * extent;
+    const double height = 80.0, lookAhead = 200.0;
 
     // Complete views at stations across the terrain.
     const int stations = quick ? 2 : 4;
@@ -129,7 +128,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
         const Viewer v = viewerAt(x, z, height, lookAhead);
         settle(scene, v);
         chunks.sync(scene, renderer);
-        const render::FrameStats s = renderer.render({{cameraOf(v, far), &small, {}}});
+        const render::FrameStats s = renderer.render({{cameraOf(v), &small, {}}});
         f.viewTriangles.push_back(double(s.triangles));
         f.maxChunks = std::max(f.maxChunks, s.chunksDrawn);
         f.maxGpuBytes = std::max(f.maxGpuBytes, s.gpuMemoryBytes);
@@ -140,7 +139,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
         }
         if (i == 0) {
             render::OffscreenTarget full(context, kWidth, kHeight);
-            f.gpuMs1080 = renderer.render({{cameraOf(v, far), &full, {}}}).gpuMs;
+            f.gpuMs1080 = renderer.render({{cameraOf(v), &full, {}}}).gpuMs;
         }
     }
 
@@ -153,7 +152,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
         FrameReport report;
         const double select = timeMs([&] { report = scene.frame(v); });
         const double mesh = timeMs([&] { chunks.sync(scene, renderer); });
-        const render::FrameStats s = renderer.render({{cameraOf(v, far), &small, {}}});
+        const render::FrameStats s = renderer.render({{cameraOf(v), &small, {}}});
         f.selectMs.push_back(select);
         f.recordMs.push_back(s.cpuMs);
         f.cpuMs.push_back(select + s.cpuMs);
@@ -168,7 +167,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     const Viewer v = viewerAt(extent * 0.5, extent * 0.5, height, lookAhead);
     settle(scene, v);
     chunks.sync(scene, renderer);
-    renderer.render({{cameraOf(v, far), &small, {}}});
+    renderer.render({{cameraOf(v), &small, {}}});
     const Volume resident = scene.residentLevel0();
     const double voxel = scene.store().voxelSize();
     const int32_t sx = int32_t((v.position[0] + lookAhead * 0.5) / voxel), sz = int32_t(v.position[2] / voxel);
@@ -191,7 +190,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     f.stampTotalMs = millisecondsSince(stampStart);
     // Then the frame that uploads them: its recording (staging copies included) counts to the upload;
     // the device's copy and draw are apart (lavapipe's draw is all CPU).
-    const render::FrameStats after = renderer.render({{cameraOf(v, far), &small, {}}});
+    const render::FrameStats after = renderer.render({{cameraOf(v), &small, {}}});
     f.stampUploadMs = after.cpuMs;
     f.stampGpuMs = after.gpuMs;
     f.stampTotalMs += f.stampUploadMs;

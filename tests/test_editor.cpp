@@ -9,6 +9,7 @@
 #include "sculpt/StrokeScript.h"
 #include "support/CliRun.h"
 #include "support/TestUtil.h"
+#include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/VolumeIO.h"
 
 #include <catch2/catch.hpp>
@@ -250,7 +251,7 @@ TEST_CASE("editor: undo of random strokes restores the scene bit-exactly after e
         const Volume resident = session.scene().residentLevel0();
         for (const Command& c : strokes)
             if (c.kind == Command::Kind::StrokeBegin) {
-                const IndexCoord below{int32_t(std::floor(c.point[0])), int32_t(std::floor(c.point[1])) - 2, int32_t(std::floor(c.point[2]))};
+                const IndexCoord below{int32_t(std::floor((*c.point)[0])), int32_t(std::floor((*c.point)[1])) - 2, int32_t(std::floor((*c.point)[2]))};
                 strokesEvicted += resident.materialAt(below) == kEmptyMaterial && after.materialAt(below) != kEmptyMaterial;
             }
     }
@@ -384,6 +385,20 @@ TEST_CASE("editor: malformed session files are refused naming the place", "[edit
     refused(R"({"vdbclay_session": 1, "commands": [{"frame": 0, "command": "camera", "eye": [0, 0, 0], "target": [0, 0, 0]}]})", "differ");
     refused(R"({"vdbclay_session": 1, "commands": [{"frame": 0, "command": "undo", "extra": 1}]})", "commands[0].extra");
     refused(R"({"vdbclay_session": 1, "viewport": [0, 10], "commands": []})", "viewport");
+    // Keys of control characters in a material or an op are quoted printable (found by fuzz_session_file: DEL).
+    for (const std::string command : {"\"material\", \"material\": {\"name\": \"clay\", \"c\x7flor\": [1, 0, 0]}",
+                                      "\"op\", \"op\": {\"mo\xc2\x9b" "2Jde\": \"add\", \"brush\": {\"shape\": \"sphere\"}}",
+                                      "\"op\", \"op\": {\"mode\": \"add\", \"material\": \"\xc2\x9b" "2J\", \"brush\": {\"shape\": \"sphere\", \"\x7f\": 1}}",
+                                      "\"op\", \"op\": {\"mode\": \"rem\x7fve\", \"brush\": {\"shape\": \"sph\x7fre\"}, \"falloff\": \"s\x7f\"}"}) {
+        const std::string text = "{\"vdbclay_session\": 1, \"commands\": [{\"frame\": 0, \"command\": " + command + "}]}";
+        try {
+            parseSessionRecord(text, "s.json");
+            FAIL("accepted: " << text);
+        } catch (const SessionError& e) {
+            CHECK(std::string(e.what()).find("commands[0]") != std::string::npos);
+            CHECK(isPrintableName(e.what(), std::string::npos));
+        }
+    }
 }
 
 TEST_CASE("replay: vdbclay edit --headless replays, saves, exports the script, and refuses what it cannot do", "[editor][replay][cli]")

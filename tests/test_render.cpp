@@ -59,7 +59,7 @@ std::vector<bool> coverage(const OffscreenTarget& target)
 {
     const std::vector<float> depth = target.depth();
     std::vector<bool> covered(depth.size());
-    for (std::size_t i = 0; i < depth.size(); ++i) covered[i] = depth[i] < 1.0f;
+    for (std::size_t i = 0; i < depth.size(); ++i) covered[i] = depth[i] != kNothingDrawn;
     return covered;
 }
 
@@ -73,7 +73,6 @@ Camera frontCamera(double distance, double fov = 40.0)
     c.target = {0.0, 0.0, 0.0};
     c.fovYDegrees = fov;
     c.nearPlane = distance * 0.05;
-    c.farPlane = distance * 4.0;
     return c;
 }
 
@@ -138,7 +137,6 @@ TEST_CASE("render: a sphere's silhouette matches its analytic projection within 
     view.camera.target = {0.0, 0.0, 0.0};
     view.camera.fovYDegrees = 40.0;
     view.camera.nearPlane = 1.0;
-    view.camera.farPlane = 200.0;
     const FrameStats stats = renderer.render({view});
     CHECK(stats.chunksUploaded == 1);
     CHECK(stats.triangles > 1000);

@@ -52,13 +52,13 @@ nlohmann::json brushSettingsJson(const BrushSettings& b)
 {
     return {{"mode", b.mode}, {"shape", b.shape}, {"radius", b.radius}, {"strength", b.strength}, {"falloff", b.falloff},
             {"material", b.material}, {"distance", b.distance}, {"spacing", b.spacing}, {"pressure", pressureName(b.pressure)},
-            {"symmetry", b.symmetry}};
+            {"symmetry", b.symmetry}, {"accumulate", b.accumulate}};
 }
 
 BrushSettings parseBrushSettings(const nlohmann::json& json)
 {
     if (!json.is_object()) throw std::invalid_argument("brush: must be an object");
-    static const std::vector<std::string> keys{"mode", "shape", "radius", "strength", "falloff", "material", "distance", "spacing", "pressure", "symmetry"};
+    static const std::vector<std::string> keys{"mode", "shape", "radius", "strength", "falloff", "material", "distance", "spacing", "pressure", "symmetry", "accumulate"};
     for (const auto& item : json.items())
         if (std::find(keys.begin(), keys.end(), item.key()) == keys.end()) throw std::invalid_argument("brush." + printableText(item.key(), 80) + ": unknown key");
     BrushSettings b;
@@ -76,8 +76,25 @@ BrushSettings parseBrushSettings(const nlohmann::json& json)
     else if (pressure == "none") b.pressure = PressureTarget::None;
     else throw std::invalid_argument("brush.pressure: size, strength or none");
     if (json.contains("symmetry")) b.symmetry = json.at("symmetry");
+    if (json.contains("accumulate")) {
+        if (!json.at("accumulate").is_boolean()) throw std::invalid_argument("brush.accumulate: must be true or false");
+        b.accumulate = json.at("accumulate").get<bool>();
+    }
     checkBrushSettings(b);
     return b;
+}
+
+double stampNormalOffset(const BrushSettings& b, double pressure)
+{
+    if (b.mode != "add" && b.mode != "remove") return 0.0;
+    const double p = std::clamp(pressure, 0.05, 1.0);
+    // The shape's own radius where it has one (a sphere of radius 0.5 at unit size), else its unit size.
+    const auto unit = b.shape.find("radius");
+    const double shapeRadius = unit != b.shape.end() && unit->is_number() && unit->get<double>() > 0.0 ? unit->get<double>() : 1.0;
+    const double radius = shapeRadius * b.radius * (b.pressure == PressureTarget::Size ? p : 1.0);
+    const double strength = b.strength * (b.pressure == PressureTarget::Strength ? p : 1.0);
+    const double depth = (1.0 - strength) * radius;
+    return b.mode == "add" ? -depth : depth;
 }
 
 nlohmann::json strokeOpJson(const BrushSettings& b, const std::vector<std::array<double, 3>>& points, double pressure,

@@ -24,6 +24,10 @@ struct BrushSettings {
     double spacing = 0.25;    // stamps every spacing * radius along a stroke
     PressureTarget pressure = PressureTarget::Size;
     nlohmann::json symmetry;  // null, or a script op's "symmetry" object
+    /// A stroke builds on itself: each stamp lands on the surface the stroke has made so far. Off, the
+    /// stroke follows the surface as it began (Blender's default), and add and remove change it by at
+    /// most strength x radius.
+    bool accumulate = false;
 };
 
 /// Throws std::invalid_argument naming the field for settings no script would accept (checked again
@@ -34,6 +38,11 @@ nlohmann::json brushSettingsJson(const BrushSettings& brush);
 BrushSettings parseBrushSettings(const nlohmann::json& json);
 
 bool isReshapingMode(const std::string& mode);
+
+/// How far along the surface's outward normal a stamp's centre goes from the surface point under the
+/// pointer: add sinks by (1 - strength) x radius so that it raises the surface by strength x radius,
+/// remove rises as far so that it cuts as deep; 0 for the other modes.
+double stampNormalOffset(const BrushSettings& brush, double pressure);
 
 /// The script op for stamps at `points` (one: a stamp; more: the swept brush along them) at `pressure`
 /// (0..1]; `offset` is the drag of a move.

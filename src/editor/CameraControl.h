@@ -3,6 +3,7 @@
 // `camera` command holding the result.
 #pragma once
 
+#include "editor/Ray.h"
 #include "render/RenderTypes.h"
 #include "scene/ViewSelection.h"
 
@@ -11,10 +12,6 @@
 
 namespace vdbclay {
 
-struct Ray {
-    std::array<double, 3> origin{0, 0, 0};
-    std::array<double, 3> direction{0, 0, -1}; // unit length
-};
 
 /// The ray through pixel (x, y) (top left 0, 0; pixel centres at +0.5) of a viewport.
 Ray pointerRay(const render::Camera& camera, const std::array<int, 2>& viewport, double x, double y);

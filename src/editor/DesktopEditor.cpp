@@ -108,7 +108,6 @@ struct DesktopEditor::Impl {
     Drag drag = Drag::None;
     double cursorX = 0.0, cursorY = 0.0;
     bool rightHeld = false;
-    std::array<double, 3> grab{0, 0, 0}; // a move brush drags along the plane through here
     std::optional<SurfaceHit> hover;
 
     const SessionRecord* replay = nullptr;
@@ -165,19 +164,12 @@ struct DesktopEditor::Impl {
         return session.pick(ray.origin, ray.direction);
     }
 
+    /// The pointer's ray: the session places the brush on the surface as the stroke found it.
     void strokeTo(double x, double y, bool begin)
     {
-        std::optional<std::array<double, 3>> point;
-        if (session.brush().mode == "move" && !begin) {
-            point = dragPoint(session.camera(), rayAt(x, y), grab);
-        } else if (const auto hit = pickAt(x, y)) {
-            point = hit->point;
-        }
-        if (!point) return;
-        if (begin) grab = *point;
         Command c;
         c.kind = begin ? Command::Kind::StrokeBegin : Command::Kind::StrokeMove;
-        c.point = *point;
+        c.ray = rayAt(x, y);
         c.pressure = 1.0;
         apply(c);
     }
@@ -229,13 +221,7 @@ struct DesktopEditor::Impl {
 
     void frameScene()
     {
-        const double h = session.scene().store().voxelSize();
-        std::array<double, 3> lo{-32 * h, -32 * h, -32 * h}, hi{32 * h, 32 * h, 32 * h};
-        if (const auto bounds = session.scene().store().bounds())
-            for (std::size_t a = 0; a < 3; ++a) {
-                lo[a] = double(bounds->first[a]) * h;
-                hi[a] = double(bounds->second[a]) * h;
-            }
+        const auto [lo, hi] = session.sceneBox();
         const auto size = windowSize();
         setCamera(render::framingCamera(lo, hi, double(size[0]) / double(size[1])));
     }
@@ -445,6 +431,9 @@ struct DesktopEditor::Impl {
         }
         render::RenderView view;
         view.camera = session.camera();
+        // The near plane follows the camera every frame: zooming up to the surface never cuts it open.
+        const auto [lo, hi] = session.shownBox();
+        render::fitNearPlane(view.camera, lo, hi);
         view.target = target;
         lastStats = renderer->render({view});
         if (!swapchain->present()) swapchain->resize(fw, fh);

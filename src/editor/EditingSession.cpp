@@ -3,10 +3,12 @@
 #include "editor/CameraControl.h"
 #include "render/Framing.h"
 #include "sculpt/StrokeScript.h"
+#include "vdb_hermite/RegionCodec.h"
 
 #include <chrono>
 #include <filesystem>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace vdbclay {
@@ -18,19 +20,37 @@ double distanceBetween(const std::array<double, 3>& a, const std::array<double, 
     return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
 }
 
-render::Camera initialCamera(const StreamingScene& scene)
+} // namespace
+
+std::pair<std::array<double, 3>, std::array<double, 3>> EditingSession::shownBox() const
 {
-    const double h = scene.store().voxelSize();
+    const std::vector<BrickKey> shown = scene_->shownBricks();
+    if (shown.empty()) return sceneBox();
+    const double h = scene_->store().voxelSize();
+    std::array<double, 3> lo{}, hi{};
+    lo.fill(std::numeric_limits<double>::infinity());
+    hi.fill(-std::numeric_limits<double>::infinity());
+    for (const BrickKey& key : shown) {
+        const double voxel = std::ldexp(h, key.level), edge = kBrickEdge * voxel;
+        for (std::size_t a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], key.brick[a] * edge - voxel);
+            hi[a] = std::max(hi[a], (key.brick[a] + 1) * edge + voxel);
+        }
+    }
+    return {lo, hi};
+}
+
+std::pair<std::array<double, 3>, std::array<double, 3>> EditingSession::sceneBox() const
+{
+    const double h = scene_->store().voxelSize();
     std::array<double, 3> lo{-32 * h, -32 * h, -32 * h}, hi{32 * h, 32 * h, 32 * h};
-    if (const auto bounds = scene.store().bounds())
+    if (const auto bounds = scene_->store().bounds())
         for (std::size_t a = 0; a < 3; ++a) {
             lo[a] = double(bounds->first[a]) * h;
             hi[a] = double(bounds->second[a] + 1) * h; // the far side of the last voxel: a one-voxel scene is framed whole
         }
-    return render::framingCamera(lo, hi, 16.0 / 9.0);
+    return {lo, hi};
 }
-
-} // namespace
 
 EditingSession::EditingSession(const std::string& scenePath, const SessionOptions& options)
     : scenePath_(scenePath), options_(options), history_(options.history)
@@ -41,7 +61,8 @@ EditingSession::EditingSession(const std::string& scenePath, const SessionOption
     streaming.loaderThreads = options.loaderThreads;
     streaming.access = StoreAccess::ReadWrite;
     scene_ = std::make_unique<StreamingScene>(prepared_.storePath, streaming);
-    camera_ = initialCamera(*scene_);
+    const auto [lo, hi] = sceneBox();
+    camera_ = render::framingCamera(lo, hi, 16.0 / 9.0);
     brush_.radius = 8.0 * scene_->store().voxelSize();
     brush_.distance = 2.0 * scene_->store().voxelSize();
 }
@@ -62,15 +83,26 @@ void EditingSession::notify(const std::string& text) const
     if (options_.message) options_.message(text);
 }
 
-void EditingSession::apply(const Command& command)
+void EditingSession::apply(const Command& given)
 {
-    record_.commands.push_back({frameNumber_, time_, command});
+    Command command = given;
+    const bool stroke = command.kind == Command::Kind::StrokeBegin || command.kind == Command::Kind::StrokeMove;
     // A move with no stroke begins one: the record says so, so that it reads as what happened.
-    if (command.kind == Command::Kind::StrokeMove && !stroke_.active) record_.commands.back().command.kind = Command::Kind::StrokeBegin;
+    if (command.kind == Command::Kind::StrokeMove && !stroke_.active) command.kind = Command::Kind::StrokeBegin;
+    const bool placed = stroke && placeStroke(command);
+    record_.commands.push_back({frameNumber_, time_, command});
     lastCommand_ = time_;
+    const auto at = [&] { return Placement{*command.point, command.normal}; };
     switch (command.kind) {
-    case Command::Kind::StrokeBegin: beginStroke(command.point, command.pressure); break;
-    case Command::Kind::StrokeMove: moveStroke(command.point, command.pressure); break;
+    case Command::Kind::StrokeBegin:
+        if (placed) beginStroke(at(), command.pressure);
+        else if (stroke_.active) endStroke(); // pressed off the surface: nothing to sculpt until the pointer reaches it
+        break;
+    case Command::Kind::StrokeMove:
+        if (!placed) break; // off the surface for now
+        if (brush_.mode == "move") dragStroke(*command.point, command.pressure);
+        else moveStroke(at(), command.pressure);
+        break;
     case Command::Kind::StrokeEnd: endStroke(); break;
     case Command::Kind::SetBrush:
         if (!command.brush) throw std::invalid_argument("a brush command carries no brush settings");
@@ -119,44 +151,125 @@ void EditingSession::applyOp(const nlohmann::json& op)
     editMs_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
-void EditingSession::beginStroke(const std::array<double, 3>& point, double pressure)
+bool EditingSession::placeStroke(Command& command)
+{
+    if (!command.ray) return command.point.has_value();
+    const Ray& ray = *command.ray;
+    std::optional<std::array<double, 3>> point, normal;
+    bool finest = true; // placed from the finest level's data (a coarser level stands in where it is not resident)
+    const bool continuing = command.kind == Command::Kind::StrokeMove && stroke_.active;
+    if (continuing && brush_.mode == "move") {
+        point = dragPoint(camera_, ray, stroke_.grab); // the grabbed point follows the pointer across the view
+    } else {
+        const std::optional<SurfaceHit> hit =
+            continuing && !brush_.accumulate ? castAtStrokeStart(ray) : pick(ray.origin, ray.direction);
+        if (hit) point = hit->point, normal = hit->normal, finest = hit->level == 0;
+    }
+    if (command.point) {
+        // A replay: the recorded placement is what happened; the ray checks that it still places the same
+        // where the finest data are resident now (a replay streams on its own clock).
+        if (point && finest && distanceBetween(*point, *command.point) > 1e-6 * scene_->store().voxelSize()) {
+            if (stats_.placementsDiffering++ == 0)
+                notify("a replayed stroke point differs from where its recorded ray now meets the surface; the recorded point is used");
+        }
+        return true;
+    }
+    command.point = point;
+    command.normal = normal;
+    return point.has_value();
+}
+
+std::optional<SurfaceHit> EditingSession::castAtStrokeStart(const Ray& ray)
+{
+    const double h = scene_->store().voxelSize();
+    if (!stroke_.before) stroke_.before = std::make_unique<Volume>(h);
+    const std::size_t materials = scene_->materials().size();
+    for (; stroke_.decoded < stroke_.changes.size(); ++stroke_.decoded) {
+        const LeafChange& c = stroke_.changes[stroke_.decoded];
+        pasteRegion(*stroke_.before, decodeRegion(c.before, {c.origin, kLeafDim}, h, materials, "the stroke's starting state"));
+        stroke_.replaced.insert(c.origin);
+    }
+    std::optional<SurfaceHit> hit;
+    scene_->visitResidentLevels([&](const std::vector<const Volume*>& levels) {
+        if (levels.empty()) return;
+        hit = castRay(OverlaidVolume{*levels[0], *stroke_.before, stroke_.replaced}, ray.origin, ray.direction, 1e30);
+        // Where the finest level is not resident, the coarser ones (which may show the stroke) stand in.
+        if (!hit && levels.size() > 1) {
+            hit = castRayAcrossLevels({levels.begin() + 1, levels.end()}, ray.origin, ray.direction, 1e30);
+            if (hit) ++hit->level;
+        }
+    });
+    return hit;
+}
+
+std::array<double, 3> EditingSession::stampCentre(const Placement& at, double pressure) const
+{
+    if (!at.normal) return at.point;
+    const std::array<double, 3>& n = *at.normal;
+    const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(length > 1e-12)) return at.point;
+    const double offset = stampNormalOffset(brush_, pressure) / length;
+    return {at.point[0] + n[0] * offset, at.point[1] + n[1] * offset, at.point[2] + n[2] * offset};
+}
+
+void EditingSession::beginStroke(const Placement& at, double pressure)
 {
     if (stroke_.active) endStroke();
     stroke_ = Stroke{};
     stroke_.active = true;
-    stroke_.lastStamp = stroke_.lastPoint = point;
-    if (brush_.mode != "move") applyOp(strokeOpJson(brush_, {point}, pressure));
+    stroke_.lastStamp = stroke_.lastPoint = at;
+    stroke_.grab = at.point;
+    if (brush_.mode != "move") applyOp(strokeOpJson(brush_, {stampCentre(at, pressure)}, pressure));
 }
 
-void EditingSession::moveStroke(const std::array<double, 3>& point, double pressure)
+void EditingSession::dragStroke(const std::array<double, 3>& point, double pressure)
 {
-    if (!stroke_.active) return beginStroke(point, pressure);
-    if (brush_.mode == "move") {
-        // The grabbed surface follows the pointer: each step drags the brush's region by the pointer's move.
-        const std::array<double, 3> offset{point[0] - stroke_.lastPoint[0], point[1] - stroke_.lastPoint[1], point[2] - stroke_.lastPoint[2]};
-        if (distanceBetween(point, stroke_.lastPoint) > 0.0) applyOp(strokeOpJson(brush_, {stroke_.lastPoint}, pressure, offset));
-        stroke_.lastPoint = stroke_.lastStamp = point;
-        return;
+    stroke_.lastPoint = stroke_.lastStamp = Placement{point, std::nullopt};
+    const std::array<double, 3> offset{point[0] - stroke_.grab[0], point[1] - stroke_.grab[1], point[2] - stroke_.grab[2]};
+    // Grab drags the surface as the stroke found it by the whole way from where it was grabbed (Blender's
+    // grab): the last step is put back first, so that the grabbed point stays under the pointer however
+    // far it goes, and the stroke is one move op.
+    if (!stroke_.changes.empty()) {
+        std::vector<LeafImage> start;
+        start.reserve(stroke_.changes.size());
+        for (LeafChange& c : stroke_.changes) {
+            start.push_back({c.origin, c.before});
+            c.after = c.before;
+        }
+        bricksChanged_ += scene_->restoreLeaves(start).bricksChanged;
+        stroke_.ops = nlohmann::json::array();
     }
+    if (distanceBetween(point, stroke_.grab) > 0.0) applyOp(strokeOpJson(brush_, {stroke_.grab}, pressure, offset));
+}
+
+void EditingSession::moveStroke(const Placement& at, double pressure)
+{
+    if (!stroke_.active) return beginStroke(at, pressure);
     // Stamps every `spacing` along the pointer's path; CSG brushes sweep from the last stamp through the
     // new ones (no gaps at any speed), reshaping brushes reshape the new stamps once each.
     const double scale = brush_.pressure == PressureTarget::Size ? std::clamp(pressure, 0.05, 1.0) : 1.0;
     const double spacing = std::max(brush_.spacing * brush_.radius * scale, 1e-3 * scene_->store().voxelSize());
-    std::vector<std::array<double, 3>> stamps;
-    const double length = distanceBetween(point, stroke_.lastPoint);
+    const Placement from = stroke_.lastPoint;
+    std::vector<Placement> stamps;
+    const double length = distanceBetween(at.point, from.point);
     double along = spacing - stroke_.travelled;
     while (along <= length) {
         const double f = along / length;
-        stamps.push_back({stroke_.lastPoint[0] + (point[0] - stroke_.lastPoint[0]) * f, stroke_.lastPoint[1] + (point[1] - stroke_.lastPoint[1]) * f,
-                          stroke_.lastPoint[2] + (point[2] - stroke_.lastPoint[2]) * f});
+        Placement p;
+        for (std::size_t a = 0; a < 3; ++a) p.point[a] = from.point[a] + (at.point[a] - from.point[a]) * f;
+        if (from.normal && at.normal) { // the normals in between: blended (stampCentre normalizes)
+            p.normal = std::array<double, 3>{};
+            for (std::size_t a = 0; a < 3; ++a) (*p.normal)[a] = (*from.normal)[a] * (1.0 - f) + (*at.normal)[a] * f;
+        }
+        stamps.push_back(p);
         along += spacing;
     }
     stroke_.travelled = stamps.empty() ? stroke_.travelled + length : length - (along - spacing);
-    stroke_.lastPoint = point;
+    stroke_.lastPoint = at;
     if (stamps.empty()) return;
     std::vector<std::array<double, 3>> path;
-    if (!isReshapingMode(brush_.mode)) path.push_back(stroke_.lastStamp);
-    path.insert(path.end(), stamps.begin(), stamps.end());
+    if (!isReshapingMode(brush_.mode)) path.push_back(stampCentre(stroke_.lastStamp, pressure));
+    for (const Placement& p : stamps) path.push_back(stampCentre(p, pressure));
     stroke_.lastStamp = stamps.back();
     applyOp(strokeOpJson(brush_, path, pressure));
 }
@@ -164,7 +277,12 @@ void EditingSession::moveStroke(const std::array<double, 3>& point, double press
 void EditingSession::endStroke()
 {
     if (!stroke_.active) return;
-    history_.push(std::move(stroke_.changes), std::move(stroke_.ops));
+    // Leaves a grab put back as they were are no change.
+    std::vector<LeafChange> changes;
+    changes.reserve(stroke_.changes.size());
+    for (LeafChange& c : stroke_.changes)
+        if (c.before != c.after) changes.push_back(std::move(c));
+    history_.push(std::move(changes), std::move(stroke_.ops));
     stroke_ = Stroke{};
 }
 

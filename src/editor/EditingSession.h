@@ -15,6 +15,7 @@
 #include <array>
 #include <functional>
 #include <map>
+#include <set>
 #include <memory>
 #include <optional>
 #include <string>
@@ -38,6 +39,7 @@ struct SessionStats {
     uint64_t stampsApplied = 0;
     uint64_t opsRefused = 0;   // stroke stretches a brush could not apply (reported through `message`)
     uint64_t autosaves = 0;
+    uint64_t placementsDiffering = 0; // replayed stroke points the recorded ray no longer places (the recorded point is used)
     uint64_t bricksChangedLastFrame = 0;
     double editMsLastFrame = 0.0; // sculpting (page-in included) in the last frame's commands
 };
@@ -69,9 +71,15 @@ public:
 
     const BrushSettings& brush() const { return brush_; }
     const render::Camera& camera() const { return camera_; }
+    /// The scene's bounds in world units (the far side of the last voxel included; a box of 64 voxels
+    /// about the origin for an empty scene): what framing and the near plane hold.
+    std::pair<std::array<double, 3>, std::array<double, 3>> sceneBox() const;
+    /// The box of the bricks the view shows now (a voxel of their level around them), what the near
+    /// plane must keep in front of it each frame; sceneBox() while nothing is shown.
+    std::pair<std::array<double, 3>, std::array<double, 3>> shownBox() const;
     bool strokeActive() const { return stroke_.active; }
     /// Where the active stroke's brush is (for the overlay and a move brush's drag plane).
-    std::array<double, 3> strokePoint() const { return stroke_.lastPoint; }
+    std::array<double, 3> strokePoint() const { return stroke_.lastPoint.point; }
     const History& history() const { return history_; }
     const SessionStats& stats() const { return stats_; }
     const SessionRecord& record() const { return record_; }
@@ -89,17 +97,35 @@ public:
     void saveRecord() const;
 
 private:
+    /// Where a stroke's stamp goes: the surface point and its outward normal (none: the stamp sits on the
+    /// point, as in sessions recorded before rays were).
+    struct Placement {
+        std::array<double, 3> point{0, 0, 0};
+        std::optional<std::array<double, 3>> normal;
+    };
     struct Stroke {
         bool active = false;
-        std::array<double, 3> lastStamp{0, 0, 0}; // where the last stamp went
-        std::array<double, 3> lastPoint{0, 0, 0}; // where the pointer was last
+        Placement lastStamp;                      // where the last stamp went
+        Placement lastPoint;                      // where the pointer was last
+        std::array<double, 3> grab{0, 0, 0};      // a move brush: the surface point grabbed
         double travelled = 0.0;                   // along the pointer's path since the last stamp
         std::vector<LeafChange> changes;          // merged per leaf: first before, last after
         std::map<IndexCoord, std::size_t> changeIndex;
         nlohmann::json ops = nlohmann::json::array(); // applied
+        // The stroke's starting state where it changed the scene: the changes' before images, decoded
+        // on demand (what the pointer's ray is cast against, so that stamps never climb on their own).
+        std::unique_ptr<Volume> before;
+        std::set<IndexCoord> replaced;
+        std::size_t decoded = 0;
     };
-    void beginStroke(const std::array<double, 3>& point, double pressure);
-    void moveStroke(const std::array<double, 3>& point, double pressure);
+    /// Fills in the point (and normal) of a stroke command from its ray; false when the ray meets no
+    /// surface (the command then changes nothing).
+    bool placeStroke(Command& command);
+    std::optional<SurfaceHit> castAtStrokeStart(const Ray& ray);
+    std::array<double, 3> stampCentre(const Placement& at, double pressure) const;
+    void beginStroke(const Placement& at, double pressure);
+    void moveStroke(const Placement& at, double pressure);
+    void dragStroke(const std::array<double, 3>& point, double pressure);
     void endStroke();
     void applyOp(const nlohmann::json& op);
     void undo();

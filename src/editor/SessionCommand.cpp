@@ -86,7 +86,9 @@ nlohmann::json commandJson(const Command& c)
     switch (c.kind) {
     case Command::Kind::StrokeBegin:
     case Command::Kind::StrokeMove:
-        j["point"] = c.point;
+        if (c.point) j["point"] = *c.point;
+        if (c.normal) j["normal"] = *c.normal;
+        if (c.ray) j["ray"] = {{"origin", c.ray->origin}, {"direction", c.ray->direction}};
         j["pressure"] = c.pressure;
         break;
     case Command::Kind::SetBrush: j["brush"] = brushSettingsJson(c.brush.value_or(BrushSettings{})); break;
@@ -127,10 +129,21 @@ Command parseCommand(const nlohmann::json& j, const std::string& where)
     switch (c.kind) {
     case Command::Kind::StrokeBegin:
     case Command::Kind::StrokeMove:
-        c.point = vec3(required(j, "point", where), where + ".point");
+        if (!j.contains("ray")) c.point = vec3(required(j, "point", where), where + ".point");
+        else {
+            const nlohmann::json& ray = j.at("ray");
+            if (!ray.is_object() || ray.size() != 2 || !ray.contains("origin") || !ray.contains("direction"))
+                fail(where + ".ray", "must be an object {\"origin\": [x, y, z], \"direction\": [x, y, z]}");
+            Ray r{vec3(ray.at("origin"), where + ".ray.origin"), vec3(ray.at("direction"), where + ".ray.direction")};
+            const double length = std::sqrt(r.direction[0] * r.direction[0] + r.direction[1] * r.direction[1] + r.direction[2] * r.direction[2]);
+            if (!(length > 1e-12) || !std::isfinite(length)) fail(where + ".ray.direction", "must be a non-zero direction");
+            c.ray = r;
+            if (j.contains("point")) c.point = vec3(j.at("point"), where + ".point");
+        }
+        if (j.contains("normal")) c.normal = vec3(j.at("normal"), where + ".normal");
         if (j.contains("pressure")) c.pressure = finite(j.at("pressure"), where + ".pressure");
         if (!(c.pressure > 0.0 && c.pressure <= 1.0)) fail(where + ".pressure", "must be in (0, 1]");
-        allow({"point", "pressure"});
+        allow({"point", "pressure", "ray", "normal"});
         break;
     case Command::Kind::SetBrush:
         try {

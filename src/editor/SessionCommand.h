@@ -4,6 +4,7 @@
 #pragma once
 
 #include "editor/BrushSettings.h"
+#include "editor/Ray.h"
 #include "render/RenderTypes.h"
 
 #include <nlohmann/json.hpp>
@@ -24,8 +25,8 @@ public:
 
 struct Command {
     enum class Kind {
-        StrokeBegin, // at `point` (the surface under the pointer) with `pressure`
-        StrokeMove,  // the pointer moved to `point` with `pressure` (a move brush: the drag's point)
+        StrokeBegin, // along `ray` (the pointer's) or at `point` (the surface under it) with `pressure`
+        StrokeMove,  // the pointer moved along `ray` or to `point` with `pressure` (a move brush: the drag's point)
         StrokeEnd,
         SetBrush,    // `brush`
         Undo,
@@ -36,7 +37,13 @@ struct Command {
         ApplyOp,     // `op`: one stroke-script op as one edit (tool stamps, imported meshes)
     };
     Kind kind = Kind::StrokeEnd;
-    std::array<double, 3> point{0, 0, 0};
+    /// Strokes: where the brush went. A front end gives the pointer's `ray` and the session places the
+    /// brush on the surface as the stroke began; the record then holds both, with the surface's outward
+    /// `normal` there (what sinks an add stamp so that it raises the surface by strength x radius).
+    /// A point alone (older sessions, tests) is taken as it is.
+    std::optional<std::array<double, 3>> point;
+    std::optional<Ray> ray;
+    std::optional<std::array<double, 3>> normal;
     double pressure = 1.0;
     std::optional<BrushSettings> brush; // SetBrush only: a session holds many commands, few of them brushes
     render::Camera camera;

@@ -9,12 +9,54 @@
 
 namespace vdbclay {
 
-std::optional<SurfaceHit> castRay(const Volume& volume, const std::array<double, 3>& origin,
-                                  const std::array<double, 3>& direction, double maxDistance)
+namespace {
+
+/// Voxels of one grid.
+struct GridLookup {
+    const HermiteGrid& grid;
+    HermiteGrid::ConstAccessor access{grid.getConstAccessor()};
+
+    explicit GridLookup(const HermiteGrid& g) : grid(g) {}
+    bool solid(const Coord& c) { return access.getValue(c).solid(); }
+    const HermiteLeaf* leaf(const Coord& c) { return access.probeConstLeaf(c); }
+    void addBounds(CoordBBox& bounds) const { addRootBounds(grid, bounds); }
+
+    static void addRootBounds(const HermiteGrid& g, CoordBBox& bounds)
+    {
+        const auto& root = g.tree().root();
+        for (auto child = root.cbeginChildOn(); child; ++child) bounds.expand(child->getNodeBoundingBox());
+        for (auto tile = root.cbeginValueAll(); tile; ++tile)
+            if (tile->solid()) bounds.expand(CoordBBox::createCube(tile.getCoord(), HermiteTree::RootNodeType::ChildNodeType::DIM));
+    }
+};
+
+/// Voxels of `current`, except in the replaced leaves, read from `before`.
+struct OverlaidLookup {
+    GridLookup current, before;
+    const std::set<std::array<int32_t, 3>>& replaced;
+
+    OverlaidLookup(const OverlaidVolume& v) : current(*v.current.impl().grid), before(*v.before.impl().grid), replaced(v.replaced) {}
+    bool fromBefore(const Coord& c) const
+    {
+        const Coord o = c & ~(kLeafDim - 1);
+        return replaced.count({o[0], o[1], o[2]}) != 0;
+    }
+    bool solid(const Coord& c) { return fromBefore(c) ? before.solid(c) : current.solid(c); }
+    const HermiteLeaf* leaf(const Coord& c) { return fromBefore(c) ? before.leaf(c) : current.leaf(c); }
+    void addBounds(CoordBBox& bounds) const
+    {
+        current.addBounds(bounds);
+        before.addBounds(bounds);
+    }
+};
+
+template<typename Lookup>
+std::optional<SurfaceHit> castRayIn(Lookup& lookup, double voxelSize, const std::array<double, 3>& origin,
+                                    const std::array<double, 3>& direction, double maxDistance)
 {
     const double length = std::sqrt(direction[0] * direction[0] + direction[1] * direction[1] + direction[2] * direction[2]);
     if (!(length > 0.0) || !std::isfinite(length) || !(maxDistance > 0.0)) return std::nullopt;
-    const double h = volume.voxelSize();
+    const double h = voxelSize;
     std::array<double, 3> o{}, d{};
     for (int a = 0; a < 3; ++a) {
         o[std::size_t(a)] = origin[std::size_t(a)] / h;
@@ -24,13 +66,9 @@ std::optional<SurfaceHit> castRay(const Volume& volume, const std::array<double,
     double tStart = 0.0, tEnd = std::min(maxDistance / h, 4.0 * kMaxLatticeCoordinate);
     // Only the part of the ray inside the root's children and solid tiles (a few, 4096^3 voxels each) is
     // walked: a ray that misses everything costs nothing.
-    const HermiteGrid& grid = *volume.impl().grid;
     {
         CoordBBox bounds;
-        const auto& root = grid.tree().root();
-        for (auto child = root.cbeginChildOn(); child; ++child) bounds.expand(child->getNodeBoundingBox());
-        for (auto tile = root.cbeginValueAll(); tile; ++tile)
-            if (tile->solid()) bounds.expand(CoordBBox::createCube(tile.getCoord(), HermiteTree::RootNodeType::ChildNodeType::DIM));
+        lookup.addBounds(bounds);
         if (bounds.empty()) return std::nullopt;
         for (int a = 0; a < 3; ++a) {
             const std::size_t i = std::size_t(a);
@@ -69,8 +107,7 @@ std::optional<SurfaceHit> castRay(const Volume& volume, const std::array<double,
         }
     }
     tEnd -= tStart;
-    auto access = grid.getConstAccessor();
-    bool wasSolid = access.getValue(cell).solid();
+    bool wasSolid = lookup.solid(cell);
     bool leftSolid = !wasSolid; // a ray starting inside looks for the next entry
     while (true) {
         const int axis = tMax[0] < tMax[1] ? (tMax[0] < tMax[2] ? 0 : 2) : (tMax[1] < tMax[2] ? 1 : 2);
@@ -79,7 +116,7 @@ std::optional<SurfaceHit> castRay(const Volume& volume, const std::array<double,
         const Coord previous = cell;
         cell[axis] += step[std::size_t(axis)];
         tMax[std::size_t(axis)] += tDelta[std::size_t(axis)];
-        const bool solid = access.getValue(cell).solid();
+        const bool solid = lookup.solid(cell);
         if (!solid) leftSolid = true;
         if (solid && !wasSolid && leftSolid) {
             // The crossing lies on the edge from the lower of the two points along `axis`.
@@ -89,7 +126,7 @@ std::optional<SurfaceHit> castRay(const Volume& volume, const std::array<double,
             double offset = 0.5;
             std::array<double, 3> n{0, 0, 0};
             n[std::size_t(axis)] = -double(step[std::size_t(axis)]);
-            if (const HermiteLeaf* leaf = access.probeConstLeaf(lower))
+            if (const HermiteLeaf* leaf = lookup.leaf(lower))
                 if (const PackedSample* s = leaf->sample(HermiteLeaf::coordToOffset(lower), axis)) {
                     const UnpackedSample u = unpackSample(*s);
                     offset = u.offset;
@@ -103,6 +140,22 @@ std::optional<SurfaceHit> castRay(const Volume& volume, const std::array<double,
         }
         wasSolid = solid;
     }
+}
+
+} // namespace
+
+std::optional<SurfaceHit> castRay(const Volume& volume, const std::array<double, 3>& origin,
+                                  const std::array<double, 3>& direction, double maxDistance)
+{
+    GridLookup lookup(*volume.impl().grid);
+    return castRayIn(lookup, volume.voxelSize(), origin, direction, maxDistance);
+}
+
+std::optional<SurfaceHit> castRay(const OverlaidVolume& volume, const std::array<double, 3>& origin,
+                                  const std::array<double, 3>& direction, double maxDistance)
+{
+    OverlaidLookup lookup(volume);
+    return castRayIn(lookup, volume.current.voxelSize(), origin, direction, maxDistance);
 }
 
 std::optional<SurfaceHit> castRayAcrossLevels(const std::vector<const Volume*>& levels, const std::array<double, 3>& origin,

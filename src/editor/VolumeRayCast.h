@@ -6,7 +6,9 @@
 #include "vdb_hermite/Volume.h"
 
 #include <array>
+#include <cstdint>
 #include <optional>
+#include <set>
 #include <vector>
 
 namespace vdbclay {
@@ -22,6 +24,18 @@ struct SurfaceHit {
 /// be unit length). A ray that starts inside solid matter hits where it enters solid matter again after
 /// leaving it. Steps voxel by voxel: at most about maxDistance / voxelSize * 1.8 lookups.
 std::optional<SurfaceHit> castRay(const Volume& volume, const std::array<double, 3>& origin,
+                                  const std::array<double, 3>& direction, double maxDistance);
+
+/// A volume as it was before some of its leaves changed (a stroke's starting state): `current`, except
+/// the leaf-sized boxes whose origins `replaced` lists, which are read from `before`.
+struct OverlaidVolume {
+    const Volume& current;
+    const Volume& before;
+    const std::set<std::array<int32_t, 3>>& replaced;
+};
+
+/// castRay on the overlaid volume.
+std::optional<SurfaceHit> castRay(const OverlaidVolume& volume, const std::array<double, 3>& origin,
                                   const std::array<double, 3>& direction, double maxDistance);
 
 /// The ray against every level's data (index = level, each on its own lattice): the finest level's hit,

@@ -5,19 +5,20 @@
 
 namespace vdbclay::render {
 
-void fitDepthRange(Camera& camera, const std::array<double, 3>& lo, const std::array<double, 3>& hi)
+void fitNearPlane(Camera& camera, const std::array<double, 3>& lo, const std::array<double, 3>& hi)
 {
-    double radius2 = 0.0, distance2 = 0.0;
-    for (int a = 0; a < 3; ++a) {
-        const double c = 0.5 * (lo[std::size_t(a)] + hi[std::size_t(a)]);
-        const double r = 0.5 * (hi[std::size_t(a)] - lo[std::size_t(a)]);
-        radius2 += r * r;
-        const double d = camera.eye[std::size_t(a)] - c;
-        distance2 += d * d;
+    double nearest2 = 0.0, farthest2 = 0.0;
+    for (std::size_t a = 0; a < 3; ++a) {
+        const double e = camera.eye[a];
+        const double outside = e < lo[a] ? lo[a] - e : e > hi[a] ? e - hi[a] : 0.0;
+        const double far = std::max(std::abs(e - lo[a]), std::abs(e - hi[a]));
+        nearest2 += outside * outside;
+        farthest2 += far * far;
     }
-    const double radius = std::max(std::sqrt(radius2), 1e-6), distance = std::sqrt(distance2);
-    camera.farPlane = distance + radius * 1.01;
-    camera.nearPlane = std::max(distance - radius * 1.01, camera.farPlane * 1e-4);
+    // The nearest point of the box may lie off the view's axis, where the view plane is nearer than the
+    // point itself: half its distance keeps it in front of the near plane at any field of view below 120.
+    const double floor = std::max(1e-6 * std::sqrt(farthest2), 1e-12);
+    camera.nearPlane = std::max(0.5 * std::sqrt(nearest2), floor);
 }
 
 namespace {
@@ -64,7 +65,7 @@ Camera frame(const std::array<double, 3>& lo, const std::array<double, 3>& hi, d
     });
     distance = std::max(distance * 1.05, 1e-6);
     for (int a = 0; a < 3; ++a) camera.eye[std::size_t(a)] = camera.target[std::size_t(a)] + f.back[a] * distance;
-    fitDepthRange(camera, lo, hi);
+    fitNearPlane(camera, lo, hi);
     return camera;
 }
 

@@ -21,7 +21,9 @@ Camera framingCamera(const std::vector<std::array<float, 3>>& points, const std:
 /// every 8th vertex and those farthest along the axes and diagonals both ways (a box's corners).
 void appendOutline(const std::vector<std::array<float, 3>>& positions, std::vector<std::array<float, 3>>& outline);
 
-/// Chooses near and far planes for `camera` that hold the box [lo, hi] (near at least 1e-4 of far).
-void fitDepthRange(Camera& camera, const std::array<double, 3>& lo, const std::array<double, 3>& hi);
+/// Puts the near plane of `camera` just in front of the box [lo, hi] (what may be drawn), or a hair from
+/// the eye (1e-6 of the distance to the box's far side) once the eye is in or at the box: zooming up to
+/// a surface never cuts it, and the reversed, unbounded depth keeps its precision at every distance.
+void fitNearPlane(Camera& camera, const std::array<double, 3>& lo, const std::array<double, 3>& hi);
 
 } // namespace vdbclay::render

@@ -26,6 +26,9 @@ struct Image {
 /// and depth. Cleared on load.
 VkRenderPass createRenderPass(VkDevice device, VkFormat colourFormat, VkImageLayout finalLayout);
 
+/// The depth of a pixel nothing was drawn on (the renderer's depth is reversed: 0 is infinitely far).
+constexpr float kNothingDrawn = 0.0f;
+
 class OffscreenTarget : public RenderTarget {
 public:
     /// Throws std::invalid_argument for sizes outside 1 .. the device's image limit.
@@ -46,7 +49,8 @@ public:
     void recordAfterPass(VkCommandBuffer cmd) const override { recordReadback(cmd); }
     /// The pixels copied by the last readback that completed.
     Image colour() const;
-    /// Depth per pixel (0 near .. 1 far, 1 where nothing was drawn), rows top to bottom.
+    /// Depth per pixel, reversed (1 at the near plane, falling towards 0 with distance, exactly
+    /// kNothingDrawn where nothing was drawn), rows top to bottom.
     std::vector<float> depth() const;
 
 private:

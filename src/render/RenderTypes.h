@@ -20,8 +20,10 @@ struct Camera {
     std::array<double, 3> target{0.0, 0.0, 0.0};
     std::array<double, 3> up{0.0, 1.0, 0.0};
     double fovYDegrees = 45.0;
-    double nearPlane = 0.05; // world units; 0: chosen from the scene's bounds
-    double farPlane = 1000.0;
+    /// World units. Depth is reversed (1 at the near plane, 0 at infinity) and there is no far plane, so
+    /// a view never cuts what lies far away, and the near plane may sit a hair from the eye
+    /// (fitNearPlane) without losing depth precision.
+    double nearPlane = 0.05;
 };
 
 /// The camera's up vector as the view uses it: `up` unless it is zero, not finite or along the view

@@ -51,8 +51,15 @@ glm::dmat4 viewProjectionMatrix(const Camera& c, double aspect)
 {
     const std::array<double, 3> u = usableUp(c); // a given up along the view would make lookAt's matrix NaN
     const glm::dvec3 eye(c.eye[0], c.eye[1], c.eye[2]), target(c.target[0], c.target[1], c.target[2]), up(u[0], u[1], u[2]);
-    glm::dmat4 proj = glm::perspective(glm::radians(c.fovYDegrees), aspect, c.nearPlane, c.farPlane);
-    proj[1][1] *= -1.0; // Vulkan's framebuffer Y points down
+    // Reversed depth with the far plane at infinity: depth = near / distance along the view, 1 at the near
+    // plane and 0 far away, so float depth keeps its relative precision at every distance.
+    const double f = 1.0 / std::tan(0.5 * glm::radians(c.fovYDegrees));
+    const double near = c.nearPlane > 0.0 && std::isfinite(c.nearPlane) ? c.nearPlane : 1e-3;
+    glm::dmat4 proj(0.0);
+    proj[0][0] = f / aspect;
+    proj[1][1] = -f; // Vulkan's framebuffer Y points down
+    proj[2][3] = -1.0;
+    proj[3][2] = near;
     return proj * glm::lookAt(eye, target, up);
 }
 
@@ -78,8 +85,8 @@ Frustum frustumOf(const glm::dmat4& m)
     f.planes[1] = row(3) - row(0);
     f.planes[2] = row(3) + row(1);
     f.planes[3] = row(3) - row(1);
-    f.planes[4] = row(2); // depth 0..1
-    f.planes[5] = row(3) - row(2);
+    f.planes[4] = row(2);          // depth >= 0: always true with the far plane at infinity
+    f.planes[5] = row(3) - row(2); // depth <= 1: the near plane
     return f;
 }
 
@@ -403,7 +410,7 @@ struct Renderer::Impl {
         for (RenderTarget* target : targets) {
             VkClearValue clears[2]{};
             clears[0].color = {{shading.background[0], shading.background[1], shading.background[2], 1.0f}};
-            clears[1].depthStencil = {1.0f, 0};
+            clears[1].depthStencil = {0.0f, 0}; // reversed depth: 0 is infinitely far
             VkRenderPassBeginInfo begin{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
             begin.renderPass = target->renderPass();
             begin.framebuffer = target->framebuffer();

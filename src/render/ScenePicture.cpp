@@ -75,7 +75,7 @@ Picture renderVolume(VulkanContext& context, const Volume& volume, const Picture
         uploadVolume(renderer, volume, pictureMeshOptions(), materialLook(volume.voxelSize(), request.textureFolder));
     Camera camera = request.camera.value_or(
         framingCamera(upload.outline, upload.lo, upload.hi, double(request.width) / double(request.height)));
-    fitDepthRange(camera, upload.lo, upload.hi);
+    fitNearPlane(camera, upload.lo, upload.hi);
     Picture p = draw(context, renderer, camera, request);
     p.meshMs = upload.meshSeconds * 1000.0;
     p.warnings = upload.warnings;
@@ -112,7 +112,7 @@ Picture renderStore(VulkanContext& context, const std::string& path, const Pictu
         hi = worldOf({box->second[0] + 1, box->second[1] + 1, box->second[2] + 1}, voxel);
     }
     camera = request.camera.value_or(defaultCamera(lo, hi, request.width, request.height));
-    fitDepthRange(camera, lo, hi);
+    fitNearPlane(camera, lo, hi);
     const auto start = Clock::now();
     const auto settle = [&] {
         const Viewer viewer = viewerOf(camera, request.width, request.height);
@@ -133,7 +133,7 @@ Picture renderStore(VulkanContext& context, const std::string& path, const Pictu
             if (const auto mesh = scene.meshBrick(key)) appendOutline(mesh->mesh.positions, outline);
         if (!outline.empty()) {
             camera = framingCamera(outline, lo, hi, double(request.width) / double(request.height));
-            fitDepthRange(camera, lo, hi);
+            fitNearPlane(camera, lo, hi);
             report = settle();
         }
     }

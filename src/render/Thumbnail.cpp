@@ -39,7 +39,7 @@ Image renderThumbnail(VulkanContext& context, const Mesh& mesh, const MaterialTa
     if (options.transparentBackground) {
         const std::vector<float> depth = target.depth();
         for (std::size_t i = 0; i < depth.size(); ++i)
-            if (depth[i] >= 1.0f) image.rgba[i * 4 + 3] = 0;
+            if (depth[i] == kNothingDrawn) image.rgba[i * 4 + 3] = 0;
     }
     return image;
 }

@@ -1,5 +1,7 @@
 #include "sculpt/Brush.h"
 
+#include "vdb_hermite/PrintableText.h"
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -123,7 +125,7 @@ Shape parseShape(const std::string& name)
     for (const auto& e : kShapeNames) {
         if (name == e.name) return e.shape;
     }
-    throw std::invalid_argument("unknown shape '" + name +
+    throw std::invalid_argument("unknown shape '" + printableText(name, 80) +
                                 "' (expected sphere, box, cylinder, capsule, torus, cone or half-space)");
 }
 

@@ -1,6 +1,7 @@
 #include "sculpt/Csg.h"
 
 #include "vdb_hermite/HermiteGrid.h"
+#include "vdb_hermite/PrintableText.h"
 
 #include <openvdb/tree/ValueAccessor.h>
 #include <tbb/blocked_range.h>
@@ -528,7 +529,7 @@ CsgMode parseCsgMode(const std::string& name)
     for (CsgMode m : {CsgMode::Add, CsgMode::Remove, CsgMode::Intersect, CsgMode::Paint, CsgMode::Erode}) {
         if (name == csgModeName(m)) return m;
     }
-    throw std::invalid_argument("unknown mode '" + name + "' (expected add, remove, intersect, paint or erode)");
+    throw std::invalid_argument("unknown mode '" + printableText(name, 80) + "' (expected add, remove, intersect, paint or erode)");
 }
 
 void checkCsgLimits(double vs, const MaterialTable& materials, const SdfField& brush, const CsgOp& op)

@@ -1,6 +1,7 @@
 #include "sculpt/FieldBrushes.h"
 
 #include "sculpt/GridTool.h"
+#include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/VolumeRegions.h"
 
 #include <tbb/blocked_range.h>
@@ -11,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -148,6 +150,41 @@ private:
 };
 
 /// The grid's points that world bounds hold (with the lattice points on their faces).
+/// The region a move's brush sweeps from where it grabbed to where it lets go: the brush at samples
+/// along the drag no farther apart than an eighth of its inner radius (the union's scallops between
+/// them are under 1% of the radius deep). What a move may change: the dragged surface stretches along it.
+class DraggedField : public SdfField {
+public:
+    DraggedField(const SdfField& brush, const Vec3d& offset) : brush_(brush), offset_(offset)
+    {
+        const double spacing = std::max(0.125 * brush.innerRadius(), 1e-9);
+        steps_ = int(std::min(std::ceil(offset.length() / spacing), 4096.0));
+    }
+    double distance(const Vec3d& world) const override
+    {
+        double d = brush_.distance(world);
+        for (int s = 1; s <= steps_; ++s) d = std::min(d, brush_.distance(world - offset_ * (double(s) / steps_)));
+        return d;
+    }
+    WorldBounds bounds() const override
+    {
+        WorldBounds b = brush_.bounds();
+        for (int a = 0; a < 3; ++a) {
+            b.min[a] = std::min(b.min[a], b.min[a] + offset_[a]);
+            b.max[a] = std::max(b.max[a], b.max[a] + offset_[a]);
+        }
+        return b;
+    }
+    double innerRadius() const override { return brush_.innerRadius(); }
+    double lipschitz() const override { return brush_.lipschitz(); }
+    double evaluationCost() const override { return brush_.evaluationCost() * (steps_ + 1); }
+
+private:
+    const SdfField& brush_;
+    Vec3d offset_;
+    int steps_ = 0;
+};
+
 PointRange pointsWithin(const LatticeGrid& g, const WorldBounds& bounds)
 {
     PointRange out;
@@ -245,7 +282,7 @@ Falloff parseFalloff(const std::string& name)
 {
     for (Falloff f : {Falloff::Smooth, Falloff::Linear, Falloff::Constant})
         if (name == falloffName(f)) return f;
-    throw std::invalid_argument("unknown falloff '" + name + "' (smooth, linear or constant)");
+    throw std::invalid_argument("unknown falloff '" + printableText(name, 80) + "' (smooth, linear or constant)");
 }
 
 double falloffWeight(Falloff falloff, double depth, double innerRadius)
@@ -303,7 +340,11 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     const double h = volume.voxelSize();
     const WorldBounds bounds = brush.bounds();
     const double inner = brush.innerRadius();
-    const auto weightAt = [&](const Vec3d& world) { return op.strength * falloffWeight(op.falloff, -brush.distance(world), inner); };
+    // A move carries a core of full weight, a voxel and a half deep (at most half the brush): dragged
+    // several radii, the surface about the grabbed point still spans a voxel, so the point the pointer
+    // holds stays under it instead of thinning to a needle the lattice cannot hold.
+    const double core = op.mode == FieldMode::Move ? std::min(1.5 * h, 0.5 * inner) : 0.0;
+    const auto weightAt = [&](const Vec3d& world) { return op.strength * falloffWeight(op.falloff, core - brush.distance(world), inner); };
     const auto latticeBox = [&](double grow, std::array<int32_t, 3>& lo, std::array<int32_t, 3>& dims) {
         for (int a = 0; a < 3; ++a) {
             lo[std::size_t(a)] = int32_t(std::floor((bounds.min[a] - grow) / h));
@@ -353,8 +394,12 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     old.values.resize(solid.distance.size());
     for (std::size_t n = 0; n < old.values.size(); ++n) old.values[n] = float(double(solid.distance[n]) * h);
     // Only points inside the brush change (the weight is zero elsewhere, and the written-back field is
-    // clipped by the brush): the work below is done on the brush's points, not on the whole band.
-    const PointRange inBrush = pointsWithin(old, bounds);
+    // clipped by the brush): the work below is done on the brush's points, not on the whole band. A move
+    // changes the region its brush sweeps along the drag.
+    std::optional<DraggedField> dragged;
+    if (op.mode == FieldMode::Move) dragged.emplace(brush, op.offset);
+    const SdfField& changed = dragged ? static_cast<const SdfField&>(*dragged) : brush;
+    const PointRange inBrush = pointsWithin(old, changed.bounds());
 
     // The material of new voxels: the op's, else the most common solid one inside the brush.
     MaterialId material = op.material.value_or(kEmptyMaterial);
@@ -417,14 +462,34 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
         break;
     }
     case FieldMode::Move: {
-        // Each surface point p moves to p + w(p) offset (w where the brush grabbed it); a lattice point x
-        // takes the old field where it came from, p = x - w(p) offset, found by fixed-point steps (they
-        // converge while the offset is shorter than the falloff is wide). Outside the brush p = x.
+        // Each point p moves to p + w(p) offset (w where the brush grabbed it). A lattice point x takes
+        // the old field where it came from: p = x - t offset with t = w(p), a root of
+        // g(t) = w(x - t offset) - t on [0, 1] (g(0) >= 0 >= g(1), so there is one). A long drag folds
+        // the trailing side over itself and x then has several sources: x is solid if any of them is
+        // (the smallest of their fields), so the dragged bump stays whole however far it goes.
+        constexpr int kSamples = 16, kBisections = 24;
         forEachPoint(inBrush, [&](int32_t i, int32_t j, int32_t k) {
             const Vec3d x = old.pointOf(i, j, k);
-            Vec3d p = x - op.offset * double(weight[old.index(i, j, k)]);
-            for (int step = 0; step < 8; ++step) p = x - op.offset * weightAt(p);
-            next.values[old.index(i, j, k)] = float(old.sample(p));
+            const auto g = [&](double t) { return weightAt(x - op.offset * t) - t; };
+            double best = std::numeric_limits<double>::infinity();
+            double t0 = 0.0, g0 = g(0.0);
+            if (g0 == 0.0) best = old.sample(x);
+            for (int s = 1; s <= kSamples; ++s) {
+                const double t1 = double(s) / kSamples, g1 = g(t1);
+                if (g1 == 0.0) best = std::min(best, old.sample(x - op.offset * t1));
+                else if ((g0 > 0.0) != (g1 > 0.0) && g0 != 0.0) {
+                    double lo = t0, hi = t1;
+                    const bool negativeAtLo = g0 < 0.0;
+                    for (int b = 0; b < kBisections; ++b) {
+                        const double mid = 0.5 * (lo + hi);
+                        ((g(mid) < 0.0) == negativeAtLo ? lo : hi) = mid;
+                    }
+                    best = std::min(best, old.sample(x - op.offset * (0.5 * (lo + hi))));
+                }
+                t0 = t1;
+                g0 = g1;
+            }
+            next.values[old.index(i, j, k)] = float(best);
         });
         break;
     }
@@ -433,8 +498,8 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     // Write back inside the brush: add what the new field holds and the old did not, then remove what the
     // new field leaves. Outside the brush nothing changes.
     const double lipschitz = std::max({1.0, next.lipschitz(inBrush.grown(1, next.dims)), old.lipschitz()});
-    EditStats stats = applyCsg(volume, ClippedGridField(next, 1.0, brush, &old, lipschitz), CsgOp{CsgMode::Add, material, 1.0, {}});
-    stats.append(applyCsg(volume, ClippedGridField(next, -1.0, brush, nullptr, lipschitz), CsgOp{CsgMode::Remove, material, 1.0, {}}));
+    EditStats stats = applyCsg(volume, ClippedGridField(next, 1.0, changed, &old, lipschitz), CsgOp{CsgMode::Add, material, 1.0, {}});
+    stats.append(applyCsg(volume, ClippedGridField(next, -1.0, changed, nullptr, lipschitz), CsgOp{CsgMode::Remove, material, 1.0, {}}));
     return stats;
 }
 

@@ -13,7 +13,9 @@
 //             distance is linear and stays as it is; edges and corners round off)
 //   flatten   phi' = phi + w (P - phi), P the distance to the plane fitted under the brush (centroid and
 //             mean normal of the surface there, weighted by w)
-//   move      phi'(x) = phi(x - w(x) offset)  (the surface under the brush centre moves by offset)
+//   move      each point p moves to p + w(p) offset, so phi'(x) = phi(p) for the p that lands on x (the
+//             surface under the brush centre moves by offset); w is full within a voxel and a half
+//             of the centre, so a drag of several radii keeps the grabbed point under the pointer
 // Voxels the brush adds take `material`, else the most common solid material under the brush.
 #pragma once
 

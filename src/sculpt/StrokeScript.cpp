@@ -38,7 +38,7 @@ void checkKeys(const json& obj, const std::string& where, std::initializer_list<
     for (auto it = obj.begin(); it != obj.end(); ++it) {
         bool ok = false;
         for (const char* a : allowed) ok = ok || it.key() == a;
-        if (!ok) fail(where, "unknown key '" + it.key() + "'");
+        if (!ok) fail(where, "unknown key '" + printableText(it.key(), 80) + "'");
     }
 }
 
@@ -150,7 +150,7 @@ Brush parseBrush(const json& b, const std::string& where, const Placement& place
                 const std::string& k = it.key();
                 const bool known = k == "at" || k == "rotate" || k == "scale" || k == "op" ||
                                    std::find_if(keys.begin(), keys.end(), [&](const char* s) { return k == s; }) != keys.end();
-                if (!known) fail(pw, "unknown key '" + k + "'");
+                if (!known) fail(pw, "unknown key '" + printableText(k, 80) + "'");
             }
             BrushPart part;
             part.primitive = parsePrimitive(pj, pw);
@@ -325,7 +325,7 @@ StrokeScript parseStrokeScript(const std::string& jsonText)
             Material m;
             m.name = text(ms[i], "name", where);
             if (m.name.empty()) fail(where + ".name", "must not be empty");
-            if (!seen.insert(m.name).second) fail(where + ".name", "duplicate material '" + m.name + "'");
+            if (!seen.insert(m.name).second) fail(where + ".name", "duplicate material '" + printableText(m.name, 80) + "'");
             if (ms[i].contains("color")) {
                 const json& c = ms[i].at("color");
                 if (!c.is_array() || (c.size() != 3 && c.size() != 4)) fail(where + ".color", "must be [r,g,b] or [r,g,b,a]");
@@ -355,16 +355,16 @@ StrokeScript loadStrokeScript(const std::string& path)
 {
     // A FIFO or a device would be read forever; a huge file is not a script.
     struct stat st;
-    if (::stat(path.c_str(), &st) != 0) throw ScriptError("cannot open script '" + path + "': " + std::strerror(errno));
-    if (!S_ISREG(st.st_mode)) throw ScriptError("script '" + path + "' is not a regular file");
+    if (::stat(path.c_str(), &st) != 0) throw ScriptError("cannot open script '" + printableText(path, 200) + "': " + std::strerror(errno));
+    if (!S_ISREG(st.st_mode)) throw ScriptError("script '" + printableText(path, 200) + "' is not a regular file");
     if (uint64_t(st.st_size) > kMaxScriptBytes)
-        throw ScriptError("script '" + path + "' is " + std::to_string(st.st_size) + " bytes; scripts may have at most " +
+        throw ScriptError("script '" + printableText(path, 200) + "' is " + std::to_string(st.st_size) + " bytes; scripts may have at most " +
                           std::to_string(kMaxScriptBytes));
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw ScriptError("cannot open script '" + path + "'");
+    if (!in) throw ScriptError("cannot open script '" + printableText(path, 200) + "'");
     std::ostringstream text;
     text << in.rdbuf();
-    if (in.bad()) throw ScriptError("cannot read script '" + path + "'");
+    if (in.bad()) throw ScriptError("cannot read script '" + printableText(path, 200) + "'");
     StrokeScript script = parseStrokeScript(text.str());
     loadScriptTools(script, std::filesystem::path(path).parent_path().string());
     return script;
@@ -381,7 +381,7 @@ std::string toolFileHint(const std::string& file)
         foreign = ext == ".vdb" && classifyVdbFile(file) == VdbFileKind::Other;
     } catch (const std::exception&) { // unreadable: the error says so already
     }
-    if (ext == ".vdbclay") return " (a store: make a tool of it with 'vdbclay tool make " + file + " -o TOOL.vdb')";
+    if (ext == ".vdbclay") return " (a store: make a tool of it with 'vdbclay tool make " + printableText(file, 200) + " -o TOOL.vdb')";
     if (foreign) return " (bring it in with 'vdbclay import', then 'vdbclay tool make')";
     return "";
 }
@@ -406,7 +406,7 @@ void loadScriptTools(StrokeScript& script, const std::string& folder, ToolCache&
             try {
                 found = loaded.emplace(file, GridTool::load(file)).first;
             } catch (const std::exception& e) {
-                throw ScriptError("ops[" + std::to_string(i) + "].brush.file: cannot use '" + file + "' as a tool: " + e.what() +
+                throw ScriptError("ops[" + std::to_string(i) + "].brush.file: cannot use '" + printableText(file, 200) + "' as a tool: " + e.what() +
                                   toolFileHint(file));
             }
         }
@@ -418,7 +418,7 @@ const char* opModeName(const ScriptOp& op) { return op.field ? fieldModeName(op.
 
 WorldBounds opBounds(const ScriptOp& op, double voxelSize)
 {
-    if (!op.toolFile.empty() && !op.tool) throw ScriptError("the tool '" + op.toolFile + "' is not loaded");
+    if (!op.toolFile.empty() && !op.tool) throw ScriptError("the tool '" + printableText(op.toolFile, 200) + "' is not loaded");
     WorldBounds one = op.tool ? PlacedTool(op.tool, op.placement).bounds() : op.brush.bounds();
     if (one.bounded() && op.field) {
         const double reach = fieldBrushReach(op.brush, *op.field, voxelSize);
@@ -488,14 +488,14 @@ std::vector<OpStep> withSymmetry(std::vector<OpStep> steps, const Symmetry& symm
 std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTable& table, double voxelSize)
 {
     const std::string where = "ops[" + std::to_string(index) + "]";
-    if (!s.toolFile.empty() && !s.tool) throw ScriptError(where + ".brush.file: the tool '" + s.toolFile + "' is not loaded");
+    if (!s.toolFile.empty() && !s.tool) throw ScriptError(where + ".brush.file: the tool '" + printableText(s.toolFile, 200) + "' is not loaded");
     CsgOp op;
     op.mode = s.mode;
     op.strength = s.strength;
     op.erodeDepth = s.depth;
     if (!s.material.empty()) {
         const auto id = table.find(s.material);
-        if (!id) throw ScriptError(where + ".material: '" + s.material + "' is neither in the volume nor in the script's materials");
+        if (!id) throw ScriptError(where + ".material: '" + printableText(s.material, 80) + "' is neither in the volume nor in the script's materials");
         op.material = *id;
     }
     std::vector<OpStep> plain;

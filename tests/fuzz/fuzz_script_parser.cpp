@@ -1,8 +1,10 @@
 // The stroke-script parser and the limits check on arbitrary text: a script parses or is refused with a
-// ScriptError; a parsed script's ops pass or fail the limits with std::invalid_argument.
+// ScriptError of one printable line; a parsed script's ops pass or fail the limits with std::invalid_argument.
 #include "sculpt/StrokeScript.h"
+#include "vdb_hermite/PrintableText.h"
 
 #include <cstdint>
+#include <cstdlib>
 #include <string>
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
@@ -24,7 +26,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
             } catch (const std::invalid_argument&) {
             }
         }
-    } catch (const vdbclay::ScriptError&) {
+    } catch (const vdbclay::ScriptError& e) {
+        if (!vdbclay::isPrintableName(e.what(), std::string::npos)) std::abort(); // raw bytes of the script reach a terminal
     } catch (const std::invalid_argument&) { // a material the table refuses (script materials are checked on parse)
     }
     return 0;

@@ -1,0 +1,252 @@
+// The editing session sculpts as a sculptor expects (issue 37): strokes follow the surface as the stroke
+// found it, add and remove change it by at most strength x radius, grab keeps the grabbed point under the
+// pointer, and the record holds each stroke point's ray beside the point it placed.
+#include "editor/EditingSession.h"
+#include "editor/CameraControl.h"
+#include "sculpt/StrokeScript.h"
+#include "support/TestUtil.h"
+#include "vdb_hermite/VolumeIO.h"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+using namespace vdbclay;
+using namespace vdbclay::test;
+
+namespace {
+
+constexpr double kBall = 20.0;
+
+std::string makeBall(const TempDir& dir, const std::string& name = "ball.vdb")
+{
+    Volume v(1.0);
+    runStrokeScript(v, parseStrokeScript(nlohmann::json{{"ops", {{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", kBall}}}}}}}.dump()));
+    const std::string path = dir.file(name);
+    saveVolume(v, path);
+    return path;
+}
+
+SessionOptions quiet()
+{
+    SessionOptions o;
+    o.memoryBudgetBytes = 256ull << 20;
+    o.autosaveSeconds = 1e9;
+    o.idleAutosaveSeconds = 1e9;
+    o.message = [](const std::string& m) { std::fprintf(stderr, "session: %s\n", m.c_str()); };
+    return o;
+}
+
+double length(const std::array<double, 3>& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+std::array<double, 3> minus(const std::array<double, 3>& a, const std::array<double, 3>& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+
+const std::array<double, 3> kEye{0.0, 0.0, 80.0};
+
+/// The ray from the eye on +z through `aim`.
+Ray rayTowards(const std::array<double, 3>& aim)
+{
+    std::array<double, 3> d = minus(aim, kEye);
+    const double n = length(d);
+    for (double& x : d) x /= n;
+    return {kEye, d};
+}
+
+/// Looks at the ball from the eye and streams it in (a ray meets only what is resident).
+void useCamera(EditingSession& session)
+{
+    Command c;
+    c.kind = Command::Kind::SetCamera;
+    c.camera.eye = kEye;
+    c.camera.target = {0, 0, 0};
+    session.apply(c);
+    for (int i = 0; i < 3; ++i) {
+        session.frame(0.0, {640, 480});
+        session.scene().waitForLoads();
+    }
+}
+
+void useBrush(EditingSession& session, const std::string& mode, double radius, double strength, bool accumulate = false)
+{
+    Command c;
+    c.kind = Command::Kind::SetBrush;
+    c.brush.emplace();
+    c.brush->mode = mode;
+    c.brush->radius = radius;
+    c.brush->strength = strength;
+    c.brush->accumulate = accumulate;
+    session.apply(c);
+}
+
+void stroke(EditingSession& session, Command::Kind kind, const Ray& ray)
+{
+    Command c;
+    c.kind = kind;
+    c.ray = ray;
+    session.apply(c);
+}
+
+void endStroke(EditingSession& session)
+{
+    Command c;
+    c.kind = Command::Kind::StrokeEnd;
+    session.apply(c);
+}
+
+/// A sideways drag across the front of the ball, 25 pointer moves from x = -12 to 12.
+void sidewaysDrag(EditingSession& session, double y = 0.0)
+{
+    for (int i = 0; i <= 24; ++i) stroke(session, i == 0 ? Command::Kind::StrokeBegin : Command::Kind::StrokeMove, rayTowards({-12.0 + i, y, 0.0}));
+    endStroke(session);
+}
+
+/// How far the surface lies from the ball's centre along the direction to `aim` (a ray from outside).
+double surfaceRadius(const EditingSession& session, const std::array<double, 3>& direction)
+{
+    const double n = length(direction);
+    const std::array<double, 3> d{direction[0] / n, direction[1] / n, direction[2] / n};
+    const std::array<double, 3> from{d[0] * 60.0, d[1] * 60.0, d[2] * 60.0};
+    const auto hit = session.pick(from, {-d[0], -d[1], -d[2]});
+    REQUIRE(hit);
+    return length(hit->point);
+}
+
+} // namespace
+
+TEST_CASE("editor: a sideways add stroke follows the surface as it began and raises it by at most strength x radius", "[editor][sculpt]")
+{
+    TempDir dir;
+    const double radius = 4.0, strength = 0.5;
+    for (const std::string mode : {"add", "remove"}) {
+        EditingSession session(makeBall(dir, mode + ".vdb"), quiet());
+        useCamera(session);
+        useBrush(session, mode, radius, strength);
+        sidewaysDrag(session);
+        // Every stroke point lies on the ball as it was (a crossing is within a voxel of the sphere), and
+        // the record holds the ray beside it.
+        std::vector<std::array<double, 3>> points;
+        for (const RecordedCommand& rc : session.record().commands) {
+            const Command& c = rc.command;
+            if (c.kind != Command::Kind::StrokeBegin && c.kind != Command::Kind::StrokeMove) continue;
+            REQUIRE(c.ray);
+            REQUIRE(c.point);
+            REQUIRE(c.normal);
+            CHECK(std::fabs(length(*c.point) - kBall) < 1.0);
+            points.push_back(*c.point);
+        }
+        CHECK(points.size() == 25);
+        // The surface under the stroke moved by strength x radius (a voxel of tolerance for the lattice).
+        double highest = 0.0, lowest = 1e9;
+        for (const auto& p : points) {
+            const double r = surfaceRadius(session, p);
+            highest = std::max(highest, r);
+            lowest = std::min(lowest, r);
+        }
+        INFO(mode << ": surface radius under the stroke from " << lowest << " to " << highest);
+        if (mode == "add") {
+            CHECK(highest <= kBall + strength * radius + 1.0);
+            CHECK(lowest >= kBall + strength * radius - 1.0);
+        } else {
+            CHECK(lowest >= kBall - strength * radius - 1.0);
+            CHECK(highest <= kBall - strength * radius + 1.0);
+        }
+    }
+}
+
+TEST_CASE("editor: with accumulate on, a stroke builds on itself and climbs towards the camera", "[editor][sculpt]")
+{
+    TempDir dir;
+    const std::string path = makeBall(dir);
+    EditingSession session(path, quiet());
+    useCamera(session);
+    useBrush(session, "add", 4.0, 1.0, true);
+    // The pointer stays put: each stamp lands on the previous one.
+    stroke(session, Command::Kind::StrokeBegin, rayTowards({0, 0, 0}));
+    for (int i = 0; i < 6; ++i) stroke(session, Command::Kind::StrokeMove, rayTowards({0.5 * (i % 2), 0, 0}));
+    endStroke(session);
+    const Command& last = session.record().commands[session.record().commands.size() - 2].command;
+    REQUIRE(last.point);
+    CHECK((*last.point)[2] > kBall + 3.0);
+
+    // Off, the same pointer path stays on the ball as it began.
+    EditingSession fresh(makeBall(dir, "again.vdb"), quiet());
+    useCamera(fresh);
+    useBrush(fresh, "add", 4.0, 1.0, false);
+    stroke(fresh, Command::Kind::StrokeBegin, rayTowards({0, 0, 0}));
+    for (int i = 0; i < 6; ++i) stroke(fresh, Command::Kind::StrokeMove, rayTowards({0.5 * (i % 2), 0, 0}));
+    endStroke(fresh);
+    for (const RecordedCommand& rc : fresh.record().commands)
+        if (rc.command.point) CHECK(std::fabs(length(*rc.command.point) - kBall) < 1.0);
+}
+
+TEST_CASE("editor: grab keeps the grabbed point under the pointer for a drag of three radii", "[editor][sculpt]")
+{
+    TempDir dir;
+    const std::string path = makeBall(dir);
+    EditingSession session(path, quiet());
+    useCamera(session);
+    const double radius = 6.0;
+    useBrush(session, "move", radius, 1.0);
+    stroke(session, Command::Kind::StrokeBegin, rayTowards({0, 0, 0}));
+    REQUIRE(session.strokeActive());
+    const std::array<double, 3> grabbed = session.strokePoint();
+    CHECK(std::fabs(grabbed[2] - kBall) < 1.0);
+    // The pointer crosses the view: the grabbed point follows it on the plane facing the camera.
+    const int steps = 18;
+    std::array<double, 3> aim{};
+    for (int i = 1; i <= steps; ++i) {
+        aim = {3.0 * radius * i / steps, 0.0, grabbed[2]};
+        stroke(session, Command::Kind::StrokeMove, rayTowards(aim));
+    }
+    endStroke(session);
+    // The surface under the pointer is where the grabbed point went (half a voxel).
+    const Ray last = rayTowards(aim);
+    const auto hit = session.pick(last.origin, last.direction);
+    REQUIRE(hit);
+    INFO("the pointer's ray meets the surface at " << hit->point[0] << ", " << hit->point[1] << ", " << hit->point[2]);
+    CHECK(length(minus(hit->point, aim)) <= 0.5);
+    // One stroke, one undo step; undone, the ball is whole again.
+    CHECK(session.history().undoDepth() == 1);
+    Command undo;
+    undo.kind = Command::Kind::Undo;
+    session.apply(undo);
+    CHECK_FALSE(session.pick(last.origin, last.direction)); // the pointer's ray passes beside the ball
+    const auto back = session.pick({aim[0], 0.0, 60.0}, {0, 0, -1});
+    REQUIRE(back);
+    CHECK(std::fabs(length(back->point) - kBall) < 1.0);
+}
+
+TEST_CASE("replay: a session of rays replays to the same scene and every recorded point is placed again", "[editor][replay][sculpt]")
+{
+    TempDir dir;
+    SessionRecord record;
+    {
+        EditingSession session(makeBall(dir, "a.vdb"), quiet());
+        useCamera(session);
+        useBrush(session, "add", 3.0, 0.6);
+        sidewaysDrag(session, 4.0);
+        session.frame(0.1, {640, 480});
+        useBrush(session, "move", 5.0, 1.0);
+        stroke(session, Command::Kind::StrokeBegin, rayTowards({0, -6, 0}));
+        for (int i = 1; i <= 6; ++i) stroke(session, Command::Kind::StrokeMove, rayTowards({0, -6.0 - i, 19.0}));
+        endStroke(session);
+        session.frame(0.2, {640, 480});
+        useBrush(session, "inflate", 4.0, 0.8);
+        sidewaysDrag(session, -3.0);
+        session.frame(0.3, {640, 480});
+        session.autosave();
+        record = session.record();
+    }
+    // Through the file, as a bug report would carry it.
+    saveSessionRecord(record, dir.file("s.json"));
+    const SessionRecord loaded = loadSessionRecord(dir.file("s.json"));
+    EditingSession replayed(makeBall(dir, "b.vdb"), quiet());
+    replaySession(replayed, loaded);
+    CHECK(replayed.stats().placementsDiffering == 0);
+    replayed.autosave();
+    EditingSession original(dir.file("a.vdb"), quiet());
+    CHECK(identical(original.scene().store().loadLevel(0), replayed.scene().store().loadLevel(0)));
+}
