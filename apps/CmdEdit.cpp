@@ -2,7 +2,8 @@
 // a recorded session with no window, then saves, draws or exports what it made.
 #include "Cli.h"
 
-#include "editor/DesktopEditor.h"
+#include "desktop/DesktopEditor.h"
+#include "desktop/DesktopSettings.h"
 #include "editor/EditedScene.h"
 #include "editor/EditingSession.h"
 #include "render/ImageFile.h"
@@ -39,7 +40,7 @@ CLI::App* addEditCommand(CLI::App& parent, EditOptions& o)
     cmd->add_flag("--discard-recovery", o.discardRecovery, "A .vdb: drop edits autosaved after its last save instead of recovering them");
     cmd->add_option("--autosave", o.autosaveSeconds, "Seconds between autosaves while sculpting")->capture_default_str()->type_name("S")->check(positiveNumber());
     cmd->add_flag("--json", o.json, "Headless: print {\"recovered_edits\", \"frames\", \"commands\", \"stamps\", \"undo_depth\", ...}");
-    cmd->footer(desktopShortcutsHelp());
+    cmd->footer(desktopShortcutsHelp(loadKeymap(defaultConfigFolder(), false, nullptr)));
     return cmd;
 }
 

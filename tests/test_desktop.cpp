@@ -3,7 +3,7 @@
 // replay, a menu clicked through Dear ImGui changes what the next stroke does, and recovered edits are
 // offered. Skipped, saying so, where
 // there is no display or no Vulkan device.
-#include "editor/DesktopEditor.h"
+#include "desktop/DesktopEditor.h"
 #include "editor/EditingSession.h"
 #include "render/VulkanContext.h"
 #include "sculpt/StrokeScript.h"
@@ -56,12 +56,15 @@ Volume committed(EditingSession& session)
 struct UiDriver {
     std::optional<std::array<float, 2>> pointer;
     bool button = false;
+    std::string configFolder;
 
     DesktopOptions options()
     {
         DesktopOptions o;
         o.validation = true;
-        o.windowSize = {800, 600};
+        o.windowSize = std::array<int, 2>{800, 600};
+        o.configFolder = configFolder; // nothing kept between tests unless a test asks
+
         o.beforeUi = [this](uint64_t) {
             if (!pointer) return;
             ImGuiIO& io = ImGui::GetIO();

@@ -250,3 +250,48 @@ TEST_CASE("replay: a session of rays replays to the same scene and every recorde
     EditingSession original(dir.file("a.vdb"), quiet());
     CHECK(identical(original.scene().store().loadLevel(0), replayed.scene().store().loadLevel(0)));
 }
+
+TEST_CASE("editor: orbit about a pivot keeps the pivot where it is on the screen, axis views look along the axes", "[editor][camera]")
+{
+    render::Camera c;
+    c.eye = {30, 20, 80};
+    c.target = {0, 0, 0};
+    const std::array<double, 3> pivot{10, 5, 12};
+    const std::array<int, 2> viewport{800, 600};
+    // Where the pivot lies on the screen: the angles of its direction from the view's axis.
+    const auto screenAngles = [&](const render::Camera& cam) {
+        const Ray centre = pointerRay(cam, viewport, 400, 300);
+        std::array<double, 3> d = minus(pivot, cam.eye);
+        const double n = length(d);
+        for (double& x : d) x /= n;
+        return std::acos(std::clamp(d[0] * centre.direction[0] + d[1] * centre.direction[1] + d[2] * centre.direction[2], -1.0, 1.0));
+    };
+    const render::Camera turned = orbitAbout(c, pivot, 25.0, -10.0);
+    CHECK(std::fabs(screenAngles(turned) - screenAngles(c)) < 1e-9);
+    CHECK(std::fabs(length(minus(turned.eye, pivot)) - length(minus(c.eye, pivot))) < 1e-9);
+    CHECK(length(minus(turned.eye, c.eye)) > 1.0);
+    // The view turns as orbit() turns it about the target.
+    const render::Camera plain = orbit(c, 25.0, -10.0);
+    const auto direction = [](const render::Camera& cam) {
+        std::array<double, 3> d = minus(cam.target, cam.eye);
+        const double n = length(d);
+        for (double& x : d) x /= n;
+        return d;
+    };
+    CHECK(length(minus(direction(turned), direction(plain))) < 1e-9);
+
+    const double distance = length(minus(c.eye, c.target));
+    const std::pair<AxisView, std::array<double, 3>> views[] = {{AxisView::Front, {0, 0, 1}}, {AxisView::Back, {0, 0, -1}}, {AxisView::Right, {1, 0, 0}},
+                                                                {AxisView::Left, {-1, 0, 0}}, {AxisView::Top, {0, 1, 0}}, {AxisView::Bottom, {0, -1, 0}}};
+    for (const auto& [view, back] : views) {
+        const render::Camera v = axisView(c, view);
+        CHECK(v.target == c.target);
+        for (std::size_t a = 0; a < 3; ++a) CHECK(v.eye[a] == Approx(c.target[a] + back[a] * distance));
+        const Ray r = pointerRay(v, viewport, 400, 300); // a usable view, even straight down
+        for (double x : r.direction) CHECK(std::isfinite(x));
+    }
+    const render::Camera centred = frameOn(c, pivot, 7.0);
+    CHECK(centred.target == pivot);
+    CHECK(length(minus(centred.eye, pivot)) == Approx(7.0));
+    CHECK(length(minus(direction(centred), direction(c))) < 1e-12);
+}

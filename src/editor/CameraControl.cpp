@@ -58,6 +58,49 @@ render::Camera orbit(const render::Camera& camera, double yawDegrees, double pit
     return out;
 }
 
+render::Camera orbitAbout(const render::Camera& camera, const std::array<double, 3>& pivotPoint, double yawDegrees, double pitchDegrees)
+{
+    const glm::dvec3 up = glm::normalize(vec(camera.up));
+    const Frame f = frameOf(camera);
+    const double elevation = glm::degrees(std::asin(std::clamp(glm::dot(-f.forward, up), -1.0, 1.0)));
+    const double pitch = std::clamp(elevation + pitchDegrees, -89.0, 89.0) - elevation;
+    const glm::dmat4 turn = glm::rotate(glm::dmat4(1.0), glm::radians(-yawDegrees), up) * glm::rotate(glm::dmat4(1.0), glm::radians(-pitch), f.right);
+    const glm::dvec3 pivot = vec(pivotPoint);
+    const auto about = [&](const std::array<double, 3>& p) { return arr(pivot + glm::dvec3(turn * glm::dvec4(vec(p) - pivot, 0.0))); };
+    render::Camera out = camera;
+    out.eye = about(camera.eye);
+    out.target = about(camera.target);
+    return out;
+}
+
+render::Camera axisView(const render::Camera& camera, AxisView view)
+{
+    const Frame f = frameOf(camera);
+    // Up stays +y: a view along y draws -z (or +z from below) at the top, as usableUp makes it.
+    glm::dvec3 back{0, 0, 1};
+    switch (view) {
+    case AxisView::Front: break;
+    case AxisView::Back: back = {0, 0, -1}; break;
+    case AxisView::Right: back = {1, 0, 0}; break;
+    case AxisView::Left: back = {-1, 0, 0}; break;
+    case AxisView::Top: back = {0, 1, 0}; break;
+    case AxisView::Bottom: back = {0, -1, 0}; break;
+    }
+    render::Camera out = camera;
+    out.eye = arr(vec(camera.target) + back * f.distance);
+    out.up = {0, 1, 0};
+    return out;
+}
+
+render::Camera frameOn(const render::Camera& camera, const std::array<double, 3>& point, double distance)
+{
+    const Frame f = frameOf(camera);
+    render::Camera out = camera;
+    out.target = point;
+    out.eye = arr(vec(point) - f.forward * std::max(distance, 1e-9));
+    return out;
+}
+
 render::Camera pan(const render::Camera& camera, const std::array<int, 2>& viewport, double dxPixels, double dyPixels)
 {
     const Frame f = frameOf(camera);

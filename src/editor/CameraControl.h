@@ -17,6 +17,16 @@ namespace vdbclay {
 Ray pointerRay(const render::Camera& camera, const std::array<int, 2>& viewport, double x, double y);
 /// Turns the eye about the target: yaw about the up axis, pitch towards it (kept 1 degree off the poles).
 render::Camera orbit(const render::Camera& camera, double yawDegrees, double pitchDegrees);
+/// Turns the camera about `pivot` (the surface point under the cursor when the orbit began): eye and
+/// target turn together, so the view turns as much as orbit() would and the pivot stays where it is on
+/// the screen. Pitch is kept 1 degree off the poles.
+render::Camera orbitAbout(const render::Camera& camera, const std::array<double, 3>& pivot, double yawDegrees, double pitchDegrees);
+/// The axis views (Blender's numpad): the camera looks at its target along an axis from the front (+z),
+/// the right (+x) or the top (+y), or from the opposite side, at the same distance.
+enum class AxisView { Front, Back, Right, Left, Top, Bottom };
+render::Camera axisView(const render::Camera& camera, AxisView view);
+/// Centres the view on `point` from the same direction, at `distance` from it.
+render::Camera frameOn(const render::Camera& camera, const std::array<double, 3>& point, double distance);
 /// Slides eye and target across the view by a pointer drag of (dx, dy) pixels: the point at the target's
 /// depth follows the pointer.
 render::Camera pan(const render::Camera& camera, const std::array<int, 2>& viewport, double dxPixels, double dyPixels);

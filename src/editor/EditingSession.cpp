@@ -2,6 +2,7 @@
 
 #include "editor/CameraControl.h"
 #include "render/Framing.h"
+#include "scene/OutputCheck.h"
 #include "sculpt/StrokeScript.h"
 #include "vdb_hermite/RegionCodec.h"
 
@@ -63,6 +64,7 @@ EditingSession::EditingSession(const std::string& scenePath, const SessionOption
     scene_ = std::make_unique<StreamingScene>(prepared_.storePath, streaming);
     const auto [lo, hi] = sceneBox();
     camera_ = render::framingCamera(lo, hi, 16.0 / 9.0);
+    unsaved_ = prepared_.recoveredEdits > 0;
     brush_.radius = 8.0 * scene_->store().voxelSize();
     brush_.distance = 2.0 * scene_->store().voxelSize();
 }
@@ -115,6 +117,7 @@ void EditingSession::apply(const Command& given)
         if (stroke_.active) endStroke();
         saveScene(*scene_, prepared_, scenePath_, command.path.empty() ? scenePath_ : command.path);
         editedSinceAutosave_ = false;
+        if (command.path.empty() || samePlace(command.path, scenePath_)) unsaved_ = false; // a copy saved elsewhere leaves the scene's file behind
         break;
     case Command::Kind::SetCamera: camera_ = command.camera; break;
     case Command::Kind::DefineMaterial: defineMaterial(command.material); break;
@@ -144,6 +147,7 @@ void EditingSession::applyOp(const nlohmann::json& op)
         stroke_.ops.push_back(op);
         ++stats_.stampsApplied;
         editedSinceAutosave_ = true;
+        if (report.bricksChanged > 0) unsaved_ = true;
     } catch (const std::exception& e) { // ScriptError, limits: the stroke goes on without this stretch
         ++stats_.opsRefused;
         notify(std::string("the brush could not be applied here: ") + e.what());
@@ -292,6 +296,7 @@ void EditingSession::undo()
     if (const auto images = history_.undo()) {
         bricksChanged_ += scene_->restoreLeaves(*images).bricksChanged;
         editedSinceAutosave_ = true;
+        unsaved_ = true;
     }
 }
 
@@ -301,6 +306,7 @@ void EditingSession::redo()
     if (const auto images = history_.redo()) {
         bricksChanged_ += scene_->restoreLeaves(*images).bricksChanged;
         editedSinceAutosave_ = true;
+        unsaved_ = true;
     }
 }
 
@@ -309,6 +315,7 @@ void EditingSession::defineMaterial(const nlohmann::json& material)
     const StrokeScript script = parseStrokeScript(nlohmann::json{{"materials", {material}}, {"ops", nlohmann::json::array()}}.dump());
     scene_->sculpt(script);
     materialsDefined_.push_back(material);
+    unsaved_ = true;
 }
 
 FrameReport EditingSession::frame(double time, const std::array<int, 2>& viewport)

@@ -55,6 +55,9 @@ public:
 
     /// Edits autosaved after the last save that this session found and kept (a session that crashed).
     uint64_t recoveredEdits() const { return prepared_.recoveredEdits; }
+    /// Whether the scene changed since it was opened or last saved into its own file (recovered edits
+    /// count): what the window's title marks with a '*'.
+    bool unsaved() const { return unsaved_; }
 
     /// Everything a user can do. Recorded with the current frame and time. A stroke stretch the brush
     /// cannot apply (too large, unknown material) is skipped with a message, never thrown; a save that
@@ -148,6 +151,7 @@ private:
     uint64_t frameNumber_ = 0;
     double time_ = 0.0, lastAutosave_ = 0.0, lastCommand_ = 0.0;
     bool editedSinceAutosave_ = false;
+    bool unsaved_ = false;
     double editMs_ = 0.0;
     uint64_t bricksChanged_ = 0;
 };

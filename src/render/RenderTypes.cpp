@@ -1,5 +1,7 @@
 #include "render/RenderTypes.h"
 
+#include "vdb_hermite/PrintableText.h"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -9,7 +11,7 @@ namespace {
 constexpr struct {
     ViewMode mode;
     const char* name;
-} kViewModes[] = {{ViewMode::Shaded, "shaded"}, {ViewMode::Lod, "lod"}, {ViewMode::Toughness, "toughness"}, {ViewMode::Normals, "normals"}};
+} kViewModes[] = {{ViewMode::Shaded, "shaded"}, {ViewMode::Lod, "lod"}, {ViewMode::Toughness, "toughness"}, {ViewMode::Normals, "normals"}, {ViewMode::Clay, "clay"}};
 } // namespace
 
 const char* viewModeName(ViewMode mode)
@@ -23,7 +25,7 @@ ViewMode parseViewMode(const std::string& name)
 {
     for (const auto& e : kViewModes)
         if (name == e.name) return e.mode;
-    throw std::invalid_argument("unknown view '" + name + "' (expected shaded, lod, toughness or normals)");
+    throw std::invalid_argument("unknown view '" + printableText(name, 80) + "' (expected shaded, clay, lod, toughness or normals)");
 }
 
 std::array<double, 3> usableUp(const Camera& camera)

@@ -37,9 +37,10 @@ enum class ViewMode : uint32_t {
     Lod = 1,       // each chunk coloured by the level it is shown at
     Toughness = 2, // colour by material toughness: blue (soft) to red (unerodable)
     Normals = 3,   // the surface normal as RGB
+    Clay = 4,      // one warm grey clay lit from the viewer (a matcap look): the form alone, without materials
 };
 const char* viewModeName(ViewMode mode);
-/// "shaded", "lod", "toughness", "normals"; throws std::invalid_argument listing them.
+/// "shaded", "lod", "toughness", "normals", "clay"; throws std::invalid_argument listing them.
 ViewMode parseViewMode(const std::string& name);
 
 /// The brush's field as the shaders evaluate it: a primitive in its local frame (same shapes and

@@ -1,8 +1,10 @@
-// The desktop editor's Dear ImGui panels: brush (mode, shape, size, strength, falloff, material, colour,
-// symmetry), custom brush editor, materials, tools, file actions, stats and help. They read the session
-// and return commands; they never change the scene themselves.
+// The desktop editor's Dear ImGui panels: brush (mode, shape, size, strength, falloff, pressure, material,
+// symmetry), custom brush editor, materials, tools, file actions (through a file browser), the view's
+// look, stats and help. They read the session and return commands; they never change the scene
+// themselves.
 #pragma once
 
+#include "desktop/FileBrowser.h"
 #include "editor/EditingSession.h"
 #include "render/RenderTypes.h"
 
@@ -15,12 +17,20 @@
 
 namespace vdbclay {
 
-/// What the stats overlay shows of the last frame.
+/// What the stats overlay shows of the last whole frame. The parts are measured one after the other
+/// inside the frame, so they never add up to more than its interval; the interval is the wall clock from
+/// one frame's start to the next (waiting for the display included).
 struct FrameFigures {
     FrameReport stream;
     render::FrameStats draw;
-    double frameMs = 0.0;   // CPU time of the last frame (input, edits, streaming, uploads, recording)
-    double editMs = 0.0;    // of which sculpting
+    double intervalMs = 0.0;        // the last frame's, wall clock
+    double averageIntervalMs = 0.0; // over the frames of about the last second
+    double inputMs = 0.0;   // events, menus and commands, sculpting left out
+    double sculptMs = 0.0;  // the commands' edits
+    double streamMs = 0.0;  // the session's frame: streaming, autosave
+    double meshMs = 0.0;    // meshing changed bricks and handing them to the renderer
+    double drawMs = 0.0;    // culling, uploads, recording and the device's work until it finished
+    double presentMs = 0.0; // acquiring and presenting the swapchain image
     uint64_t bricksShown = 0;
 };
 
@@ -45,6 +55,9 @@ public:
 
     bool showHelp = false;
     bool showStats = true;
+    render::ViewMode look = render::ViewMode::Shaded; // the view panel's choice (the window applies it)
+    bool wireframe = false;
+    std::string helpText;     // the shortcuts in effect (the window's keymap)
     std::string status;       // the last action's outcome, shown at the bottom
     std::string openRequested; // a scene the user asked to open instead (the front end reopens)
     /// The user chose to drop the edits recovered after a crash (the front end reopens the scene
@@ -58,6 +71,8 @@ private:
     void materialsPanel(EditingSession& session, std::vector<Command>& out);
     void toolsPanel(EditingSession& session, std::vector<Command>& out);
     void filePanel(EditingSession& session, std::vector<Command>& out);
+    void viewPanel();
+    void fileChosen(EditingSession& session, const std::string& path, std::vector<Command>& out);
     void statsPanel(const EditingSession& session, const FrameFigures& figures);
     void recoveryOffer(const EditingSession& session);
 
@@ -71,7 +86,7 @@ private:
     std::string materialTexture_;
     float toolMin_[3] = {-8, -8, -8}, toolMax_[3] = {8, 8, 8};
     std::string toolPath_ = "tool.vdb";
-    std::string savePath_, importPath_, exportPath_ = "scene.obj", openPath_;
+    FileBrowser browser_;
 };
 
 } // namespace vdbclay

@@ -1,13 +1,16 @@
-#include "editor/DesktopEditor.h"
+#include "desktop/DesktopEditor.h"
 
+#include "desktop/DesktopSettings.h"
 #include "editor/CameraControl.h"
-#include "editor/DesktopPanels.h"
 #include "render/Framing.h"
+#include "render/ImageFile.h"
 #include "render/Renderer.h"
 #include "render/SceneChunks.h"
 #include "render/ScenePicture.h"
 #include "render/SwapchainTarget.h"
 #include "render/VulkanContext.h"
+#include "scene/OutputCheck.h"
+#include "vdb_hermite/AtomicFile.h"
 
 #define GLFW_INCLUDE_VULKAN
 #include <GLFW/glfw3.h>
@@ -17,7 +20,9 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <deque>
 #include <filesystem>
 #include <iostream>
 
@@ -30,25 +35,65 @@ bool desktopAvailable()
     return (x && *x) || (wayland && *wayland);
 }
 
-const char* desktopShortcutsHelp()
+std::string desktopShortcutsHelp(const Keymap& keymap)
 {
-    return "Mouse: left drag sculpts with the brush; right drag (or Alt + left) orbits; middle drag (or Shift + right)\n"
-           "pans; the wheel zooms towards the surface under the cursor; hold the right button and use W A S D Q E to fly.\n"
-           "Keys:\n"
-           "  Ctrl+Z undo         Ctrl+Shift+Z / Ctrl+Y redo      Ctrl+S save\n"
-           "  [ / ]  brush smaller / larger     Shift+[ / Shift+]  weaker / stronger\n"
-           "  X      mirror across x on/off     F  frame the scene          H  help panel\n"
-           "  A add   R remove   P paint   E erode   S smooth   L flatten   I inflate   D deflate   G move (grab)\n"
-           "  Tab    stats overlay on/off       Esc  end the stroke\n";
+    return "Mouse: left drag sculpts with the brush (Ctrl inverts it: add <-> remove, inflate <-> deflate; Shift smooths);\n"
+           "right drag (or Alt + left) orbits about the surface under the cursor; middle drag (or Shift + right) pans;\n"
+           "the wheel zooms towards the surface under the cursor; hold the right button and use W A S D Q E to fly.\n"
+           "Keys (the keymap file keymap.json in the config folder rebinds them):\n" +
+           keymap.help();
+}
+
+Keymap loadKeymap(const std::string& configFolder, bool writeMissing, std::string* warning)
+{
+    if (configFolder.empty()) return Keymap::defaults();
+    const std::string path = (std::filesystem::path(configFolder) / "keymap.json").string();
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) {
+        if (writeMissing) {
+            try {
+                std::filesystem::create_directories(configFolder);
+                const std::string text = Keymap::defaults().json().dump(2) + "\n";
+                writeFileAtomically(path, [&](std::ostream& o) { o << text; });
+            } catch (const std::exception& e) {
+                if (warning) *warning = std::string("could not write the default keymap: ") + e.what();
+            }
+        }
+        return Keymap::defaults();
+    }
+    try {
+        return Keymap::load(path);
+    } catch (const KeymapError& e) {
+        if (warning) *warning = std::string(e.what()) + "; the default keys are used";
+        return Keymap::defaults();
+    }
 }
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
 
+double msBetween(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+
 void checkImgui(VkResult r)
 {
     if (r != VK_SUCCESS) std::cerr << "vdbclay: ImGui's Vulkan backend: " << render::resultName(r) << "\n";
+}
+
+/// The brush a held modifier makes of `brush`: Ctrl inverts it, Shift smooths; nullopt when neither changes it.
+std::optional<BrushSettings> modifiedBrush(const BrushSettings& brush, bool ctrl, bool shift)
+{
+    BrushSettings b = brush;
+    if (shift) b.mode = "smooth";
+    else if (ctrl) {
+        static const std::pair<const char*, const char*> opposites[] = {{"add", "remove"}, {"inflate", "deflate"}};
+        for (const auto& [one, other] : opposites) {
+            if (brush.mode == one) b.mode = other;
+            else if (brush.mode == other) b.mode = one;
+        }
+    }
+    if (b.mode == brush.mode) return std::nullopt;
+    return b;
 }
 
 /// The brush as the shaders preview it: its primitive at the pointer, sized by the brush's radius.
@@ -87,10 +132,15 @@ render::BrushOverlay overlayFor(const BrushSettings& brush, const std::array<dou
 
 struct DesktopEditor::Impl {
     enum class Drag { None, Stroke, Orbit, Pan };
+    enum class Adjust { None, Radius, Strength }; // F and Shift+F: the brush's size or strength follows the pointer
 
     DesktopEditor& self;
     EditingSession& session;
     DesktopOptions options;
+    std::string configFolder;
+    DesktopSettings settings;
+    Keymap keymap = Keymap::defaults();
+    std::string iniPath; // ImGui keeps a pointer to it
     GLFWwindow* window = nullptr;
     std::unique_ptr<render::VulkanContext> context;
     VkSurfaceKHR surface = VK_NULL_HANDLE;
@@ -102,13 +152,22 @@ struct DesktopEditor::Impl {
     DesktopPanels panels;
     FrameFigures figures;
     render::FrameStats lastStats;
-    Clock::time_point started = Clock::now(), lastFrame = Clock::now();
+    Clock::time_point started = Clock::now(), lastFrameStart = Clock::now();
+    std::deque<std::pair<Clock::time_point, double>> recentIntervals; // the last second's frame intervals
     uint64_t frames = 0;
+    bool firstFrame = true;
 
     Drag drag = Drag::None;
     double cursorX = 0.0, cursorY = 0.0;
     bool rightHeld = false;
+    std::optional<std::array<double, 3>> orbitPivot; // the surface under the cursor when the orbit began
     std::optional<SurfaceHit> hover;
+    std::optional<BrushSettings> brushBeforeModifier; // the brush to go back to after a Ctrl or Shift stroke
+    Adjust adjust = Adjust::None;
+    double adjustFromX = 0.0;
+    BrushSettings adjusted; // what the brush becomes when the drag is kept
+    bool turntable = false;
+    std::string title;
 
     const SessionRecord* replay = nullptr;
     std::size_t replayNext = 0;
@@ -119,7 +178,24 @@ struct DesktopEditor::Impl {
         return render::materialLook(session.scene().store().voxelSize(), std::filesystem::path(session.scenePath()).parent_path().string());
     }
 
-    Impl(DesktopEditor& editor, EditingSession& s, const DesktopOptions& o) : self(editor), session(s), options(o) {}
+    Impl(DesktopEditor& editor, EditingSession& s, const DesktopOptions& o) : self(editor), session(s), options(o)
+    {
+        configFolder = options.configFolder.value_or(defaultConfigFolder());
+        std::string warning;
+        settings = loadDesktopSettings(configFolder, &warning);
+        if (!warning.empty()) std::cerr << "vdbclay: warning: " << warning << "\n";
+        warning.clear();
+        keymap = loadKeymap(configFolder, true, &warning);
+        if (!warning.empty()) {
+            std::cerr << "vdbclay: warning: " << warning << "\n";
+            panels.status = warning;
+        }
+        panels.showStats = settings.showStats;
+        panels.showHelp = settings.showHelp;
+        panels.look = settings.look;
+        panels.wireframe = settings.wireframe;
+        panels.helpText = desktopShortcutsHelp(keymap);
+    }
 
     std::array<int, 2> windowSize() const
     {
@@ -174,21 +250,47 @@ struct DesktopEditor::Impl {
         apply(c);
     }
 
+    void endStroke()
+    {
+        Command c;
+        c.kind = Command::Kind::StrokeEnd;
+        apply(c);
+        drag = Drag::None;
+        if (brushBeforeModifier) {
+            setBrush(*brushBeforeModifier);
+            brushBeforeModifier.reset();
+        }
+    }
+
+    void beginAdjust(Adjust what)
+    {
+        adjust = what;
+        adjustFromX = cursorX;
+        adjusted = session.brush();
+    }
+
     void onMouseButton(int button, int action, int mods)
     {
         if (action == GLFW_RELEASE) {
             if (button == GLFW_MOUSE_BUTTON_RIGHT) rightHeld = false;
-            if (drag == Drag::Stroke && button == GLFW_MOUSE_BUTTON_LEFT) {
-                Command c;
-                c.kind = Command::Kind::StrokeEnd;
-                apply(c);
-            }
-            drag = Drag::None;
+            if (drag != Drag::Stroke) drag = Drag::None;
+            else if (button == GLFW_MOUSE_BUTTON_LEFT) endStroke();
             return;
         }
-        if (action != GLFW_PRESS || drag != Drag::None) return;
-        const bool alt = mods & GLFW_MOD_ALT, shift = mods & GLFW_MOD_SHIFT;
+        if (action != GLFW_PRESS) return;
+        if (adjust != Adjust::None) { // a click keeps the on-screen drag, the right button cancels it
+            if (button == GLFW_MOUSE_BUTTON_LEFT) setBrush(adjusted);
+            adjust = Adjust::None;
+            return;
+        }
+        if (drag != Drag::None) return;
+        const bool alt = mods & GLFW_MOD_ALT, shift = mods & GLFW_MOD_SHIFT, ctrl = mods & GLFW_MOD_CONTROL;
         if (button == GLFW_MOUSE_BUTTON_LEFT && !alt) {
+            // Ctrl and Shift change the brush for this stroke only: the commands say so, so a replay does too.
+            if (const auto modified = modifiedBrush(session.brush(), ctrl, shift)) {
+                brushBeforeModifier = session.brush();
+                setBrush(*modified);
+            }
             drag = Drag::Stroke;
             strokeTo(cursorX, cursorY, true);
         } else if (button == GLFW_MOUSE_BUTTON_MIDDLE || (button == GLFW_MOUSE_BUTTON_RIGHT && shift)) {
@@ -196,6 +298,8 @@ struct DesktopEditor::Impl {
         } else if (button == GLFW_MOUSE_BUTTON_RIGHT || button == GLFW_MOUSE_BUTTON_LEFT) {
             drag = Drag::Orbit;
             rightHeld = button == GLFW_MOUSE_BUTTON_RIGHT;
+            const auto hit = pickAt(cursorX, cursorY);
+            orbitPivot = hit ? std::optional<std::array<double, 3>>(hit->point) : std::nullopt;
         }
     }
 
@@ -204,9 +308,16 @@ struct DesktopEditor::Impl {
         const double dx = x - cursorX, dy = y - cursorY;
         cursorX = x;
         cursorY = y;
+        if (adjust == Adjust::Radius) {
+            adjusted.radius = std::max(session.brush().radius * std::exp((x - adjustFromX) / 150.0), 0.1 * session.scene().store().voxelSize());
+        } else if (adjust == Adjust::Strength) {
+            adjusted.strength = std::clamp(session.brush().strength + (x - adjustFromX) / 300.0, 0.0, 1.0);
+        }
         switch (drag) {
         case Drag::Stroke: strokeTo(x, y, false); break;
-        case Drag::Orbit: setCamera(orbit(session.camera(), dx * 0.3, dy * 0.3)); break;
+        case Drag::Orbit:
+            setCamera(orbitPivot ? orbitAbout(session.camera(), *orbitPivot, dx * 0.3, dy * 0.3) : orbit(session.camera(), dx * 0.3, dy * 0.3));
+            break;
         case Drag::Pan: setCamera(pan(session.camera(), windowSize(), dx, dy)); break;
         case Drag::None: break;
         }
@@ -226,60 +337,125 @@ struct DesktopEditor::Impl {
         setCamera(render::framingCamera(lo, hi, double(size[0]) / double(size[1])));
     }
 
+    void frameCursor()
+    {
+        const auto hit = pickAt(cursorX, cursorY);
+        if (!hit) {
+            panels.status = "no surface under the cursor to centre the view on";
+            return;
+        }
+        const render::Camera& c = session.camera();
+        const double distance = std::sqrt(std::pow(c.target[0] - c.eye[0], 2) + std::pow(c.target[1] - c.eye[1], 2) + std::pow(c.target[2] - c.eye[2], 2));
+        setCamera(frameOn(c, hit->point, std::min(distance, 12.0 * session.brush().radius)));
+    }
+
+    /// F12: the view as drawn, into SCENE-shot-N.png beside the scene (the first N not taken).
+    void screenshot()
+    {
+        try {
+            const std::filesystem::path scene = std::filesystem::absolute(session.scenePath());
+            std::string path;
+            for (int n = 1; n < 100000 && path.empty(); ++n) {
+                char name[64];
+                std::snprintf(name, sizeof name, "-shot-%03d.png", n);
+                const std::filesystem::path candidate = scene.parent_path() / (scene.stem().string() + name);
+                if (!std::filesystem::exists(candidate)) path = candidate.string();
+            }
+            if (path.empty()) throw std::runtime_error("no free name beside the scene");
+            checkOutput(path, OutputForm::Png, {session.scenePath()});
+            render::PictureRequest request;
+            const auto size = windowSize();
+            request.width = size[0];
+            request.height = size[1];
+            request.textureFolder = scene.parent_path().string();
+            request.shading = renderer->shading();
+            render::Camera camera = session.camera();
+            const auto [lo, hi] = session.shownBox();
+            render::fitNearPlane(camera, lo, hi);
+            render::writePng(render::renderStreamed(*context, session.scene(), camera, request).image, path);
+            panels.status = "wrote the view to " + path;
+        } catch (const std::exception& e) {
+            panels.status = std::string("could not write the screenshot: ") + e.what();
+        }
+    }
+
+    void toggleMirrorX(BrushSettings b)
+    {
+        nlohmann::json s = b.symmetry.is_object() ? b.symmetry : nlohmann::json::object();
+        nlohmann::json mirror = s.value("mirror", nlohmann::json::array());
+        const auto it = std::find(mirror.begin(), mirror.end(), "x");
+        if (it != mirror.end()) mirror.erase(it);
+        else mirror.push_back("x");
+        if (mirror.empty()) s.erase("mirror");
+        else s["mirror"] = mirror;
+        b.symmetry = s.empty() || (s.size() == 1 && s.contains("center")) ? nlohmann::json() : s;
+        setBrush(b);
+    }
+
     void onKey(int key, int action, int mods)
     {
         if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
-        const bool ctrl = mods & GLFW_MOD_CONTROL, shift = mods & GLFW_MOD_SHIFT;
-        Command c;
+        const bool ctrl = mods & GLFW_MOD_CONTROL;
+        static const int flyKeys[] = {GLFW_KEY_W, GLFW_KEY_A, GLFW_KEY_S, GLFW_KEY_D, GLFW_KEY_Q, GLFW_KEY_E};
+        if (rightHeld && !ctrl && std::find(std::begin(flyKeys), std::end(flyKeys), key) != std::end(flyKeys)) return; // flying (per frame)
+        const std::optional<KeyAction> bound = keymap.actionFor(key, mods);
+        if (!bound) return;
         BrushSettings b = session.brush();
-        if (ctrl) {
-            if (key == GLFW_KEY_Z) c.kind = shift ? Command::Kind::Redo : Command::Kind::Undo;
-            else if (key == GLFW_KEY_Y) c.kind = Command::Kind::Redo;
-            else if (key == GLFW_KEY_S) c.kind = Command::Kind::Save;
-            else return;
+        Command c;
+        const auto mode = [&](const char* m) {
+            b.mode = m;
+            setBrush(b);
+        };
+        switch (*bound) {
+        case KeyAction::Undo: c.kind = Command::Kind::Undo; return apply(c);
+        case KeyAction::Redo: c.kind = Command::Kind::Redo; return apply(c);
+        case KeyAction::Save:
+            c.kind = Command::Kind::Save;
             apply(c);
-            if (key == GLFW_KEY_S) panels.status = "saved " + session.scenePath();
+            if (!session.unsaved()) panels.status = "saved " + session.scenePath();
             return;
-        }
-        if (rightHeld) return; // W A S D Q E fly (handled per frame)
-        static const std::pair<int, const char*> modeKeys[] = {{GLFW_KEY_A, "add"},     {GLFW_KEY_R, "remove"},  {GLFW_KEY_P, "paint"},
-                                                               {GLFW_KEY_E, "erode"},   {GLFW_KEY_S, "smooth"},  {GLFW_KEY_L, "flatten"},
-                                                               {GLFW_KEY_I, "inflate"}, {GLFW_KEY_D, "deflate"}, {GLFW_KEY_G, "move"}};
-        for (const auto& [k, mode] : modeKeys)
-            if (key == k) {
-                b.mode = mode;
-                return setBrush(b);
-            }
-        switch (key) {
-        case GLFW_KEY_LEFT_BRACKET:
-        case GLFW_KEY_RIGHT_BRACKET: {
-            const bool up = key == GLFW_KEY_RIGHT_BRACKET;
-            if (shift) b.strength = std::clamp(b.strength + (up ? 0.05 : -0.05), 0.0, 1.0);
-            else b.radius = std::max(b.radius * (up ? 1.15 : 1.0 / 1.15), 0.1 * session.scene().store().voxelSize());
+        case KeyAction::Screenshot: return screenshot();
+        case KeyAction::ModeAdd: return mode("add");
+        case KeyAction::ModeRemove: return mode("remove");
+        case KeyAction::ModePaint: return mode("paint");
+        case KeyAction::ModeErode: return mode("erode");
+        case KeyAction::ModeSmooth: return mode("smooth");
+        case KeyAction::ModeFlatten: return mode("flatten");
+        case KeyAction::ModeInflate: return mode("inflate");
+        case KeyAction::ModeDeflate: return mode("deflate");
+        case KeyAction::ModeMove: return mode("move");
+        case KeyAction::BrushSmaller:
+        case KeyAction::BrushLarger:
+            b.radius = std::max(b.radius * (*bound == KeyAction::BrushLarger ? 1.15 : 1.0 / 1.15), 0.1 * session.scene().store().voxelSize());
             return setBrush(b);
-        }
-        case GLFW_KEY_X: {
-            nlohmann::json s = b.symmetry.is_object() ? b.symmetry : nlohmann::json::object();
-            nlohmann::json mirror = s.value("mirror", nlohmann::json::array());
-            const auto it = std::find(mirror.begin(), mirror.end(), "x");
-            if (it != mirror.end()) mirror.erase(it);
-            else mirror.push_back("x");
-            if (mirror.empty()) s.erase("mirror");
-            else s["mirror"] = mirror;
-            b.symmetry = s.empty() || (s.size() == 1 && s.contains("center")) ? nlohmann::json() : s;
+        case KeyAction::BrushWeaker:
+        case KeyAction::BrushStronger:
+            b.strength = std::clamp(b.strength + (*bound == KeyAction::BrushStronger ? 0.05 : -0.05), 0.0, 1.0);
             return setBrush(b);
-        }
-        case GLFW_KEY_F: return frameScene();
-        case GLFW_KEY_H: panels.showHelp = !panels.showHelp; return;
-        case GLFW_KEY_TAB: panels.showStats = !panels.showStats; return;
-        case GLFW_KEY_ESCAPE:
-            if (session.strokeActive()) {
-                c.kind = Command::Kind::StrokeEnd;
-                apply(c);
-                drag = Drag::None;
-            }
+        case KeyAction::RadiusDrag: return beginAdjust(Adjust::Radius);
+        case KeyAction::StrengthDrag: return beginAdjust(Adjust::Strength);
+        case KeyAction::MirrorX: return toggleMirrorX(b);
+        case KeyAction::FrameAll: return frameScene();
+        case KeyAction::FrameCursor: return frameCursor();
+        case KeyAction::ViewFront: return setCamera(axisView(session.camera(), AxisView::Front));
+        case KeyAction::ViewBack: return setCamera(axisView(session.camera(), AxisView::Back));
+        case KeyAction::ViewRight: return setCamera(axisView(session.camera(), AxisView::Right));
+        case KeyAction::ViewLeft: return setCamera(axisView(session.camera(), AxisView::Left));
+        case KeyAction::ViewTop: return setCamera(axisView(session.camera(), AxisView::Top));
+        case KeyAction::ViewBottom: return setCamera(axisView(session.camera(), AxisView::Bottom));
+        case KeyAction::Turntable: turntable = !turntable; return;
+        case KeyAction::ShadingNext:
+            panels.look = panels.look == render::ViewMode::Shaded ? render::ViewMode::Clay
+                          : panels.look == render::ViewMode::Clay ? render::ViewMode::Normals
+                                                                  : render::ViewMode::Shaded;
             return;
-        default: return;
+        case KeyAction::Wireframe: panels.wireframe = !panels.wireframe; return;
+        case KeyAction::Help: panels.showHelp = !panels.showHelp; return;
+        case KeyAction::Stats: panels.showStats = !panels.showStats; return;
+        case KeyAction::EndStroke:
+            if (adjust != Adjust::None) adjust = Adjust::None;
+            else if (session.strokeActive()) endStroke();
+            return;
         }
     }
 
@@ -299,8 +475,9 @@ struct DesktopEditor::Impl {
     {
         if (!glfwInit()) throw NoDisplay("no display to open a window on (GLFW could not reach it)");
         glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
-        const std::string title = "VDBClay - " + std::filesystem::path(session.scenePath()).filename().string();
-        window = glfwCreateWindow(options.windowSize[0], options.windowSize[1], title.c_str(), nullptr, nullptr);
+        title = windowTitle();
+        const std::array<int, 2> size = options.windowSize.value_or(settings.windowSize);
+        window = glfwCreateWindow(size[0], size[1], title.c_str(), nullptr, nullptr);
         if (!window) throw NoDisplay("the window could not be opened on this display");
         glfwSetWindowUserPointer(window, &self);
         glfwSetMouseButtonCallback(window, [](GLFWwindow* w, int b, int a, int m) { static_cast<DesktopEditor*>(glfwGetWindowUserPointer(w))->mouseButton(b, a, m); });
@@ -332,7 +509,9 @@ struct DesktopEditor::Impl {
 
         IMGUI_CHECKVERSION();
         ImGui::CreateContext();
-        ImGui::GetIO().IniFilename = nullptr;
+        // The panels' layout is kept with the other settings (nowhere when there is no config folder).
+        iniPath = configFolder.empty() ? std::string() : (std::filesystem::path(configFolder) / "imgui.ini").string();
+        ImGui::GetIO().IniFilename = iniPath.empty() ? nullptr : iniPath.c_str();
         ImGui::StyleColorsDark();
         ImGui_ImplGlfw_InitForVulkan(window, false);
         VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 16}};
@@ -362,8 +541,32 @@ struct DesktopEditor::Impl {
         });
     }
 
+    std::string windowTitle() const
+    {
+        return "VDBClay - " + std::filesystem::path(session.scenePath()).filename().string() + (session.unsaved() ? " *" : "");
+    }
+
+    /// What the next session starts with: the brush, the window's size, the panels and the look.
+    void keepSettings()
+    {
+        if (!window || configFolder.empty()) return;
+        settings.brush = brushBeforeModifier.value_or(session.brush());
+        settings.windowSize = windowSize();
+        settings.showStats = panels.showStats;
+        settings.showHelp = panels.showHelp;
+        settings.look = panels.look;
+        settings.wireframe = panels.wireframe;
+        try {
+            saveDesktopSettings(settings, configFolder);
+        } catch (const std::exception& e) {
+            std::cerr << "vdbclay: warning: the editor's settings were not kept: " << e.what() << "\n";
+        }
+    }
+
     void close()
     {
+        keepSettings();
+        if (imguiReady && !iniPath.empty()) ImGui::SaveIniSettingsToDisk(iniPath.c_str());
         if (context) vkDeviceWaitIdle(context->device());
         if (imguiReady) {
             ImGui_ImplVulkan_Shutdown();
@@ -381,12 +584,27 @@ struct DesktopEditor::Impl {
 
     bool frame()
     {
+        // The frame starts before the events are read: strokes they make are part of it.
+        const auto start = Clock::now();
+        const double seconds = std::chrono::duration<double>(start - lastFrameStart).count();
+        if (!firstFrame) {
+            figures.intervalMs = seconds * 1000.0;
+            recentIntervals.emplace_back(start, figures.intervalMs);
+            while (recentIntervals.size() > 1 && recentIntervals.front().first < start - std::chrono::seconds(1)) recentIntervals.pop_front();
+            double sum = 0.0;
+            for (const auto& [at, ms] : recentIntervals) sum += ms;
+            figures.averageIntervalMs = sum / double(recentIntervals.size());
+        }
+        lastFrameStart = start;
         glfwPollEvents();
         if (glfwWindowShouldClose(window)) return false;
-        const auto start = Clock::now();
-        const double seconds = std::chrono::duration<double>(start - lastFrame).count();
-        lastFrame = start;
+        if (firstFrame) {
+            firstFrame = false;
+            // The brush kept from the last session, unless a replay sets its own.
+            if (!replay && settings.brush) setBrush(*settings.brush);
+        }
         flyKeys(std::min(seconds, 0.1));
+        if (turntable) setCamera(orbit(session.camera(), 20.0 * std::min(seconds, 0.1), 0.0)); // 20 degrees a second
         if (replay) {
             try {
                 replayNext = applyRecordedFrame(session, *replay, replayNext, frames);
@@ -404,8 +622,11 @@ struct DesktopEditor::Impl {
         for (const Command& c : panels.draw(session, figures)) apply(c);
         ImGui::Render();
         if (!panels.openRequested.empty() || panels.discardRecoveryRequested) return false;
+        if (drag == Drag::None) hover = pickAt(cursorX, cursorY);
+        const auto inputDone = Clock::now();
 
-        figures.stream = session.frame(now(), windowSize());
+        const FrameReport stream = session.frame(now(), windowSize());
+        const auto streamed = Clock::now();
         chunks.sync(session.scene(), *renderer);
         figures.bricksShown = session.scene().shownBricks().size();
         MaterialTable materials = session.scene().materials();
@@ -415,10 +636,21 @@ struct DesktopEditor::Impl {
                 std::cerr << "vdbclay: warning: " << w << "\n";
             drawnMaterials = std::move(materials);
         }
-        if (drag == Drag::None) hover = pickAt(cursorX, cursorY);
+        render::ShadingOptions shading = renderer->shading();
+        if (shading.mode != panels.look || shading.wireframe != panels.wireframe) {
+            shading.mode = panels.look;
+            shading.wireframe = panels.wireframe;
+            renderer->setShading(shading);
+        }
+        const BrushSettings& shownBrush = adjust != Adjust::None ? adjusted : session.brush();
         const std::optional<std::array<double, 3>> brushAt =
             session.strokeActive() ? std::optional<std::array<double, 3>>(session.strokePoint()) : hover ? std::optional<std::array<double, 3>>(hover->point) : std::nullopt;
-        renderer->setBrush(brushAt ? std::optional<render::BrushOverlay>(overlayFor(session.brush(), *brushAt)) : std::nullopt);
+        renderer->setBrush(brushAt ? std::optional<render::BrushOverlay>(overlayFor(shownBrush, *brushAt)) : std::nullopt);
+        if (const std::string t = windowTitle(); t != title) {
+            title = t;
+            glfwSetWindowTitle(window, title.c_str());
+        }
+        const auto meshed = Clock::now();
 
         int fw = 0, fh = 0;
         glfwGetFramebufferSize(window, &fw, &fh);
@@ -429,6 +661,7 @@ struct DesktopEditor::Impl {
             swapchain->resize(fw, fh);
             return true;
         }
+        const auto acquired = Clock::now();
         render::RenderView view;
         view.camera = session.camera();
         // The near plane follows the camera every frame: zooming up to the surface never cuts it open.
@@ -436,10 +669,18 @@ struct DesktopEditor::Impl {
         render::fitNearPlane(view.camera, lo, hi);
         view.target = target;
         lastStats = renderer->render({view});
+        const auto drawn = Clock::now();
         if (!swapchain->present()) swapchain->resize(fw, fh);
+        const auto presented = Clock::now();
+
+        figures.stream = stream;
         figures.draw = lastStats;
-        figures.editMs = session.stats().editMsLastFrame;
-        figures.frameMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count() - lastStats.submitWaitMs;
+        figures.sculptMs = std::min(session.stats().editMsLastFrame, msBetween(start, inputDone));
+        figures.inputMs = msBetween(start, inputDone) - figures.sculptMs;
+        figures.streamMs = msBetween(inputDone, streamed);
+        figures.meshMs = msBetween(streamed, meshed);
+        figures.drawMs = msBetween(acquired, drawn);
+        figures.presentMs = msBetween(meshed, acquired) + msBetween(drawn, presented);
         ++frames;
         return true;
     }
@@ -495,6 +736,8 @@ std::optional<std::array<float, 4>> DesktopEditor::widgetRect(const std::string&
     return it->second;
 }
 const render::FrameStats& DesktopEditor::lastFrame() const { return impl_->lastStats; }
+const FrameFigures& DesktopEditor::figures() const { return impl_->figures; }
+const Keymap& DesktopEditor::keymap() const { return impl_->keymap; }
 uint64_t DesktopEditor::validationMessages() const { return impl_->context ? impl_->context->validationMessages() : 0; }
 EditingSession& DesktopEditor::session() { return impl_->session; }
 void DesktopEditor::replay(const SessionRecord* record) { impl_->replay = record; impl_->replayNext = 0; }

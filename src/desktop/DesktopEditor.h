@@ -1,8 +1,12 @@
 // The desktop editor: a GLFW window drawing the editing session with the renderer, Dear ImGui panels
-// (brush, custom brush, materials, tools, file, stats, help) and the shortcuts a sculptor expects. It only
-// maps mouse, keys and menus to the session's commands; everything it does is in the session's record.
+// (brush, custom brush, materials, tools, file, view, stats, help) and the keys and modifiers a sculptor
+// expects (Keymap). It only maps mouse, keys and menus to the session's commands; everything it does to the
+// scene is in the session's record. The brush, the window and the look persist across sessions
+// (DesktopSettings).
 #pragma once
 
+#include "desktop/DesktopPanels.h"
+#include "desktop/Keymap.h"
 #include "editor/EditingSession.h"
 #include "render/RenderTypes.h"
 
@@ -24,12 +28,19 @@ struct NoDisplay : std::runtime_error {
 
 /// Whether the environment names a display (a window may still fail to open).
 bool desktopAvailable();
-/// The shortcuts, as `vdbclay edit --help` and the help panel list them.
-const char* desktopShortcutsHelp();
+/// The mouse, the modifiers and the keys of `keymap`, as `vdbclay edit --help` and the help panel list them.
+std::string desktopShortcutsHelp(const Keymap& keymap);
+/// The keymap in effect: the user's file in `configFolder` over the defaults. A missing file gives the
+/// defaults (and, when `writeMissing`, writes them there for the user to edit); a broken one gives the
+/// defaults and `warning` saying why.
+Keymap loadKeymap(const std::string& configFolder, bool writeMissing, std::string* warning);
 
 struct DesktopOptions {
-    std::array<int, 2> windowSize{1280, 800};
+    std::optional<std::array<int, 2>> windowSize; // absent: the size kept in the settings (1280 x 800 at first)
     bool validation = false; // the Khronos validation layer (tests: zero messages)
+    /// Where settings, layout and keymap are kept: absent, the user's (defaultConfigFolder()); empty,
+    /// nowhere (nothing read or written).
+    std::optional<std::string> configFolder;
     /// Runs after the window's input is polled and before the menus are built, each frame (tests drive
     /// the menus through ImGui's input here).
     std::function<void(uint64_t frame)> beforeUi;
@@ -68,6 +79,9 @@ public:
 
     GLFWwindow* window() const;
     const render::FrameStats& lastFrame() const;
+    /// What the stats overlay shows: the last whole frame's wall-clock interval and its measured parts.
+    const FrameFigures& figures() const;
+    const Keymap& keymap() const;
     uint64_t validationMessages() const;
     EditingSession& session();
 

@@ -1,6 +1,5 @@
-#include "editor/DesktopPanels.h"
+#include "desktop/DesktopPanels.h"
 
-#include "editor/DesktopEditor.h"
 #include "editor/SceneFileActions.h"
 #include "scene/SceneStore.h"
 #include "vdb_hermite/AtomicFile.h"
@@ -10,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -21,6 +21,24 @@ constexpr const char* kModes[] = {"add", "remove", "paint", "erode", "smooth", "
 constexpr const char* kShapes[] = {"sphere", "box", "cylinder", "capsule", "torus", "cone"};
 constexpr const char* kFalloffs[] = {"smooth", "linear", "constant"};
 constexpr const char* kAxes[] = {"x", "y", "z"};
+constexpr const char* kPressures[] = {"size", "strength", "none"};
+constexpr PressureTarget kPressureTargets[] = {PressureTarget::Size, PressureTarget::Strength, PressureTarget::None};
+constexpr const char* kLooks[] = {"material", "clay", "normals", "levels of detail", "toughness"};
+constexpr render::ViewMode kLookModes[] = {render::ViewMode::Shaded, render::ViewMode::Clay, render::ViewMode::Normals, render::ViewMode::Lod,
+                                           render::ViewMode::Toughness};
+constexpr const char* kOpenTitle = "Open a scene";
+constexpr const char* kSaveAsTitle = "Save the scene as";
+constexpr const char* kImportTitle = "Import a mesh";
+constexpr const char* kExportTitle = "Export the scene";
+
+/// A figure the frame may not know yet (a view with nothing shown reports no error): "-" then.
+std::string figure(double value, const char* format)
+{
+    if (!std::isfinite(value) || std::fabs(value) >= 1e29) return "-";
+    char text[64];
+    std::snprintf(text, sizeof text, format, value);
+    return text;
+}
 
 int indexOf(const char* const* names, int count, const std::string& name)
 {
@@ -94,27 +112,41 @@ std::vector<Command> DesktopPanels::draw(EditingSession& session, const FrameFig
 {
     std::vector<Command> out;
     widgetRects.clear();
+    const ImGuiIO& io = ImGui::GetIO();
+    // The panel takes the window's height at first and may be resized; what does not fit scrolls, and the
+    // last action's outcome stays in sight below the scrolling part.
     ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(330, 0), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(340, std::max(200.0f, io.DisplaySize.y - 20.0f)), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSizeConstraints(ImVec2(240, 120), ImVec2(std::max(240.0f, io.DisplaySize.x - 20.0f), std::max(120.0f, io.DisplaySize.y - 20.0f)));
     if (ImGui::Begin("VDBClay")) {
-        if (ImGui::CollapsingHeader("Brush", ImGuiTreeNodeFlags_DefaultOpen)) brushPanel(session, out);
-        if (ImGui::CollapsingHeader("Custom brush")) customBrushPanel(session, out);
-        if (ImGui::CollapsingHeader("Materials")) materialsPanel(session, out);
-        if (ImGui::CollapsingHeader("Tools")) toolsPanel(session, out);
-        if (ImGui::CollapsingHeader("File")) filePanel(session, out);
-        ImGui::Checkbox("Stats", &showStats);
-        ImGui::SameLine();
-        ImGui::Checkbox("Help (H)", &showHelp);
-        if (!status.empty()) ImGui::TextWrapped("%s", status.c_str());
+        const float footer = status.empty() ? 0.0f : ImGui::GetTextLineHeightWithSpacing() * 3.0f;
+        if (ImGui::BeginChild("panels", ImVec2(0, -footer))) {
+            if (ImGui::CollapsingHeader("Brush", ImGuiTreeNodeFlags_DefaultOpen)) brushPanel(session, out);
+            if (ImGui::CollapsingHeader("Custom brush")) customBrushPanel(session, out);
+            if (ImGui::CollapsingHeader("Materials")) materialsPanel(session, out);
+            if (ImGui::CollapsingHeader("Tools")) toolsPanel(session, out);
+            if (ImGui::CollapsingHeader("File", ImGuiTreeNodeFlags_DefaultOpen)) filePanel(session, out);
+            if (ImGui::CollapsingHeader("View")) viewPanel();
+            ImGui::Checkbox("Stats", &showStats);
+            ImGui::SameLine();
+            ImGui::Checkbox("Help (H)", &showHelp);
+        }
+        ImGui::EndChild();
+        if (!status.empty()) {
+            ImGui::Separator();
+            ImGui::TextWrapped("%s", status.c_str());
+        }
     }
     ImGui::End();
     if (showStats) statsPanel(session, figures);
     recoveryOffer(session);
     if (showHelp) {
         ImGui::SetNextWindowPos(ImVec2(360, 10), ImGuiCond_FirstUseEver);
-        if (ImGui::Begin("Help", &showHelp)) ImGui::TextUnformatted(desktopShortcutsHelp());
+        ImGui::SetNextWindowSizeConstraints(ImVec2(200, 100), ImVec2(std::max(200.0f, io.DisplaySize.x - 20.0f), std::max(100.0f, io.DisplaySize.y - 20.0f)));
+        if (ImGui::Begin("Help", &showHelp)) ImGui::TextUnformatted(helpText.c_str());
         ImGui::End();
     }
+    if (const auto chosen = browser_.draw()) fileChosen(session, *chosen, out);
     return out;
 }
 
@@ -211,15 +243,22 @@ void DesktopPanels::brushPanel(EditingSession& session, std::vector<Command>& ou
         b.spacing = spacing;
         changed = true;
     }
+    int pressure = 0;
+    while (pressure < 2 && kPressureTargets[pressure] != b.pressure) ++pressure;
+    if (ImGui::Combo("Pressure", &pressure, kPressures, IM_ARRAYSIZE(kPressures))) {
+        b.pressure = kPressureTargets[pressure];
+        changed = true;
+    }
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("What a tablet's pen pressure scales: the brush's size, its strength, or nothing");
+    if (ImGui::Checkbox("Accumulate", &b.accumulate)) changed = true;
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("A stroke builds on itself (off: it follows the surface as the stroke began)");
+    // The scene's materials, one entry each: no brush material means the scene's first one (its default).
     const MaterialTable materials = session.scene().materials();
     const std::vector<std::string> names = materials.names();
-    if (ImGui::BeginCombo("Material", b.material.empty() ? "(default)" : b.material.c_str())) {
-        if (ImGui::Selectable("(default)", b.material.empty())) {
-            b.material.clear();
-            changed = true;
-        }
+    const std::string current = b.material.empty() && !names.empty() ? names.front() : b.material;
+    if (ImGui::BeginCombo("Material", current.c_str())) {
         for (const std::string& n : names)
-            if (ImGui::Selectable(n.c_str(), n == b.material)) {
+            if (ImGui::Selectable(n.c_str(), n == current)) {
                 b.material = n;
                 changed = true;
             }
@@ -366,62 +405,83 @@ void DesktopPanels::filePanel(EditingSession& session, std::vector<Command>& out
         c.kind = Command::Kind::Save;
         out.push_back(c);
     }
-    ImGui::InputText("Save as", &savePath_);
+    const std::string folder = std::filesystem::absolute(session.scenePath()).parent_path().string();
+    const std::string stem = std::filesystem::path(session.scenePath()).stem().string();
     ImGui::SameLine();
-    if (ImGui::Button("Save##as") && !savePath_.empty()) {
-        Command c;
-        c.kind = Command::Kind::Save;
-        c.path = savePath_;
-        out.push_back(c);
-    }
-    ImGui::InputText("Import", &importPath_);
+    if (ImGui::Button("Save as...")) browser_.open(kSaveAsTitle, folder, {".vdb", ".vdbclay"}, true, stem + "-copy.vdb");
     ImGui::SameLine();
-    if (ImGui::Button("Import##go") && !importPath_.empty()) {
-        try {
+    if (ImGui::Button("Open...")) browser_.open(kOpenTitle, folder, {".vdb", ".vdbclay"}, false);
+    if (ImGui::Button("Import mesh...")) browser_.open(kImportTitle, folder, {".obj", ".ply", ".stl", ".off"}, false);
+    ImGui::SameLine();
+    if (ImGui::Button("Export...")) browser_.open(kExportTitle, folder, {".obj", ".ply", ".stl", ".vdb"}, true, stem + ".obj");
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("A mesh (.obj, .ply, .stl) or an OpenVDB level set (.vdb)");
+}
+
+void DesktopPanels::fileChosen(EditingSession& session, const std::string& path, std::vector<Command>& out)
+{
+    const std::string title = browser_.title();
+    try {
+        if (title == kOpenTitle) {
+            openRequested = path;
+        } else if (title == kSaveAsTitle) {
+            Command c;
+            c.kind = Command::Kind::Save;
+            c.path = path;
+            out.push_back(c);
+        } else if (title == kImportTitle) {
             Command c;
             c.kind = Command::Kind::ApplyOp;
-            c.op = importIntoScene(session, importPath_, session.brush().material);
+            c.op = importIntoScene(session, path, session.brush().material);
             out.push_back(c);
-            status = "imported " + importPath_;
-        } catch (const std::exception& e) {
-            status = std::string("could not import: ") + e.what();
+            status = "imported " + path;
+        } else if (title == kExportTitle) {
+            if (std::filesystem::path(path).extension() == ".vdb") exportSceneLevelSet(session, path);
+            else exportSceneMesh(session, path);
+            status = "exported " + path;
         }
+    } catch (const std::exception& e) {
+        status = title + ": " + e.what();
     }
-    ImGui::InputText("Export", &exportPath_);
-    ImGui::SameLine();
-    if (ImGui::Button("Export##go") && !exportPath_.empty()) {
-        try {
-            if (std::filesystem::path(exportPath_).extension() == ".vdb") exportSceneLevelSet(session, exportPath_);
-            else exportSceneMesh(session, exportPath_);
-            status = "exported " + exportPath_;
-        } catch (const std::exception& e) {
-            status = std::string("could not export: ") + e.what();
-        }
-    }
-    ImGui::InputText("Open", &openPath_);
-    ImGui::SameLine();
-    if (ImGui::Button("Open##go") && !openPath_.empty()) openRequested = openPath_;
+}
+
+void DesktopPanels::viewPanel()
+{
+    int look = 0;
+    while (look < IM_ARRAYSIZE(kLookModes) - 1 && kLookModes[look] != this->look) ++look;
+    if (ImGui::Combo("Look", &look, kLooks, IM_ARRAYSIZE(kLooks))) this->look = kLookModes[look];
+    ImGui::Checkbox("Wireframe", &wireframe);
 }
 
 void DesktopPanels::statsPanel(const EditingSession& session, const FrameFigures& f)
 {
     const ImGuiIO& io = ImGui::GetIO();
     ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - 10, 10), ImGuiCond_FirstUseEver, ImVec2(1.0f, 0.0f)); // top right, whatever its width
+    // Never wider than half the window: long lines wrap instead of running off its edge.
+    ImGui::SetNextWindowSizeConstraints(ImVec2(220, 0), ImVec2(std::max(220.0f, io.DisplaySize.x * 0.5f), std::max(100.0f, io.DisplaySize.y - 20.0f)));
     ImGui::SetNextWindowBgAlpha(0.6f);
     if (ImGui::Begin("Stats", &showStats, ImGuiWindowFlags_AlwaysAutoResize)) {
-        ImGui::Text("frame %.2f ms (sculpt %.2f ms)", f.frameMs, f.editMs);
-        ImGui::Text("triangles %llu, chunks %llu", (unsigned long long)f.draw.triangles, (unsigned long long)f.draw.chunksDrawn);
-        ImGui::Text("uploaded %.1f KiB", double(f.draw.uploadBytes) / 1024.0);
-        ImGui::Text("resident %.1f MiB (meshes %.1f MiB)", double(f.stream.residentBytes) / 1048576.0, double(f.stream.meshBytes) / 1048576.0);
+        ImGui::PushTextWrapPos(std::max(220.0f, io.DisplaySize.x * 0.5f) - 16.0f);
+        const double fps = f.averageIntervalMs > 0.0 ? 1000.0 / f.averageIntervalMs : 0.0;
+        ImGui::TextWrapped("frame %s ms (%s fps over the last second)", figure(f.intervalMs, "%.1f").c_str(), figure(fps, "%.1f").c_str());
+        ImGui::TextWrapped("input %s, sculpt %s, stream %s, mesh %s, draw %s, present %s ms", figure(f.inputMs, "%.1f").c_str(),
+                           figure(f.sculptMs, "%.1f").c_str(), figure(f.streamMs, "%.1f").c_str(), figure(f.meshMs, "%.1f").c_str(),
+                           figure(f.drawMs, "%.1f").c_str(), figure(f.presentMs, "%.1f").c_str());
+        ImGui::TextWrapped("triangles %llu, chunks %llu, uploaded %.1f KiB", (unsigned long long)f.draw.triangles, (unsigned long long)f.draw.chunksDrawn,
+                           double(f.draw.uploadBytes) / 1024.0);
+        ImGui::TextWrapped("resident %.1f MiB (meshes %.1f MiB)", double(f.stream.residentBytes) / 1048576.0, double(f.stream.meshBytes) / 1048576.0);
         std::string perLevel;
         for (uint64_t n : f.stream.residentPerLevel) perLevel += std::to_string(n) + " ";
-        ImGui::Text("bricks per level: %s", perLevel.c_str());
-        ImGui::Text("shown %llu, pending %llu, hit rate %.0f%%", (unsigned long long)f.bricksShown, (unsigned long long)f.stream.pending,
-                    100.0 * f.stream.hitRate());
-        ImGui::Text("screen error %.2f px (target %.2f)%s", f.stream.screenError, f.stream.targetError, f.stream.budgetLimited ? ", budget-limited" : "");
-        ImGui::Text("undo %zu, redo %zu, history %.1f MiB (+%.1f spilled)", session.history().undoDepth(), session.history().redoDepth(),
-                    double(session.history().memoryBytes()) / 1048576.0, double(session.history().spilledBytes()) / 1048576.0);
-        ImGui::Text("edits %llu, autosaves %llu", (unsigned long long)session.scene().edits(), (unsigned long long)session.stats().autosaves);
+        ImGui::TextWrapped("bricks per level: %s", perLevel.empty() ? "-" : perLevel.c_str());
+        ImGui::TextWrapped("shown %llu, pending %llu, hit rate %.0f%%", (unsigned long long)f.bricksShown, (unsigned long long)f.stream.pending,
+                           100.0 * f.stream.hitRate());
+        const bool nothingShown = f.bricksShown == 0;
+        ImGui::TextWrapped("screen error %s px (target %s)%s", nothingShown ? "-" : figure(f.stream.screenError, "%.2f").c_str(),
+                           nothingShown ? "-" : figure(f.stream.targetError, "%.2f").c_str(), f.stream.budgetLimited ? ", budget-limited" : "");
+        ImGui::TextWrapped("undo %zu, redo %zu, history %.1f MiB (+%.1f spilled)", session.history().undoDepth(), session.history().redoDepth(),
+                           double(session.history().memoryBytes()) / 1048576.0, double(session.history().spilledBytes()) / 1048576.0);
+        ImGui::TextWrapped("edits %llu, autosaves %llu%s", (unsigned long long)session.scene().edits(), (unsigned long long)session.stats().autosaves,
+                           session.unsaved() ? ", unsaved" : "");
+        ImGui::PopTextWrapPos();
     }
     ImGui::End();
 }
