@@ -4,7 +4,9 @@
 // offered. Skipped, saying so, where
 // there is no display or no Vulkan device.
 #include "desktop/DesktopEditor.h"
+#include "editor/CameraControl.h"
 #include "editor/EditingSession.h"
+#include "render/ImageFile.h"
 #include "render/VulkanContext.h"
 #include "sculpt/StrokeScript.h"
 #include "support/TestUtil.h"
@@ -16,10 +18,13 @@
 #include <catch2/catch.hpp>
 #include <imgui.h>
 
+#include <chrono>
+#include <cmath>
 #include <filesystem>
 
 // Last: X11's headers define macros (None, Bool, Status...) that other headers use as names.
 #include <X11/extensions/XTest.h>
+#include <X11/keysym.h>
 // GLFW's X11 accessor, declared here: glfw3native.h pulls in Xrandr's headers, a package the tests need
 // for nothing else.
 extern "C" Display* glfwGetX11Display(void);
@@ -89,6 +94,63 @@ struct UiDriver {
     }
 };
 
+/// Input as the X server delivers it (XTEST), made on a connection of the test's own; the server sends
+/// the events to the window under the pointer. When XSync returns, the server has made the events and put
+/// them in the window's output; a round trip on GLFW's own connection then reads them into its queue (its
+/// reply comes after them), so the next frame's poll sees them however the two processes are scheduled.
+/// Without it, a release still in flight on a loaded machine left the stroke open when the test looked.
+struct XInput {
+    std::unique_ptr<Display, int (*)(Display*)> connection{XOpenDisplay(nullptr), XCloseDisplay};
+    DesktopEditor& editor;
+    int windowX = 0, windowY = 0;
+
+    explicit XInput(DesktopEditor& e) : editor(e)
+    {
+        REQUIRE(connection);
+        glfwGetWindowPos(editor.window(), &windowX, &windowY);
+    }
+    void deliver()
+    {
+        XSync(connection.get(), False);
+        XSync(glfwGetX11Display(), False);
+    }
+    void moveTo(double x, double y)
+    {
+        XTestFakeMotionEvent(connection.get(), -1, windowX + int(x), windowY + int(y), CurrentTime);
+        deliver();
+    }
+    void button(unsigned int which, bool down)
+    {
+        XTestFakeButtonEvent(connection.get(), which, down ? True : False, CurrentTime);
+        deliver();
+    }
+    void key(KeySym symbol, bool down)
+    {
+        XTestFakeKeyEvent(connection.get(), XKeysymToKeycode(connection.get(), symbol), down ? True : False, CurrentTime);
+        deliver();
+    }
+    void tap(KeySym symbol)
+    {
+        key(symbol, true);
+        key(symbol, false);
+        REQUIRE(editor.frame());
+    }
+    /// A left-button drag from (x0, y0) in `steps` moves of (dx, dy), a frame after each event.
+    void drag(double x0, double y0, double dx, double dy, int steps)
+    {
+        moveTo(x0, y0);
+        REQUIRE(editor.frame());
+        button(1, true);
+        REQUIRE(editor.frame());
+        for (int k = 1; k <= steps; ++k) {
+            moveTo(x0 + dx * k, y0 + dy * k);
+            REQUIRE(editor.frame());
+        }
+        button(1, false);
+        REQUIRE(editor.frame());
+    }
+};
+
 /// The editor's window, or null (with a warning saying why the test is skipped) where none can open.
 std::unique_ptr<DesktopEditor> openEditor(EditingSession& session, const DesktopOptions& options)
 {
@@ -123,42 +185,9 @@ TEST_CASE("desktop: a mouse stroke through the window equals its replay, a menu 
     CHECK(editor->lastFrame().triangles > 1000);
 
     // A stroke as the X server delivers it (XTEST: the pointer moves, the left button goes down, the
-    // pointer drags across the ball, the button comes up), through GLFW's event loop and callbacks. The
-    // events are made on a connection of the test's own; the server sends them to the window under the
-    // pointer.
-    const std::unique_ptr<Display, int (*)(Display*)> connection(XOpenDisplay(nullptr), XCloseDisplay);
-    Display* display = connection.get();
-    REQUIRE(display);
-    int windowX = 0, windowY = 0;
-    glfwGetWindowPos(editor->window(), &windowX, &windowY);
-    // When the test's XSync returns, the server has made the events and put them in the window's
-    // output; a round trip on GLFW's own connection then reads them into its queue (its reply comes
-    // after them), so the next frame's poll sees them however the two processes are scheduled. Without
-    // it, a release still in flight on a loaded machine left the stroke open when the test looked.
-    const auto deliver = [&] {
-        XSync(display, False);
-        XSync(glfwGetX11Display(), False);
-    };
-    const auto moveTo = [&](double x, double y) {
-        XTestFakeMotionEvent(display, -1, windowX + int(x), windowY + int(y), CurrentTime);
-        deliver();
-    };
-    const auto leftButton = [&](bool down) {
-        XTestFakeButtonEvent(display, 1, down ? True : False, CurrentTime);
-        deliver();
-    };
-    const auto stroke = [&](double x0, double y0) {
-        moveTo(x0, y0);
-        REQUIRE(editor->frame());
-        leftButton(true);
-        REQUIRE(editor->frame());
-        for (int k = 1; k <= 4; ++k) {
-            moveTo(x0 + 12.0 * k, y0 - 4.0 * k);
-            REQUIRE(editor->frame());
-        }
-        leftButton(false);
-        REQUIRE(editor->frame());
-    };
+    // pointer drags across the ball, the button comes up), through GLFW's event loop and callbacks.
+    XInput x(*editor);
+    const auto stroke = [&](double x0, double y0) { x.drag(x0, y0, 12.0, -4.0, 4); };
     stroke(420, 300);
     CHECK(session.history().undoDepth() == 1);
     CHECK(session.stats().stampsApplied >= 3);
@@ -238,4 +267,226 @@ TEST_CASE("desktop: edits recovered after a crash are offered: kept, or dropped 
     EditingSession reopened(ball, discard);
     CHECK(reopened.recoveredEdits() == 0);
     CHECK(identical(committed(reopened), saved));
+}
+
+namespace {
+
+/// The ball streamed in, drawn, with the brush resting over it.
+std::unique_ptr<DesktopEditor> readyEditor(EditingSession& session, UiDriver& ui)
+{
+    std::unique_ptr<DesktopEditor> editor = openEditor(session, ui.options());
+    if (!editor) return nullptr;
+    for (int i = 0; i < 3; ++i) REQUIRE(editor->frame());
+    session.scene().waitForLoads();
+    for (int i = 0; i < 2; ++i) REQUIRE(editor->frame());
+    return editor;
+}
+
+double distance(const std::array<double, 3>& a, const std::array<double, 3>& b)
+{
+    return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+/// The stroke points the session placed since command `from`.
+std::vector<std::array<double, 3>> strokePoints(const EditingSession& session, std::size_t from)
+{
+    std::vector<std::array<double, 3>> out;
+    const auto& commands = session.record().commands;
+    for (std::size_t i = from; i < commands.size(); ++i)
+        if (commands[i].command.point &&
+            (commands[i].command.kind == Command::Kind::StrokeBegin || commands[i].command.kind == Command::Kind::StrokeMove))
+            out.push_back(*commands[i].command.point);
+    return out;
+}
+
+} // namespace
+
+TEST_CASE("desktop: a sideways drag stays on the ball as the stroke found it, Ctrl inverts the brush and Shift smooths", "[desktop][editor]")
+{
+    if (!desktopAvailable()) {
+        WARN("skipped: no display (the test command runs the suite under xvfb-run)");
+        return;
+    }
+    TempDir dir;
+    EditingSession session(makeBall(dir, "ball.vdb"), quiet());
+    UiDriver ui;
+    std::unique_ptr<DesktopEditor> editor = readyEditor(session, ui);
+    if (!editor) return;
+    XInput x(*editor);
+    CHECK(editor->title() == "VDBClay - ball.vdb");
+
+    // Add, dragged sideways across the ball's middle: every stamp within a brush radius of the ball as it
+    // was (the stamps used to climb the blobs they made, towards the camera).
+    std::size_t from = session.record().commands.size();
+    x.drag(420, 300, 10.0, 0.0, 14);
+    const std::vector<std::array<double, 3>> points = strokePoints(session, from);
+    CHECK(points.size() >= 10);
+    for (const auto& p : points) CHECK(std::fabs(distance(p, {0, 0, 0}) - 20.0) <= session.brush().radius);
+    for (const auto& p : points) CHECK(std::fabs(distance(p, {0, 0, 0}) - 20.0) <= 1.0); // on the surface itself
+    CHECK(session.history().undoDepth() == 1);
+    CHECK(editor->title() == "VDBClay - ball.vdb *");
+
+    // Ctrl held: the stroke removes, and the brush is add again afterwards; Shift held: it smooths.
+    for (const auto& [modifier, expected] : {std::pair<KeySym, std::string>{XK_Control_L, "remove"}, {XK_Shift_L, "smooth"}}) {
+        x.key(modifier, true);
+        x.drag(440, 320, 8.0, 0.0, 6);
+        x.key(modifier, false);
+        REQUIRE(editor->frame());
+        INFO(expected);
+        CHECK(session.brush().mode == "add");
+        const nlohmann::json ops = session.appliedScript().at("ops");
+        REQUIRE(!ops.empty());
+        CHECK(ops.back().at("mode") == expected);
+    }
+    CHECK(session.history().undoDepth() == 3);
+
+    // Ctrl+S saves: the title loses its mark.
+    x.key(XK_Control_L, true);
+    x.tap(XK_s);
+    x.key(XK_Control_L, false);
+    REQUIRE(editor->frame());
+    CHECK_FALSE(session.unsaved());
+    CHECK(editor->title() == "VDBClay - ball.vdb");
+    CHECK(editor->validationMessages() == 0);
+}
+
+TEST_CASE("desktop: the wheel zooms up to two voxels from the surface and it is still drawn; numpad views, Home and F12", "[desktop][editor]")
+{
+    if (!desktopAvailable()) {
+        WARN("skipped: no display (the test command runs the suite under xvfb-run)");
+        return;
+    }
+    TempDir dir;
+    EditingSession session(makeBall(dir, "ball.vdb"), quiet());
+    UiDriver ui;
+    std::unique_ptr<DesktopEditor> editor = readyEditor(session, ui);
+    if (!editor) return;
+    XInput x(*editor);
+    const std::array<int, 2> size{800, 600};
+    x.moveTo(400, 300);
+    REQUIRE(editor->frame());
+    const auto gap = [&] {
+        const Ray r = pointerRay(session.camera(), size, 400, 300);
+        const auto hit = session.pick(r.origin, r.direction);
+        REQUIRE(hit);
+        return hit->distance;
+    };
+    const double framed = gap();
+    int notches = 0;
+    while (gap() > 2.0 && notches < 100) {
+        x.button(4, true); // the wheel, one notch towards the scene
+        x.button(4, false);
+        REQUIRE(editor->frame());
+        ++notches;
+    }
+    INFO("from " << framed << " to " << gap() << " voxels in " << notches << " notches");
+    REQUIRE(gap() <= 2.0);
+    for (int i = 0; i < 3; ++i) REQUIRE(editor->frame());
+    session.scene().waitForLoads();
+    REQUIRE(editor->frame());
+    CHECK(editor->lastFrame().triangles > 0);
+
+    // F12 writes the view as drawn: the surface fills its centre (the near plane used to cut it away).
+    x.tap(XK_F12);
+    const std::string shot = dir.file("ball-shot-001.png");
+    REQUIRE(std::filesystem::exists(shot));
+    const render::Image image = render::readImage(shot);
+    REQUIRE(image.width == 800);
+    const uint8_t* centre = image.pixel(400, 300);
+    const int background = std::abs(int(centre[0]) - 41) + std::abs(int(centre[1]) - 43) + std::abs(int(centre[2]) - 48);
+    INFO("centre pixel " << int(centre[0]) << " " << int(centre[1]) << " " << int(centre[2]));
+    CHECK(background > 30);
+
+    // Home frames the whole ball again; numpad 7 looks down on it, Ctrl + numpad 1 from behind.
+    x.tap(XK_Home);
+    CHECK(gap() > 20.0);
+    x.tap(XK_KP_7);
+    CHECK(session.camera().eye[1] - session.camera().target[1] > 0.0);
+    CHECK(std::fabs(session.camera().eye[0] - session.camera().target[0]) < 1e-9);
+    x.key(XK_Control_L, true);
+    x.tap(XK_KP_1);
+    x.key(XK_Control_L, false);
+    CHECK(session.camera().eye[2] < session.camera().target[2]);
+    CHECK(editor->validationMessages() == 0);
+}
+
+TEST_CASE("desktop: a grab dragged three radii keeps the grabbed point under the pointer", "[desktop][editor]")
+{
+    if (!desktopAvailable()) {
+        WARN("skipped: no display (the test command runs the suite under xvfb-run)");
+        return;
+    }
+    TempDir dir;
+    EditingSession session(makeBall(dir, "ball.vdb"), quiet());
+    UiDriver ui;
+    std::unique_ptr<DesktopEditor> editor = readyEditor(session, ui);
+    if (!editor) return;
+    XInput x(*editor);
+    x.tap(XK_g);
+    REQUIRE(session.brush().mode == "move");
+    BrushSettings full = session.brush();
+    full.strength = 1.0;
+    Command setFull;
+    setFull.kind = Command::Kind::SetBrush;
+    setFull.brush = full;
+    session.apply(setFull);
+    // Three radii on the screen at the grabbed point's depth.
+    const render::Camera& camera = session.camera();
+    const double depth = distance(camera.eye, camera.target) - 20.0;
+    const double pixelsPerUnit = 600.0 / (2.0 * depth * std::tan(camera.fovYDegrees * 3.14159265358979 / 360.0));
+    const double pixels = 3.0 * full.radius * pixelsPerUnit;
+    const int steps = 12;
+    const std::size_t from = session.record().commands.size();
+    x.drag(400, 300, pixels / steps, 0.0, steps);
+    const std::vector<std::array<double, 3>> points = strokePoints(session, from);
+    REQUIRE(points.size() == std::size_t(steps) + 1);
+    const std::array<double, 3> held = points.back();
+    CHECK(distance(points.front(), held) > 2.5 * full.radius);
+    const Ray last = pointerRay(session.camera(), {800, 600}, 400 + pixels, 300);
+    const auto hit = session.pick(last.origin, last.direction);
+    REQUIRE(hit);
+    INFO("held at " << held[0] << " " << held[1] << " " << held[2] << ", the surface under the pointer at " << hit->point[0] << " "
+                    << hit->point[1] << " " << hit->point[2]);
+    CHECK(distance(hit->point, held) <= 0.5);
+    CHECK(editor->validationMessages() == 0);
+}
+
+TEST_CASE("desktop: the overlay's frame interval agrees with the wall clock, its parts never exceed it, the brush persists", "[desktop][editor]")
+{
+    if (!desktopAvailable()) {
+        WARN("skipped: no display (the test command runs the suite under xvfb-run)");
+        return;
+    }
+    TempDir dir;
+    const std::string ball = makeBall(dir, "ball.vdb");
+    UiDriver ui;
+    ui.configFolder = dir.file("config");
+    {
+        EditingSession session(ball, quiet());
+        std::unique_ptr<DesktopEditor> editor = readyEditor(session, ui);
+        if (!editor) return;
+        XInput x(*editor);
+        REQUIRE(editor->frame());
+        double reported = 0.0;
+        const auto start = std::chrono::steady_clock::now();
+        for (int i = 0; i < 100; ++i) {
+            REQUIRE(editor->frame());
+            const FrameFigures& f = editor->figures();
+            reported += f.intervalMs;
+            const double parts = f.inputMs + f.sculptMs + f.streamMs + f.meshMs + f.drawMs + f.presentMs;
+            CHECK(parts <= f.intervalMs * 1.0001 + 1e-6);
+            CHECK(f.sculptMs >= 0.0);
+        }
+        const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+        INFO("reported " << reported << " ms, wall clock " << wall << " ms");
+        // The 100 intervals end at the 100th frame's start, a frame before the clock stops.
+        CHECK(std::fabs(reported - wall) <= 0.1 * wall);
+        x.tap(XK_r); // the brush becomes remove, and is kept for the next session
+        CHECK(session.brush().mode == "remove");
+    }
+    CHECK(std::filesystem::exists(dir.file("config/settings.json")));
+    CHECK(std::filesystem::exists(dir.file("config/keymap.json")));
+    EditingSession again(ball, quiet());
+    std::unique_ptr<DesktopEditor> editor = readyEditor(again, ui);
+    CHECK(again.brush().mode == "remove");
 }

@@ -150,7 +150,8 @@ struct DesktopEditor::Impl {
     VkDescriptorPool imguiPool = VK_NULL_HANDLE;
     bool imguiReady = false;
     DesktopPanels panels;
-    FrameFigures figures;
+    FrameFigures figures;  // what the overlay shows: the last whole frame
+    FrameFigures measured; // the parts of the frame under way, shown once its interval is known
     render::FrameStats lastStats;
     Clock::time_point started = Clock::now(), lastFrameStart = Clock::now();
     std::deque<std::pair<Clock::time_point, double>> recentIntervals; // the last second's frame intervals
@@ -588,6 +589,14 @@ struct DesktopEditor::Impl {
         const auto start = Clock::now();
         const double seconds = std::chrono::duration<double>(start - lastFrameStart).count();
         if (!firstFrame) {
+            // The frame that just ended: its interval, and the parts measured in it.
+            const FrameFigures parts = measured;
+            figures.inputMs = parts.inputMs;
+            figures.sculptMs = parts.sculptMs;
+            figures.streamMs = parts.streamMs;
+            figures.meshMs = parts.meshMs;
+            figures.drawMs = parts.drawMs;
+            figures.presentMs = parts.presentMs;
             figures.intervalMs = seconds * 1000.0;
             recentIntervals.emplace_back(start, figures.intervalMs);
             while (recentIntervals.size() > 1 && recentIntervals.front().first < start - std::chrono::seconds(1)) recentIntervals.pop_front();
@@ -675,12 +684,12 @@ struct DesktopEditor::Impl {
 
         figures.stream = stream;
         figures.draw = lastStats;
-        figures.sculptMs = std::min(session.stats().editMsLastFrame, msBetween(start, inputDone));
-        figures.inputMs = msBetween(start, inputDone) - figures.sculptMs;
-        figures.streamMs = msBetween(inputDone, streamed);
-        figures.meshMs = msBetween(streamed, meshed);
-        figures.drawMs = msBetween(acquired, drawn);
-        figures.presentMs = msBetween(meshed, acquired) + msBetween(drawn, presented);
+        measured.sculptMs = std::min(session.stats().editMsLastFrame, msBetween(start, inputDone));
+        measured.inputMs = msBetween(start, inputDone) - measured.sculptMs;
+        measured.streamMs = msBetween(inputDone, streamed);
+        measured.meshMs = msBetween(streamed, meshed);
+        measured.drawMs = msBetween(acquired, drawn);
+        measured.presentMs = msBetween(meshed, acquired) + msBetween(drawn, presented);
         ++frames;
         return true;
     }
@@ -738,6 +747,7 @@ std::optional<std::array<float, 4>> DesktopEditor::widgetRect(const std::string&
 const render::FrameStats& DesktopEditor::lastFrame() const { return impl_->lastStats; }
 const FrameFigures& DesktopEditor::figures() const { return impl_->figures; }
 const Keymap& DesktopEditor::keymap() const { return impl_->keymap; }
+const std::string& DesktopEditor::title() const { return impl_->title; }
 uint64_t DesktopEditor::validationMessages() const { return impl_->context ? impl_->context->validationMessages() : 0; }
 EditingSession& DesktopEditor::session() { return impl_->session; }
 void DesktopEditor::replay(const SessionRecord* record) { impl_->replay = record; impl_->replayNext = 0; }

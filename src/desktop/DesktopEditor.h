@@ -82,6 +82,8 @@ public:
     /// What the stats overlay shows: the last whole frame's wall-clock interval and its measured parts.
     const FrameFigures& figures() const;
     const Keymap& keymap() const;
+    /// The window's title: the scene's file name, and " *" while it has unsaved changes.
+    const std::string& title() const;
     uint64_t validationMessages() const;
     EditingSession& session();
 
