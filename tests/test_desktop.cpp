@@ -350,7 +350,7 @@ TEST_CASE("desktop: a sideways drag stays on the ball as the stroke found it, Ct
     CHECK(editor->validationMessages() == 0);
 }
 
-TEST_CASE("desktop: the wheel zooms up to two voxels from the surface and it is still drawn; numpad views, Home and F12", "[desktop][editor]")
+TEST_CASE("desktop: the wheel zooms up to two voxels from the surface and it is still drawn, numpad views, Home and F12", "[desktop][editor]")
 {
     if (!desktopAvailable()) {
         WARN("skipped: no display (the test command runs the suite under xvfb-run)");

@@ -295,3 +295,81 @@ TEST_CASE("editor: orbit about a pivot keeps the pivot where it is on the screen
     CHECK(length(minus(centred.eye, pivot)) == Approx(7.0));
     CHECK(length(minus(direction(centred), direction(c))) < 1e-12);
 }
+
+TEST_CASE("sculpt: a blended add is the smooth union of the surface and the brush, and never less than the exact add", "[sculpt][field]")
+{
+    // A ball of radius 20 and a sphere of radius 6 pressed into its side, on and off the lattice.
+    for (const std::array<double, 3>& c : {std::array<double, 3>{22.0, 0.0, 0.0}, std::array<double, 3>{15.3, 12.7, -4.1}}) {
+        const double width = 4.0;
+        Volume exact(1.0), blended(1.0);
+        const std::string ball = R"({"ops": [{"mode": "add", "brush": {"shape": "sphere", "radius": 20}}]})";
+        runStrokeScript(exact, parseStrokeScript(ball));
+        runStrokeScript(blended, parseStrokeScript(ball));
+        nlohmann::json stamp = {{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 6}}}, {"at", c}};
+        runStrokeScript(exact, parseStrokeScript(nlohmann::json{{"ops", {stamp}}}.dump()));
+        stamp["blend"] = width;
+        runStrokeScript(blended, parseStrokeScript(nlohmann::json{{"ops", {stamp}}}.dump()));
+        int filled = 0, checked = 0;
+        for (int x = 0; x <= 34; ++x)
+            for (int y = -20; y <= 24; ++y)
+                for (int z = -20; z <= 16; ++z) {
+                    const std::array<int32_t, 3> v{x, y, z};
+                    const bool e = exact.materialAt(v) != kEmptyMaterial, b = blended.materialAt(v) != kEmptyMaterial;
+                    if (e) CHECK(b); // the blend only adds
+                    const double a = std::sqrt(double(x * x + y * y + z * z)) - 20.0;
+                    const double s = std::sqrt((x - c[0]) * (x - c[0]) + (y - c[1]) * (y - c[1]) + (z - c[2]) * (z - c[2])) - 6.0;
+                    const double t = std::max(width - std::fabs(a - s), 0.0) / width;
+                    const double smooth = std::min(a, s) - 0.25 * width * t * t;
+                    // Away from the smooth union's surface (a voxel and a half: the lattice's resampling),
+                    // the blended solid is the analytic one.
+                    if (std::fabs(smooth) > 1.5) {
+                        ++checked;
+                        INFO("voxel " << x << " " << y << " " << z << ": smooth union " << smooth);
+                        CHECK(b == (smooth < 0.0));
+                    }
+                    filled += b && !e;
+                }
+        INFO("stamp at " << c[0] << " " << c[1] << " " << c[2]);
+        CHECK(filled > 20); // the crease is filled
+        CHECK(checked > 40000);
+    }
+}
+
+TEST_CASE("sculpt: smooth at strength 1 removes a one-voxel bump in one pass and rounds a seam between CSG stamps", "[sculpt][field]")
+{
+    const auto solidAbove = [](const Volume& v, int top) {
+        int count = 0;
+        for (int x = -6; x <= 6; ++x)
+            for (int z = -6; z <= 6; ++z)
+                for (int y = top + 1; y <= top + 4; ++y) count += v.materialAt({x, y, z}) != kEmptyMaterial;
+        return count;
+    };
+    // A slab whose top voxels are y = 0, with one voxel more on top at the origin (box sizes are half extents).
+    Volume v(1.0);
+    runStrokeScript(v, parseStrokeScript(R"({"ops": [{"mode": "add", "brush": {"shape": "box", "size": [20, 10, 20]}, "at": [0, -9.5, 0]},
+                                                     {"mode": "add", "brush": {"shape": "box", "size": [0.5, 0.5, 0.5]}, "at": [0, 1, 0]}]})"));
+    REQUIRE(solidAbove(v, 0) == 1);
+    runStrokeScript(v, parseStrokeScript(R"({"ops": [{"mode": "smooth", "brush": {"shape": "sphere", "radius": 5}, "at": [0, 0.5, 0], "strength": 1}]})"));
+    CHECK(solidAbove(v, 0) == 0);
+    CHECK(v.materialAt({0, 0, 0}) != kEmptyMaterial); // the slab stays
+
+    // Two boxes stamped on a slab meet at a right-angled crease; a smooth pass along it fills the crease and
+    // takes the edge off: voxels change on both sides.
+    Volume seam(1.0);
+    const std::string boxes = R"({"ops": [{"mode": "add", "brush": {"shape": "box", "size": [20, 10, 20]}, "at": [0, -9.5, 0]},
+                                          {"mode": "add", "brush": {"shape": "box", "size": [5, 5, 20]}, "at": [0, 5.5, 0]}]})";
+    runStrokeScript(seam, parseStrokeScript(boxes));
+    Volume before = seam.clone();
+    runStrokeScript(seam, parseStrokeScript(R"({"ops": [{"mode": "smooth", "brush": {"shape": "sphere", "radius": 6}, "path": [[5, 0.5, -10], [5, 0.5, 10]], "strength": 1}]})"));
+    int filled = 0, cut = 0;
+    for (int x = -2; x <= 12; ++x)
+        for (int y = -3; y <= 12; ++y)
+            for (int z = -4; z <= 4; ++z) {
+                const bool was = before.materialAt({x, y, z}) != kEmptyMaterial, now = seam.materialAt({x, y, z}) != kEmptyMaterial;
+                filled += now && !was;
+                cut += was && !now;
+            }
+    INFO("filled " << filled << ", cut " << cut);
+    CHECK(filled >= 9 * 2); // at least two voxels deep into the crease along the 9 rows checked
+    CHECK(cut >= 9);        // and the box's lower corner rounds
+}

@@ -231,6 +231,14 @@ void DesktopPanels::brushPanel(EditingSession& session, std::vector<Command>& ou
             changed = true;
         }
     }
+    if (b.mode == "add") {
+        float blend = float(b.smoothness);
+        if (ImGui::SliderFloat("Blend", &blend, 0.0f, 1.0f)) {
+            b.smoothness = blend;
+            changed = true;
+        }
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("How wide add blends into the surface, as a fraction of the radius (0: a hard edge)");
+    }
     if (b.shape.value("shape", std::string()) == "blend") {
         float smoothness = b.shape.value("smoothness", 0.0f);
         if (ImGui::SliderFloat("Smoothness", &smoothness, 0.0f, 1.0f)) {

@@ -46,19 +46,20 @@ void checkBrushSettings(const BrushSettings& b)
     if (!(b.distance > 0.0) || !std::isfinite(b.distance)) throw std::invalid_argument("brush.distance: must be above 0");
     if (!(b.spacing >= 0.02 && b.spacing <= 4.0)) throw std::invalid_argument("brush.spacing: must be in [0.02, 4]");
     if (!b.symmetry.is_null() && !b.symmetry.is_object()) throw std::invalid_argument("brush.symmetry: must be an object or null");
+    if (!(b.smoothness >= 0.0 && b.smoothness <= 1.0)) throw std::invalid_argument("brush.smoothness: must be in [0, 1]");
 }
 
 nlohmann::json brushSettingsJson(const BrushSettings& b)
 {
     return {{"mode", b.mode}, {"shape", b.shape}, {"radius", b.radius}, {"strength", b.strength}, {"falloff", b.falloff},
             {"material", b.material}, {"distance", b.distance}, {"spacing", b.spacing}, {"pressure", pressureName(b.pressure)},
-            {"symmetry", b.symmetry}, {"accumulate", b.accumulate}};
+            {"symmetry", b.symmetry}, {"accumulate", b.accumulate}, {"smoothness", b.smoothness}};
 }
 
 BrushSettings parseBrushSettings(const nlohmann::json& json)
 {
     if (!json.is_object()) throw std::invalid_argument("brush: must be an object");
-    static const std::vector<std::string> keys{"mode", "shape", "radius", "strength", "falloff", "material", "distance", "spacing", "pressure", "symmetry", "accumulate"};
+    static const std::vector<std::string> keys{"mode", "shape", "radius", "strength", "falloff", "material", "distance", "spacing", "pressure", "symmetry", "accumulate", "smoothness"};
     for (const auto& item : json.items())
         if (std::find(keys.begin(), keys.end(), item.key()) == keys.end()) throw std::invalid_argument("brush." + printableText(item.key(), 80) + ": unknown key");
     BrushSettings b;
@@ -76,6 +77,7 @@ BrushSettings parseBrushSettings(const nlohmann::json& json)
     else if (pressure == "none") b.pressure = PressureTarget::None;
     else throw std::invalid_argument("brush.pressure: size, strength or none");
     if (json.contains("symmetry")) b.symmetry = json.at("symmetry");
+    b.smoothness = number(json, "smoothness", 0.0); // absent: exact, as before the setting was
     if (json.contains("accumulate")) {
         if (!json.at("accumulate").is_boolean()) throw std::invalid_argument("brush.accumulate: must be true or false");
         b.accumulate = json.at("accumulate").get<bool>();
@@ -116,6 +118,8 @@ nlohmann::json strokeOpJson(const BrushSettings& b, const std::vector<std::array
         if (b.mode == "move") op["offset"] = offset;
     } else if (b.mode == "erode") {
         op["strength"] = strength;
+    } else if (b.mode == "add" && b.smoothness > 0.0) {
+        op["blend"] = b.smoothness * scale;
     }
     if (!b.symmetry.is_null()) op["symmetry"] = b.symmetry;
     return op;

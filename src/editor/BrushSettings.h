@@ -28,6 +28,9 @@ struct BrushSettings {
     /// stroke follows the surface as it began (Blender's default), and add and remove change it by at
     /// most strength x radius.
     bool accumulate = false;
+    /// Add: the width of its smooth union with the surface, as a fraction of the radius (0: exact, as
+    /// sessions recorded before it, which do not name it, are read).
+    double smoothness = 0.35;
 };
 
 /// Throws std::invalid_argument naming the field for settings no script would accept (checked again

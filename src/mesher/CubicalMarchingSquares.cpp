@@ -123,6 +123,12 @@ Vec2 normalized(const Vec2& v)
     return {v.x / length, v.y / length};
 }
 
+template<typename T>
+double normalDot(const std::array<T, 3>& a, const std::array<T, 3>& b)
+{
+    return double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2];
+}
+
 /// Whether the normals at the two ends of a segment on a face with normal `axis`, projected onto the
 /// face, span the sharp angle there: the segment is then a candidate for a 2D sharp feature. A normal
 /// along the axis has no direction on the face.
@@ -133,12 +139,6 @@ bool segmentBends(const std::array<T, 3>& normalA, const std::array<T, 3>& norma
     const double aa = a.x * a.x + a.y * a.y, bb = b.x * b.x + b.y * b.y;
     if (aa < 1e-12 || bb < 1e-12) return false;
     return a.x * b.x + a.y * b.y <= cosSharp * std::sqrt(aa * bb);
-}
-
-template<typename T>
-double normalDot(const std::array<T, 3>& a, const std::array<T, 3>& b)
-{
-    return double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2];
 }
 
 template<typename T>
@@ -153,6 +153,10 @@ void accumulate(std::array<double, 3>& sum, const std::array<T, 3>& v)
 /// neighbouring squares and cells never meet on a shared side. Under half the crossings' corner margin
 /// (kOffsetMarginCode, 2.4e-4), ten times the distance below which analyzeTopology merges vertices.
 constexpr double kFeatureInsetVoxels = 1e-4;
+/// A fan triangle folds when its normal lies more than 120 degrees (this cosine past perpendicular) from
+/// the surface's normals at both of its loop points: less is a crease's bridge leaning (and a rotated
+/// box's corner fans lean that far without folding).
+constexpr double kFoldCosine = 0.5;
 /// How far apart two wedge chains reaching into one clear band from opposite sides stay at least.
 constexpr double kBandGapVoxels = 1e-2;
 
@@ -304,17 +308,25 @@ struct CubicalMarchingSquaresMesher::Buffers {
     void keepFanOpen(std::array<double, 3>& centre, const uint32_t* ids, std::size_t n) const
     {
         const auto& positions = chunk.mesh.positions;
+        const auto& normals = chunk.mesh.normals;
         auto fanIsOpen = [&](const std::array<double, 3>& exact) {
             // Judged as stored: the vertex becomes a float, which can put it back on the line.
             const std::array<double, 3> c{float(exact[0]), float(exact[1]), float(exact[2])};
             for (std::size_t i = 0; i < n; ++i) {
-                const auto& p = positions[ids[i]];
-                const auto& q = positions[ids[i + 1 < n ? i + 1 : 0]];
+                const uint32_t a = ids[i], b = ids[i + 1 < n ? i + 1 : 0];
+                const auto& p = positions[a];
+                const auto& q = positions[b];
                 const double ux = p[0] - c[0], uy = p[1] - c[1], uz = p[2] - c[2];
                 const double vx = q[0] - c[0], vy = q[1] - c[1], vz = q[2] - c[2];
                 const double x = uy * vz - uz * vy, y = uz * vx - ux * vz, z = ux * vy - uy * vx;
                 if (x * x + y * y + z * z < minFanDoubledArea * minFanDoubledArea) return false;
                 if (ux * ux + uy * uy + uz * uz < minFanSpacing * minFanSpacing) return false; // on a loop point
+                // Folded: the triangle faces clearly against the surface's normals at both of its loop
+                // points. A sharp vertex a concave crease's planes put beyond the loop fans triangles that
+                // fold back over their neighbours; nearer the mean point they lean, as a crease's bridge may.
+                const double bound = -kFoldCosine * std::sqrt(x * x + y * y + z * z);
+                const auto against = [&](const std::array<float, 3>& m) { return x * m[0] + y * m[1] + z * m[2] < bound; };
+                if (against(normals[a]) && against(normals[b])) return false;
             }
             return true;
         };
@@ -322,7 +334,7 @@ struct CubicalMarchingSquaresMesher::Buffers {
         std::array<double, 3> mean{};
         for (std::size_t i = 0; i < n; ++i)
             for (int a = 0; a < 3; ++a) mean[a] += positions[ids[i]][a] / double(n);
-        for (double step : {0.01, 0.1, 0.5, 1.0}) {
+        for (double step : {0.01, 0.1, 0.25, 0.5, 0.75, 1.0}) {
             std::array<double, 3> moved;
             for (int a = 0; a < 3; ++a) moved[a] = centre[a] + step * (mean[a] - centre[a]);
             if (fanIsOpen(moved) || step == 1.0) {
@@ -602,7 +614,10 @@ private:
         const Vec2 pa = onFace(a, axis), pb = onFace(b, axis);
         const double ca = na.x * pa.x + na.y * pa.y, cb = nb.x * pb.x + nb.y * pb.y;
         const Vec2 p{(ca * nb.y - cb * na.y) / det, (na.x * cb - nb.x * ca) / det};
-        if (onlySegment && !mixedMaterials(sq)) {
+        // Only a convex corner of the solid can poke out past the square as a wedge: each crossing lies
+        // inside the other's half-plane. A concave one (the valley where two stamps meet) is kept inside.
+        const bool convex = nb.x * pa.x + nb.y * pa.y < cb && na.x * pb.x + na.y * pb.y < ca;
+        if (onlySegment && convex && !mixedMaterials(sq)) {
             shape.count = tipChain(sq, {pa, na, ca}, {pb, nb, cb}, p, shape.points);
             shape.plausible = shape.count > 0;
             if (!ordered) std::reverse(shape.points, shape.points + shape.count);

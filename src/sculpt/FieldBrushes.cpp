@@ -295,7 +295,7 @@ double falloffWeight(Falloff falloff, double depth, double innerRadius)
 
 int smoothingRadiusVoxels(const SdfField& brush, double voxelSize)
 {
-    return std::clamp(int(std::lround(brush.innerRadius() / (4.0 * voxelSize))), 1, 8);
+    return std::clamp(int(std::lround(brush.innerRadius() / (2.0 * voxelSize))), 1, 12);
 }
 
 double fieldBrushReach(const SdfField& brush, const FieldBrushOp& op, double voxelSize)
@@ -303,7 +303,7 @@ double fieldBrushReach(const SdfField& brush, const FieldBrushOp& op, double vox
     // The rebuilt field is right within its box; a few voxels more keep the box's walls away.
     double reach = 4.0 * voxelSize;
     switch (op.mode) {
-    case FieldMode::Smooth: reach += 2.0 * smoothingRadiusVoxels(brush, voxelSize) * voxelSize; break;
+    case FieldMode::Smooth: reach += 2.0 * smoothingRadiusVoxels(brush, voxelSize) * voxelSize; break; // two passes
     case FieldMode::Flatten: reach += brush.innerRadius(); break; // the plane may lie that far off the surface
     case FieldMode::Inflate:
     case FieldMode::Deflate: reach += std::fabs(op.distance); break;
@@ -439,7 +439,7 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     case FieldMode::Smooth: {
         // Two box passes per axis (a smooth, symmetric kernel), each written where a later pass reads
         // it for a point of the brush: within the brush grown by the passes' reach.
-        const int r = (smoothingRadiusVoxels(brush, h) + 1) / 2;
+        const int r = smoothingRadiusVoxels(brush, h); // fieldBrushReach reads 2 r around the brush
         const PointRange read = inBrush.grown(2 * r, old.dims);
         LatticeGrid blurred = old, scratch = old;
         for (int pass = 0; pass < 2; ++pass)
@@ -500,6 +500,72 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     const double lipschitz = std::max({1.0, next.lipschitz(inBrush.grown(1, next.dims)), old.lipschitz()});
     EditStats stats = applyCsg(volume, ClippedGridField(next, 1.0, changed, &old, lipschitz), CsgOp{CsgMode::Add, material, 1.0, {}});
     stats.append(applyCsg(volume, ClippedGridField(next, -1.0, changed, nullptr, lipschitz), CsgOp{CsgMode::Remove, material, 1.0, {}}));
+    return stats;
+}
+
+double blendReach(double width, double voxelSize) { return width + 4.0 * voxelSize; }
+
+namespace {
+
+/// A field grown by `by` world units: where a blended add's fillet may reach.
+class GrownField : public SdfField {
+public:
+    GrownField(const SdfField& field, double by) : field_(field), by_(by) {}
+    double distance(const Vec3d& world) const override { return field_.distance(world) - by_; }
+    WorldBounds bounds() const override
+    {
+        WorldBounds b = field_.bounds();
+        b.min -= Vec3d(by_);
+        b.max += Vec3d(by_);
+        return b;
+    }
+    double innerRadius() const override { return field_.innerRadius() + by_; }
+    double lipschitz() const override { return field_.lipschitz(); }
+    double evaluationCost() const override { return field_.evaluationCost(); }
+
+private:
+    const SdfField& field_;
+    double by_;
+};
+
+} // namespace
+
+EditStats applyBlendedAdd(Volume& volume, const SdfField& brush, const CsgOp& op, double width)
+{
+    checkCsgLimits(volume.voxelSize(), volume.materials(), brush, op);
+    if (!(width > 0.0) || !std::isfinite(width)) throw std::invalid_argument("a blend's width must be positive");
+    const double h = volume.voxelSize(), band = blendReach(width, h);
+    const WorldBounds bounds = brush.bounds();
+    std::array<int32_t, 3> lo{}, dims{};
+    bool fits = bounds.bounded();
+    for (int a = 0; a < 3 && fits; ++a) {
+        lo[std::size_t(a)] = int32_t(std::floor((bounds.min[a] - band) / h));
+        dims[std::size_t(a)] = int32_t(std::ceil((bounds.max[a] + band) / h)) - lo[std::size_t(a)] + 1;
+        fits = dims[std::size_t(a)] <= kMaxFieldBrushVoxels;
+    }
+    if (!fits) return applyCsg(volume, brush, op);
+    // The old surface's distance, before the brush changes it.
+    const SolidDistances solid = solidDistances(volume, lo, dims, float(band / h));
+    const bool anySolid = std::any_of(solid.material.begin(), solid.material.end(), [](MaterialId m) { return m != kEmptyMaterial; });
+    EditStats stats = applyCsg(volume, brush, op);
+    if (!anySolid) return stats; // nothing to blend into
+    LatticeGrid old;
+    old.origin = lo;
+    old.dims = solid.dims;
+    old.voxelSize = h;
+    old.values.resize(solid.distance.size());
+    for (std::size_t n = 0; n < old.values.size(); ++n) old.values[n] = float(double(solid.distance[n]) * h);
+    const GrownField reach(brush, width);
+    const PointRange inReach = pointsWithin(old, reach.bounds());
+    LatticeGrid next = old;
+    forEachPoint(inReach, [&](int32_t i, int32_t j, int32_t k) {
+        const std::size_t n = old.index(i, j, k);
+        const double a = old.values[n], b = brush.distance(old.pointOf(i, j, k));
+        const double t = std::max(width - std::fabs(a - b), 0.0) / width;
+        next.values[n] = float(std::min(a, b) - 0.25 * width * t * t);
+    });
+    const double lipschitz = std::max({1.0, next.lipschitz(inReach.grown(1, next.dims)), old.lipschitz()});
+    stats.append(applyCsg(volume, ClippedGridField(next, 1.0, reach, &old, lipschitz), op));
     return stats;
 }
 

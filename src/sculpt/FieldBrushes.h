@@ -50,7 +50,9 @@ struct FieldBrushOp {
 /// rising to 1 at the deepest point as the falloff says (constant: 1 everywhere inside).
 double falloffWeight(Falloff falloff, double depth, double innerRadius);
 
-/// The smoothing filter's radius for a brush, in voxels: a quarter of the brush's inner radius, 1 to 8.
+/// The smoothing filter's radius (each of its two box passes) for a brush, in voxels: half the brush's
+/// inner radius, 1 to 12 (wide enough that one pass at strength 1 takes a one-voxel bump away and rounds
+/// a crease between stamps).
 int smoothingRadiusVoxels(const SdfField& brush, double voxelSize);
 
 /// World units beyond the brush's bounds the op reads: its field must see the surface there.
@@ -65,5 +67,15 @@ void checkFieldBrush(const Volume& volume, const SdfField& brush, const FieldBru
 
 /// Checks the op, then applies it. A region without solid voxels is left as it is.
 EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrushOp& op);
+
+/// An add that blends into the surface (clay pressed on, not a sphere stuck on): the brush is added
+/// exactly (applyCsg), then the fillet where it meets the old surface, the smooth union
+///   min(a, b) - k/4 h^2,  h = max(k - |a - b|, 0) / k
+/// of the old distance a and the brush's b with width k = `width` (world units). The fillet only adds,
+/// within k of the brush. A fillet region wider than kMaxFieldBrushVoxels is left out (the add stays
+/// exact): the op is decided by its size, never by timing.
+EditStats applyBlendedAdd(Volume& volume, const SdfField& brush, const CsgOp& op, double width);
+/// World units beyond the brush's bounds a blended add reads and changes.
+double blendReach(double width, double voxelSize);
 
 } // namespace vdbclay

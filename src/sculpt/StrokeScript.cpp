@@ -220,7 +220,7 @@ Symmetry parseSymmetry(const json& s, const std::string& where)
 
 ScriptOp parseOp(const json& o, const std::string& where)
 {
-    checkKeys(o, where, {"mode", "brush", "at", "path", "rotate", "scale", "material", "strength", "depth", "falloff", "distance", "offset", "symmetry"});
+    checkKeys(o, where, {"mode", "brush", "at", "path", "rotate", "scale", "material", "strength", "depth", "falloff", "distance", "offset", "symmetry", "blend"});
     ScriptOp op;
     if (o.contains("symmetry")) op.symmetry = parseSymmetry(o.at("symmetry"), where + ".symmetry");
     const std::string mode = text(o, "mode", where);
@@ -293,6 +293,11 @@ ScriptOp parseOp(const json& o, const std::string& where)
     if (o.contains("depth")) {
         op.depth = number(o, "depth", where);
         if (!(*op.depth > 0.0)) fail(where + ".depth", "must be positive");
+    }
+    if (o.contains("blend")) {
+        if (op.mode != CsgMode::Add) fail(where + ".blend", "belongs to add (the width of its smooth union with the surface)");
+        op.blend = number(o, "blend", where);
+        if (!(op.blend >= 0.0 && op.blend < 1e6)) fail(where + ".blend", "must be at least 0 and below 1e6 (world units)");
     }
     if (grid) return op; // bounded, with an inner radius: its checks wait for the tool's file
     if (op.mode == CsgMode::Erode && !op.depth && !std::isfinite(op.brush.innerRadius()))
@@ -420,8 +425,8 @@ WorldBounds opBounds(const ScriptOp& op, double voxelSize)
 {
     if (!op.toolFile.empty() && !op.tool) throw ScriptError("the tool '" + printableText(op.toolFile, 200) + "' is not loaded");
     WorldBounds one = op.tool ? PlacedTool(op.tool, op.placement).bounds() : op.brush.bounds();
-    if (one.bounded() && op.field) {
-        const double reach = fieldBrushReach(op.brush, *op.field, voxelSize);
+    if (one.bounded() && (op.field || op.blend > 0.0)) {
+        const double reach = op.field ? fieldBrushReach(op.brush, *op.field, voxelSize) : blendReach(op.blend, voxelSize);
         one.min -= Vec3d(reach);
         one.max += Vec3d(reach);
     }
@@ -453,6 +458,7 @@ struct OpStep {
     std::shared_ptr<const SdfField> field;
     CsgOp op;
     std::optional<FieldBrushOp> reshape; // a reshaping brush instead of the CSG op
+    double blend = 0.0;                  // add: blended into the surface this wide (applyBlendedAdd)
 };
 
 /// The field an op carves with, with the tool's region `region` where it uses a tool. A stroke follows its
@@ -506,7 +512,7 @@ std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTabl
     }
     const bool toolMaterials = s.tool && s.material.empty() && (s.mode == CsgMode::Add || s.mode == CsgMode::Paint);
     try {
-        if (!s.field && !toolMaterials) plain = {{opField(s, kEmptyMaterial, voxelSize), op, std::nullopt}};
+        if (!s.field && !toolMaterials) plain = {{opField(s, kEmptyMaterial, voxelSize), op, std::nullopt, s.blend}};
         if (!plain.empty()) return withSymmetry(std::move(plain), s.symmetry);
         // Each material of the tool over its own region: regions share their boundaries, so each
         // material boundary of the tool becomes one in the volume, with its crossings and normals.
@@ -515,7 +521,7 @@ std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTabl
             const Material& m = s.tool->materials().at(region);
             const auto existing = table.find(m.name);
             op.material = existing ? *existing : table.define(m);
-            steps.push_back({opField(s, region, voxelSize), op, std::nullopt});
+            steps.push_back({opField(s, region, voxelSize), op, std::nullopt, s.blend});
         }
         return withSymmetry(std::move(steps), s.symmetry);
     } catch (const std::invalid_argument& e) {
@@ -585,7 +591,9 @@ std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& 
         report.mode = script.ops[i].mode;
         report.modeName = opModeName(script.ops[i]);
         for (const OpStep& step : steps[i]) {
-            report.stats.append(step.reshape ? applyFieldBrush(volume, *step.field, *step.reshape) : applyCsg(volume, *step.field, step.op));
+            report.stats.append(step.reshape       ? applyFieldBrush(volume, *step.field, *step.reshape)
+                                : step.blend > 0.0 ? applyBlendedAdd(volume, *step.field, step.op, step.blend)
+                                                   : applyCsg(volume, *step.field, step.op));
         }
         report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (onOp) onOp(report);

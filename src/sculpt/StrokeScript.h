@@ -41,6 +41,7 @@ struct ScriptOp {
     std::string material;        // empty: add uses the volume's first material
     double strength = 1.0;
     std::optional<double> depth; // erode depth override
+    double blend = 0.0;          // add: the width of the smooth union with the surface (world units; 0: exact)
     Symmetry symmetry;           // the op runs once per copy (symmetryCopies), the plain one first
 };
 
