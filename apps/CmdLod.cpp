@@ -101,7 +101,7 @@ LodCommands addLodCommand(CLI::App& parent, LodOptions& o)
         ->check(CLI::Range(uint64_t(1), uint64_t(1) << 40));
     cmds.inspect->add_option("--view", o.frameView, "With --frames: what the colours show (lod: each region's level)")
         ->capture_default_str()
-        ->check(CLI::IsMember({"shaded", "lod", "toughness", "normals"}));
+        ->check(CLI::IsMember({"shaded", "clay", "lod", "toughness", "normals"}));
     cmds.inspect->add_option("--frame-size", o.frameSize, "With --frames: picture size (default: the flight's viewport, at most 640 wide)")
         ->type_name("WxH");
     cmds.inspect->add_flag("--json", o.json, "Print {\"frames\": [one object per camera frame], \"summary\": {...}}");

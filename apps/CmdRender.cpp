@@ -74,7 +74,7 @@ CLI::App* addRenderCommand(CLI::App& parent, RenderOptions& o)
     cmd->add_option("--frame", o.frame, "The flight's frame to draw (0-based; with --camera-path)")->type_name("N")->check(unsignedInteger());
     cmd->add_option("--view", o.view, "What the colours show: shaded, lod (level of each region), toughness, normals")
         ->capture_default_str()
-        ->check(CLI::IsMember({"shaded", "lod", "toughness", "normals"}));
+        ->check(CLI::IsMember({"shaded", "clay", "lod", "toughness", "normals"}));
     cmd->add_flag("--wireframe", o.wireframe, "Draw the triangles' edges over the surface");
     cmd->add_option("--memory-budget", o.memoryBudgetMB, "Stores: resident bricks may take at most this many MB")
         ->capture_default_str()

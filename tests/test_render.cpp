@@ -824,7 +824,7 @@ TEST_CASE("render: a headless edit's screenshot draws a material defined in the 
     REQUIRE(runCli(dir, "new ball.vdb --shape sphere --size 16").exitCode == 0);
     writeText(dir.file("s.json"), R"({"vdbclay_session": 1, "viewport": [160, 120], "commands": [
         {"frame": 0, "command": "material", "material": {"name": "brick", "color": [1, 1, 1], "texture": "red.png"}},
-        {"frame": 0, "command": "brush", "brush": {"mode": "paint", "radius": 40, "material": "brick"}},
+        {"frame": 0, "command": "brush", "brush": {"mode": "paint", "radius": 40, "material": "brick", "strength": 1, "falloff": "constant"}},
         {"frame": 1, "command": "stroke_begin", "point": [0, 16, 0]},
         {"frame": 2, "command": "stroke_end"}]})");
     REQUIRE(runCli(dir, "edit ball.vdb --replay s.json --headless --screenshot unsaved.png").exitCode == 0);

@@ -423,9 +423,10 @@ TEST_CASE("strokes: a dense path is simplified within its tolerance, and a strok
         const SceneDiff d = diffScenes(dir.file("dense.vdb"), dir.file("sparse.vdb"));
         // Each simplified path lies within 2 x 1/256 voxel of the arc, so the two within 1/64: only voxels
         // whose centres lie that close to the surface may change sides, and the meshes (whose vertices
-        // a feature's normals place) stay within a tenth of a voxel.
+        // a feature's normals place, and which a sharp fan that would fold moves towards its loop's
+        // mean point) stay within a sixth of a voxel.
         CHECK(d.occupancyDifferences <= 8);
-        CHECK(d.surfaceDistance <= 0.1);
+        CHECK(d.surfaceDistance <= 0.16);
     }
 }
 

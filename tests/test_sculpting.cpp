@@ -373,3 +373,52 @@ TEST_CASE("sculpt: smooth at strength 1 removes a one-voxel bump in one pass and
     CHECK(filled >= 9 * 2); // at least two voxels deep into the crease along the 9 rows checked
     CHECK(cut >= 9);        // and the box's lower corner rounds
 }
+
+TEST_CASE("sculpt: paint honours strength and falloff, its edge a gradient of coverage, not a one-voxel step", "[sculpt][paint]")
+{
+    // A slab whose top voxels are y = 0, painted from above with a sphere of radius 10 centred on the top.
+    const auto painted = [](const std::string& extra) {
+        Volume v(1.0);
+        runStrokeScript(v, parseStrokeScript(R"({"materials": [{"name": "red", "color": [1, 0, 0]}],
+            "ops": [{"mode": "add", "brush": {"shape": "box", "size": [20, 4, 20]}, "at": [0, -3.5, 0]},
+                    {"mode": "paint", "material": "red", "brush": {"shape": "sphere", "radius": 10}, "at": [0.3, 0, -0.2])" + extra + "}]}"));
+        return v;
+    };
+    // The share of the top layer's voxels painted, in rings one voxel wide about the centre.
+    const auto coverage = [](const Volume& v) {
+        std::vector<int> red(12, 0), all(12, 0);
+        const MaterialId id = *v.materials().find("red");
+        for (int x = -12; x <= 12; ++x)
+            for (int z = -12; z <= 12; ++z) {
+                const int ring = int(std::hypot(x - 0.3, z + 0.2));
+                if (ring >= 12) continue;
+                ++all[std::size_t(ring)];
+                red[std::size_t(ring)] += v.materialAt({x, 0, z}) == id;
+            }
+        std::vector<double> share;
+        for (std::size_t r = 0; r < all.size(); ++r) share.push_back(double(red[r]) / double(all[r]));
+        return share;
+    };
+    // Hard paint (as before, and as scripts without a falloff still paint): all inside, none outside.
+    const std::vector<double> hard = coverage(painted(""));
+    for (int r = 0; r < 9; ++r) CHECK(hard[std::size_t(r)] == 1.0);
+    for (int r = 11; r < 12; ++r) CHECK(hard[std::size_t(r)] == 0.0);
+    // A smooth falloff: full at the centre, none outside, and rings in between partly painted, fewer
+    // towards the rim: the edge spreads over several voxels.
+    const std::vector<double> soft = coverage(painted(R"(, "falloff": "smooth")"));
+    std::string shares;
+    for (double s : soft) shares += std::to_string(s).substr(0, 4) + " ";
+    INFO("painted share per ring: " << shares);
+    CHECK(soft[0] == 1.0);
+    CHECK(soft[11] == 0.0);
+    int partial = 0;
+    for (double s : soft) partial += s > 0.1 && s < 0.9;
+    CHECK(partial >= 3);
+    for (std::size_t r = 0; r + 2 < soft.size(); ++r) CHECK(soft[r + 2] <= soft[r] + 0.05); // falling outwards
+    // Strength scales the coverage: half strength paints about half of what full strength does.
+    const std::vector<double> half = coverage(painted(R"(, "falloff": "constant", "strength": 0.5)"));
+    double inner = 0.0;
+    for (int r = 0; r < 8; ++r) inner += half[std::size_t(r)] / 8.0;
+    CHECK(inner > 0.25);
+    CHECK(inner < 0.75);
+}

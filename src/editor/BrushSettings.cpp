@@ -118,6 +118,9 @@ nlohmann::json strokeOpJson(const BrushSettings& b, const std::vector<std::array
         if (b.mode == "move") op["offset"] = offset;
     } else if (b.mode == "erode") {
         op["strength"] = strength;
+    } else if (b.mode == "paint") {
+        op["strength"] = strength;
+        op["falloff"] = b.falloff;
     } else if (b.mode == "add" && b.smoothness > 0.0) {
         op["blend"] = b.smoothness * scale;
     }

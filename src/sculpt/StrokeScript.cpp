@@ -1,5 +1,6 @@
 #include "sculpt/StrokeScript.h"
 
+#include "sculpt/SoftPaint.h"
 #include "sculpt/StrokePath.h"
 
 #include "vdb_hermite/StrictJson.h"
@@ -235,7 +236,16 @@ ScriptOp parseOp(const json& o, const std::string& where)
         }
     }
     for (const char* key : {"falloff", "distance", "offset"})
-        if (o.contains(key) && !op.field) fail(where + "." + key, "belongs to reshaping brushes (smooth, flatten, inflate, deflate, move)");
+        if (o.contains(key) && !op.field && !(op.mode == CsgMode::Paint && std::string(key) == "falloff"))
+            fail(where + "." + key, std::string("belongs to reshaping brushes (smooth, flatten, inflate, deflate, move)") +
+                                        (std::string(key) == "falloff" ? " and paint" : ""));
+    if (!op.field && o.contains("falloff")) {
+        try {
+            op.paintFalloff = parseFalloff(text(o, "falloff", where));
+        } catch (const std::invalid_argument& e) {
+            fail(where + ".falloff", e.what());
+        }
+    }
     if (op.field) {
         const FieldMode m = op.field->mode;
         if (o.contains("depth")) fail(where + ".depth", "belongs to erode");
@@ -512,7 +522,13 @@ std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTabl
     }
     const bool toolMaterials = s.tool && s.material.empty() && (s.mode == CsgMode::Add || s.mode == CsgMode::Paint);
     try {
-        if (!s.field && !toolMaterials) plain = {{opField(s, kEmptyMaterial, voxelSize), op, std::nullopt, s.blend}};
+        if (!s.field && !toolMaterials) {
+            std::shared_ptr<const SdfField> field = opField(s, kEmptyMaterial, voxelSize);
+            // Paint with a falloff, or below full strength, covers part of the brush (SoftPaint.h).
+            if (s.mode == CsgMode::Paint && (s.paintFalloff || s.strength < 1.0))
+                field = std::make_shared<SoftPaintField>(std::move(field), s.strength, s.paintFalloff.value_or(Falloff::Constant), voxelSize);
+            plain = {{field, op, std::nullopt, s.blend}};
+        }
         if (!plain.empty()) return withSymmetry(std::move(plain), s.symmetry);
         // Each material of the tool over its own region: regions share their boundaries, so each
         // material boundary of the tool becomes one in the volume, with its crossings and normals.
