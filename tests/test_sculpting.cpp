@@ -422,3 +422,37 @@ TEST_CASE("sculpt: paint honours strength and falloff, its edge a gradient of co
     CHECK(inner > 0.25);
     CHECK(inner < 0.75);
 }
+
+TEST_CASE("sculpt: a falloff curve weights the brush as drawn: two points equal linear, flat equals constant, bad curves are refused", "[sculpt][field]")
+{
+    CHECK(falloffWeight(Falloff::Curve, 5.0, 10.0, {0.0, 1.0}) == Approx(0.5));
+    CHECK(falloffWeight(Falloff::Curve, 2.5, 10.0, {0.0, 0.2, 1.0}) == Approx(0.1));
+    CHECK(falloffWeight(Falloff::Curve, 10.0, 10.0, {0.3, 0.6}) == Approx(0.6));
+    CHECK(falloffWeight(Falloff::Curve, -1.0, 10.0, {1.0, 1.0}) == 0.0);
+    // The same edit two ways gives the same volume, bit for bit.
+    const auto edited = [](const std::string& falloff) {
+        Volume v(1.0);
+        runStrokeScript(v, parseStrokeScript(R"({"ops": [{"mode": "add", "brush": {"shape": "sphere", "radius": 12}},
+            {"mode": "inflate", "distance": 3, "brush": {"shape": "sphere", "radius": 8}, "at": [0, 12, 0], "falloff": )" + falloff + "}]}"));
+        return v;
+    };
+    CHECK(identical(edited("[0, 1]"), edited(R"("linear")")));
+    CHECK(identical(edited("[1, 1, 1]"), edited(R"("constant")")));
+    CHECK_FALSE(identical(edited("[0, 0.2, 1]"), edited(R"("linear")")));
+    for (const std::string bad : {"[]", "[0.5]", "[0, 2]", R"(["a", 1])", "[0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,1]", R"("curve")"}) {
+        INFO(bad);
+        CHECK_THROWS_AS(parseStrokeScript(R"({"ops": [{"mode": "smooth", "brush": {"shape": "sphere"}, "falloff": )" + bad + "}]}"), ScriptError);
+    }
+    // The brush keeps its curve through a session file; paint takes it too.
+    BrushSettings b;
+    b.mode = "paint";
+    b.falloff = "curve";
+    b.falloffCurve = {0.0, 0.9, 1.0};
+    const BrushSettings back = parseBrushSettings(brushSettingsJson(b));
+    CHECK(back.falloff == "curve");
+    CHECK(back.falloffCurve == b.falloffCurve);
+    const nlohmann::json op = strokeOpJson(b, {{0, 0, 0}}, 1.0);
+    CHECK(op.at("falloff") == nlohmann::json::array({0.0, 0.9, 1.0}));
+    CHECK_NOTHROW(parseStrokeScript(nlohmann::json{{"ops", {op}}}.dump()));
+    CHECK_THROWS_AS(parseBrushSettings(nlohmann::json{{"falloff", "curve"}}), std::invalid_argument);
+}

@@ -168,6 +168,7 @@ struct DesktopEditor::Impl {
     double adjustFromX = 0.0;
     BrushSettings adjusted; // what the brush becomes when the drag is kept
     bool turntable = false;
+    std::array<double, 2> lazy{0, 0}; // where a stabilized stroke is, trailing the pointer
     std::string title;
 
     const SessionRecord* replay = nullptr;
@@ -195,6 +196,7 @@ struct DesktopEditor::Impl {
         panels.showHelp = settings.showHelp;
         panels.look = settings.look;
         panels.wireframe = settings.wireframe;
+        panels.stabilizer = float(settings.stabilizerPixels);
         panels.helpText = desktopShortcutsHelp(keymap);
     }
 
@@ -293,6 +295,7 @@ struct DesktopEditor::Impl {
                 setBrush(*modified);
             }
             drag = Drag::Stroke;
+            lazy = {cursorX, cursorY};
             strokeTo(cursorX, cursorY, true);
         } else if (button == GLFW_MOUSE_BUTTON_MIDDLE || (button == GLFW_MOUSE_BUTTON_RIGHT && shift)) {
             drag = Drag::Pan;
@@ -315,7 +318,15 @@ struct DesktopEditor::Impl {
             adjusted.strength = std::clamp(session.brush().strength + (x - adjustFromX) / 300.0, 0.0, 1.0);
         }
         switch (drag) {
-        case Drag::Stroke: strokeTo(x, y, false); break;
+        case Drag::Stroke: {
+            // The stabilizer: the stroke follows the pointer on a string, moving only once it is taut.
+            const double string = panels.stabilizer, ex = x - lazy[0], ey = y - lazy[1], length = std::hypot(ex, ey);
+            if (string <= 0.0) lazy = {x, y};
+            else if (length > string) lazy = {lazy[0] + ex * (1.0 - string / length), lazy[1] + ey * (1.0 - string / length)};
+            else break;
+            strokeTo(lazy[0], lazy[1], false);
+            break;
+        }
         case Drag::Orbit:
             setCamera(orbitPivot ? orbitAbout(session.camera(), *orbitPivot, dx * 0.3, dy * 0.3) : orbit(session.camera(), dx * 0.3, dy * 0.3));
             break;
@@ -557,6 +568,7 @@ struct DesktopEditor::Impl {
         settings.showHelp = panels.showHelp;
         settings.look = panels.look;
         settings.wireframe = panels.wireframe;
+        settings.stabilizerPixels = panels.stabilizer;
         try {
             saveDesktopSettings(settings, configFolder);
         } catch (const std::exception& e) {

@@ -2,6 +2,7 @@
 
 #include "editor/SceneFileActions.h"
 #include "scene/SceneStore.h"
+#include "sculpt/FieldBrushes.h"
 #include "vdb_hermite/AtomicFile.h"
 
 #include <imgui.h>
@@ -19,7 +20,8 @@ namespace {
 
 constexpr const char* kModes[] = {"add", "remove", "paint", "erode", "smooth", "flatten", "inflate", "deflate", "move", "intersect"};
 constexpr const char* kShapes[] = {"sphere", "box", "cylinder", "capsule", "torus", "cone"};
-constexpr const char* kFalloffs[] = {"smooth", "linear", "constant"};
+constexpr const char* kFalloffs[] = {"smooth", "linear", "constant", "curve"};
+constexpr int kCurvePoints = 6; // a new curve's points (a curve read from a file keeps its own)
 constexpr const char* kAxes[] = {"x", "y", "z"};
 constexpr const char* kPressures[] = {"size", "strength", "none"};
 constexpr PressureTarget kPressureTargets[] = {PressureTarget::Size, PressureTarget::Strength, PressureTarget::None};
@@ -58,6 +60,27 @@ nlohmann::json unitShape(int shape)
     case 5: return {{"shape", "cone"}, {"radius", 1.0}, {"height", 2.0}};
     default: return {{"shape", "sphere"}, {"radius", 1.0}};
     }
+}
+
+/// The falloff curve: its weights from the brush's rim (left) to its deepest point (right), one vertical
+/// slider each, drawn as a curve above them.
+bool falloffCurveEditor(std::vector<double>& curve)
+{
+    std::vector<float> values(curve.begin(), curve.end());
+    ImGui::PlotLines("##falloff curve", values.data(), int(values.size()), 0, "rim -> centre", 0.0f, 1.0f, ImVec2(0, 60));
+    bool changed = false;
+    for (std::size_t i = 0; i < curve.size(); ++i) {
+        if (i > 0) ImGui::SameLine();
+        ImGui::PushID(int(i));
+        float w = float(curve[i]);
+        if (ImGui::VSliderFloat("##w", ImVec2(18, 80), &w, 0.0f, 1.0f, "")) {
+            curve[i] = std::clamp(double(w), 0.0, 1.0);
+            changed = true;
+        }
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("weight %.2f at %.0f%% of the way in", w, 100.0 * double(i) / double(curve.size() - 1));
+        ImGui::PopID();
+    }
+    return changed;
 }
 
 Command brushCommand(const BrushSettings& brush)
@@ -219,11 +242,18 @@ void DesktopPanels::brushPanel(EditingSession& session, std::vector<Command>& ou
         b.strength = strength;
         changed = true;
     }
-    int falloff = std::max(0, indexOf(kFalloffs, 3, b.falloff));
-    if (ImGui::Combo("Falloff", &falloff, kFalloffs, 3)) {
+    int falloff = std::max(0, indexOf(kFalloffs, IM_ARRAYSIZE(kFalloffs), b.falloff));
+    if (ImGui::Combo("Falloff", &falloff, kFalloffs, IM_ARRAYSIZE(kFalloffs))) {
+        if (std::string(kFalloffs[falloff]) == "curve" && b.falloff != "curve") {
+            // A new curve starts as the falloff it replaces.
+            const Falloff from = parseFalloff(b.falloff);
+            b.falloffCurve.clear();
+            for (int i = 0; i < kCurvePoints; ++i) b.falloffCurve.push_back(falloffWeight(from, double(i) / (kCurvePoints - 1), 1.0));
+        }
         b.falloff = kFalloffs[falloff];
         changed = true;
     }
+    if (b.falloff == "curve") changed |= falloffCurveEditor(b.falloffCurve);
     if (b.mode == "inflate" || b.mode == "deflate") {
         float distance = float(b.distance);
         if (ImGui::SliderFloat("Distance", &distance, 0.1f * voxel, 16.0f * voxel)) {
@@ -231,6 +261,8 @@ void DesktopPanels::brushPanel(EditingSession& session, std::vector<Command>& ou
             changed = true;
         }
     }
+    ImGui::SliderFloat("Stabilizer", &stabilizer, 0.0f, 120.0f, stabilizer > 0.0f ? "%.0f px" : "off");
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Lazy mouse: the stroke follows the pointer on a string this long, for steady lines");
     if (b.mode == "add") {
         float blend = float(b.smoothness);
         if (ImGui::SliderFloat("Blend", &blend, 0.0f, 1.0f)) {

@@ -57,6 +57,7 @@ public:
     bool showStats = true;
     render::ViewMode look = render::ViewMode::Shaded; // the view panel's choice (the window applies it)
     bool wireframe = false;
+    float stabilizer = 0.0f;  // lazy mouse: the stroke trails the pointer by this many pixels (0: off)
     std::string helpText;     // the shortcuts in effect (the window's keymap)
     std::string status;       // the last action's outcome, shown at the bottom
     std::string openRequested; // a scene the user asked to open instead (the front end reopens)

@@ -41,6 +41,8 @@ DesktopSettings loadDesktopSettings(const std::string& folder, std::string* warn
         read.showHelp = j.value("help", read.showHelp);
         if (j.contains("look")) read.look = render::parseViewMode(j.at("look").get<std::string>());
         read.wireframe = j.value("wireframe", read.wireframe);
+        read.stabilizerPixels = j.value("stabilizer", read.stabilizerPixels);
+        if (!(read.stabilizerPixels >= 0.0 && read.stabilizerPixels <= 1000.0)) throw std::invalid_argument("stabilizer: 0 to 1000 pixels");
         s = read;
     } catch (const std::exception& e) {
         if (warning) *warning = "the settings in '" + path + "' were not used (" + e.what() + "); the defaults are";
@@ -55,7 +57,8 @@ void saveDesktopSettings(const DesktopSettings& s, const std::string& folder)
     std::filesystem::create_directories(folder, ec);
     if (ec) throw FileWriteError("cannot make the config folder '" + folder + "': " + ec.message());
     nlohmann::json j = {{"window", s.windowSize}, {"stats", s.showStats}, {"help", s.showHelp},
-                        {"look", render::viewModeName(s.look)}, {"wireframe", s.wireframe}};
+                        {"look", render::viewModeName(s.look)}, {"wireframe", s.wireframe},
+                        {"stabilizer", s.stabilizerPixels}};
     if (s.brush) j["brush"] = brushSettingsJson(*s.brush);
     const std::string text = j.dump(2) + "\n";
     writeFileAtomically((std::filesystem::path(folder) / "settings.json").string(), [&](std::ostream& o) { o << text; });

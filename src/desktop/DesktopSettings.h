@@ -24,6 +24,7 @@ struct DesktopSettings {
     bool showHelp = false;
     render::ViewMode look = render::ViewMode::Shaded;
     bool wireframe = false;
+    double stabilizerPixels = 0.0; // lazy mouse (0: off)
 };
 
 /// The settings in `folder`/settings.json; defaults when the file is missing. A damaged file (or one

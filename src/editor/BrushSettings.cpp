@@ -1,5 +1,6 @@
 #include "editor/BrushSettings.h"
 
+#include "sculpt/FieldBrushes.h"
 #include "vdb_hermite/PrintableText.h"
 
 #include <algorithm>
@@ -28,6 +29,13 @@ std::string text(const nlohmann::json& json, const char* key, const std::string&
     return v.get<std::string>();
 }
 
+/// The falloff as scripts and sessions write it: its name, or a curve's weights.
+nlohmann::json falloffJson(const BrushSettings& b)
+{
+    if (b.falloff == "curve") return b.falloffCurve;
+    return b.falloff;
+}
+
 } // namespace
 
 bool isReshapingMode(const std::string& mode)
@@ -42,7 +50,15 @@ void checkBrushSettings(const BrushSettings& b)
     if (!b.shape.is_object() || !b.shape.contains("shape")) throw std::invalid_argument("brush.shape: must be a script brush object");
     if (!(b.radius > 0.0) || !std::isfinite(b.radius)) throw std::invalid_argument("brush.radius: must be above 0");
     if (!(b.strength >= 0.0 && b.strength <= 1.0)) throw std::invalid_argument("brush.strength: must be in [0, 1]");
-    if (b.falloff != "smooth" && b.falloff != "linear" && b.falloff != "constant") throw std::invalid_argument("brush.falloff: smooth, linear or constant");
+    if (b.falloff != "smooth" && b.falloff != "linear" && b.falloff != "constant" && b.falloff != "curve")
+        throw std::invalid_argument("brush.falloff: smooth, linear, constant, or a curve of weights [0, 0.5, 1]");
+    if (b.falloff == "curve") {
+        try {
+            checkFalloffCurve(b.falloffCurve);
+        } catch (const std::invalid_argument& e) {
+            throw std::invalid_argument(std::string("brush.falloff: ") + e.what());
+        }
+    }
     if (!(b.distance > 0.0) || !std::isfinite(b.distance)) throw std::invalid_argument("brush.distance: must be above 0");
     if (!(b.spacing >= 0.02 && b.spacing <= 4.0)) throw std::invalid_argument("brush.spacing: must be in [0.02, 4]");
     if (!b.symmetry.is_null() && !b.symmetry.is_object()) throw std::invalid_argument("brush.symmetry: must be an object or null");
@@ -51,7 +67,7 @@ void checkBrushSettings(const BrushSettings& b)
 
 nlohmann::json brushSettingsJson(const BrushSettings& b)
 {
-    return {{"mode", b.mode}, {"shape", b.shape}, {"radius", b.radius}, {"strength", b.strength}, {"falloff", b.falloff},
+    return {{"mode", b.mode}, {"shape", b.shape}, {"radius", b.radius}, {"strength", b.strength}, {"falloff", falloffJson(b)},
             {"material", b.material}, {"distance", b.distance}, {"spacing", b.spacing}, {"pressure", pressureName(b.pressure)},
             {"symmetry", b.symmetry}, {"accumulate", b.accumulate}, {"smoothness", b.smoothness}};
 }
@@ -67,7 +83,16 @@ BrushSettings parseBrushSettings(const nlohmann::json& json)
     if (json.contains("shape")) b.shape = json.at("shape");
     b.radius = number(json, "radius", b.radius);
     b.strength = number(json, "strength", b.strength);
-    b.falloff = text(json, "falloff", b.falloff);
+    if (json.contains("falloff") && json.at("falloff").is_array()) {
+        b.falloff = "curve";
+        for (const nlohmann::json& w : json.at("falloff")) {
+            if (!w.is_number()) throw std::invalid_argument("brush.falloff: a curve holds numbers");
+            b.falloffCurve.push_back(w.get<double>());
+        }
+    } else {
+        b.falloff = text(json, "falloff", b.falloff);
+        if (b.falloff == "curve") throw std::invalid_argument("brush.falloff: a curve is given as its weights, e.g. [0, 0.5, 1]");
+    }
     b.material = text(json, "material", b.material);
     b.distance = number(json, "distance", b.distance);
     b.spacing = number(json, "spacing", b.spacing);
@@ -113,14 +138,14 @@ nlohmann::json strokeOpJson(const BrushSettings& b, const std::vector<std::array
     const double strength = b.strength * (b.pressure == PressureTarget::Strength ? p : 1.0);
     if (isReshapingMode(b.mode)) {
         op["strength"] = strength;
-        op["falloff"] = b.falloff;
+        op["falloff"] = falloffJson(b);
         if (b.mode == "inflate" || b.mode == "deflate") op["distance"] = b.distance;
         if (b.mode == "move") op["offset"] = offset;
     } else if (b.mode == "erode") {
         op["strength"] = strength;
     } else if (b.mode == "paint") {
         op["strength"] = strength;
-        op["falloff"] = b.falloff;
+        op["falloff"] = falloffJson(b);
     } else if (b.mode == "add" && b.smoothness > 0.0) {
         op["blend"] = b.smoothness * scale;
     }

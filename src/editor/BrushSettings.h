@@ -18,7 +18,8 @@ struct BrushSettings {
     nlohmann::json shape = {{"shape", "sphere"}, {"radius", 1.0}}; // a script brush at unit size
     double radius = 8.0;      // world units: the op's scale on `shape`
     double strength = 0.5;    // reshaping brushes and erode, 0..1
-    std::string falloff = "smooth";
+    std::string falloff = "smooth"; // smooth, linear, constant, or curve (falloffCurve)
+    std::vector<double> falloffCurve; // "curve": weights from the rim to the deepest point (2 to 16, in [0, 1])
     std::string material;     // empty: the scene's first (add) or the most common under the brush (reshaping)
     double distance = 2.0;    // inflate, deflate: world units at full strength
     double spacing = 0.25;    // stamps every spacing * radius along a stroke

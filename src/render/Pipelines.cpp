@@ -130,7 +130,7 @@ Pipelines::Pipelines(const VulkanContext& context, VkRenderPass renderPass) : co
     bindings[1].binding = 1;
     bindings[1].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     bindings[1].descriptorCount = 1;
-    bindings[1].stageFlags = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT; // vertices blend their materials' colours
+    bindings[1].stageFlags = VK_SHADER_STAGE_FRAGMENT_BIT;
     bindings[2].binding = 2;
     bindings[2].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
     bindings[2].descriptorCount = 1;

@@ -274,6 +274,7 @@ const char* falloffName(Falloff falloff)
     case Falloff::Smooth: return "smooth";
     case Falloff::Linear: return "linear";
     case Falloff::Constant: return "constant";
+    case Falloff::Curve: return "curve";
     }
     return "?";
 }
@@ -285,12 +286,25 @@ Falloff parseFalloff(const std::string& name)
     throw std::invalid_argument("unknown falloff '" + printableText(name, 80) + "' (smooth, linear or constant)");
 }
 
-double falloffWeight(Falloff falloff, double depth, double innerRadius)
+double falloffWeight(Falloff falloff, double depth, double innerRadius, const FalloffCurve& curve)
 {
     if (!(depth >= 0.0)) return 0.0;
     if (falloff == Falloff::Constant) return 1.0;
     const double t = innerRadius > 0.0 ? std::min(1.0, depth / innerRadius) : 1.0;
+    if (falloff == Falloff::Curve && curve.size() >= 2) {
+        const double at = t * double(curve.size() - 1);
+        const std::size_t i = std::min(std::size_t(at), curve.size() - 2);
+        return curve[i] + (curve[i + 1] - curve[i]) * (at - double(i));
+    }
     return falloff == Falloff::Linear ? t : t * t * (3.0 - 2.0 * t);
+}
+
+void checkFalloffCurve(const FalloffCurve& curve)
+{
+    if (curve.size() < 2 || curve.size() > kMaxFalloffPoints)
+        throw std::invalid_argument("a falloff curve holds 2 to " + std::to_string(kMaxFalloffPoints) + " weights");
+    for (double w : curve)
+        if (!(w >= 0.0 && w <= 1.0)) throw std::invalid_argument("a falloff curve's weights lie in [0, 1]");
 }
 
 int smoothingRadiusVoxels(const SdfField& brush, double voxelSize)
@@ -344,7 +358,7 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     // several radii, the surface about the grabbed point still spans a voxel, so the point the pointer
     // holds stays under it instead of thinning to a needle the lattice cannot hold.
     const double core = op.mode == FieldMode::Move ? std::min(1.5 * h, 0.5 * inner) : 0.0;
-    const auto weightAt = [&](const Vec3d& world) { return op.strength * falloffWeight(op.falloff, core - brush.distance(world), inner); };
+    const auto weightAt = [&](const Vec3d& world) { return op.strength * falloffWeight(op.falloff, core - brush.distance(world), inner, op.curve); };
     const auto latticeBox = [&](double grow, std::array<int32_t, 3>& lo, std::array<int32_t, 3>& dims) {
         for (int a = 0; a < 3; ++a) {
             lo[std::size_t(a)] = int32_t(std::floor((bounds.min[a] - grow) / h));

@@ -25,11 +25,17 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace vdbclay {
 
 enum class FieldMode { Smooth, Flatten, Inflate, Deflate, Move };
-enum class Falloff { Smooth, Linear, Constant };
+/// How a brush's weight rises from its rim (0) to its deepest point (1). Curve: a user's curve, weights at
+/// evenly spaced depths (FalloffCurve), linear between them.
+enum class Falloff { Smooth, Linear, Constant, Curve };
+/// A falloff curve's weights from the rim to the deepest point: 2 to 16 values in [0, 1].
+using FalloffCurve = std::vector<double>;
+constexpr std::size_t kMaxFalloffPoints = 16;
 
 const char* fieldModeName(FieldMode mode);
 /// nullopt for a name that is not a field mode.
@@ -41,14 +47,18 @@ struct FieldBrushOp {
     FieldMode mode = FieldMode::Smooth;
     double strength = 1.0;                 // in [0, 1]
     Falloff falloff = Falloff::Smooth;     // of the weight from the brush's rim (0) to its deepest point (1)
+    FalloffCurve curve;                    // Falloff::Curve
     double distance = 0.0;                 // inflate, deflate: world units at full weight
     Vec3d offset{0.0, 0.0, 0.0};           // move: world units at full weight
     std::optional<MaterialId> material;    // what added voxels are made of
 };
 
 /// The weight of a point `depth` inside a brush whose deepest point is `innerRadius` deep: 0 outside,
-/// rising to 1 at the deepest point as the falloff says (constant: 1 everywhere inside).
-double falloffWeight(Falloff falloff, double depth, double innerRadius);
+/// rising to 1 at the deepest point as the falloff says (constant: 1 everywhere inside; a curve: its
+/// weights, linear between them).
+double falloffWeight(Falloff falloff, double depth, double innerRadius, const FalloffCurve& curve = {});
+/// Throws std::invalid_argument unless the curve holds 2 to kMaxFalloffPoints finite weights in [0, 1].
+void checkFalloffCurve(const FalloffCurve& curve);
 
 /// The smoothing filter's radius (each of its two box passes) for a brush, in voxels: half the brush's
 /// inner radius, 1 to 12 (wide enough that one pass at strength 1 takes a one-voxel bump away and rounds

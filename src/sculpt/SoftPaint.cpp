@@ -22,8 +22,7 @@ double latticeValue(int64_t x, int64_t y, int64_t z)
 
 double paintThreshold(const Vec3d& world, double voxelSize)
 {
-    // Noise cells a voxel wide: the finest patches the mesher draws, so that the renderer's blend of
-    // vertex colours reads them as a gradient across a brush's falloff.
+    // Noise cells a voxel wide: the finest patches the mesher draws, so the stipple reads as a soft edge.
     const double spacing = voxelSize;
     int64_t cell[3];
     double t[3];
@@ -43,8 +42,8 @@ double paintThreshold(const Vec3d& world, double voxelSize)
     return std::min(value, std::nextafter(1.0, 0.0));
 }
 
-SoftPaintField::SoftPaintField(std::shared_ptr<const SdfField> brush, double strength, Falloff falloff, double voxelSize)
-    : brush_(std::move(brush)), strength_(strength), falloff_(falloff), voxelSize_(voxelSize)
+SoftPaintField::SoftPaintField(std::shared_ptr<const SdfField> brush, double strength, Falloff falloff, double voxelSize, FalloffCurve curve)
+    : brush_(std::move(brush)), strength_(strength), falloff_(falloff), voxelSize_(voxelSize), curve_(std::move(curve))
 {
 }
 
@@ -52,7 +51,7 @@ double SoftPaintField::distance(const Vec3d& world) const
 {
     const double d = brush_->distance(world);
     if (d > 0.0) return d;
-    const double weight = strength_ * falloffWeight(falloff_, -d, brush_->innerRadius());
+    const double weight = strength_ * falloffWeight(falloff_, -d, brush_->innerRadius(), curve_);
     // The threshold's margin in world units: its gradient is at most 1.5 per voxel, so this keeps the
     // field's slope within lipschitz().
     return std::max(d, (paintThreshold(world, voxelSize_) - weight) * voxelSize_);

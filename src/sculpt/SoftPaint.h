@@ -3,7 +3,7 @@
 // smooth noise threshold (value noise a voxel across, in [0, 1)). Where the weight is 1 every voxel is
 // painted, where it is 0 none, and in between the painted share follows the weight, in patches about a
 // voxel across whose boundaries are smooth surfaces (the CSG kernel finds their crossings as for any
-// field). The renderer blends vertex colours across them, so the edge reads as a gradient.
+// field): the edge is a stipple whose density follows the falloff, like an airbrush's.
 #pragma once
 
 #include "sculpt/Brush.h"
@@ -19,7 +19,7 @@ double paintThreshold(const Vec3d& world, double voxelSize);
 class SoftPaintField : public SdfField {
 public:
     /// `brush` where strength x falloff(depth) exceeds paintThreshold, on a lattice of `voxelSize`.
-    SoftPaintField(std::shared_ptr<const SdfField> brush, double strength, Falloff falloff, double voxelSize);
+    SoftPaintField(std::shared_ptr<const SdfField> brush, double strength, Falloff falloff, double voxelSize, FalloffCurve curve = {});
     double distance(const Vec3d& world) const override;
     WorldBounds bounds() const override { return brush_->bounds(); }
     double innerRadius() const override { return brush_->innerRadius(); }
@@ -32,6 +32,7 @@ private:
     double strength_;
     Falloff falloff_;
     double voxelSize_;
+    FalloffCurve curve_;
 };
 
 } // namespace vdbclay

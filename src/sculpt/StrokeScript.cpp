@@ -239,22 +239,28 @@ ScriptOp parseOp(const json& o, const std::string& where)
         if (o.contains(key) && !op.field && !(op.mode == CsgMode::Paint && std::string(key) == "falloff"))
             fail(where + "." + key, std::string("belongs to reshaping brushes (smooth, flatten, inflate, deflate, move)") +
                                         (std::string(key) == "falloff" ? " and paint" : ""));
-    if (!op.field && o.contains("falloff")) {
+    // A falloff by name, or a curve: weights from the rim to the deepest point.
+    const auto falloffOf = [&](FalloffCurve& curve) {
+        const json& f = o.at("falloff");
         try {
-            op.paintFalloff = parseFalloff(text(o, "falloff", where));
+            if (!f.is_array()) return parseFalloff(text(o, "falloff", where));
+            for (const json& w : f) {
+                if (!w.is_number()) throw std::invalid_argument("a falloff curve holds numbers");
+                curve.push_back(w.get<double>());
+            }
+            checkFalloffCurve(curve);
+            return Falloff::Curve;
         } catch (const std::invalid_argument& e) {
-            fail(where + ".falloff", e.what());
+            fail(where + ".falloff", std::string(e.what()) + " (smooth, linear, constant, or a curve of weights [0, 0.5, 1])");
         }
-    }
+    };
+    if (!op.field && o.contains("falloff")) op.paintFalloff = falloffOf(op.falloffCurve);
     if (op.field) {
         const FieldMode m = op.field->mode;
         if (o.contains("depth")) fail(where + ".depth", "belongs to erode");
         if (o.contains("falloff")) {
-            try {
-                op.field->falloff = parseFalloff(text(o, "falloff", where));
-            } catch (const std::invalid_argument& e) {
-                fail(where + ".falloff", e.what());
-            }
+            op.field->falloff = falloffOf(op.falloffCurve);
+            op.field->curve = op.falloffCurve;
         }
         const bool moves = m == FieldMode::Inflate || m == FieldMode::Deflate;
         if (moves != o.contains("distance")) fail(where + ".distance", moves ? "inflate and deflate need a 'distance' (world units)" : "belongs to inflate and deflate");
@@ -526,7 +532,8 @@ std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTabl
             std::shared_ptr<const SdfField> field = opField(s, kEmptyMaterial, voxelSize);
             // Paint with a falloff, or below full strength, covers part of the brush (SoftPaint.h).
             if (s.mode == CsgMode::Paint && (s.paintFalloff || s.strength < 1.0))
-                field = std::make_shared<SoftPaintField>(std::move(field), s.strength, s.paintFalloff.value_or(Falloff::Constant), voxelSize);
+                field = std::make_shared<SoftPaintField>(std::move(field), s.strength, s.paintFalloff.value_or(Falloff::Constant), voxelSize,
+                                                         s.falloffCurve);
             plain = {{field, op, std::nullopt, s.blend}};
         }
         if (!plain.empty()) return withSymmetry(std::move(plain), s.symmetry);

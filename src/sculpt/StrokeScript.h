@@ -43,6 +43,7 @@ struct ScriptOp {
     std::optional<double> depth; // erode depth override
     double blend = 0.0;          // add: the width of the smooth union with the surface (world units; 0: exact)
     std::optional<Falloff> paintFalloff; // paint: soft, its coverage strength x falloff (SoftPaint.h); absent: hard
+    FalloffCurve falloffCurve;   // paint and reshaping brushes with a "falloff" curve
     Symmetry symmetry;           // the op runs once per copy (symmetryCopies), the plain one first
 };
 

@@ -8,7 +8,6 @@ layout(location = 1) in vec3 worldNormal;
 layout(location = 2) flat in uint material;
 layout(location = 3) flat in uint level;
 layout(location = 4) in float occlusion;
-layout(location = 5) in vec3 materialColour;
 
 layout(push_constant) uniform Push {
     vec4 tint; // rgb, a = 1: a flat colour (wireframe lines)
@@ -104,7 +103,7 @@ void main()
         base = m0.rgb * triplanarPicture(worldPosition * m1.z, n, m1.w - 1.0, footprint);
     } else {
         float grain = triplanar(worldPosition * m1.z, n, m1.y);
-        base = materialColour * (0.82 + 0.36 * grain);
+        base = m0.rgb * (0.82 + 0.36 * grain);
     }
     vec3 colour = base * (0.28 * ao + 0.72 * diffuse * mix(1.0, ao, 0.5));
     if ((view.mode.y & 2u) != 0u && sdBrush(worldPosition) <= 0.0)
