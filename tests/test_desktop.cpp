@@ -490,3 +490,37 @@ TEST_CASE("desktop: the overlay's frame interval agrees with the wall clock, its
     std::unique_ptr<DesktopEditor> editor = readyEditor(again, ui);
     CHECK(again.brush().mode == "remove");
 }
+
+TEST_CASE("desktop: the stabilizer keeps the stroke a string's length behind the pointer", "[desktop][editor]")
+{
+    if (!desktopAvailable()) {
+        WARN("skipped: no display (the test command runs the suite under xvfb-run)");
+        return;
+    }
+    TempDir dir;
+    std::filesystem::create_directories(dir.file("config"));
+    writeText(dir.file("config/settings.json"), R"({"stabilizer": 40})");
+    EditingSession session(makeBall(dir, "ball.vdb"), quiet());
+    UiDriver ui;
+    ui.configFolder = dir.file("config");
+    std::unique_ptr<DesktopEditor> editor = readyEditor(session, ui);
+    if (!editor) return;
+    XInput x(*editor);
+    // A drag of 100 pixels to the right: the stroke moves only once the string is taut, and ends 40
+    // pixels behind the pointer.
+    const std::size_t from = session.record().commands.size();
+    x.drag(400, 300, 10.0, 0.0, 10);
+    int moves = 0;
+    std::optional<Ray> last;
+    for (std::size_t i = from; i < session.record().commands.size(); ++i) {
+        const Command& c = session.record().commands[i].command;
+        if (c.kind == Command::Kind::StrokeMove) {
+            ++moves;
+            last = c.ray;
+        }
+    }
+    CHECK(moves == 6); // the first four moves (40 pixels) leave the string slack
+    REQUIRE(last);
+    const Ray expected = pointerRay(session.camera(), {800, 600}, 460, 300);
+    for (std::size_t a = 0; a < 3; ++a) CHECK(last->direction[a] == Approx(expected.direction[a]).margin(1e-9));
+}
