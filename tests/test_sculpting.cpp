@@ -456,3 +456,40 @@ TEST_CASE("sculpt: a falloff curve weights the brush as drawn: two points equal 
     CHECK_NOTHROW(parseStrokeScript(nlohmann::json{{"ops", {op}}}.dump()));
     CHECK_THROWS_AS(parseBrushSettings(nlohmann::json{{"falloff", "curve"}}), std::invalid_argument);
 }
+
+TEST_CASE("editor: a parallel view draws the target's plane at the same scale with rays within a third of a degree, and toggles back", "[editor][camera]")
+{
+    render::Camera c;
+    c.eye = {30, 20, 80};
+    c.target = {2, -1, 3};
+    c.fovYDegrees = 45.0;
+    const std::array<int, 2> viewport{800, 600};
+    // Where a pixel's ray meets the plane through the target facing the view.
+    const auto onTargetPlane = [&](const render::Camera& cam, double x, double y) {
+        const Ray r = pointerRay(cam, viewport, x, y);
+        const std::array<double, 3> n = [&] {
+            std::array<double, 3> d = minus(cam.target, cam.eye);
+            const double l = length(d);
+            for (double& v : d) v /= l;
+            return d;
+        }();
+        const double t = ((cam.target[0] - r.origin[0]) * n[0] + (cam.target[1] - r.origin[1]) * n[1] + (cam.target[2] - r.origin[2]) * n[2]) /
+                         (r.direction[0] * n[0] + r.direction[1] * n[1] + r.direction[2] * n[2]);
+        return std::array<double, 3>{r.origin[0] + r.direction[0] * t, r.origin[1] + r.direction[1] * t, r.origin[2] + r.direction[2] * t};
+    };
+    const render::Camera parallel = parallelView(c);
+    for (const auto& [x, y] : {std::pair<double, double>{0, 0}, {800, 600}, {123, 456}})
+        CHECK(length(minus(onTargetPlane(parallel, x, y), onTargetPlane(c, x, y))) < 1e-6 * length(minus(c.eye, c.target)));
+    const Ray a = pointerRay(parallel, viewport, 0, 0), b = pointerRay(parallel, viewport, 800, 600);
+    const double angle = std::acos(a.direction[0] * b.direction[0] + a.direction[1] * b.direction[1] + a.direction[2] * b.direction[2]) * 180.0 / M_PI;
+    CHECK(angle < 1.0 / 3.0);
+    const render::Camera back = perspectiveView(parallel, 45.0);
+    for (std::size_t i = 0; i < 3; ++i) CHECK(back.eye[i] == Approx(c.eye[i]).margin(1e-9 * 80.0));
+    CHECK(back.fovYDegrees == Approx(45.0));
+    // Zooming a parallel view by 2 halves what it shows and keeps the point under the cursor there.
+    const std::array<double, 3> under = onTargetPlane(parallel, 600, 200);
+    const render::Camera zoomed = zoomByFieldOfView(parallel, 2.0, under);
+    CHECK(length(minus(onTargetPlane(zoomed, 600, 200), under)) < 1e-6 * length(minus(c.eye, c.target)));
+    CHECK(length(minus(onTargetPlane(zoomed, 0, 0), onTargetPlane(zoomed, 800, 0))) ==
+          Approx(0.5 * length(minus(onTargetPlane(parallel, 0, 0), onTargetPlane(parallel, 800, 0)))).epsilon(1e-6));
+}

@@ -168,6 +168,7 @@ struct DesktopEditor::Impl {
     double adjustFromX = 0.0;
     BrushSettings adjusted; // what the brush becomes when the drag is kept
     bool turntable = false;
+    std::optional<double> perspectiveFov; // in a parallel view: the field of view to go back to
     std::array<double, 2> lazy{0, 0}; // where a stabilized stroke is, trailing the pointer
     std::string title;
 
@@ -339,14 +340,29 @@ struct DesktopEditor::Impl {
     {
         if (dy == 0.0) return;
         const auto hit = pickAt(cursorX, cursorY);
-        setCamera(zoomToward(session.camera(), std::pow(1.15, dy), hit ? std::optional<std::array<double, 3>>(hit->point) : std::nullopt));
+        const std::optional<std::array<double, 3>> toward = hit ? std::optional<std::array<double, 3>>(hit->point) : std::nullopt;
+        // A parallel view zooms by narrowing: moving its far eye closer would bring perspective back.
+        setCamera(perspectiveFov ? zoomByFieldOfView(session.camera(), std::pow(1.15, dy), toward)
+                                 : zoomToward(session.camera(), std::pow(1.15, dy), toward));
     }
 
     void frameScene()
     {
         const auto [lo, hi] = session.sceneBox();
         const auto size = windowSize();
+        perspectiveFov.reset();
         setCamera(render::framingCamera(lo, hi, double(size[0]) / double(size[1])));
+    }
+
+    void toggleParallel()
+    {
+        if (perspectiveFov) {
+            setCamera(perspectiveView(session.camera(), *perspectiveFov));
+            perspectiveFov.reset();
+        } else {
+            perspectiveFov = session.camera().fovYDegrees;
+            setCamera(parallelView(session.camera()));
+        }
     }
 
     void frameCursor()
@@ -358,7 +374,8 @@ struct DesktopEditor::Impl {
         }
         const render::Camera& c = session.camera();
         const double distance = std::sqrt(std::pow(c.target[0] - c.eye[0], 2) + std::pow(c.target[1] - c.eye[1], 2) + std::pow(c.target[2] - c.eye[2], 2));
-        setCamera(frameOn(c, hit->point, std::min(distance, 12.0 * session.brush().radius)));
+        // A parallel view keeps its far eye (its scale is its field of view).
+        setCamera(frameOn(c, hit->point, perspectiveFov ? distance : std::min(distance, 12.0 * session.brush().radius)));
     }
 
     /// F12: the view as drawn, into SCENE-shot-N.png beside the scene (the first N not taken).
@@ -455,6 +472,7 @@ struct DesktopEditor::Impl {
         case KeyAction::ViewLeft: return setCamera(axisView(session.camera(), AxisView::Left));
         case KeyAction::ViewTop: return setCamera(axisView(session.camera(), AxisView::Top));
         case KeyAction::ViewBottom: return setCamera(axisView(session.camera(), AxisView::Bottom));
+        case KeyAction::Parallel: return toggleParallel();
         case KeyAction::Turntable: turntable = !turntable; return;
         case KeyAction::ShadingNext:
             panels.look = panels.look == render::ViewMode::Shaded ? render::ViewMode::Clay

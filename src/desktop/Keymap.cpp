@@ -51,6 +51,7 @@ constexpr ActionInfo kActions[] = {
     {KeyAction::ViewLeft, "view_left", "look from the left (-x)", "Ctrl+KP_3"},
     {KeyAction::ViewTop, "view_top", "look from the top (+y)", "KP_7"},
     {KeyAction::ViewBottom, "view_bottom", "look from below (-y)", "Ctrl+KP_7"},
+    {KeyAction::Parallel, "parallel_view", "parallel (orthographic) view on/off", "KP_5"},
     {KeyAction::Turntable, "turntable", "turn the view about the scene on/off", "T"},
     {KeyAction::ShadingNext, "shading_next", "next look: material, clay, normals", "Z"},
     {KeyAction::Wireframe, "wireframe", "wireframe on/off", "Shift+Z"},

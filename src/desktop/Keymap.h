@@ -18,7 +18,7 @@ enum class KeyAction {
     Undo, Redo, Save, Screenshot,
     ModeAdd, ModeRemove, ModePaint, ModeErode, ModeSmooth, ModeFlatten, ModeInflate, ModeDeflate, ModeMove,
     BrushSmaller, BrushLarger, BrushWeaker, BrushStronger, RadiusDrag, StrengthDrag, MirrorX,
-    FrameAll, FrameCursor, ViewFront, ViewBack, ViewRight, ViewLeft, ViewTop, ViewBottom, Turntable,
+    FrameAll, FrameCursor, ViewFront, ViewBack, ViewRight, ViewLeft, ViewTop, ViewBottom, Parallel, Turntable,
     ShadingNext, Wireframe, Help, Stats, EndStroke,
 };
 constexpr int kKeyActionCount = int(KeyAction::EndStroke) + 1;

@@ -101,6 +101,45 @@ render::Camera frameOn(const render::Camera& camera, const std::array<double, 3>
     return out;
 }
 
+render::Camera parallelView(const render::Camera& camera)
+{
+    const Frame f = frameOf(camera);
+    render::Camera out = camera;
+    out.eye = arr(vec(camera.target) - f.forward * (f.distance * kParallelViewDistance));
+    const double halfHeight = std::tan(glm::radians(camera.fovYDegrees) * 0.5);
+    out.fovYDegrees = glm::degrees(2.0 * std::atan(halfHeight / kParallelViewDistance));
+    return out;
+}
+
+render::Camera perspectiveView(const render::Camera& parallel, double fovYDegrees)
+{
+    // The distance at which `fovYDegrees` draws the target's plane at the parallel view's scale.
+    const Frame f = frameOf(parallel);
+    const double halfHeight = f.distance * std::tan(glm::radians(parallel.fovYDegrees) * 0.5);
+    const double distance = halfHeight / std::tan(glm::radians(fovYDegrees) * 0.5);
+    render::Camera out = parallel;
+    out.eye = arr(vec(parallel.target) - f.forward * distance);
+    out.fovYDegrees = fovYDegrees;
+    return out;
+}
+
+render::Camera zoomByFieldOfView(const render::Camera& camera, double factor, const std::optional<std::array<double, 3>>& toward)
+{
+    render::Camera out = camera;
+    const double halfHeight = std::tan(glm::radians(camera.fovYDegrees) * 0.5) / std::max(factor, 1e-6);
+    out.fovYDegrees = std::clamp(glm::degrees(2.0 * std::atan(halfHeight)), 1e-4, 170.0);
+    if (toward) {
+        // The point under the cursor stays there: the view slides towards it as it narrows.
+        const Frame f = frameOf(camera);
+        const glm::dvec3 p = vec(*toward), t = vec(camera.target);
+        const glm::dvec3 across = (p - t) - f.forward * glm::dot(p - t, f.forward);
+        const glm::dvec3 shift = across * (1.0 - 1.0 / std::max(factor, 1e-6));
+        out.eye = arr(vec(camera.eye) + shift);
+        out.target = arr(t + shift);
+    }
+    return out;
+}
+
 render::Camera pan(const render::Camera& camera, const std::array<int, 2>& viewport, double dxPixels, double dyPixels)
 {
     const Frame f = frameOf(camera);

@@ -25,6 +25,18 @@ render::Camera orbitAbout(const render::Camera& camera, const std::array<double,
 /// the right (+x) or the top (+y), or from the opposite side, at the same distance.
 enum class AxisView { Front, Back, Right, Left, Top, Bottom };
 render::Camera axisView(const render::Camera& camera, AxisView view);
+/// How much farther a parallel view's eye stands than the perspective view it replaces.
+constexpr double kParallelViewDistance = 300.0;
+/// A parallel ("orthographic") view of what `camera` frames: the eye kParallelViewDistance times farther
+/// back with the field of view narrowed so that the target's plane is drawn at the same scale. Rays then
+/// cross the view within a third of a degree of each other, and everything that works for a perspective
+/// camera (rays, levels of detail, the unbounded depth) works unchanged.
+render::Camera parallelView(const render::Camera& camera);
+/// The perspective view a parallel one stands for, with field of view `fovYDegrees`.
+render::Camera perspectiveView(const render::Camera& parallel, double fovYDegrees);
+/// Zooms a view by `factor` (> 1 zooms in) by narrowing its field of view about `toward` (the surface under
+/// the cursor): what the wheel does to a parallel view, which has no distance to give up.
+render::Camera zoomByFieldOfView(const render::Camera& camera, double factor, const std::optional<std::array<double, 3>>& toward);
 /// Centres the view on `point` from the same direction, at `distance` from it.
 render::Camera frameOn(const render::Camera& camera, const std::array<double, 3>& point, double distance);
 /// Slides eye and target across the view by a pointer drag of (dx, dy) pixels: the point at the target's
