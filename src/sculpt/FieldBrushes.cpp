@@ -326,6 +326,23 @@ double fieldBrushReach(const SdfField& brush, const FieldBrushOp& op, double vox
     return reach;
 }
 
+WorldBounds fieldBrushRegion(const SdfField& brush, const FieldBrushOp& op, double voxelSize)
+{
+    WorldBounds b = brush.bounds();
+    if (!b.bounded()) return b;
+    if (op.mode == FieldMode::Move) {
+        for (int a = 0; a < 3; ++a) {
+            b.min[a] = std::min(b.min[a], b.min[a] + op.offset[a]) - 4.0 * voxelSize;
+            b.max[a] = std::max(b.max[a], b.max[a] + op.offset[a]) + 4.0 * voxelSize;
+        }
+        return b;
+    }
+    const double reach = fieldBrushReach(brush, op, voxelSize);
+    b.min -= Vec3d(reach);
+    b.max += Vec3d(reach);
+    return b;
+}
+
 void checkFieldBrush(const Volume& volume, const SdfField& brush, const FieldBrushOp& op)
 {
     if (!(op.strength >= 0.0 && op.strength <= 1.0)) throw std::invalid_argument("strength must lie in [0,1]");
@@ -334,11 +351,12 @@ void checkFieldBrush(const Volume& volume, const SdfField& brush, const FieldBru
         if (!std::isfinite(op.offset[a])) throw std::invalid_argument("offset must be finite");
     const WorldBounds b = brush.bounds();
     if (!b.bounded()) throw std::invalid_argument(std::string(fieldModeName(op.mode)) + " needs a bounded brush");
-    const double h = volume.voxelSize(), reach = fieldBrushReach(brush, op, h);
+    const double h = volume.voxelSize();
+    const WorldBounds region = fieldBrushRegion(brush, op, h);
     for (int a = 0; a < 3; ++a) {
-        if (!(std::fabs(b.min[a] - reach) <= kMaxReachVoxels * h && std::fabs(b.max[a] + reach) <= kMaxReachVoxels * h))
+        if (!(std::fabs(region.min[a]) <= kMaxReachVoxels * h && std::fabs(region.max[a]) <= kMaxReachVoxels * h))
             throw std::invalid_argument("the brush reaches beyond " + std::to_string(int64_t(kMaxReachVoxels)) + " voxels from the origin");
-        const double voxels = (b.max[a] - b.min[a] + 2.0 * reach) / h;
+        const double voxels = (region.max[a] - region.min[a]) / h;
         if (!(voxels <= double(kMaxFieldBrushVoxels)))
             throw std::invalid_argument(std::string(fieldModeName(op.mode)) + " rebuilds the surface within " +
                                         std::to_string(kMaxFieldBrushVoxels) + " voxels of a side; this brush, with its reach, spans " +
@@ -366,10 +384,11 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
         }
     };
     // The old field must be right as far from the surface as the surface may move and the new field
-    // reads it (the band); farther, its magnitude is capped. The region is the brush's bounds grown by
-    // the band: at most what opBounds promises a store pages in (fieldBrushReach), so a streamed scene
-    // and a whole volume read the same voxels.
-    double band = fieldBrushReach(brush, op, h);
+    // reads it (the band); farther, its magnitude is capped. The region is what opBounds promises a store
+    // pages in (fieldBrushRegion), so a streamed scene and a whole volume read the same voxels. A move
+    // only carries values along: their signs, and exact distances near the surface it drags.
+    double band = op.mode == FieldMode::Move ? 6.0 * h : fieldBrushReach(brush, op, h);
+    const WorldBounds region = fieldBrushRegion(brush, op, h);
     Vec3d centroid(0.0), normal(0.0); // flatten's plane
     if (op.mode == FieldMode::Flatten) {
         // The plane under the brush, fitted to the surface's crossings there weighted by the falloff.
@@ -396,7 +415,14 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
         band = std::min(band, gap + 4.0 * h);
     }
     std::array<int32_t, 3> lo{}, dims{};
-    latticeBox(band, lo, dims);
+    for (int a = 0; a < 3; ++a) {
+        // Flatten's band may be narrower than its reach (the plane lies near): the box shrinks with it.
+        const double grow = op.mode == FieldMode::Flatten ? band : 0.0;
+        const double from = op.mode == FieldMode::Flatten ? bounds.min[a] - grow : region.min[a];
+        const double to = op.mode == FieldMode::Flatten ? bounds.max[a] + grow : region.max[a];
+        lo[std::size_t(a)] = int32_t(std::floor(from / h));
+        dims[std::size_t(a)] = int32_t(std::ceil(to / h)) - lo[std::size_t(a)] + 1;
+    }
     // The old field, rebuilt from the Hermite data in the region, and the materials there.
     const SolidDistances solid = solidDistances(volume, lo, dims, float(band / h));
     if (std::none_of(solid.material.begin(), solid.material.end(), [](MaterialId m) { return m != kEmptyMaterial; }))

@@ -67,6 +67,9 @@ int smoothingRadiusVoxels(const SdfField& brush, double voxelSize);
 
 /// World units beyond the brush's bounds the op reads: its field must see the surface there.
 double fieldBrushReach(const SdfField& brush, const FieldBrushOp& op, double voxelSize);
+/// The box an op reads and changes: the brush's bounds grown by its reach, or for a move the bounds its
+/// brush sweeps along the drag, grown by a few voxels (a drag reaches along its offset, not every way).
+WorldBounds fieldBrushRegion(const SdfField& brush, const FieldBrushOp& op, double voxelSize);
 
 /// The largest region (voxels a side) a field brush rebuilds its field over.
 constexpr int32_t kMaxFieldBrushVoxels = 200;

@@ -441,8 +441,10 @@ WorldBounds opBounds(const ScriptOp& op, double voxelSize)
 {
     if (!op.toolFile.empty() && !op.tool) throw ScriptError("the tool '" + printableText(op.toolFile, 200) + "' is not loaded");
     WorldBounds one = op.tool ? PlacedTool(op.tool, op.placement).bounds() : op.brush.bounds();
-    if (one.bounded() && (op.field || op.blend > 0.0)) {
-        const double reach = op.field ? fieldBrushReach(op.brush, *op.field, voxelSize) : blendReach(op.blend, voxelSize);
+    if (one.bounded() && op.field) {
+        one = fieldBrushRegion(op.brush, *op.field, voxelSize);
+    } else if (one.bounded() && op.blend > 0.0) {
+        const double reach = blendReach(op.blend, voxelSize);
         one.min -= Vec3d(reach);
         one.max += Vec3d(reach);
     }
