@@ -85,10 +85,14 @@ void main()
         // Clay: a light that travels with the viewer (from above its shoulder), a soft wrap and a rim, as
         // a sculptor's matcap reads the form whatever the materials are.
         vec3 v = normalize(view.eye.xyz - worldPosition);
-        vec3 key = normalize(v + vec3(0.0, 0.6, 0.0));
-        float wrap = clamp((dot(n, key) + 0.35) / 1.35, 0.0, 1.0);
-        float rim = pow(1.0 - clamp(dot(n, v), 0.0, 1.0), 3.0);
-        vec3 clay = vec3(0.72, 0.62, 0.55) * (0.18 + 0.82 * wrap) * mix(1.0, ao, 0.6) + vec3(0.20, 0.21, 0.24) * rim;
+        vec3 key = normalize(v + vec3(0.0, 1.2, 0.0));
+        float diffuse = max(dot(n, key), 0.0);
+        float facing = clamp(dot(n, v), 0.0, 1.0);
+        float rim = pow(1.0 - facing, 4.0);
+        // Form reads from the light's falloff and the occlusion in creases; faces turned from the viewer
+        // darken, as a matcap's sphere does towards its edge.
+        vec3 clay = vec3(0.70, 0.60, 0.52) * (0.12 + 0.88 * diffuse * diffuse) * mix(0.55, 1.0, facing) * mix(1.0, ao, 0.8) +
+                    vec3(0.16, 0.17, 0.20) * rim;
         if ((view.mode.y & 2u) != 0u && sdBrush(worldPosition) <= 0.0)
             clay = mix(clay, view.highlightColour.rgb, view.highlightColour.a);
         outColour = vec4(pow(clay, vec3(1.0 / 2.2)), 1.0);
