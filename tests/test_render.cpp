@@ -166,6 +166,20 @@ TEST_CASE("render: a sphere's silhouette matches its analytic projection within 
     CHECK(centre[2] > 240);
     CHECK(std::abs(int(centre[0]) - 128) < 12);
     CHECK(std::abs(int(centre[1]) - 128) < 12);
+
+    // The clay look reads the form: the face turned to the viewer is lit, the rim turned away is darker.
+    ShadingOptions clay;
+    clay.mode = ViewMode::Clay;
+    renderer.setShading(clay);
+    renderer.render({view});
+    const Image clayImage = target.colour();
+    const auto brightness = [&](int x, int y) {
+        const uint8_t* p = clayImage.pixel(x, y);
+        return int(p[0]) + int(p[1]) + int(p[2]);
+    };
+    const int rim = int(size * 0.5 + edgePixels * 0.92);
+    INFO("clay: centre " << brightness(size / 2, size / 2) << ", near the rim " << brightness(rim, size / 2));
+    CHECK(brightness(size / 2, size / 2) > brightness(rim, size / 2) + 60);
     CHECK(context->validationMessages() == 0);
 }
 
@@ -203,6 +217,14 @@ TEST_CASE("render: a painted region shows its material's colour, the rest the de
         }
     CHECK(checked[0] > 300);
     CHECK(checked[1] > 300);
+
+    // The clay look shows the form alone: painted or not, the face is one colour.
+    ShadingOptions clay;
+    clay.mode = ViewMode::Clay;
+    renderer.setShading(clay);
+    renderer.render({view});
+    const Image c = target.colour();
+    for (int k = 0; k < 3; ++k) CHECK(std::abs(int(c.pixel(size / 4, size / 2)[k]) - int(c.pixel(3 * size / 4, size / 2)[k])) <= 3);
 
     // The toughness view: red (0.9) is nearer red than blue, the default (0.5) between.
     ShadingOptions toughness;
