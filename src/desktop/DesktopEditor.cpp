@@ -40,7 +40,7 @@ std::string desktopShortcutsHelp(const Keymap& keymap)
     return "Mouse: left drag sculpts with the brush (Ctrl inverts it: add <-> remove, inflate <-> deflate; Shift smooths);\n"
            "right drag (or Alt + left) orbits about the surface under the cursor; middle drag (or Shift + right) pans;\n"
            "the wheel zooms towards the surface under the cursor; hold the right button and use W A S D Q E to fly.\n"
-           "Keys (the keymap file keymap.json in the config folder rebinds them):\n" +
+           "Keys (keymap.json in $XDG_CONFIG_HOME/vdbclay or ~/.config/vdbclay rebinds them; docs/EDITOR.md):\n" +
            keymap.help();
 }
 
