@@ -151,6 +151,14 @@ struct XInput {
     }
 };
 
+/// Whether there is no display to test on, warning that the test is skipped.
+bool skippedWithoutDisplay()
+{
+    if (desktopAvailable()) return false;
+    WARN("skipped: no display (the test command runs the suite under xvfb-run)");
+    return true;
+}
+
 /// The editor's window, or null (with a warning saying why the test is skipped) where none can open.
 std::unique_ptr<DesktopEditor> openEditor(EditingSession& session, const DesktopOptions& options)
 {
@@ -168,10 +176,7 @@ std::unique_ptr<DesktopEditor> openEditor(EditingSession& session, const Desktop
 
 TEST_CASE("desktop: a mouse stroke through the window equals its replay, a menu clicked through ImGui changes the next stroke", "[desktop][editor]")
 {
-    if (!desktopAvailable()) {
-        WARN("skipped: no display (the test command runs the suite under xvfb-run)");
-        return;
-    }
+    if (skippedWithoutDisplay()) return;
     TempDir dir;
     const std::string ball = makeBall(dir, "ball.vdb");
     std::filesystem::copy_file(ball, dir.file("copy.vdb"));
@@ -225,10 +230,7 @@ TEST_CASE("desktop: a mouse stroke through the window equals its replay, a menu 
 
 TEST_CASE("desktop: edits recovered after a crash are offered: kept, or dropped through the dialog", "[desktop][editor]")
 {
-    if (!desktopAvailable()) {
-        WARN("skipped: no display (the test command runs the suite under xvfb-run)");
-        return;
-    }
+    if (skippedWithoutDisplay()) return;
     TempDir dir;
     const std::string ball = makeBall(dir, "ball.vdb");
     const Volume saved = loadVolume(ball);
@@ -303,10 +305,7 @@ std::vector<std::array<double, 3>> strokePoints(const EditingSession& session, s
 
 TEST_CASE("desktop: a sideways drag stays on the ball as the stroke found it, Ctrl inverts the brush and Shift smooths", "[desktop][editor]")
 {
-    if (!desktopAvailable()) {
-        WARN("skipped: no display (the test command runs the suite under xvfb-run)");
-        return;
-    }
+    if (skippedWithoutDisplay()) return;
     TempDir dir;
     EditingSession session(makeBall(dir, "ball.vdb"), quiet());
     UiDriver ui;
@@ -352,10 +351,7 @@ TEST_CASE("desktop: a sideways drag stays on the ball as the stroke found it, Ct
 
 TEST_CASE("desktop: the wheel zooms up to two voxels from the surface and it is still drawn, numpad views, Home and F12", "[desktop][editor]")
 {
-    if (!desktopAvailable()) {
-        WARN("skipped: no display (the test command runs the suite under xvfb-run)");
-        return;
-    }
+    if (skippedWithoutDisplay()) return;
     TempDir dir;
     EditingSession session(makeBall(dir, "ball.vdb"), quiet());
     UiDriver ui;
@@ -412,10 +408,7 @@ TEST_CASE("desktop: the wheel zooms up to two voxels from the surface and it is 
 
 TEST_CASE("desktop: a grab dragged three radii keeps the grabbed point under the pointer", "[desktop][editor]")
 {
-    if (!desktopAvailable()) {
-        WARN("skipped: no display (the test command runs the suite under xvfb-run)");
-        return;
-    }
+    if (skippedWithoutDisplay()) return;
     TempDir dir;
     EditingSession session(makeBall(dir, "ball.vdb"), quiet());
     UiDriver ui;
@@ -453,10 +446,7 @@ TEST_CASE("desktop: a grab dragged three radii keeps the grabbed point under the
 
 TEST_CASE("desktop: the overlay's frame interval agrees with the wall clock, its parts never exceed it, the brush persists", "[desktop][editor]")
 {
-    if (!desktopAvailable()) {
-        WARN("skipped: no display (the test command runs the suite under xvfb-run)");
-        return;
-    }
+    if (skippedWithoutDisplay()) return;
     TempDir dir;
     const std::string ball = makeBall(dir, "ball.vdb");
     UiDriver ui;
@@ -493,10 +483,7 @@ TEST_CASE("desktop: the overlay's frame interval agrees with the wall clock, its
 
 TEST_CASE("desktop: the stabilizer keeps the stroke a string's length behind the pointer", "[desktop][editor]")
 {
-    if (!desktopAvailable()) {
-        WARN("skipped: no display (the test command runs the suite under xvfb-run)");
-        return;
-    }
+    if (skippedWithoutDisplay()) return;
     TempDir dir;
     std::filesystem::create_directories(dir.file("config"));
     writeText(dir.file("config/settings.json"), R"({"stabilizer": 40})");

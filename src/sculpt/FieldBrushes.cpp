@@ -121,6 +121,23 @@ struct LatticeGrid {
     double lipschitz() const { return lipschitz(PointRange{{0, 0, 0}, {dims[0] - 1, dims[1] - 1, dims[2] - 1}}); }
 };
 
+bool holdsSolid(const SolidDistances& solid)
+{
+    return std::any_of(solid.material.begin(), solid.material.end(), [](MaterialId m) { return m != kEmptyMaterial; });
+}
+
+/// The old surface's signed distance in world units, on the lattice box solidDistances rebuilt it over.
+LatticeGrid worldDistances(const SolidDistances& solid, const std::array<int32_t, 3>& origin, double voxelSize)
+{
+    LatticeGrid grid;
+    grid.origin = origin;
+    grid.dims = solid.dims;
+    grid.voxelSize = voxelSize;
+    grid.values.resize(solid.distance.size());
+    for (std::size_t n = 0; n < grid.values.size(); ++n) grid.values[n] = float(double(solid.distance[n]) * voxelSize);
+    return grid;
+}
+
 /// max(a, b, ...) of a grid field and the brush (and optionally minus another grid): the CSG kernel's
 /// view of "the new solid, inside the brush".
 class ClippedGridField : public SdfField {
@@ -425,14 +442,8 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     }
     // The old field, rebuilt from the Hermite data in the region, and the materials there.
     const SolidDistances solid = solidDistances(volume, lo, dims, float(band / h));
-    if (std::none_of(solid.material.begin(), solid.material.end(), [](MaterialId m) { return m != kEmptyMaterial; }))
-        return {}; // nothing solid to reshape
-    LatticeGrid old;
-    old.origin = lo;
-    old.dims = solid.dims;
-    old.voxelSize = h;
-    old.values.resize(solid.distance.size());
-    for (std::size_t n = 0; n < old.values.size(); ++n) old.values[n] = float(double(solid.distance[n]) * h);
+    if (!holdsSolid(solid)) return {}; // nothing solid to reshape
+    const LatticeGrid old = worldDistances(solid, lo, h);
     // Only points inside the brush change (the weight is zero elsewhere, and the written-back field is
     // clipped by the brush): the work below is done on the brush's points, not on the whole band. A move
     // changes the region its brush sweeps along the drag.
@@ -586,15 +597,9 @@ EditStats applyBlendedAdd(Volume& volume, const SdfField& brush, const CsgOp& op
     if (!fits) return applyCsg(volume, brush, op);
     // The old surface's distance, before the brush changes it.
     const SolidDistances solid = solidDistances(volume, lo, dims, float(band / h));
-    const bool anySolid = std::any_of(solid.material.begin(), solid.material.end(), [](MaterialId m) { return m != kEmptyMaterial; });
     EditStats stats = applyCsg(volume, brush, op);
-    if (!anySolid) return stats; // nothing to blend into
-    LatticeGrid old;
-    old.origin = lo;
-    old.dims = solid.dims;
-    old.voxelSize = h;
-    old.values.resize(solid.distance.size());
-    for (std::size_t n = 0; n < old.values.size(); ++n) old.values[n] = float(double(solid.distance[n]) * h);
+    if (!holdsSolid(solid)) return stats; // nothing to blend into
+    const LatticeGrid old = worldDistances(solid, lo, h);
     const GrownField reach(brush, width);
     const PointRange inReach = pointsWithin(old, reach.bounds());
     LatticeGrid next = old;
