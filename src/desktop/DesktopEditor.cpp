@@ -37,7 +37,7 @@ bool desktopAvailable()
 
 std::string desktopShortcutsHelp(const Keymap& keymap)
 {
-    return "Mouse: left drag sculpts with the brush (Ctrl inverts it: add <-> remove, inflate <-> deflate; Shift smooths);\n"
+    return "Mouse: left drag sculpts with the brush (Ctrl inverts it: add <-> remove, inflate <-> deflate, mask <-> unmask; Shift smooths);\n"
            "right drag (or Alt + left) orbits about the surface under the cursor; middle drag (or Shift + right) pans;\n"
            "the wheel zooms towards the surface under the cursor; hold the right button and use W A S D Q E to fly.\n"
            "Keys (keymap.json in $XDG_CONFIG_HOME/vdbclay or ~/.config/vdbclay rebinds them; docs/EDITOR.md):\n" +
@@ -86,7 +86,7 @@ std::optional<BrushSettings> modifiedBrush(const BrushSettings& brush, bool ctrl
     BrushSettings b = brush;
     if (shift) b.mode = "smooth";
     else if (ctrl) {
-        static const std::pair<const char*, const char*> opposites[] = {{"add", "remove"}, {"inflate", "deflate"}};
+        static const std::pair<const char*, const char*> opposites[] = {{"add", "remove"}, {"inflate", "deflate"}, {"mask", "unmask"}};
         for (const auto& [one, other] : opposites) {
             if (brush.mode == one) b.mode = other;
             else if (brush.mode == other) b.mode = one;
@@ -453,6 +453,12 @@ struct DesktopEditor::Impl {
         case KeyAction::ModeInflate: return mode("inflate");
         case KeyAction::ModeDeflate: return mode("deflate");
         case KeyAction::ModeMove: return mode("move");
+        case KeyAction::ModeMask: return mode("mask");
+        case KeyAction::MaskInvert:
+        case KeyAction::MaskClear:
+            c.kind = Command::Kind::ApplyOp;
+            c.op = {{"mode", *bound == KeyAction::MaskInvert ? "mask_invert" : "mask_clear"}};
+            return apply(c);
         case KeyAction::BrushSmaller:
         case KeyAction::BrushLarger:
             b.radius = std::max(b.radius * (*bound == KeyAction::BrushLarger ? 1.15 : 1.0 / 1.15), 0.1 * session.scene().store().voxelSize());

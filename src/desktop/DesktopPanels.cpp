@@ -18,7 +18,7 @@ namespace vdbclay {
 
 namespace {
 
-constexpr const char* kModes[] = {"add", "remove", "paint", "erode", "smooth", "flatten", "inflate", "deflate", "move", "intersect"};
+constexpr const char* kModes[] = {"add", "remove", "paint", "erode", "smooth", "flatten", "inflate", "deflate", "move", "intersect", "mask", "unmask"};
 constexpr const char* kShapes[] = {"sphere", "box", "cylinder", "capsule", "torus", "cone"};
 constexpr const char* kFalloffs[] = {"smooth", "linear", "constant", "curve"};
 constexpr int kCurvePoints = 6; // a new curve's points (a curve read from a file keeps its own)
@@ -219,6 +219,16 @@ void DesktopPanels::brushPanel(EditingSession& session, std::vector<Command>& ou
     if (ImGui::Combo("Mode", &mode, kModes, IM_ARRAYSIZE(kModes))) {
         b.mode = kModes[mode];
         changed = true;
+    }
+    // The mask: no brush changes masked voxels; shown darkened.
+    for (const char* edit : {"mask_invert", "mask_clear"}) {
+        if (std::string(edit) == "mask_clear") ImGui::SameLine();
+        if (ImGui::SmallButton(std::string(edit) == "mask_invert" ? "Invert mask (Ctrl+I)" : "Clear mask (Alt+M)")) {
+            Command c;
+            c.kind = Command::Kind::ApplyOp;
+            c.op = {{"mode", edit}};
+            out.push_back(c);
+        }
     }
     const std::string shapeName = b.shape.value("shape", std::string("sphere"));
     int shape = indexOf(kShapes, IM_ARRAYSIZE(kShapes), shapeName);

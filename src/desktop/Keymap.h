@@ -16,7 +16,8 @@ namespace vdbclay {
 
 enum class KeyAction {
     Undo, Redo, Save, Screenshot,
-    ModeAdd, ModeRemove, ModePaint, ModeErode, ModeSmooth, ModeFlatten, ModeInflate, ModeDeflate, ModeMove,
+    ModeAdd, ModeRemove, ModePaint, ModeErode, ModeSmooth, ModeFlatten, ModeInflate, ModeDeflate, ModeMove, ModeMask,
+    MaskInvert, MaskClear,
     BrushSmaller, BrushLarger, BrushWeaker, BrushStronger, RadiusDrag, StrengthDrag, MirrorX,
     FrameAll, FrameCursor, ViewFront, ViewBack, ViewRight, ViewLeft, ViewTop, ViewBottom, Parallel, Turntable,
     ShadingNext, Wireframe, Help, Stats, EndStroke,

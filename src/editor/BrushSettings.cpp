@@ -43,9 +43,11 @@ bool isReshapingMode(const std::string& mode)
     return mode == "smooth" || mode == "flatten" || mode == "inflate" || mode == "deflate" || mode == "move";
 }
 
+bool isMaskMode(const std::string& mode) { return mode == "mask" || mode == "unmask"; }
+
 void checkBrushSettings(const BrushSettings& b)
 {
-    static const std::vector<std::string> modes{"add", "remove", "intersect", "paint", "erode", "smooth", "flatten", "inflate", "deflate", "move"};
+    static const std::vector<std::string> modes{"add", "remove", "intersect", "paint", "erode", "smooth", "flatten", "inflate", "deflate", "move", "mask", "unmask"};
     if (std::find(modes.begin(), modes.end(), b.mode) == modes.end()) throw std::invalid_argument("brush.mode: unknown mode '" + printableText(b.mode, 80) + "'");
     if (!b.shape.is_object() || !b.shape.contains("shape")) throw std::invalid_argument("brush.shape: must be a script brush object");
     if (!(b.radius > 0.0) || !std::isfinite(b.radius)) throw std::invalid_argument("brush.radius: must be above 0");
@@ -133,6 +135,10 @@ nlohmann::json strokeOpJson(const BrushSettings& b, const std::vector<std::array
     op["scale"] = {scale, scale, scale};
     if (points.size() == 1) op["at"] = points[0];
     else op["path"] = points;
+    if (isMaskMode(b.mode)) { // the mask takes the brush's shape only
+        if (!b.symmetry.is_null()) op["symmetry"] = b.symmetry;
+        return op;
+    }
     if (!b.material.empty()) op["material"] = b.material;
     else if (b.mode == "paint") op["material"] = "default"; // paint needs one: the volume's first, as add uses
     const double strength = b.strength * (b.pressure == PressureTarget::Strength ? p : 1.0);

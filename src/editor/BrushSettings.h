@@ -14,7 +14,7 @@ namespace vdbclay {
 enum class PressureTarget { None, Size, Strength };
 
 struct BrushSettings {
-    std::string mode = "add"; // any script mode: add, remove, paint, erode, smooth, flatten, inflate, deflate, move
+    std::string mode = "add"; // a script mode: add, remove, paint, erode, smooth, flatten, inflate, deflate, move, mask, unmask
     nlohmann::json shape = {{"shape", "sphere"}, {"radius", 1.0}}; // a script brush at unit size
     double radius = 8.0;      // world units: the op's scale on `shape`
     double strength = 0.5;    // reshaping brushes and erode, 0..1
@@ -42,6 +42,8 @@ nlohmann::json brushSettingsJson(const BrushSettings& brush);
 BrushSettings parseBrushSettings(const nlohmann::json& json);
 
 bool isReshapingMode(const std::string& mode);
+/// Mask brushes paint the mask (VoxelMask.h), never the surface.
+bool isMaskMode(const std::string& mode);
 
 /// How far along the surface's outward normal a stamp's centre goes from the surface point under the
 /// pointer: add sinks by (1 - strength) x radius so that it raises the surface by strength x radius,

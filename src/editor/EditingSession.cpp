@@ -137,6 +137,7 @@ void EditingSession::applyOp(const nlohmann::json& op)
         StrokeScript script = parseStrokeScript(nlohmann::json{{"ops", {op}}}.dump());
         loadScriptTools(script, std::filesystem::path(scenePath_).parent_path().string(), tools_);
         std::vector<LeafChange> changes;
+        if (!stroke_.maskBefore) stroke_.maskBefore = scene_->mask().encode();
         const StreamingScene::EditReport report = scene_->sculpt(script, &changes);
         bricksChanged_ += report.bricksChanged;
         for (LeafChange& c : changes) {
@@ -147,7 +148,7 @@ void EditingSession::applyOp(const nlohmann::json& op)
         stroke_.ops.push_back(op);
         ++stats_.stampsApplied;
         editedSinceAutosave_ = true;
-        if (report.bricksChanged > 0) unsaved_ = true;
+        if (report.bricksChanged > 0 || script.ops.front().maskEdit) unsaved_ = true;
     } catch (const std::exception& e) { // ScriptError, limits: the stroke goes on without this stretch
         ++stats_.opsRefused;
         notify(std::string("the brush could not be applied here: ") + e.what());
@@ -286,28 +287,30 @@ void EditingSession::endStroke()
     changes.reserve(stroke_.changes.size());
     for (LeafChange& c : stroke_.changes)
         if (c.before != c.after) changes.push_back(std::move(c));
-    history_.push(std::move(changes), std::move(stroke_.ops));
+    std::optional<MaskChange> mask;
+    if (stroke_.maskBefore) mask = MaskChange{std::move(*stroke_.maskBefore), scene_->mask().encode()};
+    history_.push(std::move(changes), std::move(stroke_.ops), std::move(mask));
     stroke_ = Stroke{};
+}
+
+void EditingSession::putBack(const HistoryStep& step)
+{
+    if (!step.leaves.empty()) bricksChanged_ += scene_->restoreLeaves(step.leaves).bricksChanged;
+    if (step.mask) scene_->setMask(VoxelMask::decode(*step.mask));
+    editedSinceAutosave_ = true;
+    unsaved_ = true;
 }
 
 void EditingSession::undo()
 {
     if (stroke_.active) endStroke();
-    if (const auto images = history_.undo()) {
-        bricksChanged_ += scene_->restoreLeaves(*images).bricksChanged;
-        editedSinceAutosave_ = true;
-        unsaved_ = true;
-    }
+    if (const auto step = history_.undo()) putBack(*step);
 }
 
 void EditingSession::redo()
 {
     if (stroke_.active) endStroke();
-    if (const auto images = history_.redo()) {
-        bricksChanged_ += scene_->restoreLeaves(*images).bricksChanged;
-        editedSinceAutosave_ = true;
-        unsaved_ = true;
-    }
+    if (const auto step = history_.redo()) putBack(*step);
 }
 
 void EditingSession::defineMaterial(const nlohmann::json& material)

@@ -120,6 +120,7 @@ private:
         std::unique_ptr<Volume> before;
         std::set<IndexCoord> replaced;
         std::size_t decoded = 0;
+        std::optional<std::string> maskBefore; // the mask as the stroke found it (VoxelMask::encode())
     };
     /// Fills in the point (and normal) of a stroke command from its ray; false when the ray meets no
     /// surface (the command then changes nothing).
@@ -131,6 +132,7 @@ private:
     void dragStroke(const std::array<double, 3>& point, double pressure);
     void endStroke();
     void applyOp(const nlohmann::json& op);
+    void putBack(const HistoryStep& step);
     void undo();
     void redo();
     void defineMaterial(const nlohmann::json& material);

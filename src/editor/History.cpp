@@ -61,16 +61,18 @@ History::~History()
     if (spill_) std::fclose(spill_);
 }
 
-void History::push(std::vector<LeafChange> changes, nlohmann::json ops)
+void History::push(std::vector<LeafChange> changes, nlohmann::json ops, std::optional<MaskChange> mask)
 {
     changes.erase(std::remove_if(changes.begin(), changes.end(), [](const LeafChange& c) { return c.before == c.after; }), changes.end());
-    if (changes.empty()) return;
+    if (mask && mask->before == mask->after) mask.reset();
+    if (changes.empty() && !mask) return;
     for (Entry& e : redo_) release(e);
     redo_.clear();
     Entry entry;
     entry.bytes = bytesOf(changes);
     entry.changes = std::move(changes);
     entry.ops = std::move(ops);
+    entry.mask = std::move(mask);
     memoryBytes_ += entry.bytes;
     undo_.push_back(std::move(entry));
     if (undo_.size() == 1 && redo_.empty() && spill_) { // nothing spilled is referenced any more
@@ -88,20 +90,22 @@ nlohmann::json History::opsInEffect() const
     return ops;
 }
 
-std::optional<std::vector<LeafImage>> History::undo() { return step(undo_, redo_, true); }
+std::optional<HistoryStep> History::undo() { return step(undo_, redo_, true); }
 
-std::optional<std::vector<LeafImage>> History::redo() { return step(redo_, undo_, false); }
+std::optional<HistoryStep> History::redo() { return step(redo_, undo_, false); }
 
-std::optional<std::vector<LeafImage>> History::step(std::vector<Entry>& from, std::vector<Entry>& to, bool before)
+std::optional<HistoryStep> History::step(std::vector<Entry>& from, std::vector<Entry>& to, bool before)
 {
     if (from.empty()) return std::nullopt;
     Entry entry = std::move(from.back());
     from.pop_back();
     load(entry);
-    std::vector<LeafImage> images = imagesOf(entry.changes, before);
+    HistoryStep out;
+    out.leaves = imagesOf(entry.changes, before);
+    if (entry.mask) out.mask = before ? entry.mask->before : entry.mask->after;
     to.push_back(std::move(entry));
     spillOver();
-    return images;
+    return out;
 }
 
 void History::release(Entry& entry)

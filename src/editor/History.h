@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace vdbclay {
@@ -19,6 +20,17 @@ namespace vdbclay {
 struct HistoryLimits {
     uint64_t memoryBytes = 256ull << 20; // entries kept in memory
     uint64_t spillBytes = 8ull << 30;    // the spill file; beyond it the oldest entries are forgotten
+};
+
+/// A change of the mask (VoxelMask::encode() before and after).
+struct MaskChange {
+    std::string before, after;
+};
+
+/// What undo or redo puts back: leaf images, and the mask where the edit changed it.
+struct HistoryStep {
+    std::vector<LeafImage> leaves;
+    std::optional<std::string> mask; // VoxelMask::encode()
 };
 
 class History {
@@ -29,12 +41,13 @@ public:
     History& operator=(const History&) = delete;
 
     /// Records an edit and the stroke-script ops that made it (changes with equal before and after are
-    /// dropped; nothing is recorded when none remain) and forgets what could be redone.
-    void push(std::vector<LeafChange> changes, nlohmann::json ops = nlohmann::json::array());
-    /// The leaf images that take the scene back before the latest edit; the edit moves to the redo side.
-    std::optional<std::vector<LeafImage>> undo();
-    /// The leaf images that apply the latest undone edit again.
-    std::optional<std::vector<LeafImage>> redo();
+    /// dropped; nothing is recorded when none remain and the mask did not change) and forgets what could
+    /// be redone.
+    void push(std::vector<LeafChange> changes, nlohmann::json ops = nlohmann::json::array(), std::optional<MaskChange> mask = std::nullopt);
+    /// What takes the scene back before the latest edit; the edit moves to the redo side.
+    std::optional<HistoryStep> undo();
+    /// What applies the latest undone edit again.
+    std::optional<HistoryStep> redo();
 
     std::size_t undoDepth() const { return undo_.size(); }
     std::size_t redoDepth() const { return redo_.size(); }
@@ -49,12 +62,13 @@ private:
     struct Entry {
         std::vector<LeafChange> changes; // empty while spilled
         nlohmann::json ops;              // kept in memory: small beside the changes
+        std::optional<MaskChange> mask;  // kept in memory too
         uint64_t bytes = 0;              // encoded size
         bool spilled = false;
         uint64_t fileOffset = 0;
     };
     /// Moves the latest entry of `from` to `to`, returning its images before (undo) or after (redo).
-    std::optional<std::vector<LeafImage>> step(std::vector<Entry>& from, std::vector<Entry>& to, bool before);
+    std::optional<HistoryStep> step(std::vector<Entry>& from, std::vector<Entry>& to, bool before);
     void spillOver();
     void load(Entry& entry);
     void release(Entry& entry);

@@ -517,7 +517,7 @@ std::vector<std::string> Renderer::setMaterials(const MaterialTable& materials, 
 
 bool Renderer::picturesReady() const { return impl_->picturesReady(); }
 
-void Renderer::setChunk(ChunkId id, const Mesh& mesh, int level, const std::vector<uint8_t>* occlusion)
+void Renderer::setChunk(ChunkId id, const Mesh& mesh, int level, const std::vector<uint8_t>* occlusion, const std::vector<uint8_t>* masked)
 {
     impl_->removals.erase(id);
     if (mesh.triangles.empty()) {
@@ -533,7 +533,7 @@ void Renderer::setChunk(ChunkId id, const Mesh& mesh, int level, const std::vect
         p.lo[a] = std::numeric_limits<float>::max();
         p.hi[a] = std::numeric_limits<float>::lowest();
     }
-    const uint32_t levelBits = uint32_t(std::clamp(level, 0, 255)) << 16;
+    const uint32_t levelBits = uint32_t(std::clamp(level, 0, 127)) << 16;
     for (std::size_t i = 0; i < nv; ++i) {
         GpuVertex& v = vertices[i];
         for (int a = 0; a < 3; ++a) {
@@ -544,7 +544,8 @@ void Renderer::setChunk(ChunkId id, const Mesh& mesh, int level, const std::vect
         }
         const uint32_t material = i < mesh.materials.size() ? mesh.materials[i] : 1u;
         const uint32_t open = occlusion && i < occlusion->size() ? (*occlusion)[i] : 255u;
-        v.packed = material | levelBits | (open << 24);
+        const uint32_t maskBit = masked && i < masked->size() && (*masked)[i] ? 1u << 23 : 0u;
+        v.packed = material | levelBits | maskBit | (open << 24);
     }
     // The shaders take a triangle's material from its first (provoking) vertex: each triangle starts at
     // a corner of its own material (the meshers' triangleMaterials follow material transitions inside a

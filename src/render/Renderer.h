@@ -55,8 +55,10 @@ public:
     bool picturesReady() const;
     /// Queues `mesh` as chunk `id` (a new chunk, or a new version of one); uploaded by the next frame.
     /// `level` is what the lod view shows; `occlusion` (optional, one per vertex, 0 = fully occluded,
-    /// 255 = open) darkens creases in the shaded view.
-    void setChunk(ChunkId id, const Mesh& mesh, int level = 0, const std::vector<uint8_t>* occlusion = nullptr);
+    /// 255 = open) darkens creases in the shaded view; `masked` (optional, one per vertex, non-zero where
+    /// the sculptor's mask keeps the voxel) darkens the masked surface in every shading. `level` < 128.
+    void setChunk(ChunkId id, const Mesh& mesh, int level = 0, const std::vector<uint8_t>* occlusion = nullptr,
+                  const std::vector<uint8_t>* masked = nullptr);
     /// Frees the chunk's buffers at the next frame (its brick was evicted or it became empty).
     void removeChunk(ChunkId id);
     bool hasChunk(ChunkId id) const;

@@ -94,7 +94,7 @@ StreamedSceneChunks::SyncReport StreamedSceneChunks::sync(const StreamingScene& 
             continue;
         }
         const ChunkId id = it != uploaded_.end() ? it->second.id : nextId_++;
-        renderer.setChunk(id, m->mesh, key.level, &m->occlusion);
+        renderer.setChunk(id, m->mesh, key.level, &m->occlusion, &m->masked);
         uploaded_[key] = {id, m->version, m->hash};
         ++report.uploaded;
     }

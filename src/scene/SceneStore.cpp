@@ -37,6 +37,7 @@ constexpr const char* kFormatKey = "format";
 constexpr const char* kFormatValue = "vdbclay-scene";
 constexpr const char* kVoxelSizeKey = "voxel_size";
 constexpr const char* kMaterialsKey = "materials";
+constexpr const char* kMaskKey = "mask"; // VoxelMask::encode(); absent or empty: nothing masked
 constexpr const char* kBrickLeavesKey = "brick_leaves";
 constexpr const char* kLodLevelsKey = "lod_levels";
 constexpr const char* kLodStaleKey = "lod_stale";
@@ -130,6 +131,19 @@ void SceneStore::setMaterials(const MaterialTable& materials)
     store_->putMeta(kMaterialsKey, materials.toJson());
     materials_ = materials;
 }
+
+VoxelMask SceneStore::mask() const
+{
+    const std::optional<std::string> bytes = store_->meta(kMaskKey);
+    if (!bytes || bytes->empty()) return {};
+    try {
+        return VoxelMask::decode(*bytes);
+    } catch (const MaskFormatError& e) {
+        throw StoreError("'" + path() + "': " + e.what());
+    }
+}
+
+void SceneStore::setMask(const VoxelMask& mask) { store_->putMeta(kMaskKey, mask.any() ? mask.encode() : std::string()); }
 
 std::optional<std::pair<IndexCoord, IndexCoord>> SceneStore::bounds() const
 {
@@ -274,6 +288,7 @@ Volume SceneStore::loadLevel(int level, const Progress& progress) const
     Volume volume(levelVoxelSize(voxelSize_, level));
     volume.materials() = materials_;
     loadBricks(level, brickCoords(level), volume, progress);
+    if (level == 0) volume.mask() = mask();
     return volume;
 }
 
@@ -381,7 +396,10 @@ void createStoreFile(const std::string& path, double voxelSize, const MaterialTa
 void writeStoreFile(const Volume& volume, const std::string& path, const Progress& progress)
 {
     createStoreFile(path, volume.voxelSize(), volume.materials(),
-                    [&](SceneStore& scene) { scene.writeLevel(0, volume, progress); });
+                    [&](SceneStore& scene) {
+                        scene.writeLevel(0, volume, progress);
+                        if (volume.mask().any()) scene.setMask(volume.mask());
+                    });
 }
 
 Volume loadScene(const std::string& path, const Progress& progress)

@@ -9,6 +9,7 @@
 #include "vdb_hermite/RegionCodec.h"
 #include "vdb_hermite/Volume.h"
 #include "vdb_hermite/VolumeRegions.h"
+#include "vdb_hermite/VoxelMask.h"
 
 #include <functional>
 #include <memory>
@@ -68,6 +69,11 @@ public:
     const MaterialTable& materials() const { return materials_; }
     /// Replaces the materials table (inside a transaction).
     void setMaterials(const MaterialTable& materials);
+    /// The mask (VoxelMask.h) the store keeps beside level 0: empty when none was stored. StoreError for a
+    /// damaged one.
+    VoxelMask mask() const;
+    /// Replaces it (inside a transaction).
+    void setMask(const VoxelMask& mask);
     /// The coarse levels built and whether edits since left them behind; StoreError when the metadata
     /// holds anything but a whole number of 0 .. wavelet::kMaxLodLevels, or 0 or 1.
     int lodLevels() const;
@@ -101,7 +107,7 @@ public:
     /// table meanwhile). `payloadBytes` (optional) receives the size of the record read.
     DecodedRegion readBrick(int level, const IndexCoord& brick, const BrickStore& from, std::size_t materialCount,
                             uint64_t* payloadBytes = nullptr) const;
-    /// A whole level as one volume.
+    /// A whole level as one volume (level 0 with the mask).
     Volume loadLevel(int level, const Progress& progress = {}) const;
     /// Stores the given bricks of `volume` (a level): a payload, a uniform record, or nothing for empty
     /// space. Call between bricks().begin() and commit().

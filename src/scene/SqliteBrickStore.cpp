@@ -188,8 +188,9 @@ public:
         const int rc = sqlite3_step(s);
         if (rc == SQLITE_DONE) return std::nullopt;
         if (rc != SQLITE_ROW) fail("read the scene's metadata");
+        // Values may hold any bytes (a mask), so they are read by length, not up to a NUL.
         const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
-        return std::string(text ? text : "");
+        return text ? std::string(text, std::size_t(sqlite3_column_bytes(s, 0))) : std::string();
     }
 
     void putMeta(const std::string& key, const std::string& value) override

@@ -30,6 +30,7 @@ std::optional<std::pair<IndexCoord, IndexCoord>> brickRange(const ScriptOp& op, 
 
 std::optional<std::pair<IndexCoord, IndexCoord>> voxelsReachedBy(const ScriptOp& op, double voxelSize)
 {
+    if (op.maskEdit) return std::pair{IndexCoord{0, 0, 0}, IndexCoord{-1, -1, -1}}; // the mask is not in the bricks
     if (op.mode == CsgMode::Intersect) return std::nullopt;
     const WorldBounds b = opBounds(op, voxelSize);
     if (!b.bounded()) return std::nullopt;
@@ -76,6 +77,7 @@ StoreSculptReport sculptStore(SceneStore& scene, const StrokeScript& script,
     const std::vector<IndexCoord> order = bricksReachedBy(script, scene.voxelSize(), [&] { return scene.brickCoords(0); });
     Volume part(scene.voxelSize());
     part.materials() = scene.materials();
+    part.mask() = scene.mask();
     std::vector<std::optional<BrickRecord>> before;
     scene.loadBricks(0, order, part, {}, &before);
 
@@ -95,6 +97,7 @@ StoreSculptReport sculptStore(SceneStore& scene, const StrokeScript& script,
     }
     report.bricksWritten = written.size();
     scene.setMaterials(part.materials());
+    if (part.mask() != scene.mask()) scene.setMask(part.mask());
     if (!written.empty()) {
         scene.forgetBounds();
         if (lodFollowsEdits(scene)) report.lodBricksWritten = updateStoreLod(scene, written).bricksWritten();

@@ -23,7 +23,8 @@ struct StoreSculptReport {
 /// The level-0 voxels an op can read or change, min and max inclusive: its brush's bounds grown by two
 /// voxels below (edges that start below reach into the brush) and by a leaf and two voxels above (the
 /// CSG kernel reads the first layer of the +x, +y, +z neighbours), clamped to +-1e9. Nullopt when the
-/// op reaches everything (intersect, unbounded brushes).
+/// op reaches everything (intersect, unbounded brushes); an empty range (min > max) for a mask op, which
+/// changes no voxel.
 std::optional<std::pair<IndexCoord, IndexCoord>> voxelsReachedBy(const ScriptOp& op, double voxelSize);
 
 /// The level-0 bricks a script's ops can read or change (sorted): every brush's bounds, grown as the

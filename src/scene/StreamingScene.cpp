@@ -42,6 +42,8 @@ constexpr int32_t kMeshReach = kLeafDim + 2;
 constexpr int kReachClasses = 8;
 int64_t reachOfClass(int c) { return kMeshReach + (c > 0 ? (int64_t(1) << c) : 0); }
 
+int32_t floorDivide(int32_t v, int32_t d) { return v >= 0 ? v / d : -((-v + d - 1) / d); }
+
 /// The 27 directions from a brick to the bricks around it (13: itself), each axis -1, 0 or +1.
 int directionIndex(const std::array<int, 3>& d) { return (d[0] + 1) + 3 * (d[1] + 1) + 9 * (d[2] + 1); }
 
@@ -116,6 +118,10 @@ struct StreamingScene::Impl {
     std::vector<BrickKey> shown;
     LodCut cut; // the shown bricks and the rest of the split bricks' children
     MaterialTable materials; // the scene's, with what edits defined since the last autosave
+    VoxelMask mask;          // as edits left it; maskDirty until autosaved
+    bool maskDirty = false;
+    // Per brick, the last content version at which the mask changed over it: its mesh's darkening.
+    std::unordered_map<BrickKey, uint64_t, BrickKeyHash> maskStamps;
     bool stopping = false;
     std::vector<std::unique_ptr<BrickStore>> readers; // one per worker
     std::vector<std::thread> workers;
@@ -141,6 +147,7 @@ struct StreamingScene::Impl {
                                         std::to_string((largest + (1 << 20) - 1) >> 20) + " MB)");
         edits = committedEdits(scene);
         materials = scene.materials();
+        mask = scene.mask();
         for (int k = 0; k <= levels; ++k) {
             levelVolumes.emplace_back(scene.voxelSize() * double(1 << k));
             levelVolumes.back().materials() = materials;
@@ -169,6 +176,10 @@ struct StreamingScene::Impl {
         if (it == resident.end()) return 0;
         // Order-independent sums over the cut's bricks touching this one: which they are, and their content.
         uint64_t v = (loadsOnly ? it->second.loadVersion : it->second.version) * 0x9E3779B97F4A7C15ull;
+        if (!loadsOnly) {
+            const auto stamp = maskStamps.find(key);
+            if (stamp != maskStamps.end()) v += stamp->second * 0xC2B2AE3D27D4EB4Full;
+        }
         const LodBrickHash hash;
         const int64_t own = int64_t(kLodBrickVoxels) << key.level;
         LodCut::Point lo, hi;
@@ -267,11 +278,66 @@ struct StreamingScene::Impl {
             out->mesh = meshLodBrick(levelsOf, cut.shows(brick) ? cut : LodCut({brick}), brick, options.meshing);
             out->occlusion = vertexOcclusion(volume, out->mesh);
         }
+        out->masked = maskedVertices(out->mesh);
         out->version = meshVersionLocked(key);
         out->hash = contentHash(out->mesh);
         for (uint8_t o : out->occlusion) out->hash = (out->hash ^ o) * 1099511628211ull;
+        for (uint8_t m : out->masked) out->hash = (out->hash ^ m) * 1099511628211ull;
         out->bytes = sizeof(BrickMesh) + out->mesh.memoryBytes() + out->occlusion.capacity() + (out->pieces ? out->pieces->bytes : 0);
         return out;
+    }
+
+    /// Per vertex of a mesh (world units), 1 where the mask keeps the level-0 voxel nearest to it; empty
+    /// when nothing is masked. Lock held.
+    std::vector<uint8_t> maskedVertices(const Mesh& mesh) const
+    {
+        if (!mask.any()) return {};
+        std::vector<uint8_t> out(mesh.vertexCount(), 0);
+        const double h = scene.voxelSize();
+        for (std::size_t i = 0; i < out.size(); ++i) {
+            IndexCoord voxel;
+            for (int a = 0; a < 3; ++a) voxel[std::size_t(a)] = int32_t(std::lround(mesh.positions[i][std::size_t(a)] / h));
+            out[i] = mask.masked(voxel) ? 1 : 0;
+        }
+        return out;
+    }
+
+    /// The mask changed from `old` to `mask`: the bricks of every level over the leaves that changed (and
+    /// those beside them, whose vertices may round into them) get a new stamp, so that their meshes are
+    /// darkened anew. Lock held.
+    void noteMaskChange(const VoxelMask& old)
+    {
+        const uint64_t stamp = ++versions;
+        if (old.inverted() != mask.inverted()) {
+            for (const auto& [key, r] : resident) maskStamps[key] = stamp;
+            return;
+        }
+        std::set<IndexCoord> leaves;
+        const auto& a = old.listedLeaves();
+        const auto& b = mask.listedLeaves();
+        for (const auto& [origin, bits] : a) {
+            const auto it = b.find(origin);
+            if (it == b.end() || it->second != bits) leaves.insert(origin);
+        }
+        for (const auto& [origin, bits] : b)
+            if (!a.count(origin)) leaves.insert(origin);
+        std::set<IndexCoord> bricks;
+        for (const IndexCoord& leaf : leaves) {
+            IndexCoord lo, hi;
+            for (std::size_t i = 0; i < 3; ++i) {
+                lo[i] = floorDivide(leaf[i] - 1, kBrickEdge);
+                hi[i] = floorDivide(leaf[i] + kLeafDim, kBrickEdge);
+            }
+            for (int32_t x = lo[0]; x <= hi[0]; ++x)
+                for (int32_t y = lo[1]; y <= hi[1]; ++y)
+                    for (int32_t z = lo[2]; z <= hi[2]; ++z) bricks.insert({x, y, z});
+        }
+        for (int k = 0; k <= levels; ++k) {
+            std::set<IndexCoord> atLevel;
+            for (const IndexCoord& b0 : bricks)
+                atLevel.insert({floorDivide(b0[0], 1 << k), floorDivide(b0[1], 1 << k), floorDivide(b0[2], 1 << k)});
+            for (const IndexCoord& c : atLevel) maskStamps[{k, c}] = stamp;
+        }
     }
 
     /// The pieces of a brick's mesh of the current cut: those of `old` where they still hold (the same
@@ -492,6 +558,7 @@ struct StreamingScene::Impl {
     {
         Volume work(scene.voxelSize());
         work.materials() = materials;
+        work.mask() = mask;
         for (const IndexCoord& b : bricks) pasteRegion(work, levelVolumes[0], brickBox(b));
         return work;
     }
@@ -584,7 +651,7 @@ struct StreamingScene::Impl {
         fine.materials() = materials;
         // Materials defined since (even ones no voxel uses yet) are saved with the bricks, or alone.
         const bool newMaterials = !(materials == scene.materials());
-        if (dirty.empty() && committedEdits(scene) == edits && !newMaterials) return 0;
+        if (dirty.empty() && committedEdits(scene) == edits && !newMaterials && !maskDirty) return 0;
         StoreTransaction transaction(scene.bricks());
         for (auto& [key, r] : dirty) {
             if (const std::optional<BrickRecord> record = encodeBrick(fine, key.brick)) {
@@ -596,6 +663,7 @@ struct StreamingScene::Impl {
         }
         LodRefresh lod;
         if (newMaterials) scene.setMaterials(materials);
+        if (maskDirty) scene.setMask(mask);
         if (!dirty.empty()) {
             scene.forgetBounds();
             std::vector<IndexCoord> bricks;
@@ -606,6 +674,7 @@ struct StreamingScene::Impl {
         scene.bricks().putMeta(kEditCountKey, std::to_string(edits));
         transaction.commit();
         for (auto& [key, r] : dirty) r->dirty = false;
+        maskDirty = false;
         lodBricksWritten += lod.bricksWritten();
         forgetCoarseBricks(lod);
         return dirty.size();
@@ -840,8 +909,33 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
         report.bricksChanged += s.commitBrick(b, work, reached, leaves);
     }
     s.materials = work.materials();
+    if (work.mask() != s.mask) {
+        const VoxelMask old = std::move(s.mask);
+        s.mask = work.mask();
+        s.maskDirty = true;
+        s.noteMaskChange(old);
+    }
     s.edits += script.ops.size();
     return report;
+}
+
+VoxelMask StreamingScene::mask() const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    return impl_->mask;
+}
+
+void StreamingScene::setMask(const VoxelMask& mask)
+{
+    Impl& s = *impl_;
+    if (s.options.access == StoreAccess::ReadOnly) throw std::logic_error("editing a scene opened read-only");
+    std::lock_guard<std::mutex> lock(s.mutex);
+    if (mask == s.mask) return;
+    const VoxelMask old = std::move(s.mask);
+    s.mask = mask;
+    s.maskDirty = true;
+    s.noteMaskChange(old);
+    ++s.edits;
 }
 
 StreamingScene::EditReport StreamingScene::restoreLeaves(const std::vector<LeafImage>& leaves)
@@ -1021,6 +1115,7 @@ Volume StreamingScene::residentLevel0() const
     std::lock_guard<std::mutex> lock(impl_->mutex);
     Volume out = impl_->levelVolumes[0].clone();
     out.materials() = impl_->materials;
+    out.mask() = impl_->mask;
     return out;
 }
 

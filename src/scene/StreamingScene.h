@@ -92,6 +92,10 @@ public:
     /// Puts leaf boxes back as the images hold them (undo, redo), paging their bricks in first; counts as
     /// one edit. Throws VolumeIOError for damaged images.
     EditReport restoreLeaves(const std::vector<LeafImage>& leaves);
+    /// The mask brushes respect (VoxelMask.h), as edits left it; autosave stores it.
+    VoxelMask mask() const;
+    /// Replaces the mask (undo, redo of a mask edit); counts as one edit.
+    void setMask(const VoxelMask& mask);
     /// The scene's materials, with those edits defined since the last autosave.
     MaterialTable materials() const;
     /// Edits applied since the store was made, including those not yet autosaved.
@@ -143,6 +147,7 @@ public:
     struct BrickMesh {
         Mesh mesh;
         std::vector<uint8_t> occlusion; // per vertex (vertexOcclusion)
+        std::vector<uint8_t> masked;    // per vertex, 1 where the mask keeps its voxel; empty: none masked
         uint64_t version = 0;
         uint64_t hash = 0;  // of the mesh and its occlusion: equal meshes need no new upload
         uint64_t bytes = 0; // what it takes in memory, its pieces included

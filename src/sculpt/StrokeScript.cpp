@@ -1,5 +1,7 @@
 #include "sculpt/StrokeScript.h"
 
+#include "sculpt/MaskedEdit.h"
+
 #include "sculpt/SoftPaint.h"
 #include "sculpt/StrokePath.h"
 
@@ -219,20 +221,40 @@ Symmetry parseSymmetry(const json& s, const std::string& where)
     return out;
 }
 
+std::optional<MaskEdit> parseMaskEdit(const std::string& mode)
+{
+    if (mode == "mask") return MaskEdit::Mask;
+    if (mode == "unmask") return MaskEdit::Unmask;
+    if (mode == "mask_invert") return MaskEdit::Invert;
+    if (mode == "mask_clear") return MaskEdit::Clear;
+    return std::nullopt;
+}
+
 ScriptOp parseOp(const json& o, const std::string& where)
 {
-    checkKeys(o, where, {"mode", "brush", "at", "path", "rotate", "scale", "material", "strength", "depth", "falloff", "distance", "offset", "symmetry", "blend"});
     ScriptOp op;
-    if (o.contains("symmetry")) op.symmetry = parseSymmetry(o.at("symmetry"), where + ".symmetry");
     const std::string mode = text(o, "mode", where);
-    if (const std::optional<FieldMode> field = parseFieldMode(mode)) {
+    if (const std::optional<MaskEdit> maskEdit = parseMaskEdit(mode)) {
+        op.maskEdit = maskEdit;
+        if (*maskEdit == MaskEdit::Invert || *maskEdit == MaskEdit::Clear) {
+            checkKeys(o, where, {"mode"});
+            return op;
+        }
+        checkKeys(o, where, {"mode", "brush", "at", "path", "rotate", "scale", "symmetry"});
+    } else {
+        checkKeys(o, where, {"mode", "brush", "at", "path", "rotate", "scale", "material", "strength", "depth", "falloff", "distance", "offset", "symmetry", "blend"});
+    }
+    if (o.contains("symmetry")) op.symmetry = parseSymmetry(o.at("symmetry"), where + ".symmetry");
+    if (op.maskEdit) {
+    } else if (const std::optional<FieldMode> field = parseFieldMode(mode)) {
         op.field = FieldBrushOp{};
         op.field->mode = *field;
     } else {
         try {
             op.mode = parseCsgMode(mode);
         } catch (const std::invalid_argument& e) {
-            fail(where + ".mode", std::string(e.what()) + ", or a reshaping brush (smooth, flatten, inflate, deflate, move)");
+            fail(where + ".mode", std::string(e.what()) + ", a reshaping brush (smooth, flatten, inflate, deflate, move) or a mask op "
+                                                          "(mask, unmask, mask_invert, mask_clear)");
         }
     }
     for (const char* key : {"falloff", "distance", "offset"})
@@ -290,11 +312,17 @@ ScriptOp parseOp(const json& o, const std::string& where)
     const bool grid = brush.is_object() && brush.contains("shape") && brush.at("shape") == "grid";
     if (grid) {
         if (op.field) fail(where + ".brush", std::string(fieldModeName(op.field->mode)) + " takes an analytic brush, not a grid tool");
+        if (op.maskEdit) fail(where + ".brush", std::string(mode) + " takes an analytic brush, not a grid tool");
         checkKeys(brush, where + ".brush", {"shape", "file"});
         op.toolFile = text(brush, "file", where + ".brush");
         if (op.toolFile.empty()) fail(where + ".brush.file", "must not be empty");
     } else {
         op.brush = parseBrush(brush, where + ".brush", op.placement);
+    }
+    if (op.maskEdit) {
+        if (!op.brush.bounds().bounded()) fail(where, mode + " needs a bounded brush");
+        if (op.path.size() > 1 && !std::isfinite(op.brush.boundingRadius())) fail(where + ".path", "an unbounded brush cannot follow a path");
+        return op;
     }
     if (o.contains("material")) op.material = text(o, "material", where);
     if (op.mode == CsgMode::Paint && op.material.empty() && !grid)
@@ -435,10 +463,27 @@ void loadScriptTools(StrokeScript& script, const std::string& folder, ToolCache&
     }
 }
 
-const char* opModeName(const ScriptOp& op) { return op.field ? fieldModeName(op.field->mode) : csgModeName(op.mode); }
+const char* opModeName(const ScriptOp& op)
+{
+    if (op.maskEdit) {
+        switch (*op.maskEdit) {
+        case MaskEdit::Mask: return "mask";
+        case MaskEdit::Unmask: return "unmask";
+        case MaskEdit::Invert: return "mask_invert";
+        case MaskEdit::Clear: return "mask_clear";
+        }
+    }
+    return op.field ? fieldModeName(op.field->mode) : csgModeName(op.mode);
+}
 
 WorldBounds opBounds(const ScriptOp& op, double voxelSize)
 {
+    if (op.maskEdit == MaskEdit::Invert || op.maskEdit == MaskEdit::Clear) {
+        WorldBounds none;
+        none.min = Vec3d(0.0);
+        none.max = Vec3d(-1.0);
+        return none;
+    }
     if (!op.toolFile.empty() && !op.tool) throw ScriptError("the tool '" + printableText(op.toolFile, 200) + "' is not loaded");
     WorldBounds one = op.tool ? PlacedTool(op.tool, op.placement).bounds() : op.brush.bounds();
     if (one.bounded() && op.field) {
@@ -477,6 +522,7 @@ struct OpStep {
     CsgOp op;
     std::optional<FieldBrushOp> reshape; // a reshaping brush instead of the CSG op
     double blend = 0.0;                  // add: blended into the surface this wide (applyBlendedAdd)
+    std::optional<MaskEdit> maskEdit;    // a mask op instead (its field null for invert and clear)
 };
 
 /// The field an op carves with, with the tool's region `region` where it uses a tool. A stroke follows its
@@ -523,10 +569,14 @@ std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTabl
         op.material = *id;
     }
     std::vector<OpStep> plain;
+    if (s.maskEdit) {
+        if (*s.maskEdit == MaskEdit::Invert || *s.maskEdit == MaskEdit::Clear) return {{nullptr, op, std::nullopt, 0.0, s.maskEdit}};
+        return withSymmetry({{opField(s, kEmptyMaterial, voxelSize), op, std::nullopt, 0.0, s.maskEdit}}, s.symmetry);
+    }
     if (s.field) {
         FieldBrushOp reshape = *s.field;
         if (!s.material.empty()) reshape.material = op.material;
-        plain = {{opField(s, kEmptyMaterial, voxelSize), op, reshape}};
+        plain = {{opField(s, kEmptyMaterial, voxelSize), op, reshape, 0.0, std::nullopt}};
     }
     const bool toolMaterials = s.tool && s.material.empty() && (s.mode == CsgMode::Add || s.mode == CsgMode::Paint);
     try {
@@ -536,7 +586,7 @@ std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTabl
             if (s.mode == CsgMode::Paint && (s.paintFalloff || s.strength < 1.0))
                 field = std::make_shared<SoftPaintField>(std::move(field), s.strength, s.paintFalloff.value_or(Falloff::Constant), voxelSize,
                                                          s.falloffCurve);
-            plain = {{field, op, std::nullopt, s.blend}};
+            plain = {{field, op, std::nullopt, s.blend, std::nullopt}};
         }
         if (!plain.empty()) return withSymmetry(std::move(plain), s.symmetry);
         // Each material of the tool over its own region: regions share their boundaries, so each
@@ -546,7 +596,7 @@ std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTabl
             const Material& m = s.tool->materials().at(region);
             const auto existing = table.find(m.name);
             op.material = existing ? *existing : table.define(m);
-            steps.push_back({opField(s, region, voxelSize), op, std::nullopt, s.blend});
+            steps.push_back({opField(s, region, voxelSize), op, std::nullopt, s.blend, std::nullopt});
         }
         return withSymmetry(std::move(steps), s.symmetry);
     } catch (const std::invalid_argument& e) {
@@ -558,6 +608,28 @@ std::vector<OpStep> compileOp(const ScriptOp& s, std::size_t index, MaterialTabl
 
 namespace {
 
+/// A mask brush's bounds must be finite and of a size a stroke can visit.
+void checkMaskBrush(const SdfField& field, double voxelSize)
+{
+    const WorldBounds b = field.bounds();
+    if (!b.bounded()) throw std::invalid_argument("a mask brush must be bounded");
+    double leaves = 1.0;
+    for (int a = 0; a < 3; ++a) leaves *= (b.max[a] - b.min[a]) / (voxelSize * kLeafDim) + 2.0;
+    if (!(leaves <= kMaxMaskBrushLeaves))
+        throw std::invalid_argument("the mask brush spans about " + std::to_string(uint64_t(std::min(leaves, 1e18))) + " leaves, more than " +
+                                    std::to_string(uint64_t(kMaxMaskBrushLeaves)));
+}
+
+void applyMaskEdit(VoxelMask& mask, const OpStep& step, double voxelSize)
+{
+    switch (*step.maskEdit) {
+    case MaskEdit::Mask: paintMask(mask, *step.field, voxelSize, true); break;
+    case MaskEdit::Unmask: paintMask(mask, *step.field, voxelSize, false); break;
+    case MaskEdit::Invert: mask.invert(); break;
+    case MaskEdit::Clear: mask.clear(); break;
+    }
+}
+
 /// The script's ops compiled into steps, each checked against the limits (on `table`, the materials once
 /// the script's are defined; a tool's materials are added to it): a script is refused whole, before the
 /// first op runs.
@@ -568,7 +640,9 @@ std::vector<std::vector<OpStep>> compileChecked(const StrokeScript& script, doub
         steps.push_back(compileOp(script.ops[i], i, table, voxelSize));
         for (const OpStep& step : steps.back()) {
             try {
-                if (step.reshape) {
+                if (step.maskEdit) {
+                    if (step.field) checkMaskBrush(*step.field, voxelSize);
+                } else if (step.reshape) {
                     Volume probe(voxelSize); // the checks read the voxel size and the materials only
                     probe.materials() = table;
                     checkFieldBrush(probe, *step.field, *step.reshape);
@@ -597,7 +671,7 @@ double checkStrokeScript(const StrokeScript& script, double voxelSize, const Mat
     MaterialTable table = withScriptMaterials(materials, script);
     for (const auto& steps : compileChecked(script, voxelSize, table))
         for (const OpStep& step : steps)
-            if (step.field->bounds().bounded()) surface += step.field->surfaceAreaBound() / (voxelSize * voxelSize);
+            if (!step.maskEdit && step.field->bounds().bounded()) surface += step.field->surfaceAreaBound() / (voxelSize * voxelSize);
     return surface;
 }
 
@@ -615,10 +689,19 @@ std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& 
         report.index = i;
         report.mode = script.ops[i].mode;
         report.modeName = opModeName(script.ops[i]);
+        const WorldBounds reach = opBounds(script.ops[i], volume.voxelSize());
         for (const OpStep& step : steps[i]) {
+            if (step.maskEdit) {
+                applyMaskEdit(volume.mask(), step, volume.voxelSize());
+                continue;
+            }
+            // The mask is respected by putting back what it keeps once the brush has run.
+            std::optional<MaskedVoxels> kept;
+            if (volume.mask().any()) kept.emplace(volume, reach);
             report.stats.append(step.reshape       ? applyFieldBrush(volume, *step.field, *step.reshape)
                                 : step.blend > 0.0 ? applyBlendedAdd(volume, *step.field, step.op, step.blend)
                                                    : applyCsg(volume, *step.field, step.op));
+            if (kept) kept->restore(volume);
         }
         report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (onOp) onOp(report);

@@ -30,8 +30,13 @@ constexpr std::size_t kMaxPathPoints = 100000;
 constexpr std::size_t kMaxBlendParts = 256;
 constexpr uint64_t kMaxScriptBytes = 64ull << 20;
 
+/// Ops on the mask (VoxelMask.h) rather than the surface: paint it with a brush ("mask", "unmask"), or
+/// change it whole ("mask_invert", "mask_clear").
+enum class MaskEdit { Mask, Unmask, Invert, Clear };
+
 struct ScriptOp {
-    CsgMode mode = CsgMode::Add; // unused by reshaping brushes (`field`)
+    CsgMode mode = CsgMode::Add; // unused by reshaping brushes (`field`) and mask ops
+    std::optional<MaskEdit> maskEdit; // a mask op: changes the mask, never the surface
     std::optional<FieldBrushOp> field; // smooth, flatten, inflate, deflate, move (its material set when run)
     Brush brush;                 // placed at "at" (or at the first path point); unused with a tool
     std::string toolFile;        // {"shape": "grid", "file": ...}: the tool's file as the script names it
@@ -66,7 +71,8 @@ using ToolCache = std::map<std::string, std::shared_ptr<const GridTool>>;
 void loadScriptTools(StrokeScript& script, const std::string& folder, ToolCache& cache);
 
 /// The world bounds an op can change (a stroke's whole path included), and for a reshaping brush those
-/// it reads (fieldBrushReach on a lattice of `voxelSize`): infinite for an unbounded brush.
+/// it reads (fieldBrushReach on a lattice of `voxelSize`): infinite for an unbounded brush. A mask op's
+/// are those of the voxels it masks (none for invert and clear: an empty box, min > max).
 WorldBounds opBounds(const ScriptOp& op, double voxelSize);
 /// "add", "smooth", ...: the op's mode as scripts name it.
 const char* opModeName(const ScriptOp& op);

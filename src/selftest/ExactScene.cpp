@@ -19,7 +19,7 @@ ExactScene::ExactScene(const StrokeScript& script, const MaterialTable& material
 {
     for (const ScriptOp& s : script.ops) {
         // Reshaping brushes have no closed form to compare with.
-        if (s.field) throw std::invalid_argument(std::string("exact evaluation has no closed form for ") + opModeName(s));
+        if (s.field || s.maskEdit) throw std::invalid_argument(std::string("exact evaluation has no closed form for ") + opModeName(s));
         Op op;
         op.mode = s.mode;
         op.field = s.path.size() > 1 ? std::shared_ptr<const SdfField>(std::make_shared<SweptBrush>(s.brush, s.path))

@@ -16,6 +16,7 @@
 #include "vdb_hermite/Materials.h"
 #include "vdb_hermite/Quantize.h"
 #include "vdb_hermite/Volume.h"
+#include "vdb_hermite/VoxelMask.h"
 
 #include <openvdb/openvdb.h>
 #include <openvdb/io/Compression.h>
@@ -280,6 +281,7 @@ void placeUniformLeaves(HermiteTree& tree, const std::vector<Coord>& origins, co
 /// Metadata keys stored on the grid.
 constexpr const char* kFormatVersionKey = "vdbclay_format_version";
 constexpr const char* kMaterialsKey = "vdbclay_materials";
+constexpr const char* kMaskKey = "vdbclay_mask"; // VoxelMask::encode(), present only for a mask in use
 constexpr int kFormatVersion = 1;
 
 namespace detail {
@@ -287,6 +289,7 @@ namespace detail {
 struct VolumeGrid {
     HermiteGrid::Ptr grid;
     MaterialTable materials;
+    VoxelMask mask;
     int formatVersion = kFormatVersion;
 };
 } // namespace detail

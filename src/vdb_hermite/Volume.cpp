@@ -32,6 +32,7 @@ Volume Volume::clone() const
     Volume copy(nullptr);
     copy.impl_->grid = impl_->grid->deepCopy();
     copy.impl_->materials = impl_->materials;
+    copy.impl_->mask = impl_->mask;
     copy.impl_->formatVersion = impl_->formatVersion;
     return copy;
 }
@@ -41,6 +42,8 @@ int Volume::formatVersion() const { return impl_->formatVersion; }
 double Volume::voxelSize() const { return impl_->grid->voxelSize()[0]; }
 MaterialTable& Volume::materials() { return impl_->materials; }
 const MaterialTable& Volume::materials() const { return impl_->materials; }
+VoxelMask& Volume::mask() { return impl_->mask; }
+const VoxelMask& Volume::mask() const { return impl_->mask; }
 
 MaterialId Volume::materialAt(const std::array<int32_t, 3>& ijk) const
 {
@@ -81,7 +84,7 @@ bool identical(const Volume& a, const Volume& b)
 {
     const HermiteGrid& ga = *a.impl().grid;
     const HermiteGrid& gb = *b.impl().grid;
-    if (!(a.materials() == b.materials())) return false;
+    if (!(a.materials() == b.materials()) || a.mask() != b.mask()) return false;
     if (ga.transform() != gb.transform()) return false;
     const HermiteTree& ta = ga.constTree();
     const HermiteTree& tb = gb.constTree();

@@ -13,6 +13,7 @@ namespace vdbclay {
 namespace detail {
 struct VolumeGrid;
 }
+class VoxelMask;
 
 /// Leaves are cubes of 8^3 voxels; edits report, and meshers chunk, by leaf.
 constexpr int kLeafLog2Dim = 3;
@@ -54,6 +55,9 @@ public:
     double voxelSize() const;
     MaterialTable& materials();
     const MaterialTable& materials() const;
+    /// The voxels no brush changes (VoxelMask.h); saved with the volume.
+    VoxelMask& mask();
+    const VoxelMask& mask() const;
     VolumeStats stats() const;
     /// Format version of the file this volume was loaded from; the version saves write for a new one.
     int formatVersion() const;
@@ -68,7 +72,7 @@ private:
     std::unique_ptr<detail::VolumeGrid> impl_;
 };
 
-/// Bit-exact comparison: same voxel size, materials table, tree topology, tiles, voxels and samples.
+/// Bit-exact comparison: same voxel size, materials table, tree topology, tiles, voxels, samples and mask.
 bool identical(const Volume& a, const Volume& b);
 
 } // namespace vdbclay

@@ -145,6 +145,7 @@ void writePayload(const Volume& volume, std::ostream& os)
     HermiteGrid::Ptr out = openvdb::gridPtrCast<HermiteGrid>(volume.impl().grid->copyGrid()); // shares the tree
     out->insertMeta(kFormatVersionKey, openvdb::Int32Metadata(kFormatVersion));
     out->insertMeta(kMaterialsKey, openvdb::StringMetadata(volume.materials().toJson()));
+    if (volume.mask().any()) out->insertMeta(kMaskKey, openvdb::StringMetadata(volume.mask().encode()));
     openvdb::io::Stream stream(os);
     stream.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
     stream.write(openvdb::GridCPtrVec{out});
@@ -207,11 +208,21 @@ Volume readVolume(std::istream& in, uint64_t size, const std::string& path)
     }
     forEachTile(grid->constTree(), [&](const CoordBBox&, MaterialValue v) { corrupt = corrupt || undefinedMaterial(v); });
     if (corrupt) throw VolumeIOError("'" + path + "' is corrupt: a voxel uses an undefined material id");
+    VoxelMask mask;
+    if (const auto maskMeta = grid->getMetadata<openvdb::StringMetadata>(kMaskKey)) {
+        try {
+            mask = VoxelMask::decode(maskMeta->value());
+        } catch (const MaskFormatError& e) {
+            throw VolumeIOError("'" + path + "': " + e.what());
+        }
+    }
     grid->removeMeta(kFormatVersionKey);
     grid->removeMeta(kMaterialsKey);
+    grid->removeMeta(kMaskKey);
     Volume volume(grid->voxelSize()[0]);
     volume.impl().grid = grid;
     volume.materials() = std::move(materials);
+    volume.mask() = std::move(mask);
     volume.impl().formatVersion = version;
     return volume;
 }

@@ -8,6 +8,7 @@ layout(location = 1) in vec3 worldNormal;
 layout(location = 2) flat in uint material;
 layout(location = 3) flat in uint level;
 layout(location = 4) in float occlusion;
+layout(location = 5) in float masked;
 
 layout(push_constant) uniform Push {
     vec4 tint; // rgb, a = 1: a flat colour (wireframe lines)
@@ -62,6 +63,9 @@ const vec3 kLevelColours[8] = vec3[8](vec3(0.90, 0.30, 0.25), vec3(0.95, 0.65, 0
                                        vec3(0.35, 0.80, 0.35), vec3(0.25, 0.75, 0.80), vec3(0.30, 0.45, 0.90),
                                        vec3(0.60, 0.35, 0.85), vec3(0.85, 0.40, 0.70));
 
+// Masked surface shows darkened (as sculpting tools show a mask), whatever the shading.
+const float kMaskedShade = 0.35;
+
 void main()
 {
     if (push.tint.a > 0.5) {
@@ -93,6 +97,7 @@ void main()
         // darken, as a matcap's sphere does towards its edge.
         vec3 clay = vec3(0.70, 0.60, 0.52) * (0.12 + 0.88 * diffuse * diffuse) * mix(0.55, 1.0, facing) * mix(1.0, ao, 0.8) +
                     vec3(0.16, 0.17, 0.20) * rim;
+        clay *= mix(1.0, kMaskedShade, masked);
         if ((view.mode.y & 2u) != 0u && sdBrush(worldPosition) <= 0.0)
             clay = mix(clay, view.highlightColour.rgb, view.highlightColour.a);
         outColour = vec4(pow(clay, vec3(1.0 / 2.2)), 1.0);
@@ -109,7 +114,7 @@ void main()
         float grain = triplanar(worldPosition * m1.z, n, m1.y);
         base = m0.rgb * (0.82 + 0.36 * grain);
     }
-    vec3 colour = base * (0.28 * ao + 0.72 * diffuse * mix(1.0, ao, 0.5));
+    vec3 colour = base * (0.28 * ao + 0.72 * diffuse * mix(1.0, ao, 0.5)) * mix(1.0, kMaskedShade, masked);
     if ((view.mode.y & 2u) != 0u && sdBrush(worldPosition) <= 0.0)
         colour = mix(colour, view.highlightColour.rgb, view.highlightColour.a);
     outColour = vec4(pow(colour, vec3(1.0 / 2.2)), 1.0); // linear to display (the target is UNORM)

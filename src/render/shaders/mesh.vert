@@ -4,20 +4,22 @@
 
 layout(location = 0) in vec3 inPosition;
 layout(location = 1) in vec3 inNormal;
-layout(location = 2) in uint inPacked; // material (16 bits) | level (8) | occlusion (8)
+layout(location = 2) in uint inPacked; // material (16 bits) | level (7) | masked (1) | occlusion (8)
 
 layout(location = 0) out vec3 worldPosition;
 layout(location = 1) out vec3 worldNormal;
 layout(location = 2) flat out uint material;
 layout(location = 3) flat out uint level;
 layout(location = 4) out float occlusion;
+layout(location = 5) out float masked; // 1 where the sculptor's mask keeps the voxel
 
 void main()
 {
     worldPosition = inPosition;
     worldNormal = inNormal;
     material = inPacked & 0xffffu;
-    level = (inPacked >> 16) & 0xffu;
+    level = (inPacked >> 16) & 0x7fu;
+    masked = float((inPacked >> 23) & 1u);
     occlusion = float(inPacked >> 24) / 255.0;
     gl_Position = view.viewProj * vec4(inPosition, 1.0);
 }
