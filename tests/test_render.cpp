@@ -862,6 +862,43 @@ TEST_CASE("render: a headless edit's screenshot draws a material defined in the 
     CHECK(differing < 160 * 120 / 100);
 }
 
+TEST_CASE("render: the masked surface shows darkened in the editor's picture, the rest as it was", "[render][editor][mask]")
+{
+    TempDir dir;
+    REQUIRE(runCli(dir, "new ball.vdb --shape sphere --size 16").exitCode == 0);
+    const std::string head = R"({"vdbclay_session": 1, "viewport": [160, 120], "commands": [
+        {"frame": 0, "command": "camera", "eye": [0, 0, 70], "target": [0, 0, 0], "up": [0, 1, 0], "fov": 40},
+        {"frame": 0, "command": "brush", "brush": {"mode": "mask", "radius": 3}})";
+    writeText(dir.file("plain.json"), head + R"(]})");
+    writeText(dir.file("masked.json"), head + R"(,
+        {"frame": 1, "command": "stroke_begin", "point": [0, 0, 16]},
+        {"frame": 2, "command": "stroke_end"}]})");
+    REQUIRE(runCli(dir, "edit ball.vdb --replay plain.json --headless --screenshot plain.png").exitCode == 0);
+    REQUIRE(runCli(dir, "edit ball.vdb --replay masked.json --headless --screenshot masked.png").exitCode == 0);
+    const Image plain = readImage(dir.file("plain.png")), masked = readImage(dir.file("masked.png"));
+    const auto luminance = [](const Image& image, int x, int y) {
+        const uint8_t* p = image.pixel(x, y);
+        return srgbToLinear(p[0]) + srgbToLinear(p[1]) + srgbToLinear(p[2]);
+    };
+    // The ball (radius 16) shows about 37 pixels wide from its centre, the mask (radius 3 about its front)
+    // about 9: the centre is darker by the mask's shade, the rest of the ball untouched.
+    const double centrePlain = luminance(plain, 80, 60), centreMasked = luminance(masked, 80, 60);
+    INFO("centre luminance " << centrePlain << " -> " << centreMasked);
+    CHECK(centrePlain > 0.05);
+    CHECK(centreMasked < 0.5 * centrePlain);
+    CHECK(centreMasked > 0.2 * centrePlain);
+    int rimDiffering = 0, rimSeen = 0;
+    for (int y = 0; y < 120; ++y)
+        for (int x = 0; x < 160; ++x) {
+            const double r = std::hypot(x - 79.5, y - 59.5);
+            if (r < 20.0 || luminance(plain, x, y) < 0.02) continue; // near the mask, or the background
+            ++rimSeen;
+            rimDiffering += std::fabs(luminance(plain, x, y) - luminance(masked, x, y)) > 0.02;
+        }
+    CHECK(rimSeen > 100);
+    CHECK(rimDiffering == 0);
+}
+
 TEST_CASE("render: a window's pictures load on a worker: procedural until ready, then the picture", "[render]")
 {
     TempDir dir;
