@@ -191,7 +191,7 @@ TEST_CASE("mask: a masked region is bit-identical after a brush of every mode ov
     }
 }
 
-TEST_CASE("mask: unmask frees voxels, invert masks everything else, clear frees all; symmetry masks the mirror image", "[sculpt][mask]")
+TEST_CASE("mask: unmask frees voxels, invert masks everything else, clear frees all, symmetry masks the mirror image", "[sculpt][mask]")
 {
     Volume v = ball();
     run(v, json::array({op("mask", 5.0, {16, 0, 0}), op("unmask", 3.0, {16, 0, 0})}));
@@ -244,7 +244,7 @@ TEST_CASE("mask: scripts refuse mask ops with keys that belong to other brushes,
                     ScriptError);
 }
 
-TEST_CASE("mask: saved with the scene in a .vdb and in a store, read back exactly; damaged mask bytes are refused", "[sculpt][mask][io]")
+TEST_CASE("mask: saved with the scene in a .vdb and in a store, read back exactly, and damaged mask bytes are refused", "[sculpt][mask][io]")
 {
     TempDir dir;
     Volume v = ball();
