@@ -897,6 +897,20 @@ TEST_CASE("render: the masked surface shows darkened in the editor's picture, th
         }
     CHECK(rimSeen > 100);
     CHECK(rimDiffering == 0);
+
+    // `render` shows a masked scene's mask the same way, from a .vdb and from a store.
+    writeText(dir.file("mask.json"), R"({"ops": [{"mode": "mask", "brush": {"shape": "sphere", "radius": 3}, "at": [0, 0, 16]}]})");
+    REQUIRE(runCli(dir, "sculpt ball.vdb mask.json -o masked.vdb").exitCode == 0);
+    REQUIRE(runCli(dir, "import masked.vdb -o masked.vdbclay").exitCode == 0);
+    for (const char* scene : {"ball.vdb", "masked.vdb", "masked.vdbclay"})
+        REQUIRE(runCli(dir, std::string("render ") + scene + " -o " + scene + ".png --size 160x120 --camera 0,0,70,0,0,0,40").exitCode == 0);
+    const Image renderedPlain = readImage(dir.file("ball.vdb.png"));
+    for (const char* scene : {"masked.vdb.png", "masked.vdbclay.png"}) {
+        INFO(scene);
+        const double centre = luminance(readImage(dir.file(scene)), 80, 60), plainCentre = luminance(renderedPlain, 80, 60);
+        CHECK(centre < 0.5 * plainCentre);
+        CHECK(std::fabs(luminance(readImage(dir.file(scene)), 80, 30) - luminance(renderedPlain, 80, 30)) < 0.02);
+    }
 }
 
 TEST_CASE("render: a window's pictures load on a worker: procedural until ready, then the picture", "[render]")

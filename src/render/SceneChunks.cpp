@@ -1,5 +1,6 @@
 #include "render/SceneChunks.h"
 
+#include "mesher/VertexMask.h"
 #include "mesher/VertexOcclusion.h"
 #include "render/Framing.h"
 
@@ -52,7 +53,8 @@ VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOp
                 out.hi[a] = std::max(out.hi[a], double(p[a]));
             }
         const std::vector<uint8_t> occlusion = vertexOcclusion(volume, chunk.mesh);
-        renderer.setChunk(leafChunkId(chunk.leafOrigin), chunk.mesh, 0, &occlusion);
+        const std::vector<uint8_t> masked = maskedVertices(volume.mask(), chunk.mesh, volume.voxelSize());
+        renderer.setChunk(leafChunkId(chunk.leafOrigin), chunk.mesh, 0, &occlusion, &masked);
         ++out.chunks;
         out.triangles += chunk.mesh.triangles.size();
     }

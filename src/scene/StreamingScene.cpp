@@ -2,6 +2,7 @@
 
 #include "mesher/LodCut.h"
 #include "mesher/LodMesh.h"
+#include "mesher/VertexMask.h"
 #include "mesher/VertexOcclusion.h"
 #include "scene/StoreLod.h"
 #include "scene/StoreSculpt.h"
@@ -278,27 +279,12 @@ struct StreamingScene::Impl {
             out->mesh = meshLodBrick(levelsOf, cut.shows(brick) ? cut : LodCut({brick}), brick, options.meshing);
             out->occlusion = vertexOcclusion(volume, out->mesh);
         }
-        out->masked = maskedVertices(out->mesh);
+        out->masked = maskedVertices(mask, out->mesh, scene.voxelSize());
         out->version = meshVersionLocked(key);
         out->hash = contentHash(out->mesh);
         for (uint8_t o : out->occlusion) out->hash = (out->hash ^ o) * 1099511628211ull;
         for (uint8_t m : out->masked) out->hash = (out->hash ^ m) * 1099511628211ull;
         out->bytes = sizeof(BrickMesh) + out->mesh.memoryBytes() + out->occlusion.capacity() + (out->pieces ? out->pieces->bytes : 0);
-        return out;
-    }
-
-    /// Per vertex of a mesh (world units), 1 where the mask keeps the level-0 voxel nearest to it; empty
-    /// when nothing is masked. Lock held.
-    std::vector<uint8_t> maskedVertices(const Mesh& mesh) const
-    {
-        if (!mask.any()) return {};
-        std::vector<uint8_t> out(mesh.vertexCount(), 0);
-        const double h = scene.voxelSize();
-        for (std::size_t i = 0; i < out.size(); ++i) {
-            IndexCoord voxel;
-            for (int a = 0; a < 3; ++a) voxel[std::size_t(a)] = int32_t(std::lround(mesh.positions[i][std::size_t(a)] / h));
-            out[i] = mask.masked(voxel) ? 1 : 0;
-        }
         return out;
     }
 
