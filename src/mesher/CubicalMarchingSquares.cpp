@@ -10,7 +10,11 @@
 // sharp feature on the face while the other pairing's do not; then the other pairing is. Segments are
 // linked into components; each component gets one inner vertex, the least-squares point of its
 // crossing planes (truncated SVD, clamped to the cell grown to the component's face points) when its
-// normals span the sharp angle, else the mean of its vertices, and is fanned from it.
+// normals span the sharp angle, else the mean of its vertices, and is fanned from it. A fan with a
+// triangle that folds back against the surface's normals at both of its loop points (a concave crease's
+// planes can put the point where) gets a centre nearer the mean point, or else the loop is triangulated
+// without one, its diagonals chosen so that none folds (never between points that may share a cell face,
+// so neighbouring cells cannot both draw one).
 // A face's segments and sharp points depend on the face alone, so neighbouring cells agree on them
 // and the welded mesh is watertight.
 //
@@ -27,6 +31,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <optional>
 #include <stdexcept>
 #include <vector>
@@ -288,6 +293,10 @@ struct CubicalMarchingSquaresMesher::Buffers {
                 const MaterialId* materials, std::size_t n, bool sharp)
     {
         if (sharp) keepFanOpen(centre, ids, n);
+        if (foldsOfFan(centre, ids, n) > 0) {
+            // Nearer the mean point first, then the loop alone, then a centre a little off the mean point.
+            if (!unfoldFan(centre, normalSum, ids, n, false) && triangulateLoop(ids, materials, n)) return;
+        }
         const double length = std::sqrt(normalSum[0] * normalSum[0] + normalSum[1] * normalSum[1] + normalSum[2] * normalSum[2]);
         const double scale = length > 0.0 ? 1.0 / length : 0.0;
         const uint32_t c = addVertex(kUnsharedVertex, {float(centre[0]), float(centre[1]), float(centre[2])},
@@ -343,6 +352,126 @@ struct CubicalMarchingSquaresMesher::Buffers {
             }
         }
     }
+    /// Whether a triangle folds against the surface: its normal lies more than 120 degrees from the
+    /// surface's normals at all of `loopPoints` (at one only, a fan at a convex corner may lean so).
+    bool foldsAgainst(const std::array<double, 3>& c, uint32_t a, uint32_t b, std::initializer_list<uint32_t> loopPoints) const
+    {
+        const auto& p = chunk.mesh.positions;
+        const double ux = p[a][0] - c[0], uy = p[a][1] - c[1], uz = p[a][2] - c[2];
+        const double vx = p[b][0] - c[0], vy = p[b][1] - c[1], vz = p[b][2] - c[2];
+        const double x = uy * vz - uz * vy, y = uz * vx - ux * vz, z = ux * vy - uy * vx;
+        const double bound = -kFoldCosine * std::sqrt(x * x + y * y + z * z);
+        for (const uint32_t q : loopPoints) {
+            const auto& m = chunk.mesh.normals[q];
+            if (x * m[0] + y * m[1] + z * m[2] >= bound) return false;
+        }
+        return true;
+    }
+
+    /// The fan triangles from `centre` (as stored, a float) that fold.
+    int foldsOfFan(const std::array<double, 3>& centre, const uint32_t* ids, std::size_t n) const
+    {
+        const std::array<double, 3> c{float(centre[0]), float(centre[1]), float(centre[2])};
+        int folds = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const uint32_t a = ids[i], b = ids[i + 1 < n ? i + 1 : 0];
+            folds += foldsAgainst(c, a, b, {a, b});
+        }
+        return folds;
+    }
+
+    /// A fan that folds (at a concave crease the loop's mean point, or its sharp feature, can lie where
+    /// some triangles face back) gets another centre where none folds, if one is near: between it and the
+    /// loop's mean point, or (`offMean`) a fifth of a voxel at most off the mean point along the loop's
+    /// normal. Returns whether it found one.
+    bool unfoldFan(std::array<double, 3>& centre, const std::array<double, 3>& normalSum, const uint32_t* ids, std::size_t n,
+                   bool offMean) const
+    {
+        const auto& positions = chunk.mesh.positions;
+        std::array<double, 3> mean{};
+        for (std::size_t i = 0; i < n; ++i)
+            for (int a = 0; a < 3; ++a) mean[a] += positions[ids[i]][a] / double(n);
+        const double length = std::sqrt(normalSum[0] * normalSum[0] + normalSum[1] * normalSum[1] + normalSum[2] * normalSum[2]);
+        std::vector<std::array<double, 3>> tries;
+        if (!offMean)
+            for (double s : {0.25, 0.5, 0.75, 1.0})
+                tries.push_back({centre[0] + s * (mean[0] - centre[0]), centre[1] + s * (mean[1] - centre[1]), centre[2] + s * (mean[2] - centre[2])});
+        if (offMean && length > 0.0)
+            for (double t : {-0.05, 0.05, -0.1, 0.1, -0.2, 0.2}) {
+                const double d = t * voxelSize / length;
+                tries.push_back({mean[0] + d * normalSum[0], mean[1] + d * normalSum[1], mean[2] + d * normalSum[2]});
+            }
+        for (const auto& at : tries)
+            if (foldsOfFan(at, ids, n) == 0) {
+                centre = at;
+                return true;
+            }
+        return false;
+    }
+
+    /// Triangulates a loop of one material without an inner vertex, choosing the diagonals (dynamic
+    /// programming over the loop) so that the fewest triangles fold, then the triangles best face the
+    /// loop's normals. A diagonal between two points that may share a cell face (an equal coordinate)
+    /// is never drawn: the cell beside could draw it too. Returns false, adding nothing, when the loop
+    /// has several materials, no triangulation avoids such diagonals, or the best still folds.
+    bool triangulateLoop(const uint32_t* ids, const MaterialId* materials, std::size_t n)
+    {
+        if (n < 4 || n > 24) return false;
+        for (std::size_t i = 1; i < n; ++i)
+            if (materials[i] != materials[0]) return false;
+        const auto& p = chunk.mesh.positions;
+        const auto& normals = chunk.mesh.normals;
+        const auto mayShareFace = [&](uint32_t a, uint32_t b) { return p[a][0] == p[b][0] || p[a][1] == p[b][1] || p[a][2] == p[b][2]; };
+        constexpr double kInvalid = 1e30, kFold = 1e6;
+        const auto triangleCost = [&](std::size_t i, std::size_t k, std::size_t j) {
+            const uint32_t a = ids[i], b = ids[k], c = ids[j];
+            const double ux = p[b][0] - p[a][0], uy = p[b][1] - p[a][1], uz = p[b][2] - p[a][2];
+            const double vx = p[c][0] - p[a][0], vy = p[c][1] - p[a][1], vz = p[c][2] - p[a][2];
+            const double x = uy * vz - uz * vy, y = uz * vx - ux * vz, z = ux * vy - uy * vx;
+            const double area = std::sqrt(x * x + y * y + z * z);
+            if (area < minFanDoubledArea) return kInvalid;
+            double cost = 0.0;
+            for (const uint32_t q : {a, b, c}) {
+                const double d = (x * normals[q][0] + y * normals[q][1] + z * normals[q][2]) / area;
+                cost += (d < -kFoldCosine ? kFold : 0.0) + (1.0 - d);
+            }
+            return cost;
+        };
+        // best[i][j]: the polygon ids[i..j] closed by the edge (i, j), which is a loop edge for (0, n-1)
+        // and a diagonal otherwise.
+        std::vector<double> best(n * n, 0.0);
+        std::vector<uint8_t> split(n * n, 0);
+        for (std::size_t span = 2; span < n; ++span)
+            for (std::size_t i = 0; i + span < n; ++i) {
+                const std::size_t j = i + span;
+                double& out = best[i * n + j];
+                out = kInvalid;
+                if (!(i == 0 && j == n - 1) && mayShareFace(ids[i], ids[j])) continue;
+                for (std::size_t k = i + 1; k < j; ++k) {
+                    const double c = best[i * n + k] + best[k * n + j] + triangleCost(i, k, j);
+                    if (c < out) {
+                        out = c;
+                        split[i * n + j] = uint8_t(k);
+                    }
+                }
+            }
+        if (best[n - 1] >= kFold) return false;
+        Mesh& mesh = chunk.mesh;
+        std::vector<std::pair<std::size_t, std::size_t>> stack{{0, n - 1}};
+        while (!stack.empty()) {
+            const auto [i, j] = stack.back();
+            stack.pop_back();
+            if (j - i < 2) continue;
+            const std::size_t k = split[i * n + j];
+            mesh.triangles.push_back({ids[i], ids[k], ids[j]});
+            mesh.triangleMaterials.push_back(materials[0]);
+            stack.push_back({i, k});
+            stack.push_back({k, j});
+        }
+        return true;
+    }
+
+    double voxelSize = 1.0;         // world units; set by the mesher
     double minFanDoubledArea = 0.0; // world units squared; set by the mesher from its voxel size
     double minFanSpacing = 0.0;     // world units: the least distance of a fan's vertex from its loop
 
@@ -1371,6 +1500,7 @@ CubicalMarchingSquaresMesher::CubicalMarchingSquaresMesher(double voxelSize, dou
     // Ten times analyzeTopology's zero-area bound, so a fan it accepts passes that test after rounding.
     buffers_->minFanDoubledArea = 10.0 * kMergeDistanceVoxels * kMergeDistanceVoxels * voxelSize * voxelSize;
     buffers_->minFanSpacing = kFeatureInsetVoxels * voxelSize;
+    buffers_->voxelSize = voxelSize;
 }
 
 CubicalMarchingSquaresMesher::~CubicalMarchingSquaresMesher() = default;
