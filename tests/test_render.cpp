@@ -203,7 +203,7 @@ TEST_CASE("render: a painted region shows its material's colour, the rest the de
     for (int y = 0; y < size; ++y)
         for (int x = 0; x < size; ++x) {
             const auto p = onPlane(view.camera, x, y, size, 8.0);
-            if (std::fabs(p[0]) < 3.0 || std::fabs(p[0]) > 36.0 || std::fabs(p[1]) > 36.0) continue; // edges, the seam
+            if (std::fabs(p[0]) < 7.0 || std::fabs(p[0]) > 36.0 || std::fabs(p[1]) > 36.0) continue; // edges, the seam (blended 2.5 voxels each side)
             const Material& expected = p[0] < 0.0 ? paint : grey;
             const uint8_t* px = image.pixel(x, y);
             // Light, occlusion and texture scale every channel alike: the chromaticity is the material's.
@@ -236,6 +236,50 @@ TEST_CASE("render: a painted region shows its material's colour, the rest the de
     const uint8_t* soft = t.pixel(3 * size / 4, size / 2);
     CHECK(hard[0] > hard[2]);
     CHECK(int(hard[0]) - int(hard[2]) > int(soft[0]) - int(soft[2]));
+    requireNoValidationMessages(*context);
+}
+
+TEST_CASE("render: paint's boundary colour changes continuously across a soft stroke's edge, not in one-voxel steps", "[render][paint]")
+{
+    auto context = validatedContext();
+    Volume volume = slab();
+    runStrokeScript(volume, parseStrokeScript(R"({"materials": [{"name": "red", "color": [0.8, 0.1, 0.1]}],
+        "ops": [{"mode": "paint", "material": "red", "falloff": "linear", "brush": {"shape": "sphere", "radius": 30}, "at": [0, 0, 8]}]})"));
+    Renderer renderer(*context);
+    uploadVolume(renderer, volume, cmsOptions());
+    ShadingOptions flat;
+    flat.ambientOcclusion = false;
+    renderer.setShading(flat);
+    const int size = 256;
+    OffscreenTarget target(*context, size, size);
+    RenderView view{frontCamera(120.0), &target, {}};
+    renderer.render({view});
+    const Image image = target.colour();
+    // Redness (the red channel's share) along rows through the stroke's middle, from its centre out past
+    // its rim: it falls from the paint's to the default's, in steps no larger than a fifth of the way.
+    const Material& paint = volume.materials().at(*volume.materials().find("red"));
+    const Material& grey = volume.materials().at(1);
+    const auto share = [](double r, double g, double b) { return r / (r + g + b); };
+    const double redShare = share(paint.color[0], paint.color[1], paint.color[2]), greyShare = share(grey.color[0], grey.color[1], grey.color[2]);
+    const double total = redShare - greyShare;
+    double largestStep = 0.0;
+    int rows = 0;
+    for (int y = size / 2 - 8; y <= size / 2 + 8; y += 4, ++rows) {
+        std::vector<double> along;
+        for (int x = size / 2; x < size; ++x) {
+            const auto p = onPlane(view.camera, x, y, size, 8.0);
+            if (p[0] > 36.0) break;
+            const uint8_t* px = image.pixel(x, y);
+            along.push_back(share(srgbToLinear(px[0]), srgbToLinear(px[1]), srgbToLinear(px[2])));
+        }
+        REQUIRE(along.size() > 60);
+        INFO("row " << y << ": centre " << along.front() << ", end " << along.back() << " (paint " << redShare << ", default " << greyShare << ")");
+        CHECK(std::fabs(along.front() - redShare) < 0.1 * total);
+        CHECK(std::fabs(along.back() - greyShare) < 0.1 * total);
+        for (std::size_t i = 1; i < along.size(); ++i) largestStep = std::max(largestStep, std::fabs(along[i] - along[i - 1]));
+    }
+    INFO("largest step between neighbouring pixels: " << largestStep / total << " of the way");
+    CHECK(largestStep < 0.2 * total);
     requireNoValidationMessages(*context);
 }
 

@@ -494,6 +494,8 @@ TEST_CASE("after stamps anywhere (across brick faces too), every kept mesh is th
             CHECK(kept->mesh.triangles == fresh->mesh.triangles);
             CHECK(kept->mesh.triangleMaterials == fresh->mesh.triangleMaterials);
             CHECK(kept->occlusion == fresh->occlusion);
+            CHECK(kept->blend == fresh->blend);
+            CHECK(kept->masked == fresh->masked);
         }
     };
     meshAll();

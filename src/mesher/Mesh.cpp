@@ -115,8 +115,8 @@ Mesh weldChunks(const std::vector<MeshChunk>& chunks)
 
 Mesh weldChunks(const std::vector<const MeshChunk*>& chunks) { return weldChunks(chunks, {}, nullptr); }
 
-Mesh weldChunks(const std::vector<const MeshChunk*>& chunks, const std::vector<const std::vector<uint8_t>*>& values,
-                std::vector<uint8_t>* welded)
+Mesh weldChunks(const std::vector<const MeshChunk*>& chunks, const std::vector<const std::vector<uint32_t>*>& values,
+                std::vector<uint32_t>* welded)
 {
     if (welded) {
         if (values.size() != chunks.size()) throw std::invalid_argument("weldChunks: one value array per chunk");

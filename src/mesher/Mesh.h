@@ -77,9 +77,9 @@ bool identical(const MeshChunk& a, const MeshChunk& b);
 /// touches it) occurs in that chunk only.
 Mesh weldChunks(const std::vector<MeshChunk>& chunks);
 Mesh weldChunks(const std::vector<const MeshChunk*>& chunks);
-/// The same, carrying a byte per vertex along: `values[c][v]` of chunk c's vertex v goes into `welded`
-/// at the welded vertex (a shared vertex takes its first holder's).
-Mesh weldChunks(const std::vector<const MeshChunk*>& chunks, const std::vector<const std::vector<uint8_t>*>& values,
-                std::vector<uint8_t>* welded);
+/// The same, carrying a 32-bit value per vertex along: `values[c][v]` of chunk c's vertex v goes into
+/// `welded` at the welded vertex (a shared vertex takes its first holder's).
+Mesh weldChunks(const std::vector<const MeshChunk*>& chunks, const std::vector<const std::vector<uint32_t>*>& values,
+                std::vector<uint32_t>* welded);
 
 } // namespace vdbclay

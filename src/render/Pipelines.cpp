@@ -47,16 +47,17 @@ VkPipeline createPipeline(VkDevice device, VkRenderPass pass, VkPipelineLayout l
     stages[1] = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0, VK_SHADER_STAGE_FRAGMENT_BIT,
                  shape.frag, "main", nullptr};
     VkVertexInputBindingDescription binding{0, sizeof(GpuVertex), VK_VERTEX_INPUT_RATE_VERTEX};
-    VkVertexInputAttributeDescription attributes[3] = {
+    VkVertexInputAttributeDescription attributes[4] = {
         {0, 0, VK_FORMAT_R32G32B32_SFLOAT, uint32_t(offsetof(GpuVertex, position))},
         {1, 0, VK_FORMAT_R32G32B32_SFLOAT, uint32_t(offsetof(GpuVertex, normal))},
         {2, 0, VK_FORMAT_R32_UINT, uint32_t(offsetof(GpuVertex, packed))},
+        {3, 0, VK_FORMAT_R32_UINT, uint32_t(offsetof(GpuVertex, blend))},
     };
     VkPipelineVertexInputStateCreateInfo input{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
     if (shape.meshInput) {
         input.vertexBindingDescriptionCount = 1;
         input.pVertexBindingDescriptions = &binding;
-        input.vertexAttributeDescriptionCount = 3;
+        input.vertexAttributeDescriptionCount = 4;
         input.pVertexAttributeDescriptions = attributes;
     }
     VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
@@ -130,7 +131,7 @@ Pipelines::Pipelines(const VulkanContext& context, VkRenderPass renderPass) : co
     bindings[1].binding = 1;
     bindings[1].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     bindings[1].descriptorCount = 1;
-    bindings[1].stageFlags = VK_SHADER_STAGE_FRAGMENT_BIT;
+    bindings[1].stageFlags = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT; // vertices blend materials' colours
     bindings[2].binding = 2;
     bindings[2].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
     bindings[2].descriptorCount = 1;

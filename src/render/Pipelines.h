@@ -11,6 +11,7 @@ struct GpuVertex {
     float position[3];
     float normal[3];
     uint32_t packed;
+    uint32_t blend; // MaterialBlend | 1 << 31, or 0: no blend
 };
 
 class Pipelines {

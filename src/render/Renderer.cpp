@@ -517,7 +517,7 @@ std::vector<std::string> Renderer::setMaterials(const MaterialTable& materials, 
 
 bool Renderer::picturesReady() const { return impl_->picturesReady(); }
 
-void Renderer::setChunk(ChunkId id, const Mesh& mesh, int level, const std::vector<uint8_t>* occlusion, const std::vector<uint8_t>* masked)
+void Renderer::setChunk(ChunkId id, const Mesh& mesh, int level, const VertexShading& shading)
 {
     impl_->removals.erase(id);
     if (mesh.triangles.empty()) {
@@ -543,9 +543,11 @@ void Renderer::setChunk(ChunkId id, const Mesh& mesh, int level, const std::vect
             p.hi[a] = std::max(p.hi[a], v.position[a]);
         }
         const uint32_t material = i < mesh.materials.size() ? mesh.materials[i] : 1u;
-        const uint32_t open = occlusion && i < occlusion->size() ? (*occlusion)[i] : 255u;
-        const uint32_t maskBit = masked && i < masked->size() && (*masked)[i] ? 1u << 23 : 0u;
+        const uint32_t open = shading.occlusion && i < shading.occlusion->size() ? (*shading.occlusion)[i] : 255u;
+        const uint32_t maskBit = shading.masked && i < shading.masked->size() && (*shading.masked)[i] ? 1u << 23 : 0u;
         v.packed = material | levelBits | maskBit | (open << 24);
+        // Bit 31: the vertex carries a blend (its colour mixes in the other material's by the share).
+        v.blend = shading.blend && i < shading.blend->size() ? ((*shading.blend)[i] & 0xffffffu) | (1u << 31) : 0u;
     }
     // The shaders take a triangle's material from its first (provoking) vertex: each triangle starts at
     // a corner of its own material (the meshers' triangleMaterials follow material transitions inside a

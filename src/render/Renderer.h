@@ -35,6 +35,13 @@ struct RenderView {
     std::array<int, 4> viewport{0, 0, 0, 0}; // x, y, width, height in pixels; zero size: the whole target
 };
 
+/// What a chunk's vertices may carry beside the mesh (Renderer::setChunk): each null, or one value per vertex.
+struct VertexShading {
+    const std::vector<uint8_t>* occlusion = nullptr; // 0 = fully occluded .. 255 = open: creases darken (shaded view)
+    const std::vector<uint8_t>* masked = nullptr;    // non-zero where the sculptor's mask keeps the voxel: darkened in every look
+    const std::vector<uint32_t>* blend = nullptr;    // MaterialBlend: colours blend with the material beside
+};
+
 class Renderer {
 public:
     Renderer(VulkanContext& context, const RendererOptions& options = {});
@@ -54,11 +61,9 @@ public:
     /// Whether pictures asked for with PictureLoading::Background are read and wait to be installed.
     bool picturesReady() const;
     /// Queues `mesh` as chunk `id` (a new chunk, or a new version of one); uploaded by the next frame.
-    /// `level` is what the lod view shows; `occlusion` (optional, one per vertex, 0 = fully occluded,
-    /// 255 = open) darkens creases in the shaded view; `masked` (optional, one per vertex, non-zero where
-    /// the sculptor's mask keeps the voxel) darkens the masked surface in every shading. `level` < 128.
-    void setChunk(ChunkId id, const Mesh& mesh, int level = 0, const std::vector<uint8_t>* occlusion = nullptr,
-                  const std::vector<uint8_t>* masked = nullptr);
+    /// `level` (< 128) is what the lod view shows. Without a blend, a triangle shows its own material
+    /// alone; with one, each vertex's colour is its own and the other material's, mixed by the share.
+    void setChunk(ChunkId id, const Mesh& mesh, int level = 0, const VertexShading& shading = VertexShading());
     /// Frees the chunk's buffers at the next frame (its brick was evicted or it became empty).
     void removeChunk(ChunkId id);
     bool hasChunk(ChunkId id) const;

@@ -1,6 +1,7 @@
 #include "render/SceneChunks.h"
 
 #include "mesher/VertexMask.h"
+#include "mesher/VertexMaterialBlend.h"
 #include "mesher/VertexOcclusion.h"
 #include "render/Framing.h"
 
@@ -54,7 +55,8 @@ VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOp
             }
         const std::vector<uint8_t> occlusion = vertexOcclusion(volume, chunk.mesh);
         const std::vector<uint8_t> masked = maskedVertices(volume.mask(), chunk.mesh, volume.voxelSize());
-        renderer.setChunk(leafChunkId(chunk.leafOrigin), chunk.mesh, 0, &occlusion, &masked);
+        const std::vector<uint32_t> blend = vertexMaterialBlend(volume, chunk.mesh);
+        renderer.setChunk(leafChunkId(chunk.leafOrigin), chunk.mesh, 0, {&occlusion, &masked, &blend});
         ++out.chunks;
         out.triangles += chunk.mesh.triangles.size();
     }
@@ -96,7 +98,7 @@ StreamedSceneChunks::SyncReport StreamedSceneChunks::sync(const StreamingScene& 
             continue;
         }
         const ChunkId id = it != uploaded_.end() ? it->second.id : nextId_++;
-        renderer.setChunk(id, m->mesh, key.level, &m->occlusion, &m->masked);
+        renderer.setChunk(id, m->mesh, key.level, {&m->occlusion, &m->masked, &m->blend});
         uploaded_[key] = {id, m->version, m->hash};
         ++report.uploaded;
     }

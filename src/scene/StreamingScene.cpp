@@ -3,6 +3,7 @@
 #include "mesher/LodCut.h"
 #include "mesher/LodMesh.h"
 #include "mesher/VertexMask.h"
+#include "mesher/VertexMaterialBlend.h"
 #include "mesher/VertexOcclusion.h"
 #include "scene/StoreLod.h"
 #include "scene/StoreSculpt.h"
@@ -59,6 +60,7 @@ constexpr int32_t kOcclusionReach = 5;
 struct LeafMesh {
     MeshChunk chunk;
     std::vector<uint8_t> occlusion; // per vertex of the chunk
+    std::vector<uint32_t> blend;    // per vertex of the chunk (vertexMaterialBlend)
 };
 
 } // namespace
@@ -263,28 +265,44 @@ struct StreamingScene::Impl {
         const Volume& volume = *levelsOf[std::size_t(key.level)];
         if (inPieces && cut.shows(brick)) {
             out->pieces = remeshPieces(key, levelsOf, old, inputs);
+            // Each piece's occlusion (low byte) and blend (the three above) welded along as one value.
             std::vector<const MeshChunk*> chunks;
-            std::vector<const std::vector<uint8_t>*> occlusion;
-            for (const auto& leaf : out->pieces->leaves) {
-                chunks.push_back(&leaf->chunk);
-                occlusion.push_back(&leaf->occlusion);
+            std::vector<std::vector<uint32_t>> shading(out->pieces->leaves.size());
+            std::vector<const std::vector<uint32_t>*> shadingOf;
+            for (std::size_t i = 0; i < out->pieces->leaves.size(); ++i) {
+                const LeafMesh& leaf = *out->pieces->leaves[i];
+                chunks.push_back(&leaf.chunk);
+                shading[i].resize(leaf.occlusion.size());
+                for (std::size_t v = 0; v < shading[i].size(); ++v) shading[i][v] = leaf.occlusion[v] | leaf.blend[v] << 8;
+                shadingOf.push_back(&shading[i]);
             }
-            out->mesh = weldChunks(chunks, occlusion, &out->occlusion);
-            const std::size_t welded = out->mesh.vertexCount();
+            std::vector<uint32_t> welded;
+            out->mesh = weldChunks(chunks, shadingOf, &welded);
+            out->occlusion.resize(welded.size());
+            out->blend.resize(welded.size());
+            for (std::size_t v = 0; v < welded.size(); ++v) {
+                out->occlusion[v] = uint8_t(welded[v] & 0xffu);
+                out->blend[v] = welded[v] >> 8;
+            }
             appendLodTransitions(levelsOf, cut, brick, out->mesh);
-            const std::vector<uint8_t> transitions = vertexOcclusion(volume, out->mesh, welded);
+            const std::vector<uint8_t> transitions = vertexOcclusion(volume, out->mesh, welded.size());
             out->occlusion.insert(out->occlusion.end(), transitions.begin(), transitions.end());
+            const std::vector<uint32_t> transitionBlend = vertexMaterialBlend(volume, out->mesh, welded.size());
+            out->blend.insert(out->blend.end(), transitionBlend.begin(), transitionBlend.end());
         } else {
             // A brick outside the last frame's cut (asked for directly) is meshed alone at its level.
             out->mesh = meshLodBrick(levelsOf, cut.shows(brick) ? cut : LodCut({brick}), brick, options.meshing);
             out->occlusion = vertexOcclusion(volume, out->mesh);
+            out->blend = vertexMaterialBlend(volume, out->mesh);
         }
         out->masked = maskedVertices(mask, out->mesh, scene.voxelSize());
         out->version = meshVersionLocked(key);
         out->hash = contentHash(out->mesh);
         for (uint8_t o : out->occlusion) out->hash = (out->hash ^ o) * 1099511628211ull;
         for (uint8_t m : out->masked) out->hash = (out->hash ^ m) * 1099511628211ull;
-        out->bytes = sizeof(BrickMesh) + out->mesh.memoryBytes() + out->occlusion.capacity() + (out->pieces ? out->pieces->bytes : 0);
+        for (uint32_t b : out->blend) out->hash = (out->hash ^ b) * 1099511628211ull;
+        out->bytes = sizeof(BrickMesh) + out->mesh.memoryBytes() + out->occlusion.capacity() + out->masked.capacity() +
+                     out->blend.capacity() * sizeof(uint32_t) + (out->pieces ? out->pieces->bytes : 0);
         return out;
     }
 
@@ -394,6 +412,7 @@ struct StreamingScene::Impl {
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
                 auto leaf = std::make_shared<LeafMesh>();
                 leaf->occlusion = vertexOcclusion(volume, fresh[i].mesh);
+                leaf->blend = vertexMaterialBlend(volume, fresh[i].mesh);
                 leaf->chunk = std::move(fresh[i]);
                 made[i] = std::move(leaf);
             }
@@ -405,7 +424,7 @@ struct StreamingScene::Impl {
         next->bytes = sizeof(BrickMeshPieces);
         for (const auto& leaf : next->leaves)
             next->bytes += sizeof(LeafMesh) + leaf->chunk.mesh.memoryBytes() + leaf->chunk.vertexKeys.capacity() * sizeof(uint64_t) +
-                           leaf->occlusion.capacity();
+                           leaf->occlusion.capacity() + leaf->blend.capacity() * sizeof(uint32_t);
         return next;
     }
 

@@ -148,8 +148,9 @@ public:
         Mesh mesh;
         std::vector<uint8_t> occlusion; // per vertex (vertexOcclusion)
         std::vector<uint8_t> masked;    // per vertex, 1 where the mask keeps its voxel; empty: none masked
+        std::vector<uint32_t> blend;    // per vertex (vertexMaterialBlend): the material beside its own, and its share
         uint64_t version = 0;
-        uint64_t hash = 0;  // of the mesh and its occlusion: equal meshes need no new upload
+        uint64_t hash = 0;  // of the mesh and its per-vertex shading: equal meshes need no new upload
         uint64_t bytes = 0; // what it takes in memory, its pieces included
         /// Once edits re-mesh the brick (its own or, for a coarse brick, finer ones beside it): the
         /// mesh per leaf, which the next re-mesh re-uses where no edit reached.

@@ -9,6 +9,8 @@ layout(location = 2) flat in uint material;
 layout(location = 3) flat in uint level;
 layout(location = 4) in float occlusion;
 layout(location = 5) in float masked;
+layout(location = 6) in vec3 blendedColour;
+layout(location = 7) in float blended;
 
 layout(push_constant) uniform Push {
     vec4 tint; // rgb, a = 1: a flat colour (wireframe lines)
@@ -79,6 +81,9 @@ void main()
     float ao = view.lightDir.w > 0.5 ? occlusion : 1.0;
     vec4 m0 = materials.entries[2u * material];
     vec4 m1 = materials.entries[2u * material + 1u];
+    // Where the mesh carries blends, colours run smoothly across material boundaries (a soft paint
+    // stroke's edge); the triangle's own material still picks the pattern or picture.
+    vec3 tint = mix(m0.rgb, blendedColour, blended);
 
     vec3 base;
     uint mode = view.mode.x;
@@ -109,10 +114,10 @@ void main()
         base = mix(vec3(0.15, 0.35, 0.95), vec3(0.95, 0.2, 0.15), t);
     } else if (m1.w > 0.5) {
         float footprint = view.eye.w * distance(view.eye.xyz, worldPosition) * m1.z;
-        base = m0.rgb * triplanarPicture(worldPosition * m1.z, n, m1.w - 1.0, footprint);
+        base = tint * triplanarPicture(worldPosition * m1.z, n, m1.w - 1.0, footprint);
     } else {
         float grain = triplanar(worldPosition * m1.z, n, m1.y);
-        base = m0.rgb * (0.82 + 0.36 * grain);
+        base = tint * (0.82 + 0.36 * grain);
     }
     vec3 colour = base * (0.28 * ao + 0.72 * diffuse * mix(1.0, ao, 0.5)) * mix(1.0, kMaskedShade, masked);
     if ((view.mode.y & 2u) != 0u && sdBrush(worldPosition) <= 0.0)

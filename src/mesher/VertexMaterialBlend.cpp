@@ -1,0 +1,85 @@
+#include "mesher/VertexMaterialBlend.h"
+
+#include "mesher/CellGrid.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace vdbclay {
+
+uint32_t MaterialBlend::pack(MaterialId other, double share)
+{
+    return uint32_t(other) | uint32_t(std::lround(std::clamp(share, 0.0, 1.0) * 255.0)) << 16;
+}
+
+std::vector<uint32_t> vertexMaterialBlend(const Volume& volume, const Mesh& mesh, std::size_t firstVertex)
+{
+    using namespace mesher_detail;
+    firstVertex = std::min(firstVertex, mesh.positions.size());
+    std::vector<uint32_t> out(mesh.positions.size() - firstVertex, 0);
+    const HermiteTree& tree = volume.impl().grid->constTree();
+    const double inv = 1.0 / volume.voxelSize();
+    constexpr int kSide = 5;          // lattice points per axis around the vertex
+    constexpr double kReach = 2.5;    // voxels: the tent's half width per axis
+    constexpr double kTrace = 0.15;   // shares below it count as none (above 1 - kTrace as all), smoothly
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(firstVertex, mesh.positions.size(), 512), [&](const auto& range) {
+        ConstAccessor acc(tree);
+        for (std::size_t v = range.begin(); v != range.end(); ++v) {
+            const MaterialId own = v < mesh.materials.size() ? mesh.materials[v] : kEmptyMaterial;
+            double p[3], weights[3][kSide];
+            int32_t first[3];
+            for (int a = 0; a < 3; ++a) {
+                p[a] = mesh.positions[v][std::size_t(a)] * inv;
+                first[a] = int32_t(std::lround(p[a])) - kSide / 2;
+                for (int k = 0; k < kSide; ++k) weights[a][k] = std::max(0.0, kReach - std::fabs(double(first[a] + k) - p[a]));
+            }
+            MaterialId m[kSide][kSide][kSide];
+            // Most vertices see their own material alone in the cube of 3 nearest them: nothing to blend.
+            bool mixed = false;
+            for (int i = 1; i < kSide - 1; ++i)
+                for (int j = 1; j < kSide - 1; ++j)
+                    for (int k = 1; k < kSide - 1; ++k) {
+                        m[i][j][k] = acc.getValue(Coord(first[0] + i, first[1] + j, first[2] + k)).id;
+                        mixed = mixed || (m[i][j][k] != own && m[i][j][k] != kEmptyMaterial);
+                    }
+            if (!mixed) continue;
+            double ownWeight = 0.0;
+            MaterialId others[kSide * kSide * kSide];
+            double otherWeights[kSide * kSide * kSide];
+            int count = 0;
+            for (int i = 0; i < kSide; ++i)
+                for (int j = 0; j < kSide; ++j)
+                    for (int k = 0; k < kSide; ++k) {
+                        const double w = weights[0][i] * weights[1][j] * weights[2][k];
+                        if (w <= 0.0) continue;
+                        const bool inner = i > 0 && j > 0 && k > 0 && i < kSide - 1 && j < kSide - 1 && k < kSide - 1;
+                        const MaterialId id = inner ? m[i][j][k] : acc.getValue(Coord(first[0] + i, first[1] + j, first[2] + k)).id;
+                        if (id == kEmptyMaterial) continue;
+                        if (id == own) {
+                            ownWeight += w;
+                            continue;
+                        }
+                        int slot = 0;
+                        while (slot < count && others[slot] != id) ++slot;
+                        if (slot == count) {
+                            others[count] = id;
+                            otherWeights[count++] = 0.0;
+                        }
+                        otherWeights[slot] += w;
+                    }
+            if (count == 0) continue;
+            const int heaviest = int(std::max_element(otherWeights, otherWeights + count) - otherWeights);
+            // A trace of the other material leaves the vertex its own colour: a large triangle of a flat
+            // face beside a boundary would otherwise carry the trace across its whole width.
+            const double share = otherWeights[heaviest] / (ownWeight + otherWeights[heaviest]);
+            const double t = std::clamp((share - kTrace) / (1.0 - 2.0 * kTrace), 0.0, 1.0);
+            out[v - firstVertex] = MaterialBlend::pack(others[heaviest], t * t * (3.0 - 2.0 * t));
+        }
+    });
+    return out;
+}
+
+} // namespace vdbclay
