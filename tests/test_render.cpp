@@ -244,7 +244,7 @@ TEST_CASE("render: paint's boundary colour changes continuously across a soft st
     auto context = validatedContext();
     Volume volume = slab();
     runStrokeScript(volume, parseStrokeScript(R"({"materials": [{"name": "red", "color": [0.8, 0.1, 0.1]}],
-        "ops": [{"mode": "paint", "material": "red", "falloff": "linear", "brush": {"shape": "sphere", "radius": 30}, "at": [0, 0, 8]}]})"));
+        "ops": [{"mode": "paint", "material": "red", "falloff": [0, 0.5, 1, 1, 1], "brush": {"shape": "sphere", "radius": 30}, "at": [0, 0, 8]}]})"));
     Renderer renderer(*context);
     uploadVolume(renderer, volume, cmsOptions());
     ShadingOptions flat;
@@ -256,7 +256,8 @@ TEST_CASE("render: paint's boundary colour changes continuously across a soft st
     renderer.render({view});
     const Image image = target.colour();
     // Redness (the red channel's share) along rows through the stroke's middle, from its centre out past
-    // its rim: it falls from the paint's to the default's, in steps no larger than a fifth of the way.
+    // its rim: it falls from the paint's to the default's in steps no larger than a quarter of the way
+    // (pixels are a third of a voxel apart; painted voxels drawn in their own colour step all the way).
     const Material& paint = volume.materials().at(*volume.materials().find("red"));
     const Material& grey = volume.materials().at(1);
     const auto share = [](double r, double g, double b) { return r / (r + g + b); };
@@ -279,7 +280,7 @@ TEST_CASE("render: paint's boundary colour changes continuously across a soft st
         for (std::size_t i = 1; i < along.size(); ++i) largestStep = std::max(largestStep, std::fabs(along[i] - along[i - 1]));
     }
     INFO("largest step between neighbouring pixels: " << largestStep / total << " of the way");
-    CHECK(largestStep < 0.2 * total);
+    CHECK(largestStep < 0.25 * total);
     requireNoValidationMessages(*context);
 }
 

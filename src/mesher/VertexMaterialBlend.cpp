@@ -23,19 +23,28 @@ std::vector<uint32_t> vertexMaterialBlend(const Volume& volume, const Mesh& mesh
     const HermiteTree& tree = volume.impl().grid->constTree();
     const double inv = 1.0 / volume.voxelSize();
     constexpr int kSide = 5;          // lattice points per axis around the vertex
-    constexpr double kReach = 2.5;    // voxels: the tent's half width per axis
+    constexpr double kAlong = 2.5;    // voxels: the kernel's reach along the surface
+    constexpr double kAcross = 1.0;   // voxels: its reach across it (material beneath the surface stays hidden)
     constexpr double kTrace = 0.15;   // shares below it count as none (above 1 - kTrace as all), smoothly
     tbb::parallel_for(tbb::blocked_range<std::size_t>(firstVertex, mesh.positions.size(), 512), [&](const auto& range) {
         ConstAccessor acc(tree);
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
             const MaterialId own = v < mesh.materials.size() ? mesh.materials[v] : kEmptyMaterial;
-            double p[3], weights[3][kSide];
+            double p[3], n[3] = {0.0, 0.0, 0.0};
             int32_t first[3];
             for (int a = 0; a < 3; ++a) {
                 p[a] = mesh.positions[v][std::size_t(a)] * inv;
                 first[a] = int32_t(std::lround(p[a])) - kSide / 2;
-                for (int k = 0; k < kSide; ++k) weights[a][k] = std::max(0.0, kReach - std::fabs(double(first[a] + k) - p[a]));
+                if (v < mesh.normals.size()) n[a] = mesh.normals[v][std::size_t(a)];
             }
+            // A disc-shaped tent: full at the vertex, falling to zero kAlong away along the surface and
+            // kAcross away across it.
+            const auto weight = [&](int i, int j, int k) {
+                const double d[3] = {first[0] + i - p[0], first[1] + j - p[1], first[2] + k - p[2]};
+                const double across = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+                const double along = std::sqrt(std::max(0.0, d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - across * across));
+                return std::max(0.0, 1.0 - std::fabs(across) / kAcross) * std::max(0.0, 1.0 - along / kAlong);
+            };
             MaterialId m[kSide][kSide][kSide];
             // Most vertices see their own material alone in the cube of 3 nearest them: nothing to blend.
             bool mixed = false;
@@ -53,7 +62,7 @@ std::vector<uint32_t> vertexMaterialBlend(const Volume& volume, const Mesh& mesh
             for (int i = 0; i < kSide; ++i)
                 for (int j = 0; j < kSide; ++j)
                     for (int k = 0; k < kSide; ++k) {
-                        const double w = weights[0][i] * weights[1][j] * weights[2][k];
+                        const double w = weight(i, j, k);
                         if (w <= 0.0) continue;
                         const bool inner = i > 0 && j > 0 && k > 0 && i < kSide - 1 && j < kSide - 1 && k < kSide - 1;
                         const MaterialId id = inner ? m[i][j][k] : acc.getValue(Coord(first[0] + i, first[1] + j, first[2] + k)).id;
