@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <random>
 #include <tuple>
 
 using namespace vdbclay;
@@ -188,6 +189,39 @@ TEST_CASE("mask: a masked region is bit-identical after a brush of every mode ov
         run(plain, json::array({o}));
         CHECK_FALSE(changedBlocks(plain, ball()).empty());
         CHECK_FALSE(changedBlocks(v, masked).empty());
+    }
+}
+
+TEST_CASE("mask: seeded random masks and brushes, on and off the lattice, inverted or not, keep every masked voxel and crossing", "[sculpt][mask]")
+{
+    for (unsigned seed = 1; seed <= 6; ++seed) {
+        std::mt19937 rng(seed);
+        std::uniform_real_distribution<double> u(-1.0, 1.0);
+        const auto onSurface = [&](double r, bool lattice) {
+            std::array<double, 3> p{u(rng), u(rng), u(rng)};
+            const double n = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) + 1e-9;
+            for (double& c : p) c = c / n * r;
+            if (lattice)
+                for (double& c : p) c = std::round(c);
+            return p;
+        };
+        Volume v = ball();
+        json masks = json::array();
+        for (int i = 0; i < 3; ++i) masks.push_back(op(i == 2 ? "unmask" : "mask", 3.0 + 4.0 * std::fabs(u(rng)), onSurface(16.0, i == 0)));
+        if (seed % 2 == 0) masks.push_back(json{{"mode", "mask_invert"}});
+        run(v, masks);
+        const std::vector<json> modes = everyMode();
+        for (int k = 0; k < 4; ++k) {
+            json o = modes[std::size_t(rng() % modes.size())];
+            if (o.contains("at")) o["at"] = onSurface(16.0 + 2.0 * u(rng), k % 2 == 0);
+            INFO("seed " << seed << ", op " << o.dump());
+            const Volume before = v.clone();
+            run(v, json::array({o}));
+            REQUIRE(checkInvariants(v).empty());
+            const MaskedDifference d = maskedDifference(before, v, v.mask(), -30, 30);
+            CHECK(d.voxels == 0);
+            CHECK(d.edges == 0);
+        }
     }
 }
 
