@@ -161,6 +161,20 @@ TEST_CASE("mask: voxels masked, freed, inverted and cleared, and its bytes read 
     CHECK_THROWS_AS(VoxelMask::decode(count), MaskFormatError);
     m.clear();
     CHECK_FALSE(m.any());
+
+    // Whole leaves at once, as a mask brush marks the leaves inside it.
+    m.setLeaf({16, -8, 0}, true);
+    CHECK(m.masked({23, -1, 7}));
+    CHECK(m.masked({16, -8, 0}));
+    CHECK_FALSE(m.masked({24, -1, 7}));
+    m.set({20, -4, 4}, false);
+    CHECK_FALSE(m.masked({20, -4, 4}));
+    m.setLeaf({16, -8, 0}, false);
+    CHECK_FALSE(m.any());
+    m.invert();
+    m.setLeaf({0, 0, 0}, false);
+    CHECK_FALSE(m.masked({7, 7, 7}));
+    CHECK(m.masked({8, 7, 7}));
 }
 
 TEST_CASE("mask: a masked region is bit-identical after a brush of every mode over it, and the rest changes", "[sculpt][mask]")

@@ -239,7 +239,7 @@ uint64_t paintMask(VoxelMask& mask, const SdfField& field, double voxelSize, boo
     }
     double leafCount = 1.0;
     for (int a = 0; a < 3; ++a) leafCount *= double(hi[a] - lo[a]) / kLeafDim + 2.0;
-    if (leafCount > kMaxMaskBrushLeaves) throw std::invalid_argument("the mask brush spans too many voxels (more than 1e10)");
+    if (leafCount > kMaxMaskBrushLeaves) throw std::invalid_argument("the mask brush spans too many leaves");
     // A leaf whose centre lies farther from the surface than its half diagonal is wholly on one side.
     const double halfDiagonal = 0.5 * std::sqrt(3.0) * (kLeafDim - 1) * voxelSize * field.lipschitz() + 1e-9;
     uint64_t tested = 0;
@@ -247,14 +247,14 @@ uint64_t paintMask(VoxelMask& mask, const SdfField& field, double voxelSize, boo
         const Vec3d centre = (Vec3d(o.x(), o.y(), o.z()) + Vec3d(0.5 * (kLeafDim - 1))) * voxelSize;
         const double d = field.distance(centre);
         if (d > halfDiagonal) return;
-        const bool whole = d < -halfDiagonal;
+        if (d < -halfDiagonal) {
+            mask.setLeaf(indexOf(o), masked);
+            return;
+        }
         for (Index n = 0; n < Index(kLeafVoxels); ++n) {
             const Coord v = HermiteLeaf::offsetToLocalCoord(n) + o;
-            if (!whole) {
-                ++tested;
-                if (field.distance(Vec3d(v.x(), v.y(), v.z()) * voxelSize) > 0.0) continue;
-            }
-            mask.set(indexOf(v), masked);
+            ++tested;
+            if (field.distance(Vec3d(v.x(), v.y(), v.z()) * voxelSize) <= 0.0) mask.set(indexOf(v), masked);
         }
     });
     return tested;

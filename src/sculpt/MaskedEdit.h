@@ -39,7 +39,8 @@ private:
 /// Returns the voxels tested one by one (whole leaves inside or outside are decided at once).
 uint64_t paintMask(VoxelMask& mask, const SdfField& field, double voxelSize, bool masked);
 
-/// The most leaves a mask brush's bounds may span.
-constexpr double kMaxMaskBrushLeaves = 2e7;
+/// The most leaves a mask brush's bounds may span: a box 800 voxels a side (the mask it paints is kept
+/// whole in memory, 64 bytes a leaf).
+constexpr double kMaxMaskBrushLeaves = 1e6;
 
 } // namespace vdbclay

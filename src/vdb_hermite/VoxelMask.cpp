@@ -60,6 +60,13 @@ void VoxelMask::set(const IndexCoord& voxel, bool mask)
     leaves_.erase(it);
 }
 
+void VoxelMask::setLeaf(const IndexCoord& leafOrigin, bool mask)
+{
+    const IndexCoord origin = leafOriginOf(leafOrigin);
+    if (mask != inverted_) leaves_[origin].fill(~uint64_t(0));
+    else leaves_.erase(origin);
+}
+
 void VoxelMask::clear()
 {
     inverted_ = false;

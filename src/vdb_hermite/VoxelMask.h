@@ -34,6 +34,8 @@ public:
     bool inverted() const { return inverted_; }
     /// Masks (true) or unmasks (false) one voxel.
     void set(const IndexCoord& voxel, bool masked);
+    /// Masks or unmasks every voxel of the leaf at `leafOrigin` at once.
+    void setLeaf(const IndexCoord& leafOrigin, bool masked);
     /// Every voxel changes state: masked ones are freed, all others (all of space) masked.
     void invert() { inverted_ = !inverted_; }
     void clear();
