@@ -18,6 +18,19 @@ std::string coordText(const std::array<int32_t, 3>& c)
     return "(" + std::to_string(c[0]) + ", " + std::to_string(c[1]) + ", " + std::to_string(c[2]) + ")";
 }
 
+/// What `info` says of a mask: the leaves it lists and whether it is inverted.
+nlohmann::json maskJson(const VoxelMask& mask)
+{
+    return {{"leaves", mask.listedLeaves().size()}, {"inverted", mask.inverted()}};
+}
+
+std::string maskText(const VoxelMask& mask)
+{
+    if (!mask.any()) return "none";
+    const std::string leaves = std::to_string(mask.listedLeaves().size()) + " leaves";
+    return mask.inverted() ? "everything but " + leaves : leaves;
+}
+
 } // namespace
 
 CLI::App* addInfoCommand(CLI::App& parent, InfoOptions& o)
@@ -66,11 +79,13 @@ int storeInfo(const InfoOptions& o)
                    {"materials", materials},
                    {"levels", levels},
                    {"lod_stale", scene.lodStale()},
+                   {"mask", maskJson(scene.mask())},
                    {"format_version", scene.bricks().formatVersion()}});
         return kExitOk;
     }
     std::string names;
     for (const auto& n : materials) names += (names.empty() ? "" : ", ") + n;
+    rows.push_back({"mask", maskText(scene.mask())});
     rows.push_back({"bbox_min", box ? coordText(lo) : "(empty)"});
     rows.push_back({"bbox_max", box ? coordText(hi) : "(empty)"});
     if (box) {
@@ -143,6 +158,7 @@ int runInfo(const InfoOptions& o)
                    {"bbox_max", s.bboxMax},
                    {"materials", materials},
                    {"memory_bytes", s.memoryBytes},
+                   {"mask", maskJson(volume.mask())},
                    {"format_version", volume.formatVersion()}});
         return kExitOk;
     }
@@ -156,6 +172,7 @@ int runInfo(const InfoOptions& o)
                  {"bbox_max", s.empty ? "(empty)" : coordText(s.bboxMax)},
                  {"materials", std::to_string(materials.size()) + ": " + names},
                  {"memory_bytes", std::to_string(s.memoryBytes) + " (" + formatBytes(double(s.memoryBytes)) + ")"},
+                 {"mask", maskText(volume.mask())},
                  {"format_version", std::to_string(volume.formatVersion())}},
                 0);
     return kExitOk;

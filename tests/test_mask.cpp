@@ -4,6 +4,7 @@
 #include "editor/EditingSession.h"
 #include "scene/SceneStore.h"
 #include "sculpt/StrokeScript.h"
+#include "support/CliRun.h"
 #include "support/HermiteProbe.h"
 #include "support/TestUtil.h"
 #include "vdb_hermite/VolumeIO.h"
@@ -310,6 +311,15 @@ TEST_CASE("mask: saved with the scene in a .vdb and in a store, read back exactl
     // Without a mask, the files hold none.
     saveVolume(ball(), dir.file("plain.vdb"));
     CHECK_FALSE(loadVolume(dir.file("plain.vdb")).mask().any());
+
+    // `info` tells both forms' masks.
+    for (const char* name : {"masked.vdb", "masked.vdbclay", "plain.vdb"}) {
+        const CommandResult r = runCli(dir, std::string("info --json ") + name);
+        REQUIRE(r.exitCode == 0);
+        const json info = json::parse(r.out);
+        CHECK(info.at("mask").at("leaves").get<std::size_t>() == (std::string(name) == "plain.vdb" ? 0 : v.mask().listedLeaves().size()));
+        CHECK_FALSE(info.at("mask").at("inverted").get<bool>());
+    }
 
     // A store whose mask was damaged names the store.
     {
