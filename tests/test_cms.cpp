@@ -692,8 +692,10 @@ TEST_CASE("CMS at concave creases: few triangles face against the union's normal
     // triangles whose normal lies more than 120 degrees from the analytic normal of the union at their
     // centroid (the nearest sphere's). Before sharp fans were kept from folding and only convex corners
     // could poke out of a square, about 1 in 180 did; then about 1 in 500; with folded fans given another
-    // centre or triangulated without one, about 1 in 1,000. Marching Cubes makes about 1 in 10,000. The
-    // goal is none (a bridge across a crease may lean, never fold back): this bounds what is left.
+    // centre or triangulated without one, and a concave crease's leaning fans triangulated without their
+    // vertex, about 1 in 9,000 over seeds 1-12 (none for seeds 1, 4, 6; at most 1 in 1,600).
+    // Marching Cubes makes about 1 in 10,000. The goal is none (a bridge across a crease may lean, never
+    // fold back): this bounds what is left.
     for (unsigned seed = 1; seed <= 4; ++seed) {
         std::mt19937 rng(seed);
         std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -730,7 +732,7 @@ TEST_CASE("CMS at concave creases: few triangles face against the union's normal
             const Mesh m = meshWith(v, MesherKind::CubicalMarchingSquares, cells);
             requireClosed(m);
             INFO("seed " << seed << (cells == Cells::Uniform ? " uniform" : " adaptive") << ": " << foldedShare(m) * 100.0 << "% folded");
-            CHECK(foldedShare(m) <= 1.0 / 600.0);
+            CHECK(foldedShare(m) <= 1.0 / 1200.0);
         }
         CHECK(foldedShare(meshWith(v, MesherKind::MarchingCubes, Cells::Uniform)) <= 1.0 / 2000.0);
     }

@@ -293,10 +293,10 @@ struct CubicalMarchingSquaresMesher::Buffers {
                 const MaterialId* materials, std::size_t n, bool sharp)
     {
         if (sharp) keepFanOpen(centre, ids, n);
-        if (foldsOfFan(centre, ids, n) > 0) {
-            // Nearer the mean point first, then the loop alone, then a centre a little off the mean point.
-            if (!unfoldFan(centre, normalSum, ids, n, false) && triangulateLoop(ids, materials, n)) return;
-        }
+        // Nearer the mean point first, then the loop alone. A concave crease's vertex (below its loop's
+        // mean point) whose fan leans back past one loop point's normal gives way to the loop alone too.
+        if (foldsOfFan(centre, ids, n) > 0 && !unfoldFan(centre, ids, n) && triangulateLoop(ids, materials, n)) return;
+        if (sharp && concaveFeature(centre, normalSum, ids, n) && leansOfFan(centre, ids, n) > 0 && triangulateLoop(ids, materials, n)) return;
         const double length = std::sqrt(normalSum[0] * normalSum[0] + normalSum[1] * normalSum[1] + normalSum[2] * normalSum[2]);
         const double scale = length > 0.0 ? 1.0 / length : 0.0;
         const uint32_t c = addVertex(kUnsharedVertex, {float(centre[0]), float(centre[1]), float(centre[2])},
@@ -381,32 +381,51 @@ struct CubicalMarchingSquaresMesher::Buffers {
     }
 
     /// A fan that folds (at a concave crease the loop's mean point, or its sharp feature, can lie where
-    /// some triangles face back) gets another centre where none folds, if one is near: between it and the
-    /// loop's mean point, or (`offMean`) a fifth of a voxel at most off the mean point along the loop's
-    /// normal. Returns whether it found one.
-    bool unfoldFan(std::array<double, 3>& centre, const std::array<double, 3>& normalSum, const uint32_t* ids, std::size_t n,
-                   bool offMean) const
+    /// some triangles face back) gets another centre where none folds, if one lies between it and the
+    /// loop's mean point. Returns whether it found one.
+    bool unfoldFan(std::array<double, 3>& centre, const uint32_t* ids, std::size_t n) const
     {
-        const auto& positions = chunk.mesh.positions;
-        std::array<double, 3> mean{};
-        for (std::size_t i = 0; i < n; ++i)
-            for (int a = 0; a < 3; ++a) mean[a] += positions[ids[i]][a] / double(n);
-        const double length = std::sqrt(normalSum[0] * normalSum[0] + normalSum[1] * normalSum[1] + normalSum[2] * normalSum[2]);
-        std::vector<std::array<double, 3>> tries;
-        if (!offMean)
-            for (double s : {0.25, 0.5, 0.75, 1.0})
-                tries.push_back({centre[0] + s * (mean[0] - centre[0]), centre[1] + s * (mean[1] - centre[1]), centre[2] + s * (mean[2] - centre[2])});
-        if (offMean && length > 0.0)
-            for (double t : {-0.05, 0.05, -0.1, 0.1, -0.2, 0.2}) {
-                const double d = t * voxelSize / length;
-                tries.push_back({mean[0] + d * normalSum[0], mean[1] + d * normalSum[1], mean[2] + d * normalSum[2]});
-            }
-        for (const auto& at : tries)
+        const std::array<double, 3> mean = loopMean(ids, n);
+        for (double s : {0.25, 0.5, 0.75, 1.0}) {
+            const std::array<double, 3> at{centre[0] + s * (mean[0] - centre[0]), centre[1] + s * (mean[1] - centre[1]),
+                                           centre[2] + s * (mean[2] - centre[2])};
             if (foldsOfFan(at, ids, n) == 0) {
                 centre = at;
                 return true;
             }
+        }
         return false;
+    }
+
+    std::array<double, 3> loopMean(const uint32_t* ids, std::size_t n) const
+    {
+        std::array<double, 3> mean{};
+        for (std::size_t i = 0; i < n; ++i)
+            for (int a = 0; a < 3; ++a) mean[a] += chunk.mesh.positions[ids[i]][a] / double(n);
+        return mean;
+    }
+
+    /// Whether a sharp vertex sits below its loop's mean point along the loop's normal: a valley (a
+    /// concave crease or corner), not a ridge or a tip.
+    bool concaveFeature(const std::array<double, 3>& centre, const std::array<double, 3>& normalSum, const uint32_t* ids, std::size_t n) const
+    {
+        const std::array<double, 3> mean = loopMean(ids, n);
+        double along = 0.0;
+        for (int a = 0; a < 3; ++a) along += (centre[a] - mean[a]) * normalSum[a];
+        return along < 0.0;
+    }
+
+    /// The fan triangles from `centre` that face more than 120 degrees from the normal at either of their
+    /// loop points.
+    int leansOfFan(const std::array<double, 3>& centre, const uint32_t* ids, std::size_t n) const
+    {
+        const std::array<double, 3> c{float(centre[0]), float(centre[1]), float(centre[2])};
+        int leans = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const uint32_t a = ids[i], b = ids[i + 1 < n ? i + 1 : 0];
+            leans += foldsAgainst(c, a, b, {a}) || foldsAgainst(c, a, b, {b});
+        }
+        return leans;
     }
 
     /// Triangulates a loop of one material without an inner vertex, choosing the diagonals (dynamic
