@@ -14,7 +14,8 @@
 // triangle that folds back against the surface's normals at both of its loop points (a concave crease's
 // planes can put the point where) gets a centre nearer the mean point, or else the loop is triangulated
 // without one, its diagonals chosen so that none folds (never between points that may share a cell face,
-// so neighbouring cells cannot both draw one).
+// so neighbouring cells cannot both draw one). A concave crease's sharp fan that leans back past either
+// loop point's normal is triangulated that way too.
 // A face's segments and sharp points depend on the face alone, so neighbouring cells agree on them
 // and the welded mesh is watertight.
 //
