@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_map>
 
 namespace vdbclay {
 
@@ -28,8 +29,43 @@ std::vector<uint32_t> vertexMaterialBlend(const Volume& volume, const Mesh& mesh
     constexpr double kTrace = 0.15;   // shares below it count as none (above 1 - kTrace as all), smoothly
     tbb::parallel_for(tbb::blocked_range<std::size_t>(firstVertex, mesh.positions.size(), 512), [&](const auto& range) {
         ConstAccessor acc(tree);
+        // Per 8^3 block: its one solid material (0: none), or kMixed. Most vertices lie among blocks of
+        // their own material alone and are settled by these, without reading voxels.
+        constexpr MaterialId kMixed = 0xffff;
+        std::unordered_map<Coord, MaterialId> blocks;
+        const auto blockMaterial = [&](const Coord& origin) {
+            const auto [it, fresh] = blocks.try_emplace(origin, kEmptyMaterial);
+            if (!fresh) return it->second;
+            if (const HermiteLeaf* leaf = acc.probeConstLeaf(origin)) {
+                const MaterialValue* values = leaf->buffer().data();
+                for (Index n = 0; n < Index(kLeafVoxels) && it->second != kMixed; ++n) {
+                    const MaterialId m = values[n].id;
+                    if (m == kEmptyMaterial || m == it->second) continue;
+                    it->second = it->second == kEmptyMaterial ? m : kMixed;
+                }
+            } else {
+                it->second = acc.getValue(origin).id;
+            }
+            return it->second;
+        };
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
             const MaterialId own = v < mesh.materials.size() ? mesh.materials[v] : kEmptyMaterial;
+            {
+                Coord lo, hi;
+                for (int a = 0; a < 3; ++a) {
+                    const int32_t c = int32_t(std::lround(mesh.positions[v][std::size_t(a)] * inv));
+                    lo[a] = (c - kSide / 2) & ~int32_t(kLeafDim - 1);
+                    hi[a] = (c + kSide / 2) & ~int32_t(kLeafDim - 1);
+                }
+                bool alone = true;
+                for (int32_t x = lo.x(); x <= hi.x() && alone; x += kLeafDim)
+                    for (int32_t y = lo.y(); y <= hi.y() && alone; y += kLeafDim)
+                        for (int32_t z = lo.z(); z <= hi.z() && alone; z += kLeafDim) {
+                            const MaterialId m = blockMaterial(Coord(x, y, z));
+                            alone = m == kEmptyMaterial || m == own;
+                        }
+                if (alone) continue;
+            }
             double p[3], n[3] = {0.0, 0.0, 0.0};
             int32_t first[3];
             for (int a = 0; a < 3; ++a) {
