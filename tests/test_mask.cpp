@@ -5,6 +5,7 @@
 #include "scene/SceneStore.h"
 #include "sculpt/StrokeScript.h"
 #include "support/CliRun.h"
+#include "support/QuietSession.h"
 #include "support/HermiteProbe.h"
 #include "support/TestUtil.h"
 #include "vdb_hermite/VolumeIO.h"
@@ -333,16 +334,6 @@ TEST_CASE("mask: saved with the scene in a .vdb and in a store, read back exactl
 
 namespace {
 
-SessionOptions quiet()
-{
-    SessionOptions o;
-    o.memoryBudgetBytes = 256ull << 20;
-    o.autosaveSeconds = 1e9;
-    o.idleAutosaveSeconds = 1e9;
-    o.message = [](const std::string& m) { std::fprintf(stderr, "session: %s\n", m.c_str()); };
-    return o;
-}
-
 void command(EditingSession& s, Command c) { s.apply(c); }
 
 Command kindOf(Command::Kind kind)
@@ -392,7 +383,7 @@ TEST_CASE("editor: a masked region stays bit-identical under strokes of every mo
     VoxelMask maskAfter;
     Volume after(1.0);
     {
-        EditingSession s(dir.file("ball.vdb"), quiet());
+        EditingSession s(dir.file("ball.vdb"), quietSession());
         Command camera;
         camera.kind = Command::Kind::SetCamera;
         camera.camera.eye = {0, 0, 60};
@@ -454,7 +445,7 @@ TEST_CASE("editor: a masked region stays bit-identical under strokes of every mo
 
     // The recorded session replays to the same scene and mask from the original ball.
     saveVolume(ball(), dir.file("again.vdb"));
-    SessionOptions options = quiet();
+    SessionOptions options = quietSession();
     options.refuseUnsaved = true;
     EditingSession replay(dir.file("again.vdb"), options);
     replaySession(replay, record);

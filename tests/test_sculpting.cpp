@@ -4,6 +4,7 @@
 #include "editor/EditingSession.h"
 #include "editor/CameraControl.h"
 #include "sculpt/StrokeScript.h"
+#include "support/QuietSession.h"
 #include "support/TestUtil.h"
 #include "vdb_hermite/VolumeIO.h"
 
@@ -30,15 +31,6 @@ std::string makeBall(const TempDir& dir, const std::string& name = "ball.vdb")
     return path;
 }
 
-SessionOptions quiet()
-{
-    SessionOptions o;
-    o.memoryBudgetBytes = 256ull << 20;
-    o.autosaveSeconds = 1e9;
-    o.idleAutosaveSeconds = 1e9;
-    o.message = [](const std::string& m) { std::fprintf(stderr, "session: %s\n", m.c_str()); };
-    return o;
-}
 
 double length(const std::array<double, 3>& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
@@ -121,7 +113,7 @@ TEST_CASE("editor: a sideways add stroke follows the surface as it began and rai
     TempDir dir;
     const double radius = 4.0, strength = 0.5;
     for (const std::string mode : {"add", "remove"}) {
-        EditingSession session(makeBall(dir, mode + ".vdb"), quiet());
+        EditingSession session(makeBall(dir, mode + ".vdb"), quietSession());
         useCamera(session);
         useBrush(session, mode, radius, strength);
         sidewaysDrag(session);
@@ -160,7 +152,7 @@ TEST_CASE("editor: with accumulate on, a stroke builds on itself and climbs towa
 {
     TempDir dir;
     const std::string path = makeBall(dir);
-    EditingSession session(path, quiet());
+    EditingSession session(path, quietSession());
     useCamera(session);
     useBrush(session, "add", 4.0, 1.0, true);
     // The pointer stays put: each stamp lands on the previous one.
@@ -172,7 +164,7 @@ TEST_CASE("editor: with accumulate on, a stroke builds on itself and climbs towa
     CHECK((*last.point)[2] > kBall + 3.0);
 
     // Off, the same pointer path stays on the ball as it began.
-    EditingSession fresh(makeBall(dir, "again.vdb"), quiet());
+    EditingSession fresh(makeBall(dir, "again.vdb"), quietSession());
     useCamera(fresh);
     useBrush(fresh, "add", 4.0, 1.0, false);
     stroke(fresh, Command::Kind::StrokeBegin, rayTowards({0, 0, 0}));
@@ -186,7 +178,7 @@ TEST_CASE("editor: grab keeps the grabbed point under the pointer for a drag of 
 {
     TempDir dir;
     const std::string path = makeBall(dir);
-    EditingSession session(path, quiet());
+    EditingSession session(path, quietSession());
     useCamera(session);
     const double radius = 6.0;
     useBrush(session, "move", radius, 1.0);
@@ -224,7 +216,7 @@ TEST_CASE("replay: a session of rays replays to the same scene and every recorde
     TempDir dir;
     SessionRecord record;
     {
-        EditingSession session(makeBall(dir, "a.vdb"), quiet());
+        EditingSession session(makeBall(dir, "a.vdb"), quietSession());
         useCamera(session);
         useBrush(session, "add", 3.0, 0.6);
         sidewaysDrag(session, 4.0);
@@ -243,11 +235,11 @@ TEST_CASE("replay: a session of rays replays to the same scene and every recorde
     // Through the file, as a bug report would carry it.
     saveSessionRecord(record, dir.file("s.json"));
     const SessionRecord loaded = loadSessionRecord(dir.file("s.json"));
-    EditingSession replayed(makeBall(dir, "b.vdb"), quiet());
+    EditingSession replayed(makeBall(dir, "b.vdb"), quietSession());
     replaySession(replayed, loaded);
     CHECK(replayed.stats().placementsDiffering == 0);
     replayed.autosave();
-    EditingSession original(dir.file("a.vdb"), quiet());
+    EditingSession original(dir.file("a.vdb"), quietSession());
     CHECK(identical(original.scene().store().loadLevel(0), replayed.scene().store().loadLevel(0)));
 }
 
