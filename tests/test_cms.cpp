@@ -686,6 +686,27 @@ TEST_CASE("the leaves an edit's compared bounds reach hold every chunk the edit 
     CHECK(affectedLeaves > changedChunks);
 }
 
+namespace {
+
+/// The share of a mesh's triangles whose normal lies more than 120 degrees from `normalAt(centroid)`,
+/// the analytic surface's outward normal (any length).
+template<typename NormalAt>
+double foldedShare(const Mesh& m, NormalAt&& normalAt)
+{
+    int folded = 0;
+    for (const auto& t : m.triangles) {
+        const Vec3d a(m.positions[t[0]][0], m.positions[t[0]][1], m.positions[t[0]][2]);
+        const Vec3d b(m.positions[t[1]][0], m.positions[t[1]][1], m.positions[t[1]][2]);
+        const Vec3d c(m.positions[t[2]][0], m.positions[t[2]][1], m.positions[t[2]][2]);
+        const Vec3d n = (b - a).cross(c - a), g = normalAt((a + b + c) / 3.0);
+        if (n.length() < 1e-12 || g.length() < 1e-9) continue;
+        folded += n.dot(g) < -0.5 * n.length() * g.length();
+    }
+    return double(folded) / double(std::max<std::size_t>(1, m.triangleCount()));
+}
+
+} // namespace
+
 TEST_CASE("CMS at concave creases: few triangles face against the union's normal, none of a sharp fan folds back", "[cms][crease]")
 {
     // Seeded unions of a ball and three spheres crossing it at general angles, off the lattice: the
@@ -712,29 +733,22 @@ TEST_CASE("CMS at concave creases: few triangles face against the union's normal
         }
         Volume v(1.0);
         for (const Ball& b : balls) applyCsg(v, Brush(sphere(b.r), at(b.c)), op(CsgMode::Add));
-        const auto foldedShare = [&](const Mesh& m) {
-            int folded = 0;
-            for (const auto& t : m.triangles) {
-                const Vec3d a(m.positions[t[0]][0], m.positions[t[0]][1], m.positions[t[0]][2]);
-                const Vec3d b(m.positions[t[1]][0], m.positions[t[1]][1], m.positions[t[1]][2]);
-                const Vec3d c(m.positions[t[2]][0], m.positions[t[2]][1], m.positions[t[2]][2]);
-                const Vec3d n = (b - a).cross(c - a), centroid = (a + b + c) / 3.0;
-                if (n.length() < 1e-12) continue;
+        // The union's normal at a point: that of the sphere nearest to it.
+        const auto folded = [&](const Mesh& m) {
+            return foldedShare(m, [&](const Vec3d& x) {
                 const Ball* nearest = &balls[0];
                 for (const Ball& s : balls)
-                    if ((centroid - s.c).length() - s.r < (centroid - nearest->c).length() - nearest->r) nearest = &s;
-                const Vec3d g = centroid - nearest->c;
-                folded += n.dot(g) < -0.5 * n.length() * g.length();
-            }
-            return double(folded) / double(std::max<std::size_t>(1, m.triangleCount()));
+                    if ((x - s.c).length() - s.r < (x - nearest->c).length() - nearest->r) nearest = &s;
+                return x - nearest->c;
+            });
         };
         for (const Cells cells : {Cells::Uniform, Cells::Adaptive}) {
             const Mesh m = meshWith(v, MesherKind::CubicalMarchingSquares, cells);
             requireClosed(m);
-            INFO("seed " << seed << (cells == Cells::Uniform ? " uniform" : " adaptive") << ": " << foldedShare(m) * 100.0 << "% folded");
-            CHECK(foldedShare(m) <= 1.0 / 1200.0);
+            INFO("seed " << seed << (cells == Cells::Uniform ? " uniform" : " adaptive") << ": " << folded(m) * 100.0 << "% folded");
+            CHECK(folded(m) <= 1.0 / 1200.0);
         }
-        CHECK(foldedShare(meshWith(v, MesherKind::MarchingCubes, Cells::Uniform)) <= 1.0 / 2000.0);
+        CHECK(folded(meshWith(v, MesherKind::MarchingCubes, Cells::Uniform)) <= 1.0 / 2000.0);
     }
 }
 
@@ -767,26 +781,19 @@ TEST_CASE("CMS at concave creases of boxes added to a ball, on and off the latti
             }
             return d;
         };
-        const auto foldedShare = [&](const Mesh& m) {
-            int folded = 0;
-            for (const auto& t : m.triangles) {
-                const Vec3d a(m.positions[t[0]][0], m.positions[t[0]][1], m.positions[t[0]][2]);
-                const Vec3d b(m.positions[t[1]][0], m.positions[t[1]][1], m.positions[t[1]][2]);
-                const Vec3d c(m.positions[t[2]][0], m.positions[t[2]][1], m.positions[t[2]][2]);
-                const Vec3d n = (b - a).cross(c - a), x = (a + b + c) / 3.0;
+        // The union's normal at a point: its distance's gradient.
+        const auto folded = [&](const Mesh& m) {
+            return foldedShare(m, [&](const Vec3d& x) {
                 constexpr double e = 1e-3;
-                const Vec3d g(distance(x + Vec3d(e, 0, 0)) - distance(x - Vec3d(e, 0, 0)), distance(x + Vec3d(0, e, 0)) - distance(x - Vec3d(0, e, 0)),
-                              distance(x + Vec3d(0, 0, e)) - distance(x - Vec3d(0, 0, e)));
-                if (n.length() < 1e-12 || g.length() < 1e-9) continue;
-                folded += n.dot(g) < -0.5 * n.length() * g.length();
-            }
-            return double(folded) / double(std::max<std::size_t>(1, m.triangleCount()));
+                return Vec3d(distance(x + Vec3d(e, 0, 0)) - distance(x - Vec3d(e, 0, 0)), distance(x + Vec3d(0, e, 0)) - distance(x - Vec3d(0, e, 0)),
+                             distance(x + Vec3d(0, 0, e)) - distance(x - Vec3d(0, 0, e)));
+            });
         };
         for (const Cells cells : {Cells::Uniform, Cells::Adaptive}) {
             const Mesh m = meshWith(v, MesherKind::CubicalMarchingSquares, cells);
             requireClosed(m);
-            INFO("seed " << seed << (cells == Cells::Uniform ? " uniform" : " adaptive") << ": " << foldedShare(m) * 100.0 << "% folded");
-            CHECK(foldedShare(m) <= 1.0 / 2000.0);
+            INFO("seed " << seed << (cells == Cells::Uniform ? " uniform" : " adaptive") << ": " << folded(m) * 100.0 << "% folded");
+            CHECK(folded(m) <= 1.0 / 2000.0);
         }
     }
 }
