@@ -3,6 +3,7 @@
 // pointer, and the record holds each stroke point's ray beside the point it placed.
 #include "editor/EditingSession.h"
 #include "editor/CameraControl.h"
+#include "editor/VolumeRayCast.h"
 #include "sculpt/StrokeScript.h"
 #include "support/QuietSession.h"
 #include "support/TestUtil.h"
@@ -61,7 +62,8 @@ void useCamera(EditingSession& session)
     }
 }
 
-void useBrush(EditingSession& session, const std::string& mode, double radius, double strength, bool accumulate = false)
+void useBrush(EditingSession& session, const std::string& mode, double radius, double strength, bool accumulate = false,
+              double distance = 2.0)
 {
     Command c;
     c.kind = Command::Kind::SetBrush;
@@ -70,6 +72,7 @@ void useBrush(EditingSession& session, const std::string& mode, double radius, d
     c.brush->radius = radius;
     c.brush->strength = strength;
     c.brush->accumulate = accumulate;
+    c.brush->distance = distance;
     session.apply(c);
 }
 
@@ -146,6 +149,99 @@ TEST_CASE("editor: a sideways add stroke follows the surface as it began and rai
             CHECK(highest <= kBall - strength * radius + 1.0);
         }
     }
+}
+
+TEST_CASE("editor: inflate and deflate move the surface by at most strength x distance per stroke, unless they accumulate", "[editor][sculpt]")
+{
+    TempDir dir;
+    const double radius = 6.0, strength = 0.8, distance = 2.5, cap = strength * distance;
+    for (const std::string mode : {"inflate", "deflate"})
+        for (const bool accumulate : {false, true}) {
+            EditingSession session(makeBall(dir, mode + (accumulate ? "-acc.vdb" : ".vdb")), quietSession());
+            useCamera(session);
+            useBrush(session, mode, radius, strength, accumulate, distance);
+            sidewaysDrag(session); // stamps 1.5 voxels apart: each point under the stroke is stamped about 8 times
+            CHECK(session.stats().opsRefused == 0);
+            // How far the surface moved along the stroke's line, from the ball's radius.
+            double farthest = 0.0, nearest = 1e9;
+            for (int x = -9; x <= 9; ++x) {
+                const double moved = std::fabs(surfaceRadius(session, {double(x), 0.0, std::sqrt(kBall * kBall - x * x)}) - kBall);
+                farthest = std::max(farthest, moved);
+                nearest = std::min(nearest, moved);
+            }
+            INFO(mode << (accumulate ? " accumulating" : "") << ": moved from " << nearest << " to " << farthest);
+            if (accumulate) {
+                CHECK(farthest > cap + 2.0);
+            } else {
+                CHECK(farthest <= cap + 1.0);
+                CHECK(nearest >= cap - 1.0);
+            }
+        }
+}
+
+TEST_CASE("script: inflate and deflate that continue a stroke move the surface from where it began, at most distance x strength", "[sculpt][field]")
+{
+    const auto ball = [] {
+        Volume v(1.0);
+        runStrokeScript(v, parseStrokeScript(nlohmann::json{{"ops", {{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", kBall}}}}}}}.dump()));
+        return v;
+    };
+    // The surface's height above the ball's centre at (x, 0).
+    const auto heightAt = [](const Volume& v, double x) {
+        const auto hit = castRay(v, {x, 0.0, 60.0}, {0.0, 0.0, -1.0}, 100.0);
+        REQUIRE(hit);
+        return hit->point[2];
+    };
+    for (const std::string mode : {"inflate", "deflate"}) {
+        const double sign = mode == "inflate" ? 1.0 : -1.0, distance = 2.0, strength = 0.75;
+        // Five stamps on one spot, then a row along x, once as one stroke and once as separate ones.
+        nlohmann::json stroke = nlohmann::json::array(), separate = nlohmann::json::array();
+        for (int i = 0; i < 9; ++i) {
+            const double x = i < 5 ? 0.0 : double(i - 4) * 1.5;
+            nlohmann::json op = {{"mode", mode}, {"brush", {{"shape", "sphere"}, {"radius", 6.0}}}, {"at", {x, 0.0, kBall}},
+                                 {"strength", strength}, {"distance", distance}, {"falloff", "constant"}};
+            separate.push_back(op);
+            if (i > 0) op["stroke"] = "continue";
+            stroke.push_back(op);
+        }
+        Volume capped = ball(), summed = ball();
+        runStrokeScript(capped, parseStrokeScript(nlohmann::json{{"ops", stroke}}.dump()));
+        runStrokeScript(summed, parseStrokeScript(nlohmann::json{{"ops", separate}}.dump()));
+        for (const double x : {0.0, 1.5, 3.0, 4.5}) {
+            INFO(mode << " at x = " << x);
+            CHECK(std::fabs(sign * (heightAt(capped, x) - std::sqrt(kBall * kBall - x * x)) - strength * distance) < 0.6);
+            CHECK(sign * (heightAt(summed, x) - std::sqrt(kBall * kBall - x * x)) > 3.0 * strength * distance);
+        }
+        // A stroke held by the caller across scripts (the editor's way) does what one script does.
+        Volume carried = ball();
+        StrokeStart start(1.0);
+        for (const nlohmann::json& op : stroke)
+            runStrokeScript(carried, parseStrokeScript(nlohmann::json{{"ops", {op}}}.dump()), {}, &start);
+        CHECK(identical(carried, capped));
+    }
+}
+
+TEST_CASE("script: 'stroke' is refused outside inflate and deflate strokes", "[sculpt][field]")
+{
+    const auto refusal = [](const nlohmann::json& ops) {
+        try {
+            parseStrokeScript(nlohmann::json{{"ops", ops}}.dump());
+        } catch (const ScriptError& e) {
+            return std::string(e.what());
+        }
+        return std::string("accepted");
+    };
+    const nlohmann::json inflate = {{"mode", "inflate"}, {"brush", {{"shape", "sphere"}, {"radius", 3.0}}}, {"distance", 1.0}};
+    const nlohmann::json add = {{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 3.0}}}};
+    nlohmann::json goesOn = inflate, addGoesOn = add, badValue = inflate;
+    goesOn["stroke"] = "continue";
+    addGoesOn["stroke"] = "continue";
+    badValue["stroke"] = "begin";
+    CHECK(refusal({inflate, goesOn}) == "accepted");
+    CHECK(refusal(nlohmann::json::array({goesOn})) == "accepted"); // nothing before it to continue: it begins the stroke
+    CHECK(refusal({add, addGoesOn}).find("ops[1].stroke: belongs to inflate and deflate") != std::string::npos);
+    CHECK(refusal({add, goesOn}).find("ops[1].stroke: continues a stroke only after an inflate or deflate op") != std::string::npos);
+    CHECK(refusal({inflate, badValue}).find("ops[1].stroke: must be \"continue\"") != std::string::npos);
 }
 
 TEST_CASE("editor: with accumulate on, a stroke builds on itself and climbs towards the camera", "[editor][sculpt]")

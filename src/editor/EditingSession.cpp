@@ -138,7 +138,14 @@ void EditingSession::applyOp(const nlohmann::json& op)
         loadScriptTools(script, std::filesystem::path(scenePath_).parent_path().string(), tools_);
         std::vector<LeafChange> changes;
         if (!stroke_.maskBefore) stroke_.maskBefore = scene_->mask().encode();
-        const StreamingScene::EditReport report = scene_->sculpt(script, &changes);
+        // Inflate and deflate keep the stroke's start where they reach, to be measured against it.
+        StrokeStart* start = nullptr;
+        const std::optional<FieldBrushOp>& field = script.ops.front().field;
+        if (field && (field->mode == FieldMode::Inflate || field->mode == FieldMode::Deflate) && !brush_.accumulate && stroke_.active) {
+            if (!stroke_.start) stroke_.start = std::make_unique<StrokeStart>(scene_->store().voxelSize());
+            start = stroke_.start.get();
+        }
+        const StreamingScene::EditReport report = scene_->sculpt(script, &changes, start);
         bricksChanged_ += report.bricksChanged;
         for (LeafChange& c : changes) {
             const auto [it, fresh] = stroke_.changeIndex.emplace(c.origin, stroke_.changes.size());
@@ -195,13 +202,14 @@ std::optional<SurfaceHit> EditingSession::castAtStrokeStart(const Ray& ray)
         stroke_.replaced.insert(c.origin);
     }
     std::optional<SurfaceHit> hit;
-    scene_->visitResidentLevels([&](const std::vector<const Volume*>& levels) {
+    scene_->visitResidentLevels([&](const std::vector<const Volume*>& levels, const StreamingScene::FinestResidentAt& finestResidentAt) {
         if (levels.empty()) return;
         hit = castRay(OverlaidVolume{*levels[0], *stroke_.before, stroke_.replaced}, ray.origin, ray.direction, 1e30);
         // Where the finest level is not resident, the coarser ones (which may show the stroke) stand in.
         if (!hit && levels.size() > 1) {
-            hit = castRayAcrossLevels({levels.begin() + 1, levels.end()}, ray.origin, ray.direction, 1e30);
-            if (hit) ++hit->level;
+            std::vector<const Volume*> coarser(levels.begin(), levels.end());
+            coarser[0] = nullptr;
+            hit = castRayAcrossLevels(coarser, ray.origin, ray.direction, 1e30, finestResidentAt);
         }
     });
     return hit;
@@ -276,7 +284,10 @@ void EditingSession::moveStroke(const Placement& at, double pressure)
     if (!isReshapingMode(brush_.mode)) path.push_back(stampCentre(stroke_.lastStamp, pressure));
     for (const Placement& p : stamps) path.push_back(stampCentre(p, pressure));
     stroke_.lastStamp = stamps.back();
-    applyOp(strokeOpJson(brush_, path, pressure));
+    nlohmann::json op = strokeOpJson(brush_, path, pressure);
+    // Inflate and deflate change the surface by at most distance x strength per stroke (accumulate: per stamp).
+    if ((brush_.mode == "inflate" || brush_.mode == "deflate") && !brush_.accumulate) op["stroke"] = "continue";
+    applyOp(op);
 }
 
 void EditingSession::endStroke()
@@ -356,7 +367,9 @@ std::optional<SurfaceHit> EditingSession::pick(const std::array<double, 3>& orig
                                                double maxDistance) const
 {
     std::optional<SurfaceHit> hit;
-    scene_->visitResidentLevels([&](const std::vector<const Volume*>& levels) { hit = castRayAcrossLevels(levels, origin, direction, maxDistance); });
+    scene_->visitResidentLevels([&](const std::vector<const Volume*>& levels, const StreamingScene::FinestResidentAt& finestResidentAt) {
+        hit = castRayAcrossLevels(levels, origin, direction, maxDistance, finestResidentAt);
+    });
     return hit;
 }
 

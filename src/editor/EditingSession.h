@@ -121,6 +121,7 @@ private:
         std::set<IndexCoord> replaced;
         std::size_t decoded = 0;
         std::optional<std::string> maskBefore; // the mask as the stroke found it (VoxelMask::encode())
+        std::unique_ptr<StrokeStart> start;    // inflate and deflate: the stroke's start where they reached
     };
     /// Fills in the point (and normal) of a stroke command from its ray; false when the ray meets no
     /// surface (the command then changes nothing).

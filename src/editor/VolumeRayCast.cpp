@@ -159,12 +159,15 @@ std::optional<SurfaceHit> castRay(const OverlaidVolume& volume, const std::array
 }
 
 std::optional<SurfaceHit> castRayAcrossLevels(const std::vector<const Volume*>& levels, const std::array<double, 3>& origin,
-                                              const std::array<double, 3>& direction, double maxDistance)
+                                              const std::array<double, 3>& direction, double maxDistance,
+                                              const std::function<bool(const std::array<double, 3>&)>& finestResidentAt)
 {
     std::optional<SurfaceHit> best;
     for (std::size_t k = 0; k < levels.size(); ++k) {
+        if (!levels[k]) continue;
         std::optional<SurfaceHit> hit = castRay(*levels[k], origin, direction, maxDistance);
         if (!hit) continue;
+        if (k > 0 && finestResidentAt && finestResidentAt(hit->point)) continue;
         hit->level = int(k);
         if (!best || hit->distance < best->distance - 2.0 * levels[k]->voxelSize()) best = hit;
     }

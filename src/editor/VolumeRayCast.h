@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <set>
 #include <vector>
@@ -41,7 +42,10 @@ std::optional<SurfaceHit> castRay(const OverlaidVolume& volume, const std::array
 /// The ray against every level's data (index = level, each on its own lattice): the finest level's hit,
 /// unless a coarser level meets the surface clearly in front of it (two of that level's voxels), where
 /// the finer data are not resident.
+/// Null levels are skipped. `finestResidentAt`, when given, says where the finest level's data are resident: a coarser level's
+/// hit stands in only elsewhere (coarse levels may lag the finest one's edits).
 std::optional<SurfaceHit> castRayAcrossLevels(const std::vector<const Volume*>& levels, const std::array<double, 3>& origin,
-                                              const std::array<double, 3>& direction, double maxDistance);
+                                              const std::array<double, 3>& direction, double maxDistance,
+                                              const std::function<bool(const std::array<double, 3>&)>& finestResidentAt = {});
 
 } // namespace vdbclay

@@ -883,7 +883,7 @@ void StreamingScene::waitForLoads()
     s.idle.wait(lock, [&] { return s.queue.empty() && s.inFlight.empty(); });
 }
 
-StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, std::vector<LeafChange>* changes)
+StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, std::vector<LeafChange>* changes, StrokeStart* stroke)
 {
     Impl& s = *impl_;
     if (s.options.access == StoreAccess::ReadOnly) throw std::logic_error("sculpting a scene opened read-only");
@@ -905,7 +905,7 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
     report.bricksPagedIn = s.pageInForEdit(bricks, lock);
     report.pageInSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     Volume work = s.workCopy(bricks);
-    report.ops = runStrokeScript(work, script);
+    report.ops = runStrokeScript(work, script, {}, stroke);
     std::vector<Impl::VoxelRange> reached;
     for (const ScriptOp& op : script.ops) reached.push_back(voxelsReachedBy(op, s.scene.voxelSize()));
     for (const IndexCoord& b : bricks) {
@@ -986,12 +986,18 @@ uint64_t StreamingScene::edits() const
     return impl_->edits;
 }
 
-void StreamingScene::visitResidentLevels(const std::function<void(const std::vector<const Volume*>&)>& visit) const
+void StreamingScene::visitResidentLevels(const std::function<void(const std::vector<const Volume*>&, const FinestResidentAt&)>& visit) const
 {
-    std::lock_guard<std::mutex> lock(impl_->mutex);
+    const Impl& s = *impl_;
+    std::lock_guard<std::mutex> lock(s.mutex);
     std::vector<const Volume*> levels;
-    for (const Volume& v : impl_->levelVolumes) levels.push_back(&v);
-    visit(levels);
+    for (const Volume& v : s.levelVolumes) levels.push_back(&v);
+    const double h = s.scene.voxelSize();
+    visit(levels, [&](const std::array<double, 3>& world) {
+        BrickKey key;
+        for (std::size_t a = 0; a < 3; ++a) key.brick[a] = int32_t(std::floor(world[a] / (h * kBrickEdge)));
+        return s.resident.count(key) > 0;
+    });
 }
 
 std::optional<std::string> StreamingScene::meta(const std::string& key) const

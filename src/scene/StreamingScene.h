@@ -88,7 +88,8 @@ public:
     /// Applies a script at level 0: the bricks its brushes reach are paged in first (loaded now if not
     /// resident), the changed ones stay resident and dirty until autosave. `changes`, when given, receives
     /// every level-0 leaf box the script changed, before and after (in brick order, then box order).
-    EditReport sculpt(const StrokeScript& script, std::vector<LeafChange>* changes = nullptr);
+    /// `stroke` carries an inflate or deflate stroke across calls (runStrokeScript).
+    EditReport sculpt(const StrokeScript& script, std::vector<LeafChange>* changes = nullptr, StrokeStart* stroke = nullptr);
     /// Puts leaf boxes back as the images hold them (undo, redo), paging their bricks in first; counts as
     /// one edit. Throws VolumeIOError for damaged images.
     EditReport restoreLeaves(const std::vector<LeafImage>& leaves);
@@ -100,8 +101,11 @@ public:
     MaterialTable materials() const;
     /// Edits applied since the store was made, including those not yet autosaved.
     uint64_t edits() const;
-    /// Calls `visit` with each level's resident data (index = level), the loaders held off meanwhile.
-    void visitResidentLevels(const std::function<void(const std::vector<const Volume*>&)>& visit) const;
+    /// Calls `visit` with each level's resident data (index = level), the loaders held off meanwhile, and
+    /// whether the level-0 brick holding a world point is resident (coarser levels stand in elsewhere; where
+    /// it is, they may lag its edits until the next autosave).
+    using FinestResidentAt = std::function<bool(const std::array<double, 3>& world)>;
+    void visitResidentLevels(const std::function<void(const std::vector<const Volume*>&, const FinestResidentAt&)>& visit) const;
     /// A value the store keeps beside the bricks (the editor's save marks), and writing one at once, in a
     /// transaction of its own.
     std::optional<std::string> meta(const std::string& key) const;

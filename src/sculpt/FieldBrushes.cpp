@@ -383,7 +383,7 @@ void checkFieldBrush(const Volume& volume, const SdfField& brush, const FieldBru
         throw std::invalid_argument("unknown material id " + std::to_string(*op.material));
 }
 
-EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrushOp& op)
+EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrushOp& op, const Volume* strokeStart)
 {
     checkFieldBrush(volume, brush, op);
     const double h = volume.voxelSize();
@@ -481,9 +481,19 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     case FieldMode::Inflate:
     case FieldMode::Deflate: {
         const double d = op.mode == FieldMode::Inflate ? op.distance : -op.distance;
+        if (!strokeStart) {
+            forEachPoint(inBrush, [&](int32_t i, int32_t j, int32_t k) {
+                const std::size_t n = old.index(i, j, k);
+                next.values[n] = float(old.values[n] - weight[n] * d);
+            });
+            break;
+        }
+        // Moved from where the stroke began, never back past where its earlier stamps put the surface.
+        const LatticeGrid began = worldDistances(solidDistances(*strokeStart, lo, dims, float(band / h)), lo, h);
         forEachPoint(inBrush, [&](int32_t i, int32_t j, int32_t k) {
             const std::size_t n = old.index(i, j, k);
-            next.values[n] = float(old.values[n] - weight[n] * d);
+            const float moved = float(began.values[n] - weight[n] * d);
+            next.values[n] = d > 0.0 ? std::min(old.values[n], moved) : std::max(old.values[n], moved);
         });
         break;
     }

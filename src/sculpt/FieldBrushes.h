@@ -78,8 +78,12 @@ constexpr int32_t kMaxFieldBrushVoxels = 200;
 /// brush, a region wider than kMaxFieldBrushVoxels, or an unknown material.
 void checkFieldBrush(const Volume& volume, const SdfField& brush, const FieldBrushOp& op);
 
-/// Checks the op, then applies it. A region without solid voxels is left as it is.
-EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrushOp& op);
+/// Checks the op, then applies it. A region without solid voxels is left as it is. `strokeStart`, the
+/// state the op's stroke began from (right over the op's region), caps inflate and deflate per stroke:
+///   inflate   phi' = min(phi, phi0 - w D),   deflate   phi' = max(phi, phi0 + w D)
+/// with phi0 the start's distance, so overlapping stamps of one stroke move the surface at most w D from
+/// where the stroke found it (the stroke's swept weight), never their sum.
+EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrushOp& op, const Volume* strokeStart = nullptr);
 
 /// An add that blends into the surface (clay pressed on, not a sphere stuck on): the brush is added
 /// exactly (applyCsg), then the fillet where it meets the old surface, the smooth union

@@ -242,7 +242,7 @@ ScriptOp parseOp(const json& o, const std::string& where)
         }
         checkKeys(o, where, {"mode", "brush", "at", "path", "rotate", "scale", "symmetry"});
     } else {
-        checkKeys(o, where, {"mode", "brush", "at", "path", "rotate", "scale", "material", "strength", "depth", "falloff", "distance", "offset", "symmetry", "blend"});
+        checkKeys(o, where, {"mode", "brush", "at", "path", "rotate", "scale", "material", "strength", "depth", "falloff", "distance", "offset", "symmetry", "blend", "stroke"});
     }
     if (o.contains("symmetry")) op.symmetry = parseSymmetry(o.at("symmetry"), where + ".symmetry");
     if (op.maskEdit) {
@@ -295,6 +295,12 @@ ScriptOp parseOp(const json& o, const std::string& where)
             op.field->offset = vec3(o.at("offset"), where + ".offset");
             if (!(op.field->offset.length() < 1e6)) fail(where + ".offset", "is too long");
         }
+    }
+    if (o.contains("stroke")) {
+        const bool moves = op.field && (op.field->mode == FieldMode::Inflate || op.field->mode == FieldMode::Deflate);
+        if (!moves) fail(where + ".stroke", "belongs to inflate and deflate");
+        if (text(o, "stroke", where) != "continue") fail(where + ".stroke", "must be \"continue\" (the op goes on with the stroke the op before it began)");
+        op.continuesStroke = true;
     }
     if (o.contains("at") && o.contains("path")) fail(where, "give either 'at' or 'path', not both");
     if (o.contains("path")) {
@@ -396,7 +402,16 @@ StrokeScript parseStrokeScript(const std::string& jsonText)
     }
     if (!root.contains("ops") || !root.at("ops").is_array()) fail("script", "needs an 'ops' array");
     const json& ops = root.at("ops");
-    for (std::size_t i = 0; i < ops.size(); ++i) script.ops.push_back(parseOp(ops[i], "ops[" + std::to_string(i) + "]"));
+    for (std::size_t i = 0; i < ops.size(); ++i) {
+        script.ops.push_back(parseOp(ops[i], "ops[" + std::to_string(i) + "]"));
+        // A stroke is kept from its start only where inflate and deflate reach (bounded, a field brush's
+        // region at most), so only they may make up a stroke.
+        if (i > 0 && script.ops[i].continuesStroke) {
+            const std::optional<FieldBrushOp>& before = script.ops[i - 1].field;
+            if (!before || (before->mode != FieldMode::Inflate && before->mode != FieldMode::Deflate))
+                fail("ops[" + std::to_string(i) + "].stroke", "continues a stroke only after an inflate or deflate op");
+        }
+    }
     return script;
 }
 
@@ -676,14 +691,23 @@ double checkStrokeScript(const StrokeScript& script, double voxelSize, const Mat
 }
 
 std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& script,
-                                            const std::function<void(const ScriptOpReport&)>& onOp)
+                                            const std::function<void(const ScriptOpReport&)>& onOp, StrokeStart* stroke)
 {
     MaterialTable table = withScriptMaterials(volume.materials(), script);
     const std::vector<std::vector<OpStep>> steps = compileChecked(script, volume.voxelSize(), table);
     volume.materials() = table;
 
     std::vector<ScriptOpReport> reports;
+    std::optional<StrokeStart> ownStroke; // a stroke the script holds whole
     for (std::size_t i = 0; i < script.ops.size(); ++i) {
+        const bool continues = script.ops[i].continuesStroke;
+        const bool continued = i + 1 < script.ops.size() && script.ops[i + 1].continuesStroke;
+        if (!continues) {
+            ownStroke.reset();
+            if (stroke) *stroke = StrokeStart(volume.voxelSize());
+            if (continued && !stroke) ownStroke.emplace(volume.voxelSize());
+        }
+        StrokeStart* keepIn = stroke ? stroke : ownStroke ? &*ownStroke : nullptr;
         const auto start = std::chrono::steady_clock::now();
         ScriptOpReport report;
         report.index = i;
@@ -698,7 +722,9 @@ std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& 
             // The mask is respected by putting back what it keeps once the brush has run.
             std::optional<MaskedVoxels> kept;
             if (volume.mask().any()) kept.emplace(volume, reach);
-            report.stats.append(step.reshape       ? applyFieldBrush(volume, *step.field, *step.reshape)
+            if (keepIn && step.reshape) keepIn->keep(volume, fieldBrushRegion(*step.field, *step.reshape, volume.voxelSize()));
+            const Volume* began = continues && keepIn && step.reshape ? &keepIn->volume() : nullptr;
+            report.stats.append(step.reshape       ? applyFieldBrush(volume, *step.field, *step.reshape, began)
                                 : step.blend > 0.0 ? applyBlendedAdd(volume, *step.field, step.op, step.blend)
                                                    : applyCsg(volume, *step.field, step.op));
             if (kept) kept->restore(volume);

@@ -5,6 +5,7 @@
 #include "sculpt/Csg.h"
 #include "sculpt/FieldBrushes.h"
 #include "sculpt/Symmetry.h"
+#include "sculpt/StrokeStart.h"
 #include "sculpt/GridTool.h"
 #include "vdb_hermite/Materials.h"
 #include "vdb_hermite/Volume.h"
@@ -50,6 +51,7 @@ struct ScriptOp {
     std::optional<Falloff> paintFalloff; // paint: soft, its coverage strength x falloff (SoftPaint.h); absent: hard
     FalloffCurve falloffCurve;   // paint and reshaping brushes with a "falloff" curve
     Symmetry symmetry;           // the op runs once per copy (symmetryCopies), the plain one first
+    bool continuesStroke = false; // inflate, deflate: "stroke": "continue", capped against the stroke's start (StrokeStart.h)
 };
 
 struct StrokeScript {
@@ -94,7 +96,12 @@ struct ScriptOpReport {
 /// as it would, without touching any volume (a caller that must page in what an op reaches checks first).
 /// Returns a bound on the surface the script's brushes make, in square voxels (all ops and copies).
 double checkStrokeScript(const StrokeScript& script, double voxelSize, const MaterialTable& materials);
+/// Inflate and deflate ops marked "stroke": "continue" go on with the stroke the op before them began:
+/// together they move the surface at most distance x strength from where the stroke found it
+/// (applyFieldBrush's cap). `stroke`, when given, carries a stroke across calls (the editor sends a
+/// stroke op by op): each op's reach is kept in it, and an op that does not continue starts it afresh.
 std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& script,
-                                            const std::function<void(const ScriptOpReport&)>& onOp = {});
+                                            const std::function<void(const ScriptOpReport&)>& onOp = {},
+                                            StrokeStart* stroke = nullptr);
 
 } // namespace vdbclay
