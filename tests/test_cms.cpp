@@ -714,7 +714,10 @@ TEST_CASE("CMS at concave creases: few triangles face against the union's normal
     // centroid (the nearest sphere's). Before sharp fans were kept from folding and only convex corners
     // could poke out of a square, about 1 in 180 did; then about 1 in 500; with folded fans given another
     // centre or triangulated without one, and a concave crease's leaning fans triangulated without their
-    // vertex, about 1 in 9,000 over seeds 1-12 (none for seeds 1, 4, 6; at most 1 in 1,600).
+    // vertex, about 1 in 9,000 over seeds 1-12 (36 in 210,942, adaptive). With no face feature where the
+    // normals themselves are less than the sharp angle apart, and a fan whose crease vertex lies in a
+    // sub-voxel gap between the crease's sheets placed elsewhere in its cell, 3 in 210,342 (all at one
+    // triple junction of seed 3, where a third sphere's sliver passes between the lattice's edges).
     // Marching Cubes makes about 1 in 10,000. The goal is none (a bridge across a crease may lean, never
     // fold back): this bounds what is left.
     for (unsigned seed = 1; seed <= 4; ++seed) {
@@ -746,7 +749,7 @@ TEST_CASE("CMS at concave creases: few triangles face against the union's normal
             const Mesh m = meshWith(v, MesherKind::CubicalMarchingSquares, cells);
             requireClosed(m);
             INFO("seed " << seed << (cells == Cells::Uniform ? " uniform" : " adaptive") << ": " << folded(m) * 100.0 << "% folded");
-            CHECK(folded(m) <= 1.0 / 1200.0);
+            CHECK(folded(m) <= 1.0 / 4000.0);
         }
         CHECK(folded(meshWith(v, MesherKind::MarchingCubes, Cells::Uniform)) <= 1.0 / 2000.0);
     }
@@ -756,7 +759,9 @@ TEST_CASE("CMS at concave creases of boxes added to a ball, on and off the latti
 {
     // Three boxes crossing a ball at random places, centred on lattice points (odd seeds) or off them; the
     // union's analytic normal is its distance's gradient at each triangle's centroid. The goal is none;
-    // about 1 in 20,000 is left (at most 1 in 2,300 for one seed, adaptive).
+    // about 1 in 20,000 is left over seeds 1-4 (at most 1 in 2,300 for one seed, adaptive), 13 in 113,338
+    // over seeds 1-12: slivers a few hundredths of a voxel wide where a box's face lies that close to a
+    // lattice plane and the sphere's crossing.
     for (unsigned seed = 1; seed <= 4; ++seed) {
         std::mt19937 rng(seed);
         std::uniform_real_distribution<double> u(-1.0, 1.0);

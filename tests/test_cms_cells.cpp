@@ -178,7 +178,10 @@ TEST_CASE("CMS meshes smooth cells from the corner-case table exactly as the fac
             INFO((adaptive ? "adaptive: " : "voxel cells: ") << shortcut.cellsFromCaseTable() << " of "
                                                               << shortcut.cellsMeshed() << " cells from the table");
             CHECK(share >= (adaptive ? c.minAdaptiveShareFromTable : c.minShareFromTable));
-            CHECK(share < 1.0); // each shape also has cells the walk must take
+            // Each shape with creases also has cells the walk must take; a sphere's voxel cells have no
+            // normals a sharp angle apart, so the table takes them all (wide cells may span one).
+            if (std::string(c.name) == "sphere" && !adaptive) CHECK(share == 1.0);
+            else CHECK(share < 1.0);
         }
     }
 }

@@ -33,6 +33,7 @@
 #include <algorithm>
 #include <cmath>
 #include <initializer_list>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <vector>
@@ -136,11 +137,14 @@ double normalDot(const std::array<T, 3>& a, const std::array<T, 3>& b)
 }
 
 /// Whether the normals at the two ends of a segment on a face with normal `axis`, projected onto the
-/// face, span the sharp angle there: the segment is then a candidate for a 2D sharp feature. A normal
-/// along the axis has no direction on the face.
+/// face, span the sharp angle there, and so do the normals themselves: the segment is then a candidate
+/// for a 2D sharp feature. A normal along the axis has no direction on the face, and a surface nearly
+/// parallel to the face turns its normals' small differences into wide angles on it: a feature the
+/// surface does not have, whose fan folds.
 template<typename T>
 bool segmentBends(const std::array<T, 3>& normalA, const std::array<T, 3>& normalB, int axis, double cosSharp)
 {
+    if (normalDot(normalA, normalB) > cosSharp * std::sqrt(normalDot(normalA, normalA) * normalDot(normalB, normalB))) return false;
     const Vec2 a = project(normalA, axis), b = project(normalB, axis);
     const double aa = a.x * a.x + a.y * a.y, bb = b.x * b.x + b.y * b.y;
     if (aa < 1e-12 || bb < 1e-12) return false;
@@ -165,6 +169,12 @@ constexpr double kFeatureInsetVoxels = 1e-4;
 constexpr double kFoldCosine = 0.5;
 /// How far apart two wedge chains reaching into one clear band from opposite sides stay at least.
 constexpr double kBandGapVoxels = 1e-2;
+
+/// A cell's place in world units: its lowest corner and width.
+struct CellBox {
+    std::array<double, 3> lo{};
+    double width = 1.0;
+};
 
 /// Buffers reused from cell to cell and leaf to leaf.
 struct CubicalMarchingSquaresMesher::Buffers {
@@ -291,13 +301,17 @@ struct CubicalMarchingSquaresMesher::Buffers {
     /// vertex i to the next, gets `materials[i]`. A sharp vertex (`sharp`) is first kept off its loop;
     /// a loop's mean point lies inside it.
     void addFan(std::array<double, 3> centre, const std::array<double, 3>& normalSum, const uint32_t* ids,
-                const MaterialId* materials, std::size_t n, bool sharp)
+                const MaterialId* materials, std::size_t n, bool sharp, const CellBox& cell)
     {
         if (sharp) keepFanOpen(centre, ids, n);
-        // Nearer the mean point first, then the loop alone. A concave crease's vertex (below its loop's
-        // mean point) whose fan leans back past one loop point's normal gives way to the loop alone too.
-        if (foldsOfFan(centre, ids, n) > 0 && !unfoldFan(centre, ids, n) && triangulateLoop(ids, materials, n)) return;
-        if (sharp && concaveFeature(centre, normalSum, ids, n) && leansOfFan(centre, ids, n) > 0 && triangulateLoop(ids, materials, n)) return;
+        // Nearer the mean point first, then the loop alone, then anywhere in the cell. A concave crease's
+        // vertex (below its loop's mean point) whose fan leans back past one loop point's normal gives way
+        // to the loop alone too.
+        if (foldsOfFan(centre, ids, n) > 0 && !unfoldFan(centre, ids, n)) {
+            if (triangulateLoop(ids, materials, n)) return;
+            placeUnfolded(centre, ids, n, cell);
+        }
+        if (sharp && concaveFeature(centre, normalSum, ids, n) && leansOfFan(centre, ids, n) > 0 && triangulateLoop(ids, materials, n, 3)) return;
         const double length = std::sqrt(normalSum[0] * normalSum[0] + normalSum[1] * normalSum[1] + normalSum[2] * normalSum[2]);
         const double scale = length > 0.0 ? 1.0 / length : 0.0;
         const uint32_t c = addVertex(kUnsharedVertex, {float(centre[0]), float(centre[1]), float(centre[2])},
@@ -398,6 +412,51 @@ struct CubicalMarchingSquaresMesher::Buffers {
         return false;
     }
 
+    /// Where a crease's two sheets close to under a voxel apart, the edges keep one crossing each and the
+    /// crease's vertex lands in the gap between the sheets, where the fan folds whether it sits there or
+    /// at the loop's mean point. Another point of the cell may fan its loop without folding: one of a
+    /// lattice of candidates across the cell (inset from its sides) that folds none and lies as near the
+    /// loop's tangent planes as the vertex does, within a twentieth of a voxel (so a corner the planes
+    /// agree on, exact even where its fan folds, stays where it is). Of those, the one
+    /// whose triangles lean back least, then the nearest to the planes. The fan stays inside its cell,
+    /// so it meets no other cell's triangles. Keeps `centre` when none does.
+    void placeUnfolded(std::array<double, 3>& centre, const uint32_t* ids, std::size_t n, const CellBox& cell) const
+    {
+        constexpr int kSteps = 6;
+        const double inset = kFeatureInsetVoxels * voxelSize, span = cell.width - 2.0 * inset;
+        const double allowed = tangentPlaneGap(centre, ids, n) + 0.05 * voxelSize;
+        std::pair<int, double> best{std::numeric_limits<int>::max(), 0.0};
+        std::array<double, 3> chosen = centre;
+        for (int i = 0; i <= kSteps; ++i)
+            for (int j = 0; j <= kSteps; ++j)
+                for (int k = 0; k <= kSteps; ++k) {
+                    const std::array<double, 3> at{cell.lo[0] + inset + span * i / kSteps, cell.lo[1] + inset + span * j / kSteps,
+                                                   cell.lo[2] + inset + span * k / kSteps};
+                    const double gap = tangentPlaneGap(at, ids, n);
+                    if (gap > allowed || foldsOfFan(at, ids, n) > 0) continue;
+                    const std::pair<int, double> score{leansOfFan(at, ids, n), gap};
+                    if (score < best) {
+                        best = score;
+                        chosen = at;
+                    }
+                }
+        centre = chosen;
+    }
+
+    /// How far a point lies from the farthest of the tangent planes at a loop's points.
+    double tangentPlaneGap(const std::array<double, 3>& at, const uint32_t* ids, std::size_t n) const
+    {
+        const auto& positions = chunk.mesh.positions;
+        const auto& normals = chunk.mesh.normals;
+        double gap = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const auto& p = positions[ids[i]];
+            const auto& m = normals[ids[i]];
+            gap = std::max(gap, std::fabs((at[0] - p[0]) * m[0] + (at[1] - p[1]) * m[1] + (at[2] - p[2]) * m[2]));
+        }
+        return gap;
+    }
+
     std::array<double, 3> loopMean(const uint32_t* ids, std::size_t n) const
     {
         std::array<double, 3> mean{};
@@ -433,10 +492,11 @@ struct CubicalMarchingSquaresMesher::Buffers {
     /// programming over the loop) so that the fewest triangles fold, then the triangles best face the
     /// loop's normals. A diagonal between two points that may share a cell face (an equal coordinate)
     /// is never drawn: the cell beside could draw it too. Returns false, adding nothing, when the loop
-    /// has several materials, no triangulation avoids such diagonals, or the best still folds.
-    bool triangulateLoop(const uint32_t* ids, const MaterialId* materials, std::size_t n)
+    /// has several materials, no triangulation avoids such diagonals, or the best still folds, or it has
+    /// fewer than `fewest` points (a loop of three is its own triangle, which cuts a convex corner off).
+    bool triangulateLoop(const uint32_t* ids, const MaterialId* materials, std::size_t n, std::size_t fewest = 4)
     {
-        if (n < 4 || n > 24) return false;
+        if (n < fewest || n > 24) return false;
         for (std::size_t i = 1; i < n; ++i)
             if (materials[i] != materials[0]) return false;
         const auto& p = chunk.mesh.positions;
@@ -1403,7 +1463,9 @@ private:
                 }
             }
         }
-        ctx_.buffers.addFan(centre, normalSum, ids.data(), pieceMaterials.data(), n, sharp);
+        const double vs = ctx_.voxelSize;
+        ctx_.buffers.addFan(centre, normalSum, ids.data(), pieceMaterials.data(), n, sharp,
+                            CellBox{{base_[0] * vs, base_[1] * vs, base_[2] * vs}, width_ * vs});
     }
 
     LeafContext& ctx_;
@@ -1506,7 +1568,8 @@ bool meshSmoothCell(LeafContext& ctx, const Coord& base, int width, const Materi
             ids[i] = b.crossingVertex(slots[begin + i], x);
         }
         for (double& c : centre) c /= double(size);
-        b.addFan(centre, normalSum, ids, materials, std::size_t(size), false);
+        b.addFan(centre, normalSum, ids, materials, std::size_t(size), false,
+                 CellBox{{base[0] * ctx.voxelSize, base[1] * ctx.voxelSize, base[2] * ctx.voxelSize}, width * ctx.voxelSize});
     }
     return true;
 }
