@@ -90,6 +90,7 @@ struct UiDriver {
         button = false;
         const bool stillOpen = open && editor.frame();
         pointer.reset();
+        editor.finishEdits();
         return stillOpen;
     }
 };
@@ -134,6 +135,7 @@ struct XInput {
         key(symbol, true);
         key(symbol, false);
         REQUIRE(editor.frame());
+        editor.finishEdits();
     }
     /// A left-button drag from (x0, y0) in `steps` moves of (dx, dy), a frame after each event.
     void drag(double x0, double y0, double dx, double dy, int steps)
@@ -148,8 +150,17 @@ struct XInput {
         }
         button(1, false);
         REQUIRE(editor.frame());
+        editor.finishEdits();
     }
 };
+
+/// One frame, then what its input gave the edit worker applied: the session may be read.
+bool settledFrame(DesktopEditor& editor)
+{
+    const bool open = editor.frame();
+    editor.finishEdits();
+    return open;
+}
 
 /// Whether there is no display to test on, warning that the test is skipped.
 bool skippedWithoutDisplay()
@@ -184,9 +195,9 @@ TEST_CASE("desktop: a mouse stroke through the window equals its replay, a menu 
     UiDriver ui;
     std::unique_ptr<DesktopEditor> editor = openEditor(session, ui.options());
     if (!editor) return;
-    for (int i = 0; i < 3; ++i) REQUIRE(editor->frame());
+    for (int i = 0; i < 3; ++i) REQUIRE(settledFrame(*editor));
     session.scene().waitForLoads();
-    for (int i = 0; i < 2; ++i) REQUIRE(editor->frame());
+    for (int i = 0; i < 2; ++i) REQUIRE(settledFrame(*editor));
     CHECK(editor->lastFrame().triangles > 1000);
 
     // A stroke as the X server delivers it (XTEST: the pointer moves, the left button goes down, the
@@ -249,12 +260,12 @@ TEST_CASE("desktop: edits recovered after a crash are offered: kept, or dropped 
         REQUIRE(session.recoveredEdits() > 0);
         std::unique_ptr<DesktopEditor> editor = openEditor(session, ui.options());
         if (!editor) return;
-        for (int i = 0; i < 2; ++i) REQUIRE(editor->frame());
+        for (int i = 0; i < 2; ++i) REQUIRE(settledFrame(*editor));
         INFO(answer);
         if (answer == "Keep them") {
             CHECK(ui.click(*editor, answer)); // the editor goes on, the edits stay
             CHECK_FALSE(editor->discardRecoveryRequested());
-            REQUIRE(editor->frame());
+            REQUIRE(settledFrame(*editor));
             CHECK_FALSE(editor->widgetRect("Keep them")); // the dialog is gone
             CHECK_FALSE(identical(committed(session), saved));
         } else {
@@ -278,9 +289,9 @@ std::unique_ptr<DesktopEditor> readyEditor(EditingSession& session, UiDriver& ui
 {
     std::unique_ptr<DesktopEditor> editor = openEditor(session, ui.options());
     if (!editor) return nullptr;
-    for (int i = 0; i < 3; ++i) REQUIRE(editor->frame());
+    for (int i = 0; i < 3; ++i) REQUIRE(settledFrame(*editor));
     session.scene().waitForLoads();
-    for (int i = 0; i < 2; ++i) REQUIRE(editor->frame());
+    for (int i = 0; i < 2; ++i) REQUIRE(settledFrame(*editor));
     return editor;
 }
 
@@ -330,7 +341,7 @@ TEST_CASE("desktop: a sideways drag stays on the ball as the stroke found it, Ct
         x.key(modifier, true);
         x.drag(440, 320, 8.0, 0.0, 6);
         x.key(modifier, false);
-        REQUIRE(editor->frame());
+        REQUIRE(settledFrame(*editor));
         INFO(expected);
         CHECK(session.brush().mode == "add");
         const nlohmann::json ops = session.appliedScript().at("ops");
@@ -343,7 +354,7 @@ TEST_CASE("desktop: a sideways drag stays on the ball as the stroke found it, Ct
     x.key(XK_Control_L, true);
     x.tap(XK_s);
     x.key(XK_Control_L, false);
-    REQUIRE(editor->frame());
+    REQUIRE(settledFrame(*editor));
     CHECK_FALSE(session.unsaved());
     CHECK(editor->title() == "VDBClay - ball.vdb");
     CHECK(editor->validationMessages() == 0);
@@ -360,7 +371,7 @@ TEST_CASE("desktop: the wheel zooms up to two voxels from the surface and it is 
     XInput x(*editor);
     const std::array<int, 2> size{800, 600};
     x.moveTo(400, 300);
-    REQUIRE(editor->frame());
+    REQUIRE(settledFrame(*editor));
     const auto gap = [&] {
         const Ray r = pointerRay(session.camera(), size, 400, 300);
         const auto hit = session.pick(r.origin, r.direction);
@@ -372,14 +383,14 @@ TEST_CASE("desktop: the wheel zooms up to two voxels from the surface and it is 
     while (gap() > 2.0 && notches < 100) {
         x.button(4, true); // the wheel, one notch towards the scene
         x.button(4, false);
-        REQUIRE(editor->frame());
+        REQUIRE(settledFrame(*editor));
         ++notches;
     }
     INFO("from " << framed << " to " << gap() << " voxels in " << notches << " notches");
     REQUIRE(gap() <= 2.0);
-    for (int i = 0; i < 3; ++i) REQUIRE(editor->frame());
+    for (int i = 0; i < 3; ++i) REQUIRE(settledFrame(*editor));
     session.scene().waitForLoads();
-    REQUIRE(editor->frame());
+    REQUIRE(settledFrame(*editor));
     CHECK(editor->lastFrame().triangles > 0);
 
     // F12 writes the view as drawn: the surface fills its centre (the near plane used to cut it away).
@@ -422,7 +433,8 @@ TEST_CASE("desktop: a grab dragged three radii keeps the grabbed point under the
     Command setFull;
     setFull.kind = Command::Kind::SetBrush;
     setFull.brush = full;
-    session.apply(setFull);
+    editor->submit(setFull);
+    editor->finishEdits();
     // Three radii on the screen at the grabbed point's depth.
     const render::Camera& camera = session.camera();
     const double depth = distance(camera.eye, camera.target) - 20.0;
@@ -456,11 +468,11 @@ TEST_CASE("desktop: the overlay's frame interval agrees with the wall clock, its
         std::unique_ptr<DesktopEditor> editor = readyEditor(session, ui);
         if (!editor) return;
         XInput x(*editor);
-        REQUIRE(editor->frame());
+        REQUIRE(settledFrame(*editor));
         double reported = 0.0;
         const auto start = std::chrono::steady_clock::now();
         for (int i = 0; i < 100; ++i) {
-            REQUIRE(editor->frame());
+            REQUIRE(settledFrame(*editor));
             const FrameFigures& f = editor->figures();
             reported += f.intervalMs;
             const double parts = f.inputMs + f.sculptMs + f.streamMs + f.meshMs + f.drawMs + f.presentMs;

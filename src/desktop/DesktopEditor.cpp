@@ -135,7 +135,7 @@ struct DesktopEditor::Impl {
     enum class Adjust { None, Radius, Strength }; // F and Shift+F: the brush's size or strength follows the pointer
 
     DesktopEditor& self;
-    EditingSession& session;
+    EditingSession& session; // safe from this thread: its scene, pick() and paths; the rest goes through the worker
     DesktopOptions options;
     std::string configFolder;
     DesktopSettings settings;
@@ -175,13 +175,16 @@ struct DesktopEditor::Impl {
     const SessionRecord* replay = nullptr;
     std::size_t replayNext = 0;
     MaterialTable drawnMaterials; // what the renderer was last given
+    uint64_t savesShown = 0;      // the worker's saves the status line has told of
+    // Edits, undo, autosave and saves run here, in the order submitted: the frame never waits for them.
+    SessionWorker worker;
 
     render::MaterialLook look() const
     {
         return render::materialLook(session.scene().store().voxelSize(), std::filesystem::path(session.scenePath()).parent_path().string());
     }
 
-    Impl(DesktopEditor& editor, EditingSession& s, const DesktopOptions& o) : self(editor), session(s), options(o)
+    Impl(DesktopEditor& editor, EditingSession& s, const DesktopOptions& o) : self(editor), session(s), options(o), worker(s)
     {
         configFolder = options.configFolder.value_or(defaultConfigFolder());
         std::string warning;
@@ -213,7 +216,7 @@ struct DesktopEditor::Impl {
     void apply(const Command& c)
     {
         try {
-            session.apply(c);
+            worker.submit(c);
         } catch (const std::exception& e) {
             panels.status = std::string(commandName(c.kind)) + " failed: " + e.what();
             std::cerr << "vdbclay: " << panels.status << "\n";
@@ -236,7 +239,7 @@ struct DesktopEditor::Impl {
         apply(c);
     }
 
-    Ray rayAt(double x, double y) const { return pointerRay(session.camera(), windowSize(), x, y); }
+    Ray rayAt(double x, double y) const { return pointerRay(worker.camera(), windowSize(), x, y); }
 
     std::optional<SurfaceHit> pickAt(double x, double y) const
     {
@@ -270,7 +273,7 @@ struct DesktopEditor::Impl {
     {
         adjust = what;
         adjustFromX = cursorX;
-        adjusted = session.brush();
+        adjusted = worker.brush();
     }
 
     void onMouseButton(int button, int action, int mods)
@@ -291,8 +294,8 @@ struct DesktopEditor::Impl {
         const bool alt = mods & GLFW_MOD_ALT, shift = mods & GLFW_MOD_SHIFT, ctrl = mods & GLFW_MOD_CONTROL;
         if (button == GLFW_MOUSE_BUTTON_LEFT && !alt) {
             // Ctrl and Shift change the brush for this stroke only: the commands say so, so a replay does too.
-            if (const auto modified = modifiedBrush(session.brush(), ctrl, shift)) {
-                brushBeforeModifier = session.brush();
+            if (const auto modified = modifiedBrush(worker.brush(), ctrl, shift)) {
+                brushBeforeModifier = worker.brush();
                 setBrush(*modified);
             }
             drag = Drag::Stroke;
@@ -314,9 +317,9 @@ struct DesktopEditor::Impl {
         cursorX = x;
         cursorY = y;
         if (adjust == Adjust::Radius) {
-            adjusted.radius = std::max(session.brush().radius * std::exp((x - adjustFromX) / 150.0), 0.1 * session.scene().store().voxelSize());
+            adjusted.radius = std::max(worker.brush().radius * std::exp((x - adjustFromX) / 150.0), 0.1 * session.scene().store().voxelSize());
         } else if (adjust == Adjust::Strength) {
-            adjusted.strength = std::clamp(session.brush().strength + (x - adjustFromX) / 300.0, 0.0, 1.0);
+            adjusted.strength = std::clamp(worker.brush().strength + (x - adjustFromX) / 300.0, 0.0, 1.0);
         }
         switch (drag) {
         case Drag::Stroke: {
@@ -329,9 +332,9 @@ struct DesktopEditor::Impl {
             break;
         }
         case Drag::Orbit:
-            setCamera(orbitPivot ? orbitAbout(session.camera(), *orbitPivot, dx * 0.3, dy * 0.3) : orbit(session.camera(), dx * 0.3, dy * 0.3));
+            setCamera(orbitPivot ? orbitAbout(worker.camera(), *orbitPivot, dx * 0.3, dy * 0.3) : orbit(worker.camera(), dx * 0.3, dy * 0.3));
             break;
-        case Drag::Pan: setCamera(pan(session.camera(), windowSize(), dx, dy)); break;
+        case Drag::Pan: setCamera(pan(worker.camera(), windowSize(), dx, dy)); break;
         case Drag::None: break;
         }
     }
@@ -342,8 +345,8 @@ struct DesktopEditor::Impl {
         const auto hit = pickAt(cursorX, cursorY);
         const std::optional<std::array<double, 3>> toward = hit ? std::optional<std::array<double, 3>>(hit->point) : std::nullopt;
         // A parallel view zooms by narrowing: moving its far eye closer would bring perspective back.
-        setCamera(perspectiveFov ? zoomByFieldOfView(session.camera(), std::pow(1.15, dy), toward)
-                                 : zoomToward(session.camera(), std::pow(1.15, dy), toward));
+        setCamera(perspectiveFov ? zoomByFieldOfView(worker.camera(), std::pow(1.15, dy), toward)
+                                 : zoomToward(worker.camera(), std::pow(1.15, dy), toward));
     }
 
     void frameScene()
@@ -357,11 +360,11 @@ struct DesktopEditor::Impl {
     void toggleParallel()
     {
         if (perspectiveFov) {
-            setCamera(perspectiveView(session.camera(), *perspectiveFov));
+            setCamera(perspectiveView(worker.camera(), *perspectiveFov));
             perspectiveFov.reset();
         } else {
-            perspectiveFov = session.camera().fovYDegrees;
-            setCamera(parallelView(session.camera()));
+            perspectiveFov = worker.camera().fovYDegrees;
+            setCamera(parallelView(worker.camera()));
         }
     }
 
@@ -372,10 +375,10 @@ struct DesktopEditor::Impl {
             panels.status = "no surface under the cursor to centre the view on";
             return;
         }
-        const render::Camera& c = session.camera();
+        const render::Camera& c = worker.camera();
         const double distance = std::sqrt(std::pow(c.target[0] - c.eye[0], 2) + std::pow(c.target[1] - c.eye[1], 2) + std::pow(c.target[2] - c.eye[2], 2));
         // A parallel view keeps its far eye (its scale is its field of view).
-        setCamera(frameOn(c, hit->point, perspectiveFov ? distance : std::min(distance, 12.0 * session.brush().radius)));
+        setCamera(frameOn(c, hit->point, perspectiveFov ? distance : std::min(distance, 12.0 * worker.brush().radius)));
     }
 
     /// F12: the view as drawn, into SCENE-shot-N.png beside the scene (the first N not taken).
@@ -398,7 +401,7 @@ struct DesktopEditor::Impl {
             request.height = size[1];
             request.textureFolder = scene.parent_path().string();
             request.shading = renderer->shading();
-            render::Camera camera = session.camera();
+            render::Camera camera = worker.camera();
             const auto [lo, hi] = session.shownBox();
             render::fitNearPlane(camera, lo, hi);
             render::writePng(render::renderStreamed(*context, session.scene(), camera, request).image, path);
@@ -429,7 +432,7 @@ struct DesktopEditor::Impl {
         if (rightHeld && !ctrl && std::find(std::begin(flyKeys), std::end(flyKeys), key) != std::end(flyKeys)) return; // flying (per frame)
         const std::optional<KeyAction> bound = keymap.actionFor(key, mods);
         if (!bound) return;
-        BrushSettings b = session.brush();
+        BrushSettings b = worker.brush();
         Command c;
         const auto mode = [&](const char* m) {
             b.mode = m;
@@ -440,8 +443,7 @@ struct DesktopEditor::Impl {
         case KeyAction::Redo: c.kind = Command::Kind::Redo; return apply(c);
         case KeyAction::Save:
             c.kind = Command::Kind::Save;
-            apply(c);
-            if (!session.unsaved()) panels.status = "saved " + session.scenePath();
+            apply(c); // the status line shows it under way, then saved (or why not)
             return;
         case KeyAction::Screenshot: return screenshot();
         case KeyAction::ModeAdd: return mode("add");
@@ -472,12 +474,12 @@ struct DesktopEditor::Impl {
         case KeyAction::MirrorX: return toggleMirrorX(b);
         case KeyAction::FrameAll: return frameScene();
         case KeyAction::FrameCursor: return frameCursor();
-        case KeyAction::ViewFront: return setCamera(axisView(session.camera(), AxisView::Front));
-        case KeyAction::ViewBack: return setCamera(axisView(session.camera(), AxisView::Back));
-        case KeyAction::ViewRight: return setCamera(axisView(session.camera(), AxisView::Right));
-        case KeyAction::ViewLeft: return setCamera(axisView(session.camera(), AxisView::Left));
-        case KeyAction::ViewTop: return setCamera(axisView(session.camera(), AxisView::Top));
-        case KeyAction::ViewBottom: return setCamera(axisView(session.camera(), AxisView::Bottom));
+        case KeyAction::ViewFront: return setCamera(axisView(worker.camera(), AxisView::Front));
+        case KeyAction::ViewBack: return setCamera(axisView(worker.camera(), AxisView::Back));
+        case KeyAction::ViewRight: return setCamera(axisView(worker.camera(), AxisView::Right));
+        case KeyAction::ViewLeft: return setCamera(axisView(worker.camera(), AxisView::Left));
+        case KeyAction::ViewTop: return setCamera(axisView(worker.camera(), AxisView::Top));
+        case KeyAction::ViewBottom: return setCamera(axisView(worker.camera(), AxisView::Bottom));
         case KeyAction::Parallel: return toggleParallel();
         case KeyAction::Turntable: turntable = !turntable; return;
         case KeyAction::ShadingNext:
@@ -490,7 +492,7 @@ struct DesktopEditor::Impl {
         case KeyAction::Stats: panels.showStats = !panels.showStats; return;
         case KeyAction::EndStroke:
             if (adjust != Adjust::None) adjust = Adjust::None;
-            else if (session.strokeActive()) endStroke();
+            else if (drag == Drag::Stroke || worker.snapshot().strokeActive) endStroke();
             return;
         }
     }
@@ -501,7 +503,7 @@ struct DesktopEditor::Impl {
         const auto held = [&](int k) { return glfwGetKey(window, k) == GLFW_PRESS ? 1.0 : 0.0; };
         const double f = held(GLFW_KEY_W) - held(GLFW_KEY_S), r = held(GLFW_KEY_D) - held(GLFW_KEY_A), u = held(GLFW_KEY_E) - held(GLFW_KEY_Q);
         if (f == 0.0 && r == 0.0 && u == 0.0) return;
-        const render::Camera& c = session.camera();
+        const render::Camera& c = worker.camera();
         const double dist = std::sqrt(std::pow(c.target[0] - c.eye[0], 2) + std::pow(c.target[1] - c.eye[1], 2) + std::pow(c.target[2] - c.eye[2], 2));
         const double speed = 0.5 * dist * seconds; // half the distance to the target per second
         setCamera(fly(c, f * speed, r * speed, u * speed));
@@ -579,14 +581,14 @@ struct DesktopEditor::Impl {
 
     std::string windowTitle() const
     {
-        return "VDBClay - " + std::filesystem::path(session.scenePath()).filename().string() + (session.unsaved() ? " *" : "");
+        return "VDBClay - " + std::filesystem::path(session.scenePath()).filename().string() + (worker.snapshot().unsaved ? " *" : "");
     }
 
     /// What the next session starts with: the brush, the window's size, the panels and the look.
     void keepSettings()
     {
         if (!window || configFolder.empty()) return;
-        settings.brush = brushBeforeModifier.value_or(session.brush());
+        settings.brush = brushBeforeModifier.value_or(worker.brush());
         settings.windowSize = windowSize();
         settings.showStats = panels.showStats;
         settings.showHelp = panels.showHelp;
@@ -649,10 +651,10 @@ struct DesktopEditor::Impl {
             if (!replay && settings.brush) setBrush(*settings.brush);
         }
         flyKeys(std::min(seconds, 0.1));
-        if (turntable) setCamera(orbit(session.camera(), 20.0 * std::min(seconds, 0.1), 0.0)); // 20 degrees a second
+        if (turntable) setCamera(orbit(worker.camera(), 20.0 * std::min(seconds, 0.1), 0.0)); // 20 degrees a second
         if (replay) {
             try {
-                replayNext = applyRecordedFrame(session, *replay, replayNext, frames);
+                replayNext = submitRecordedFrame(worker, *replay, replayNext, frames);
             } catch (const std::exception& e) {
                 panels.status = std::string("the replay stopped: ") + e.what();
                 std::cerr << "vdbclay: " << panels.status << "\n";
@@ -664,13 +666,26 @@ struct DesktopEditor::Impl {
         ImGui_ImplGlfw_NewFrame();
         if (options.beforeUi) options.beforeUi(frames);
         ImGui::NewFrame();
-        for (const Command& c : panels.draw(session, figures)) apply(c);
+        for (const Command& c : panels.draw(worker, figures)) apply(c);
         ImGui::Render();
         if (!panels.openRequested.empty() || panels.discardRecoveryRequested) return false;
-        if (drag == Drag::None) hover = pickAt(cursorX, cursorY);
+        // The brush follows the pointer every frame, whatever the worker has still to do.
+        if (drag == Drag::None || drag == Drag::Stroke) hover = pickAt(cursorX, cursorY);
         const auto inputDone = Clock::now();
 
-        const FrameReport stream = session.frame(now(), windowSize());
+        const FrameReport stream = worker.frame(now(), windowSize());
+        const SessionSnapshot done = worker.snapshot();
+        for (const std::string& failure : worker.takeFailures()) {
+            panels.status = failure;
+            std::cerr << "vdbclay: " << failure << "\n";
+        }
+        if (done.saves > savesShown) {
+            savesShown = done.saves;
+            panels.status = "saved " + done.lastSavedPath;
+        } else if (!done.busy.empty()) {
+            panels.status = done.busy + " ...";
+        }
+        figures.pendingEdits = worker.pending();
         const auto streamed = Clock::now();
         chunks.sync(session.scene(), *renderer);
         figures.bricksShown = session.scene().shownBricks().size();
@@ -687,9 +702,11 @@ struct DesktopEditor::Impl {
             shading.wireframe = panels.wireframe;
             renderer->setShading(shading);
         }
-        const BrushSettings& shownBrush = adjust != Adjust::None ? adjusted : session.brush();
+        const BrushSettings& shownBrush = adjust != Adjust::None ? adjusted : worker.brush();
         const std::optional<std::array<double, 3>> brushAt =
-            session.strokeActive() ? std::optional<std::array<double, 3>>(session.strokePoint()) : hover ? std::optional<std::array<double, 3>>(hover->point) : std::nullopt;
+            worker.brush().mode == "move" && done.strokeActive ? std::optional<std::array<double, 3>>(done.strokePoint)
+            : hover                                             ? std::optional<std::array<double, 3>>(hover->point)
+                                                                : std::nullopt;
         renderer->setBrush(brushAt ? std::optional<render::BrushOverlay>(overlayFor(shownBrush, *brushAt)) : std::nullopt);
         if (const std::string t = windowTitle(); t != title) {
             title = t;
@@ -708,7 +725,7 @@ struct DesktopEditor::Impl {
         }
         const auto acquired = Clock::now();
         render::RenderView view;
-        view.camera = session.camera();
+        view.camera = worker.camera();
         // The near plane follows the camera every frame: zooming up to the surface never cuts it open.
         const auto [lo, hi] = session.shownBox();
         render::fitNearPlane(view.camera, lo, hi);
@@ -720,7 +737,7 @@ struct DesktopEditor::Impl {
 
         figures.stream = stream;
         figures.draw = lastStats;
-        measured.sculptMs = std::min(session.stats().editMsLastFrame, msBetween(start, inputDone));
+        measured.sculptMs = 0.0; // the edit worker sculpts, not this thread
         measured.inputMs = msBetween(start, inputDone) - measured.sculptMs;
         measured.streamMs = msBetween(inputDone, streamed);
         measured.meshMs = msBetween(streamed, meshed);
@@ -786,6 +803,10 @@ const Keymap& DesktopEditor::keymap() const { return impl_->keymap; }
 const std::string& DesktopEditor::title() const { return impl_->title; }
 uint64_t DesktopEditor::validationMessages() const { return impl_->context ? impl_->context->validationMessages() : 0; }
 EditingSession& DesktopEditor::session() { return impl_->session; }
+
+void DesktopEditor::finishEdits() { impl_->worker.waitIdle(); }
+
+void DesktopEditor::submit(const Command& command) { impl_->apply(command); }
 void DesktopEditor::replay(const SessionRecord* record) { impl_->replay = record; impl_->replayNext = 0; }
 std::string DesktopEditor::openRequested() const { return impl_->panels.openRequested; }
 

@@ -86,6 +86,11 @@ public:
     const std::string& title() const;
     uint64_t validationMessages() const;
     EditingSession& session();
+    /// Waits until the edit worker has applied every command the window gave it (the window's frames
+    /// never wait; tests and a scene being closed do).
+    void finishEdits();
+    /// A command as the window's input gives one: to the edit worker (tests).
+    void submit(const Command& command);
 
 private:
     struct Impl;

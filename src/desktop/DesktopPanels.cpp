@@ -131,7 +131,7 @@ nlohmann::json symmetryJson(const SymmetryUi& ui)
 
 } // namespace
 
-std::vector<Command> DesktopPanels::draw(EditingSession& session, const FrameFigures& figures)
+std::vector<Command> DesktopPanels::draw(SessionWorker& session, const FrameFigures& figures)
 {
     std::vector<Command> out;
     widgetRects.clear();
@@ -173,7 +173,7 @@ std::vector<Command> DesktopPanels::draw(EditingSession& session, const FrameFig
     return out;
 }
 
-void DesktopPanels::recoveryOffer(const EditingSession& session)
+void DesktopPanels::recoveryOffer(const SessionWorker& session)
 {
     if (recoveryAnswered_ || session.recoveredEdits() == 0) return;
     const char* title = "Recovered edits";
@@ -211,7 +211,7 @@ void DesktopPanels::track(const std::string& label)
     widgetRects[label] = {lo.x, lo.y, hi.x, hi.y};
 }
 
-void DesktopPanels::brushPanel(EditingSession& session, std::vector<Command>& out)
+void DesktopPanels::brushPanel(SessionWorker& session, std::vector<Command>& out)
 {
     BrushSettings b = session.brush();
     bool changed = false;
@@ -332,7 +332,7 @@ void DesktopPanels::brushPanel(EditingSession& session, std::vector<Command>& ou
     if (changed) out.push_back(brushCommand(b));
 }
 
-void DesktopPanels::customBrushPanel(EditingSession& session, std::vector<Command>& out)
+void DesktopPanels::customBrushPanel(SessionWorker& session, std::vector<Command>& out)
 {
     ImGui::SliderFloat("Blend", &customSmoothness_, 0.0f, 1.0f);
     for (std::size_t i = 0; i < parts_.size(); ++i) {
@@ -395,7 +395,7 @@ void DesktopPanels::customBrushPanel(EditingSession& session, std::vector<Comman
     }
 }
 
-void DesktopPanels::materialsPanel(EditingSession& session, std::vector<Command>& out)
+void DesktopPanels::materialsPanel(SessionWorker& session, std::vector<Command>& out)
 {
     const MaterialTable materials = session.scene().materials();
     for (const std::string& n : materials.names()) {
@@ -426,7 +426,7 @@ void DesktopPanels::materialsPanel(EditingSession& session, std::vector<Command>
     }
 }
 
-void DesktopPanels::toolsPanel(EditingSession& session, std::vector<Command>& out)
+void DesktopPanels::toolsPanel(SessionWorker& session, std::vector<Command>& out)
 {
     ImGui::InputFloat3("Box min", toolMin_);
     ImGui::InputFloat3("Box max", toolMax_);
@@ -436,7 +436,8 @@ void DesktopPanels::toolsPanel(EditingSession& session, std::vector<Command>& ou
             WorldBounds box{Vec3d(toolMin_[0], toolMin_[1], toolMin_[2]), Vec3d(toolMax_[0], toolMax_[1], toolMax_[2])};
             const std::string path = (std::filesystem::path(session.scenePath()).parent_path() / toolPath_).string();
             BrushSettings b = session.brush();
-            b.shape = makeToolFromBox(session, box, path);
+            session.waitIdle(); // the tool is cut from the scene as the edits so far left it
+            b.shape = makeToolFromBox(session.session(), box, path);
             b.radius = 1.0; // a tool keeps its size
             out.push_back(brushCommand(b));
             status = "made the tool " + path + ": the brush now stamps it";
@@ -446,7 +447,7 @@ void DesktopPanels::toolsPanel(EditingSession& session, std::vector<Command>& ou
     }
 }
 
-void DesktopPanels::filePanel(EditingSession& session, std::vector<Command>& out)
+void DesktopPanels::filePanel(SessionWorker& session, std::vector<Command>& out)
 {
     const bool save = ImGui::Button("Save (Ctrl+S)");
     track("Save (Ctrl+S)");
@@ -467,7 +468,7 @@ void DesktopPanels::filePanel(EditingSession& session, std::vector<Command>& out
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("A mesh (.obj, .ply, .stl) or an OpenVDB level set (.vdb)");
 }
 
-void DesktopPanels::fileChosen(EditingSession& session, const std::string& path, std::vector<Command>& out)
+void DesktopPanels::fileChosen(SessionWorker& session, const std::string& path, std::vector<Command>& out)
 {
     const std::string title = browser_.title();
     try {
@@ -481,12 +482,13 @@ void DesktopPanels::fileChosen(EditingSession& session, const std::string& path,
         } else if (title == kImportTitle) {
             Command c;
             c.kind = Command::Kind::ApplyOp;
-            c.op = importIntoScene(session, path, session.brush().material);
+            c.op = importIntoScene(session.session(), path, session.brush().material);
             out.push_back(c);
             status = "imported " + path;
         } else if (title == kExportTitle) {
-            if (std::filesystem::path(path).extension() == ".vdb") exportSceneLevelSet(session, path);
-            else exportSceneMesh(session, path);
+            session.waitIdle(); // the scene as the edits so far left it
+            if (std::filesystem::path(path).extension() == ".vdb") exportSceneLevelSet(session.session(), path);
+            else exportSceneMesh(session.session(), path);
             status = "exported " + path;
         }
     } catch (const std::exception& e) {
@@ -502,7 +504,7 @@ void DesktopPanels::viewPanel()
     ImGui::Checkbox("Wireframe", &wireframe);
 }
 
-void DesktopPanels::statsPanel(const EditingSession& session, const FrameFigures& f)
+void DesktopPanels::statsPanel(const SessionWorker& session, const FrameFigures& f)
 {
     const ImGuiIO& io = ImGui::GetIO();
     ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - 10, 10), ImGuiCond_FirstUseEver, ImVec2(1.0f, 0.0f)); // top right, whatever its width
@@ -527,10 +529,13 @@ void DesktopPanels::statsPanel(const EditingSession& session, const FrameFigures
         const bool nothingShown = f.bricksShown == 0;
         ImGui::TextWrapped("screen error %s px (target %s)%s", nothingShown ? "-" : figure(f.stream.screenError, "%.2f").c_str(),
                            nothingShown ? "-" : figure(f.stream.targetError, "%.2f").c_str(), f.stream.budgetLimited ? ", budget-limited" : "");
-        ImGui::TextWrapped("undo %zu, redo %zu, history %.1f MiB (+%.1f spilled)", session.history().undoDepth(), session.history().redoDepth(),
-                           double(session.history().memoryBytes()) / 1048576.0, double(session.history().spilledBytes()) / 1048576.0);
-        ImGui::TextWrapped("edits %llu, autosaves %llu%s", (unsigned long long)session.scene().edits(), (unsigned long long)session.stats().autosaves,
-                           session.unsaved() ? ", unsaved" : "");
+        const SessionSnapshot done = session.snapshot();
+        ImGui::TextWrapped("pending edits %llu (the edit worker's last frame: %s ms)", (unsigned long long)f.pendingEdits,
+                           figure(done.stats.editMsLastFrame, "%.1f").c_str());
+        ImGui::TextWrapped("undo %zu, redo %zu, history %.1f MiB (+%.1f spilled)", done.undoDepth, done.redoDepth,
+                           double(done.historyBytes) / 1048576.0, double(done.historySpilledBytes) / 1048576.0);
+        ImGui::TextWrapped("edits %llu, autosaves %llu%s", (unsigned long long)session.scene().edits(), (unsigned long long)done.stats.autosaves,
+                           done.unsaved ? ", unsaved" : "");
         ImGui::PopTextWrapPos();
     }
     ImGui::End();

@@ -5,7 +5,7 @@
 #pragma once
 
 #include "desktop/FileBrowser.h"
-#include "editor/EditingSession.h"
+#include "editor/SessionWorker.h"
 #include "render/RenderTypes.h"
 
 #include <nlohmann/json.hpp>
@@ -26,12 +26,13 @@ struct FrameFigures {
     double intervalMs = 0.0;        // the last frame's, wall clock
     double averageIntervalMs = 0.0; // over the frames of about the last second
     double inputMs = 0.0;   // events, menus and commands, sculpting left out
-    double sculptMs = 0.0;  // the commands' edits
+    double sculptMs = 0.0;  // the commands' edits on the frame thread (none: the edit worker applies them)
     double streamMs = 0.0;  // the session's frame: streaming, autosave
     double meshMs = 0.0;    // meshing changed bricks and handing them to the renderer
     double drawMs = 0.0;    // culling, uploads, recording and the device's work until it finished
     double presentMs = 0.0; // acquiring and presenting the swapchain image
     uint64_t bricksShown = 0;
+    uint64_t pendingEdits = 0; // commands queued for the edit worker or under way
 };
 
 struct CustomBrushPart {
@@ -46,7 +47,7 @@ class DesktopPanels {
 public:
     /// Builds this frame's panels (between ImGui::NewFrame and ImGui::Render) and returns the commands
     /// they issued, in order. File actions that write other files run here and report in `status`.
-    std::vector<Command> draw(EditingSession& session, const FrameFigures& figures);
+    std::vector<Command> draw(SessionWorker& session, const FrameFigures& figures);
 
     /// Where some widgets were drawn in the last frame (min x, min y, max x, max y; window pixels), by label:
     /// "mirror x", "mirror y", "mirror z", "Use as brush", "Save (Ctrl+S)", "Keep them", "Discard them".
@@ -67,15 +68,15 @@ public:
 
 private:
     void track(const std::string& label);
-    void brushPanel(EditingSession& session, std::vector<Command>& out);
-    void customBrushPanel(EditingSession& session, std::vector<Command>& out);
-    void materialsPanel(EditingSession& session, std::vector<Command>& out);
-    void toolsPanel(EditingSession& session, std::vector<Command>& out);
-    void filePanel(EditingSession& session, std::vector<Command>& out);
+    void brushPanel(SessionWorker& session, std::vector<Command>& out);
+    void customBrushPanel(SessionWorker& session, std::vector<Command>& out);
+    void materialsPanel(SessionWorker& session, std::vector<Command>& out);
+    void toolsPanel(SessionWorker& session, std::vector<Command>& out);
+    void filePanel(SessionWorker& session, std::vector<Command>& out);
     void viewPanel();
-    void fileChosen(EditingSession& session, const std::string& path, std::vector<Command>& out);
-    void statsPanel(const EditingSession& session, const FrameFigures& figures);
-    void recoveryOffer(const EditingSession& session);
+    void fileChosen(SessionWorker& session, const std::string& path, std::vector<Command>& out);
+    void statsPanel(const SessionWorker& session, const FrameFigures& figures);
+    void recoveryOffer(const SessionWorker& session);
 
     bool recoveryAnswered_ = false;
     std::vector<CustomBrushPart> parts_{CustomBrushPart{}};

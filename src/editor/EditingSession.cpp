@@ -45,7 +45,7 @@ std::pair<std::array<double, 3>, std::array<double, 3>> EditingSession::sceneBox
 {
     const double h = scene_->store().voxelSize();
     std::array<double, 3> lo{-32 * h, -32 * h, -32 * h}, hi{32 * h, 32 * h, 32 * h};
-    if (const auto bounds = scene_->store().bounds())
+    if (const auto bounds = scene_->storeBounds())
         for (std::size_t a = 0; a < 3; ++a) {
             lo[a] = double(bounds->first[a]) * h;
             hi[a] = double(bounds->second[a] + 1) * h; // the far side of the last voxel: a one-voxel scene is framed whole
@@ -334,8 +334,19 @@ void EditingSession::defineMaterial(const nlohmann::json& material)
 
 FrameReport EditingSession::frame(double time, const std::array<int, 2>& viewport)
 {
+    const FrameReport report = streamView(camera_, viewport);
+    advanceFrame(time, viewport);
+    return report;
+}
+
+FrameReport EditingSession::streamView(const render::Camera& camera, const std::array<int, 2>& viewport)
+{
+    return scene_->frame(viewerOf(camera, viewport));
+}
+
+void EditingSession::advanceFrame(double time, const std::array<int, 2>& viewport)
+{
     time_ = std::max(time_, time);
-    const FrameReport report = scene_->frame(viewerOf(camera_, viewport));
     stats_.editMsLastFrame = editMs_;
     stats_.bricksChangedLastFrame = bricksChanged_;
     editMs_ = 0.0;
@@ -346,7 +357,6 @@ FrameReport EditingSession::frame(double time, const std::array<int, 2>& viewpor
     ++frameNumber_;
     record_.frames = frameNumber_;
     record_.viewport = viewport;
-    return report;
 }
 
 void EditingSession::autosave()

@@ -65,8 +65,15 @@ public:
     void apply(const Command& command);
 
     /// One frame at `time` seconds since the session began: streams for the camera's view at this
-    /// viewport and autosaves when due. Commands applied next belong to the next frame.
+    /// viewport and autosaves when due. Commands applied next belong to the next frame. The two halves,
+    /// streamView then advanceFrame.
     FrameReport frame(double time, const std::array<int, 2>& viewport);
+    /// Streams for a view: the loaders' selection for `camera` at `viewport`. Touches the scene alone, so a
+    /// frame thread may call it while a SessionWorker applies commands.
+    FrameReport streamView(const render::Camera& camera, const std::array<int, 2>& viewport);
+    /// The session's side of a frame: its clock, the last frame's figures, an autosave when due, the
+    /// record's frame count.
+    void advanceFrame(double time, const std::array<int, 2>& viewport);
 
     /// The surface under a ray, from the resident data of any level (no loading).
     std::optional<SurfaceHit> pick(const std::array<double, 3>& origin, const std::array<double, 3>& direction,

@@ -104,6 +104,7 @@ struct StreamingScene::Impl {
     BrickSet staleInFlight; // loads an autosave's LOD update overtook: discarded on arrival
     BrickSet damaged;       // bricks the store could not give: shown by their ancestors, not loaded again
     BrickSet wanted;        // the current frame's accepted selection and fallbacks
+    BrickSet pinned;        // level-0 bricks an edit is working on outside the lock: never evicted
     uint64_t residentBytes = 0, inFlightBytes = 0; // resident: bricks and meshes
     uint64_t meshBytes = 0;
     double meshShare = 0.0; // a mesh's bytes over its brick's, lately: estimates what a brick's mesh will take
@@ -467,7 +468,7 @@ struct StreamingScene::Impl {
         while (residentBytes + inFlightBytes + needed > options.memoryBudgetBytes) {
             auto victim = resident.end();
             for (auto it = resident.begin(); it != resident.end(); ++it) {
-                if (wanted.count(it->first)) continue;
+                if (wanted.count(it->first) || pinned.count(it->first)) continue;
                 if (victim == resident.end() || it->second.lastUsed < victim->second.lastUsed) victim = it;
             }
             if (victim == resident.end()) return false;
@@ -568,12 +569,11 @@ struct StreamingScene::Impl {
         return work;
     }
 
-    /// The leaf boxes of brick `b` where `work` differs from the resident data, with the bounds of what
-    /// differs; only boxes some range reaches are compared. Lock held.
-    std::vector<BlockChange> changedLeaves(const IndexCoord& b, const Volume& work, const std::vector<VoxelRange>& reached) const
+    /// The leaf boxes of brick `b` where `work` differs from `fine`, with the bounds of what differs;
+    /// only boxes some range reaches are compared.
+    static std::vector<BlockChange> changedLeaves(const IndexCoord& b, const Volume& fine, const Volume& work, const std::vector<VoxelRange>& reached)
     {
         std::vector<BlockChange> out;
-        const Volume& fine = levelVolumes[0];
         const LeafAlignedBox box = brickBox(b);
         for (int32_t z = 0; z < box.edge; z += kLeafDim)
             for (int32_t y = 0; y < box.edge; y += kLeafDim)
@@ -598,12 +598,12 @@ struct StreamingScene::Impl {
         return out;
     }
 
-    /// The leaves of the resident data and of `work` at the origins given, before and after. Lock held.
-    void recordLeafChanges(const std::vector<BlockChange>& leaves, const Volume& work, std::vector<LeafChange>& out) const
+    /// The leaves of `fine` and of `work` at the origins given, before and after.
+    static void recordLeafChanges(const std::vector<BlockChange>& leaves, const Volume& fine, const Volume& work, std::vector<LeafChange>& out)
     {
         for (const BlockChange& change : leaves) {
             const LeafAlignedBox leaf{change.origin, kLeafDim};
-            out.push_back({change.origin, encodeRegion(levelVolumes[0], leaf), encodeRegion(work, leaf)});
+            out.push_back({change.origin, encodeRegion(fine, leaf), encodeRegion(work, leaf)});
         }
     }
 
@@ -905,14 +905,33 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
     report.bricksPagedIn = s.pageInForEdit(bricks, lock);
     report.pageInSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     Volume work = s.workCopy(bricks);
+    // The script runs outside the lock, so that selection, loads, meshing and picks go on meanwhile: its
+    // bricks stay resident (pinned), and only this thread changes level 0 where they are (edits are
+    // applied one at a time, from one thread).
+    for (const IndexCoord& b : bricks) s.pinned.insert({0, b});
+    struct Unpin { // with the lock held again, whatever happens
+        Impl& s;
+        std::unique_lock<std::mutex>& lock;
+        const std::vector<IndexCoord>& bricks;
+        ~Unpin()
+        {
+            if (!lock.owns_lock()) lock.lock();
+            for (const IndexCoord& b : bricks) s.pinned.erase({0, b});
+        }
+    };
+    const Unpin unpin{s, lock, bricks};
+    lock.unlock();
+    const Volume before = work.clone();
     report.ops = runStrokeScript(work, script, {}, stroke);
     std::vector<Impl::VoxelRange> reached;
     for (const ScriptOp& op : script.ops) reached.push_back(voxelsReachedBy(op, s.scene.voxelSize()));
-    for (const IndexCoord& b : bricks) {
-        const std::vector<BlockChange> leaves = s.changedLeaves(b, work, reached);
-        if (changes) s.recordLeafChanges(leaves, work, *changes);
-        report.bricksChanged += s.commitBrick(b, work, reached, leaves);
+    std::vector<std::vector<BlockChange>> leaves(bricks.size());
+    for (std::size_t i = 0; i < bricks.size(); ++i) {
+        leaves[i] = Impl::changedLeaves(bricks[i], before, work, reached);
+        if (changes) Impl::recordLeafChanges(leaves[i], before, work, *changes);
     }
+    lock.lock();
+    for (std::size_t i = 0; i < bricks.size(); ++i) report.bricksChanged += s.commitBrick(bricks[i], work, reached, leaves[i]);
     s.materials = work.materials();
     if (work.mask() != s.mask) {
         const VoxelMask old = std::move(s.mask);
@@ -922,6 +941,12 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
     }
     s.edits += script.ops.size();
     return report;
+}
+
+std::optional<std::pair<IndexCoord, IndexCoord>> StreamingScene::storeBounds() const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    return impl_->scene.bounds();
 }
 
 VoxelMask StreamingScene::mask() const
@@ -969,7 +994,7 @@ StreamingScene::EditReport StreamingScene::restoreLeaves(const std::vector<LeafI
     Volume work = s.workCopy(bricks);
     for (const LeafImage& leaf : leaves)
         pasteRegion(work, decodeRegion(leaf.bytes, {leaf.origin, kLeafDim}, s.scene.voxelSize(), s.materials.size(), "the edit history"));
-    for (const IndexCoord& b : bricks) report.bricksChanged += s.commitBrick(b, work, reached, s.changedLeaves(b, work, reached));
+    for (const IndexCoord& b : bricks) report.bricksChanged += s.commitBrick(b, work, reached, Impl::changedLeaves(b, s.levelVolumes[0], work, reached));
     ++s.edits;
     return report;
 }

@@ -127,6 +127,9 @@ public:
     /// surface (in voxel^2 of its level) that residentBytes() holds.
     uint64_t residentActiveVoxels() const;
     const SceneStore& store() const;
+    /// The store's bounds (SceneStore::bounds), read under the scene's lock: safe beside an autosave on
+    /// another thread.
+    std::optional<std::pair<IndexCoord, IndexCoord>> storeBounds() const;
     /// The resident level-0 bricks, for checks: a volume holding them (dirty content included).
     Volume residentLevel0() const;
 
