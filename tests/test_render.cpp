@@ -284,6 +284,60 @@ TEST_CASE("render: paint's boundary colour changes continuously across a soft st
     requireNoValidationMessages(*context);
 }
 
+TEST_CASE("render: a hard paint edge's colour changes continuously along the edge, not in a one-voxel sawtooth", "[render][paint]")
+{
+    // A hard paint stroke (each voxel wholly one material) whose edge, a circle of radius 30 on the face,
+    // crosses the lattice at every angle: voxels drawn in their own colour would show its staircase.
+    auto context = validatedContext();
+    Volume volume = slab();
+    runStrokeScript(volume, parseStrokeScript(R"({"materials": [{"name": "red", "color": [0.8, 0.1, 0.1]}],
+        "ops": [{"mode": "paint", "material": "red", "brush": {"shape": "sphere", "radius": 30}, "at": [-10.3, 0.4, 8]}]})"));
+    Renderer renderer(*context);
+    uploadVolume(renderer, volume, cmsOptions());
+    ShadingOptions flat;
+    flat.ambientOcclusion = false;
+    renderer.setShading(flat);
+    const int size = 256;
+    OffscreenTarget target(*context, size, size);
+    RenderView view{frontCamera(120.0), &target, {}};
+    renderer.render({view});
+    const Image image = target.colour();
+    const Material& paint = volume.materials().at(*volume.materials().find("red"));
+    const Material& grey = volume.materials().at(1);
+    const auto share = [](double r, double g, double b) { return r / (r + g + b); };
+    const double redShare = share(paint.color[0], paint.color[1], paint.color[2]), greyShare = share(grey.color[0], grey.color[1], grey.color[2]);
+    const double total = redShare - greyShare;
+    // Row by row (pixels half a voxel apart), the pixel on the edge's right half, where the circle's
+    // tangent turns from 45 degrees through vertical and back: its redness, as a share of the way.
+    std::vector<double> onEdge;
+    for (int y = 0; y < size; ++y) {
+        int best = -1;
+        double nearest = 1e9;
+        for (int x = size / 2; x < size; ++x) {
+            const auto p = onPlane(view.camera, x, y, size, 8.0);
+            const double off = std::fabs(std::hypot(p[0] + 10.3, p[1] - 0.4) - 30.0);
+            if (std::fabs(p[1] - 0.4) < 21.0 && off < nearest) nearest = off, best = x;
+        }
+        if (best < 0 || nearest > 0.5) continue;
+        const uint8_t* px = image.pixel(best, y);
+        onEdge.push_back((share(srgbToLinear(px[0]), srgbToLinear(px[1]), srgbToLinear(px[2])) - greyShare) / total);
+    }
+    REQUIRE(onEdge.size() > 70);
+    double largestStep = 0.0, lowest = 1.0, highest = 0.0;
+    for (std::size_t i = 0; i < onEdge.size(); ++i) {
+        lowest = std::min(lowest, onEdge[i]);
+        highest = std::max(highest, onEdge[i]);
+        if (i > 0) largestStep = std::max(largestStep, std::fabs(onEdge[i] - onEdge[i - 1]));
+    }
+    INFO("along the edge: from " << lowest << " to " << highest << " of the way from the default to the paint, steps up to " << largestStep);
+    // Voxels in their own colour give 0 and 1 here, a step all the way; blended, about 0.19 to 0.47, in
+    // steps up to 0.15.
+    CHECK(lowest > 0.1);
+    CHECK(highest < 0.9);
+    CHECK(largestStep < 0.2);
+    requireNoValidationMessages(*context);
+}
+
 TEST_CASE("render: the brush highlight covers exactly the surface inside the brush, the preview draws the brush", "[render]")
 {
     auto context = validatedContext();

@@ -21,7 +21,8 @@ struct MaterialBlend {
 /// Per vertex (from `firstVertex` on), its blend, weighed over the solid voxels of the 5^3 lattice points
 /// nearest to it with a disc-shaped tent reaching 2.5 voxels along the surface (wide enough to read a soft
 /// paint stroke's one-voxel stipple as its coverage) and one across it (so material beneath the surface,
-/// or on the far side of a crease, does not show), then eased so that a trace (under 15%) counts as none;
+/// or on the far side of a crease, does not show), then mapped linearly so that a trace (under 15%) counts
+/// as none and over 85% as all;
 /// a vertex whose nearest 3^3 hold no other material has none. The vertex's own material is
 /// mesh.materials[v]. `mesh` is in the volume's world units.
 std::vector<uint32_t> vertexMaterialBlend(const Volume& volume, const Mesh& mesh, std::size_t firstVertex = 0);
