@@ -578,6 +578,115 @@ TEST_CASE("render: a store streamed under a small budget draws what the .vdb dra
     requireNoValidationMessages(*context);
 }
 
+TEST_CASE("render: a sync within a meshing budget meshes a brick a call, draws edited bricks with their old meshes meanwhile, and never opens a hole", "[render]")
+{
+    auto context = validatedContext();
+    TempDir dir;
+    const std::string path = dir.file("scene.vdbclay");
+    writeStoreFile(multiBrickScene(), path);
+    {
+        SceneStore store = SceneStore::open(path, StoreAccess::ReadWrite);
+        buildStoreLod(store, 2);
+    }
+    StreamingOptions streaming;
+    streaming.memoryBudgetBytes = 64ull << 20;
+    streaming.pixelTolerance = 0.5;
+    streaming.access = StoreAccess::ReadWrite;
+    StreamingScene scene(path, streaming);
+    Viewer viewer;
+    viewer.position = {90.0, 60.0, 110.0};
+    viewer.fovDegrees = 45.0;
+    viewer.viewport = {64, 64};
+    const auto settle = [&] {
+        FrameReport report;
+        for (int i = 0; i < 50 && !(report.settled && report.pending == 0); ++i) {
+            report = scene.frame(viewer);
+            scene.waitForLoads();
+        }
+    };
+    settle();
+    Renderer renderer(*context);
+    renderer.setMaterials(scene.store().materials());
+    StreamedSceneChunks chunks;
+    const auto overlap = [](const BrickKey& p, const BrickKey& q) {
+        for (std::size_t a = 0; a < 3; ++a) {
+            const int64_t plo = int64_t(p.brick[a]) * (int64_t(kBrickEdge) << p.level), phi = plo + (int64_t(kBrickEdge) << p.level);
+            const int64_t qlo = int64_t(q.brick[a]) * (int64_t(kBrickEdge) << q.level), qhi = qlo + (int64_t(kBrickEdge) << q.level);
+            if (qhi <= plo || phi <= qlo) return false;
+        }
+        return true;
+    };
+    // Every shown brick where something was drawn before is drawn: by its own mesh, or by drawn bricks
+    // overlapping it (standing in). Regions coming into view for the first time have nothing to keep.
+    const auto covered = [&](const std::vector<BrickKey>& drawnBefore) {
+        const std::vector<BrickKey> drawn = chunks.drawnBricks();
+        for (const BrickKey& key : scene.shownBricks()) {
+            if (chunks.chunkOf(key)) continue;
+            if (std::none_of(drawnBefore.begin(), drawnBefore.end(), [&](const BrickKey& d) { return overlap(key, d); })) continue;
+            if (std::none_of(drawn.begin(), drawn.end(), [&](const BrickKey& d) { return overlap(key, d); })) return false;
+        }
+        return true;
+    };
+    const auto stale = [&] {
+        std::size_t n = 0;
+        for (const BrickKey& key : scene.shownBricks()) n += chunks.versionOf(key) != scene.brickVersion(key);
+        return n;
+    };
+    // A budget of nothing: one brick a call, until every shown brick has its mesh.
+    const std::size_t shown = scene.shownBricks().size();
+    REQUIRE(shown > 4);
+    std::size_t calls = 0;
+    for (StreamedSceneChunks::SyncReport r; calls == 0 || r.waiting > 0; ++calls) {
+        r = chunks.sync(scene, renderer, 0.0);
+        CHECK(r.meshed == 1);
+        CHECK(r.waiting + calls + 1 == shown);
+    }
+    CHECK(stale() == 0);
+
+    // An edit: the bricks it changed keep their old meshes, drawn, until their turn.
+    // On the surface where four bricks meet (x = y = 0), found along +z.
+    double top = 0.0;
+    {
+        const Volume fine = scene.residentLevel0();
+        for (int32_t k = 400; k > 0 && top == 0.0; --k)
+            if (fine.materialAt({0, 0, k}) != kEmptyMaterial) top = k * fine.voxelSize();
+    }
+    REQUIRE(top > 0.0);
+    const StreamingScene::EditReport edit = scene.sculpt(parseStrokeScript(
+        nlohmann::json{{"ops", {{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 5}}}, {"at", {0.2, 0.3, top}}}}}}.dump()));
+    REQUIRE(edit.bricksChanged >= 2);
+    scene.frame(viewer);
+    std::size_t before = stale();
+    REQUIRE(before >= 2);
+    const std::vector<BrickKey> drawnBeforeEdit = chunks.drawnBricks();
+    while (before > 0) {
+        chunks.sync(scene, renderer, 0.0);
+        CHECK(covered(drawnBeforeEdit));
+        const std::size_t now = stale();
+        CHECK(now + 1 == before);
+        before = now;
+    }
+
+    // The view moves far off: coarse bricks replace fine ones, and the fine stand in until their
+    // replacements are meshed.
+    const std::vector<BrickKey> drawnNear = chunks.drawnBricks();
+    viewer.position = {900.0, 600.0, 1100.0};
+    settle();
+    REQUIRE(stale() > 1);
+    const std::vector<BrickKey> farShown = scene.shownBricks();
+    CHECK(std::any_of(farShown.begin(), farShown.end(), [](const BrickKey& k) { return k.level > 0; })); // coarse bricks replace fine ones
+    CHECK(std::any_of(drawnNear.begin(), drawnNear.end(), [](const BrickKey& k) { return k.level == 0; }));
+    for (int i = 0; i < 200 && stale() > 0; ++i) {
+        chunks.sync(scene, renderer, 0.0);
+        CHECK(covered(drawnNear));
+    }
+    CHECK(stale() == 0);
+    // Then only the shown bricks are drawn, as an unlimited sync draws them.
+    const std::vector<BrickKey> drawn = chunks.drawnBricks(), nowShown = scene.shownBricks();
+    CHECK(std::set<BrickKey>(drawn.begin(), drawn.end()) == std::set<BrickKey>(nowShown.begin(), nowShown.end()));
+    requireNoValidationMessages(*context);
+}
+
 TEST_CASE("cli: render writes the picture it is asked for, bad arguments and a missing device fail cleanly", "[render][cli]")
 {
     TempDir dir;

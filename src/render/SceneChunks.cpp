@@ -4,6 +4,7 @@
 #include "mesher/VertexMaterialBlend.h"
 #include "mesher/VertexOcclusion.h"
 #include "render/Framing.h"
+#include "scene/SceneStore.h"
 
 #include <algorithm>
 #include <chrono>
@@ -38,6 +39,20 @@ std::optional<ChunkId> StreamedSceneChunks::chunkOf(const BrickKey& key) const
     return it->second.id;
 }
 
+std::optional<uint64_t> StreamedSceneChunks::versionOf(const BrickKey& key) const
+{
+    const auto it = uploaded_.find(key);
+    if (it == uploaded_.end()) return std::nullopt;
+    return it->second.version;
+}
+
+std::vector<BrickKey> StreamedSceneChunks::drawnBricks() const
+{
+    std::vector<BrickKey> out;
+    for (const auto& [key, uploaded] : uploaded_) out.push_back(key);
+    return out;
+}
+
 VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOptions& options, const MaterialLook& look)
 {
     const auto start = Clock::now();
@@ -65,7 +80,22 @@ VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOp
     return out;
 }
 
-StreamedSceneChunks::SyncReport StreamedSceneChunks::sync(const StreamingScene& scene, Renderer& renderer)
+namespace {
+
+/// Whether two bricks (of any levels) share level-0 voxels.
+bool overlap(const BrickKey& a, const BrickKey& b)
+{
+    for (std::size_t i = 0; i < 3; ++i) {
+        const int64_t aLo = int64_t(a.brick[i]) * (int64_t(kBrickEdge) << a.level), aHi = aLo + (int64_t(kBrickEdge) << a.level);
+        const int64_t bLo = int64_t(b.brick[i]) * (int64_t(kBrickEdge) << b.level), bHi = bLo + (int64_t(kBrickEdge) << b.level);
+        if (aHi <= bLo || bHi <= aLo) return false;
+    }
+    return true;
+}
+
+} // namespace
+
+StreamedSceneChunks::SyncReport StreamedSceneChunks::sync(const StreamingScene& scene, Renderer& renderer, double budgetSeconds)
 {
     const auto start = Clock::now();
     SyncReport report;
@@ -75,32 +105,50 @@ StreamedSceneChunks::SyncReport StreamedSceneChunks::sync(const StreamingScene& 
         it = evictedSet.count(it->second.id) ? uploaded_.erase(it) : std::next(it);
     const std::vector<BrickKey> shown = scene.shownBricks();
     report.shown = shown.size();
+    // What needs a mesh: edited bricks (drawn with their old mesh meanwhile) first, then new ones.
+    std::vector<std::pair<BrickKey, uint64_t>> edited, fresh;
+    for (const BrickKey& key : shown) {
+        const uint64_t version = scene.brickVersion(key);
+        const auto it = uploaded_.find(key);
+        if (it == uploaded_.end()) fresh.push_back({key, version});
+        else if (it->second.version != version) edited.push_back({key, version});
+    }
+    std::vector<BrickKey> waiting;
+    for (const auto* list : {&edited, &fresh})
+        for (const auto& [key, version] : *list) {
+            if (report.meshed > 0 && secondsSince(start) >= budgetSeconds) {
+                waiting.push_back(key);
+                continue;
+            }
+            const std::shared_ptr<const StreamingScene::BrickMesh> m =
+                meshes_ == Meshes::KeptByScene ? scene.meshBrick(key) : scene.meshBrickAfresh(key);
+            if (!m) continue;
+            ++report.meshed;
+            const auto it = uploaded_.find(key);
+            if (it != uploaded_.end() && it->second.meshHash == m->hash) {
+                it->second.version = m->version;
+                continue;
+            }
+            const ChunkId id = it != uploaded_.end() ? it->second.id : nextId_++;
+            renderer.setChunk(id, m->mesh, key.level, {&m->occlusion, &m->masked, &m->blend});
+            uploaded_[key] = {id, m->version, m->hash};
+            ++report.uploaded;
+        }
+    report.waiting = waiting.size();
+    // Bricks no longer shown go, unless a shown brick they overlap has no mesh yet.
     const std::set<BrickKey> shownSet(shown.begin(), shown.end());
+    std::vector<BrickKey> unmeshed;
+    for (const BrickKey& key : waiting)
+        if (!uploaded_.count(key)) unmeshed.push_back(key);
     for (auto it = uploaded_.begin(); it != uploaded_.end();) {
-        if (shownSet.count(it->first)) {
+        const bool standsIn = std::any_of(unmeshed.begin(), unmeshed.end(), [&](const BrickKey& k) { return overlap(k, it->first); });
+        if (shownSet.count(it->first) || standsIn) {
             ++it;
             continue;
         }
         renderer.removeChunk(it->second.id);
         it = uploaded_.erase(it);
         ++report.removed;
-    }
-    for (const BrickKey& key : shown) {
-        const uint64_t version = scene.brickVersion(key);
-        const auto it = uploaded_.find(key);
-        if (it != uploaded_.end() && it->second.version == version) continue;
-        const std::shared_ptr<const StreamingScene::BrickMesh> m =
-            meshes_ == Meshes::KeptByScene ? scene.meshBrick(key) : scene.meshBrickAfresh(key);
-        if (!m) continue;
-        ++report.meshed;
-        if (it != uploaded_.end() && it->second.meshHash == m->hash) {
-            it->second.version = m->version;
-            continue;
-        }
-        const ChunkId id = it != uploaded_.end() ? it->second.id : nextId_++;
-        renderer.setChunk(id, m->mesh, key.level, {&m->occlusion, &m->masked, &m->blend});
-        uploaded_[key] = {id, m->version, m->hash};
-        ++report.uploaded;
     }
     report.meshSeconds = secondsSince(start);
     return report;

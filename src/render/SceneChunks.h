@@ -7,6 +7,7 @@
 #include "scene/StreamingScene.h"
 
 #include <cstdint>
+#include <limits>
 #include <map>
 
 namespace vdbclay::render {
@@ -40,14 +41,23 @@ public:
         uint64_t uploaded = 0; // of those, the ones whose mesh changed: queued for upload
         uint64_t removed = 0;  // chunks of bricks no longer shown
         uint64_t shown = 0;
+        uint64_t waiting = 0;  // shown bricks left for a later call: new or changed, not meshed within the budget
         double meshSeconds = 0.0;
     };
     /// After scene.frame(): takes the meshes of the shown bricks that are new or whose version changed
     /// (StreamingScene::meshBrick makes them), uploads the meshes that changed, drops the bricks not shown.
-    SyncReport sync(const StreamingScene& scene, Renderer& renderer);
+    /// Within `budgetSeconds` of meshing (at least one brick a call): edited bricks first, then new ones,
+    /// in the order the scene shows them; the rest wait for later calls. Meanwhile a brick keeps its old
+    /// mesh, and the meshes of bricks no longer shown stay while a shown brick they overlap has none yet
+    /// (a parent stands in for its children, children for their parent), so the view never opens a hole.
+    SyncReport sync(const StreamingScene& scene, Renderer& renderer, double budgetSeconds = std::numeric_limits<double>::infinity());
 
     /// The chunk a shown brick is drawn as, if it has one.
     std::optional<ChunkId> chunkOf(const BrickKey& key) const;
+    /// The brick version (StreamingScene::brickVersion) its drawn mesh was made at, if it has one.
+    std::optional<uint64_t> versionOf(const BrickKey& key) const;
+    /// The bricks drawn: those shown that have a mesh, and those standing in for shown ones still without.
+    std::vector<BrickKey> drawnBricks() const;
 
 private:
     struct Uploaded {
