@@ -19,6 +19,10 @@
 #include <random>
 #include <thread>
 
+#include <csignal>
+#include <sys/wait.h>
+#include <unistd.h>
+
 using namespace vdbclay;
 using namespace vdbclay::test;
 
@@ -269,4 +273,72 @@ TEST_CASE("editor: a save through the edit worker that cannot be written is repo
         CHECK(worker.snapshot().commandsApplied == 2);
     }
     CHECK(session.brush().mode == "smooth");
+}
+
+TEST_CASE("editor: a session killed while the edit worker holds pending strokes reopens with exactly what its last autosave saved", "[editor][worker]")
+{
+    TempDir dir;
+    const std::string ball = makeBall(dir, "a.vdb");
+    std::filesystem::copy_file(ball, dir.file("copy.vdb"));
+    const std::string recordPath = dir.file("record.json");
+    const auto at = [](Command::Kind k, const std::array<double, 3>& p) {
+        Command c;
+        c.kind = k;
+        c.point = p;
+        return c;
+    };
+    const std::vector<Command> applied{brushCommand("add", 4.0, 0.7), at(Command::Kind::StrokeBegin, {0, 20, 0}),
+                                       at(Command::Kind::StrokeMove, {6, 19, 0}), kind(Command::Kind::StrokeEnd)};
+    const std::vector<Command> pending{brushCommand("remove", 5.0, 1.0), at(Command::Kind::StrokeBegin, {0, 0, 20}),
+                                       at(Command::Kind::StrokeMove, {5, 0, 19}), kind(Command::Kind::StrokeEnd)};
+    const pid_t child = ::fork();
+    REQUIRE(child >= 0);
+    if (child == 0) {
+        try {
+            SessionOptions options = quietSession();
+            options.recordPath = recordPath;
+            options.idleAutosaveSeconds = 0.5; // the frame at 10 s finds the session idle: it autosaves
+            EditingSession session(ball, options);
+            std::mutex gate;
+            bool held = false;
+            std::condition_variable never;
+            SessionWorkerOptions workerOptions;
+            workerOptions.beforeTask = [&] {
+                std::unique_lock<std::mutex> lock(gate);
+                never.wait(lock, [&] { return !held; });
+            };
+            SessionWorker worker(session, workerOptions);
+            for (const Command& c : applied) worker.submit(c);
+            worker.frame(10.0, kViewport);
+            worker.waitIdle();
+            {
+                std::lock_guard<std::mutex> lock(gate);
+                held = true;
+            }
+            for (const Command& c : pending) worker.submit(c);
+            worker.frame(11.0, kViewport);
+            std::raise(SIGKILL); // strokes pending, no destructor, no save
+        } catch (...) {
+        }
+        ::_exit(3);
+    }
+    int status = 0;
+    REQUIRE(::waitpid(child, &status, 0) == child);
+    REQUIRE(WIFSIGNALED(status));
+
+    // What the autosave said it saved: the record written with it, replayed on the scene as it was.
+    const SessionRecord record = loadSessionRecord(recordPath);
+    CHECK(record.commands.size() == applied.size());
+    Volume expected;
+    uint64_t edits = 0;
+    {
+        EditingSession replayed(dir.file("copy.vdb"), quietSession());
+        replaySession(replayed, record);
+        expected = committed(replayed);
+        edits = replayed.scene().edits();
+    }
+    REQUIRE(edits > 0);
+    EditingSession reopened(ball, quietSession());
+    CHECK(reopened.recoveredEdits() == edits);
+    CHECK(identical(committed(reopened), expected));
 }
