@@ -239,48 +239,74 @@ TEST_CASE("render: a painted region shows its material's colour, the rest the de
     requireNoValidationMessages(*context);
 }
 
-TEST_CASE("render: paint's boundary colour changes continuously across a soft stroke's edge, not in one-voxel steps", "[render][paint]")
+namespace {
+
+/// The slab's face with red painted on by `paintOp`, drawn flat (no occlusion) from the front, 256 pixels
+/// for 120 units; and how red a pixel is, as a share of the way from the default material to the paint.
+struct PaintedFace {
+    Image image;
+    Camera camera;
+    static constexpr int size = 256;
+    double redShare = 0.0, greyShare = 0.0;
+
+    static double share(double r, double g, double b) { return r / (r + g + b); }
+    /// The red channel's share of the pixel's linear colour.
+    double redness(int x, int y) const
+    {
+        const uint8_t* px = image.pixel(x, y);
+        return share(srgbToLinear(px[0]), srgbToLinear(px[1]), srgbToLinear(px[2]));
+    }
+    double wayTowardsPaint(int x, int y) const { return (redness(x, y) - greyShare) / (redShare - greyShare); }
+};
+
+PaintedFace paintedFace(VulkanContext& context, const std::string& paintOp)
 {
-    auto context = validatedContext();
     Volume volume = slab();
-    runStrokeScript(volume, parseStrokeScript(R"({"materials": [{"name": "red", "color": [0.8, 0.1, 0.1]}],
-        "ops": [{"mode": "paint", "material": "red", "falloff": [0, 0.5, 1, 1, 1], "brush": {"shape": "sphere", "radius": 30}, "at": [0, 0, 8]}]})"));
-    Renderer renderer(*context);
+    runStrokeScript(volume, parseStrokeScript(R"({"materials": [{"name": "red", "color": [0.8, 0.1, 0.1]}], "ops": [)" + paintOp + "]}"));
+    Renderer renderer(context);
     uploadVolume(renderer, volume, cmsOptions());
     ShadingOptions flat;
     flat.ambientOcclusion = false;
     renderer.setShading(flat);
-    const int size = 256;
-    OffscreenTarget target(*context, size, size);
-    RenderView view{frontCamera(120.0), &target, {}};
-    renderer.render({view});
-    const Image image = target.colour();
-    // Redness (the red channel's share) along rows through the stroke's middle, from its centre out past
-    // its rim: it falls from the paint's to the default's in steps no larger than a quarter of the way
-    // (pixels are a third of a voxel apart; painted voxels drawn in their own colour step all the way).
+    OffscreenTarget target(context, PaintedFace::size, PaintedFace::size);
+    PaintedFace out;
+    out.camera = frontCamera(120.0);
+    renderer.render({RenderView{out.camera, &target, {}}});
+    out.image = target.colour();
     const Material& paint = volume.materials().at(*volume.materials().find("red"));
     const Material& grey = volume.materials().at(1);
-    const auto share = [](double r, double g, double b) { return r / (r + g + b); };
-    const double redShare = share(paint.color[0], paint.color[1], paint.color[2]), greyShare = share(grey.color[0], grey.color[1], grey.color[2]);
-    const double total = redShare - greyShare;
+    out.redShare = PaintedFace::share(paint.color[0], paint.color[1], paint.color[2]);
+    out.greyShare = PaintedFace::share(grey.color[0], grey.color[1], grey.color[2]);
+    return out;
+}
+
+} // namespace
+
+TEST_CASE("render: paint's boundary colour changes continuously across a soft stroke's edge, not in one-voxel steps", "[render][paint]")
+{
+    auto context = validatedContext();
+    const PaintedFace face = paintedFace(
+        *context, R"({"mode": "paint", "material": "red", "falloff": [0, 0.5, 1, 1, 1], "brush": {"shape": "sphere", "radius": 30}, "at": [0, 0, 8]})");
+    const int size = PaintedFace::size;
+    // Redness along rows through the stroke's middle, from its centre out past its rim: it falls from the
+    // paint's to the default's in steps no larger than a quarter of the way (pixels are a third of a voxel
+    // apart; painted voxels drawn in their own colour step all the way).
     double largestStep = 0.0;
     int rows = 0;
     for (int y = size / 2 - 8; y <= size / 2 + 8; y += 4, ++rows) {
         std::vector<double> along;
         for (int x = size / 2; x < size; ++x) {
-            const auto p = onPlane(view.camera, x, y, size, 8.0);
-            if (p[0] > 36.0) break;
-            const uint8_t* px = image.pixel(x, y);
-            along.push_back(share(srgbToLinear(px[0]), srgbToLinear(px[1]), srgbToLinear(px[2])));
+            if (onPlane(face.camera, x, y, size, 8.0)[0] > 36.0) break;
+            along.push_back(face.wayTowardsPaint(x, y));
         }
         REQUIRE(along.size() > 60);
-        INFO("row " << y << ": centre " << along.front() << ", end " << along.back() << " (paint " << redShare << ", default " << greyShare << ")");
-        CHECK(std::fabs(along.front() - redShare) < 0.1 * total);
-        CHECK(std::fabs(along.back() - greyShare) < 0.1 * total);
+        INFO("row " << y << ": centre " << along.front() << ", end " << along.back() << " of the way from the default to the paint");
+        CHECK(std::fabs(along.front() - 1.0) < 0.1);
+        CHECK(std::fabs(along.back()) < 0.1);
         for (std::size_t i = 1; i < along.size(); ++i) largestStep = std::max(largestStep, std::fabs(along[i] - along[i - 1]));
     }
-    INFO("largest step between neighbouring pixels: " << largestStep / total << " of the way");
-    CHECK(largestStep < 0.25 * total);
+    INFO("largest step between neighbouring pixels: " << largestStep << " of the way");
+    CHECK(largestStep < 0.25);
     requireNoValidationMessages(*context);
 }
 
@@ -289,24 +315,8 @@ TEST_CASE("render: a hard paint edge's colour changes continuously along the edg
     // A hard paint stroke (each voxel wholly one material) whose edge, a circle of radius 30 on the face,
     // crosses the lattice at every angle: voxels drawn in their own colour would show its staircase.
     auto context = validatedContext();
-    Volume volume = slab();
-    runStrokeScript(volume, parseStrokeScript(R"({"materials": [{"name": "red", "color": [0.8, 0.1, 0.1]}],
-        "ops": [{"mode": "paint", "material": "red", "brush": {"shape": "sphere", "radius": 30}, "at": [-10.3, 0.4, 8]}]})"));
-    Renderer renderer(*context);
-    uploadVolume(renderer, volume, cmsOptions());
-    ShadingOptions flat;
-    flat.ambientOcclusion = false;
-    renderer.setShading(flat);
-    const int size = 256;
-    OffscreenTarget target(*context, size, size);
-    RenderView view{frontCamera(120.0), &target, {}};
-    renderer.render({view});
-    const Image image = target.colour();
-    const Material& paint = volume.materials().at(*volume.materials().find("red"));
-    const Material& grey = volume.materials().at(1);
-    const auto share = [](double r, double g, double b) { return r / (r + g + b); };
-    const double redShare = share(paint.color[0], paint.color[1], paint.color[2]), greyShare = share(grey.color[0], grey.color[1], grey.color[2]);
-    const double total = redShare - greyShare;
+    const PaintedFace face = paintedFace(*context, R"({"mode": "paint", "material": "red", "brush": {"shape": "sphere", "radius": 30}, "at": [-10.3, 0.4, 8]})");
+    const int size = PaintedFace::size;
     // Row by row (pixels half a voxel apart), the pixel on the edge's right half, where the circle's
     // tangent turns from 45 degrees through vertical and back: its redness, as a share of the way.
     std::vector<double> onEdge;
@@ -314,13 +324,11 @@ TEST_CASE("render: a hard paint edge's colour changes continuously along the edg
         int best = -1;
         double nearest = 1e9;
         for (int x = size / 2; x < size; ++x) {
-            const auto p = onPlane(view.camera, x, y, size, 8.0);
+            const auto p = onPlane(face.camera, x, y, size, 8.0);
             const double off = std::fabs(std::hypot(p[0] + 10.3, p[1] - 0.4) - 30.0);
             if (std::fabs(p[1] - 0.4) < 21.0 && off < nearest) nearest = off, best = x;
         }
-        if (best < 0 || nearest > 0.5) continue;
-        const uint8_t* px = image.pixel(best, y);
-        onEdge.push_back((share(srgbToLinear(px[0]), srgbToLinear(px[1]), srgbToLinear(px[2])) - greyShare) / total);
+        if (best >= 0 && nearest <= 0.5) onEdge.push_back(face.wayTowardsPaint(best, y));
     }
     REQUIRE(onEdge.size() > 70);
     double largestStep = 0.0, lowest = 1.0, highest = 0.0;

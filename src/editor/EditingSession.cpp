@@ -387,12 +387,7 @@ nlohmann::json EditingSession::appliedScript() const { return {{"materials", mat
 
 std::size_t applyRecordedFrame(EditingSession& session, const SessionRecord& record, std::size_t next, uint64_t frame, double* time)
 {
-    while (next < record.commands.size() && record.commands[next].frame <= frame) {
-        const RecordedCommand& rc = record.commands[next++];
-        if (time) *time = rc.time;
-        if (rc.command.kind != Command::Kind::Save) session.apply(rc.command);
-    }
-    return next;
+    return forRecordedFrame(record, next, frame, time, [&](const Command& c) { session.apply(c); });
 }
 
 void replaySession(EditingSession& session, const SessionRecord& record, std::optional<uint64_t> frames,

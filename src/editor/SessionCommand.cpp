@@ -201,6 +201,17 @@ nlohmann::json sessionRecordJson(const SessionRecord& record)
     return {{"vdbclay_session", 1}, {"viewport", record.viewport}, {"frames", record.frames}, {"commands", std::move(commands)}};
 }
 
+std::size_t forRecordedFrame(const SessionRecord& record, std::size_t next, uint64_t frame, double* time,
+                             const std::function<void(const Command&)>& apply)
+{
+    while (next < record.commands.size() && record.commands[next].frame <= frame) {
+        const RecordedCommand& rc = record.commands[next++];
+        if (time) *time = rc.time;
+        if (rc.command.kind != Command::Kind::Save) apply(rc.command);
+    }
+    return next;
+}
+
 SessionRecord loadSessionRecord(const std::string& path)
 {
     // Checked before reading: /dev/zero or a FIFO would be read without end.

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <array>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -69,6 +70,12 @@ struct SessionRecord {
     std::vector<RecordedCommand> commands;
     uint64_t frames = 0; // frames the session ran
 };
+
+/// Hands `apply` the recorded commands from index `next` on that belong before frame `frame`, save
+/// commands skipped (a replay never writes the files the recorded session saved to); returns the next
+/// index and, in `time`, the clock of the last one.
+std::size_t forRecordedFrame(const SessionRecord& record, std::size_t next, uint64_t frame, double* time,
+                             const std::function<void(const Command&)>& apply);
 
 nlohmann::json sessionRecordJson(const SessionRecord& record);
 /// Reads a session file; throws SessionError for unreadable or malformed ones.

@@ -141,12 +141,7 @@ void SessionWorker::run()
 
 std::size_t submitRecordedFrame(SessionWorker& worker, const SessionRecord& record, std::size_t next, uint64_t frame, double* time)
 {
-    while (next < record.commands.size() && record.commands[next].frame <= frame) {
-        const RecordedCommand& rc = record.commands[next++];
-        if (time) *time = rc.time;
-        if (rc.command.kind != Command::Kind::Save) worker.submit(rc.command);
-    }
-    return next;
+    return forRecordedFrame(record, next, frame, time, [&](const Command& c) { worker.submit(c); });
 }
 
 } // namespace vdbclay
