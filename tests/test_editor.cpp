@@ -385,6 +385,8 @@ TEST_CASE("editor: malformed session files are refused naming the place", "[edit
     refused(R"({"vdbclay_session": 1, "commands": [{"frame": 0, "command": "camera", "eye": [0, 0, 0], "target": [0, 0, 0]}]})", "differ");
     refused(R"({"vdbclay_session": 1, "commands": [{"frame": 0, "command": "undo", "extra": 1}]})", "commands[0].extra");
     refused(R"({"vdbclay_session": 1, "viewport": [0, 10], "commands": []})", "viewport");
+    refused(R"({"vdbclay_session": 1, "commands": [{"frame": 0, "command": "stroke_move", "point": [0, 1, 2], "merged": 1}]})", "commands[0].merged");
+    refused(R"({"vdbclay_session": 1, "commands": [{"frame": 0, "command": "stroke_begin", "point": [0, 1, 2], "merged": true}]})", "belongs to stroke moves");
     // Keys of control characters in a material or an op are quoted printable (found by fuzz_session_file: DEL).
     for (const std::string command : {"\"material\", \"material\": {\"name\": \"clay\", \"c\x7flor\": [1, 0, 0]}",
                                       "\"op\", \"op\": {\"mo\xc2\x9b" "2Jde\": \"add\", \"brush\": {\"shape\": \"sphere\"}}",

@@ -6,6 +6,7 @@
 #include "support/QuietSession.h"
 #include "support/TestUtil.h"
 #include "vdb_hermite/VolumeIO.h"
+#include "vdb_hermite/VolumeRegions.h"
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -13,6 +14,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <algorithm>
 #include <condition_variable>
 #include <filesystem>
 #include <mutex>
@@ -126,6 +128,7 @@ Volume replayThroughWorker(const std::string& scene, const SessionRecord& record
         std::mt19937 rng(delaySeed);
         std::mutex rngMutex;
         SessionWorkerOptions options;
+        options.mergeStrokePoints = false; // a replay: the record says which points went together
         options.beforeTask = [&] {
             int micros = 0;
             {
@@ -179,7 +182,7 @@ TEST_CASE("editor: a session through the edit worker with 1, 2 and 4 threads and
     CHECK(identical(scripted, direct));
 }
 
-TEST_CASE("editor: the frame thread submits strokes, undo and frames while the edit worker is held, and the scene comes out as applied directly", "[editor][worker]")
+TEST_CASE("editor: the frame thread submits strokes, undo and frames while the edit worker is held, and the scene comes out as its record replays", "[editor][worker]")
 {
     TempDir dir;
     const std::string a = makeBall(dir, "a.vdb");
@@ -205,6 +208,7 @@ TEST_CASE("editor: the frame thread submits strokes, undo and frames while the e
     };
 
     Volume direct;
+    uint64_t stampsDirect = 0;
     {
         EditingSession session(a, quietSession());
         session.apply(camera);
@@ -213,9 +217,11 @@ TEST_CASE("editor: the frame thread submits strokes, undo and frames while the e
         session.frame(1.0, kViewport);
         CHECK(session.history().undoDepth() == 1);
         CHECK(session.history().redoDepth() == 0); // the smooth stroke after the undo dropped the redo
+        stampsDirect = session.stats().stampsApplied;
         direct = committed(session);
     }
 
+    std::filesystem::copy_file(a, dir.file("c.vdb"));
     EditingSession session(dir.file("b.vdb"), quietSession());
     session.apply(camera);
     stream(session);
@@ -250,7 +256,25 @@ TEST_CASE("editor: the frame thread submits strokes, undo and frames while the e
         CHECK_FALSE(done.strokeActive);
         CHECK(done.unsaved);
     }
-    CHECK(identical(committed(session), direct));
+    // The points of each stroke waited together, so each stroke went in merged: fewer ops than points.
+    const SessionRecord record = session.record();
+    const auto merged = std::count_if(record.commands.begin(), record.commands.end(), [](const RecordedCommand& rc) { return rc.command.mergedWithNext; });
+    CHECK(merged >= 8);
+    CHECK(session.stats().stampsApplied < stampsDirect);
+    // Its record replays to the same scene (the merges are in it), and so does its exported script.
+    const Volume live = committed(session);
+    {
+        EditingSession replayed(dir.file("c.vdb"), quietSession());
+        replaySession(replayed, record);
+        CHECK(identical(committed(replayed), live));
+    }
+    Volume scripted = loadVolume(a);
+    runStrokeScript(scripted, parseStrokeScript(session.appliedScript().dump()));
+    CHECK(identical(scripted, live));
+    // Merged or not, the strokes changed the scene alike: it differs from the stroke applied point by
+    // point only where the merged op's surface meets itself.
+    CHECK_FALSE(identical(live, loadVolume(a)));
+    CHECK(compareRegion(live, direct, {{-32, -32, -32}, 64}).occupancy < 200);
 }
 
 TEST_CASE("editor: a save through the edit worker that cannot be written is reported, and the session goes on", "[editor][worker]")
@@ -341,4 +365,52 @@ TEST_CASE("editor: a session killed while the edit worker holds pending strokes 
     EditingSession reopened(ball, quietSession());
     CHECK(reopened.recoveredEdits() == edits);
     CHECK(identical(committed(reopened), expected));
+}
+
+TEST_CASE("editor: a grab's drag steps waiting together apply as its last one, exactly as applied step by step", "[editor][worker]")
+{
+    TempDir dir;
+    const std::string a = makeBall(dir, "a.vdb");
+    std::filesystem::copy_file(a, dir.file("b.vdb"));
+    Command camera;
+    camera.kind = Command::Kind::SetCamera;
+    camera.camera.eye = {0.0, 0.0, 80.0};
+    camera.camera.target = {0.0, 0.0, 0.0};
+    std::vector<Command> drag{brushCommand("move", 5.0, 1.0), strokeTowards(Command::Kind::StrokeBegin, 0.0, 0.0)};
+    for (int m = 1; m <= 6; ++m) drag.push_back(strokeTowards(Command::Kind::StrokeMove, 1.5 * m, 0.5 * m));
+    drag.push_back(kind(Command::Kind::StrokeEnd));
+    const auto open = [&](const std::string& path) {
+        auto session = std::make_unique<EditingSession>(path, quietSession());
+        session->apply(camera);
+        for (int i = 0; i < 3; ++i) {
+            session->frame(0.0, kViewport);
+            session->scene().waitForLoads();
+        }
+        return session;
+    };
+    auto direct = open(a);
+    for (const Command& c : drag) direct->apply(c);
+    auto merged = open(dir.file("b.vdb"));
+    {
+        std::mutex gate;
+        bool held = true;
+        std::condition_variable opened;
+        SessionWorkerOptions options;
+        options.beforeTask = [&] {
+            std::unique_lock<std::mutex> lock(gate);
+            opened.wait(lock, [&] { return !held; });
+        };
+        SessionWorker worker(*merged, options);
+        for (const Command& c : drag) worker.submit(c);
+        {
+            std::lock_guard<std::mutex> lock(gate);
+            held = false;
+        }
+        opened.notify_all();
+        worker.waitIdle();
+    }
+    const auto& commands = merged->record().commands;
+    CHECK(std::count_if(commands.begin(), commands.end(), [](const RecordedCommand& rc) { return rc.command.mergedWithNext; }) == 5);
+    CHECK(merged->stats().stampsApplied < direct->stats().stampsApplied);
+    CHECK(identical(committed(*merged), committed(*direct)));
 }

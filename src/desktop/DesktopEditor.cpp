@@ -811,7 +811,13 @@ EditingSession& DesktopEditor::session() { return impl_->session; }
 void DesktopEditor::finishEdits() { impl_->worker.waitIdle(); }
 
 void DesktopEditor::submit(const Command& command) { impl_->apply(command); }
-void DesktopEditor::replay(const SessionRecord* record) { impl_->replay = record; impl_->replayNext = 0; }
+void DesktopEditor::replay(const SessionRecord* record)
+{
+    impl_->replay = record;
+    impl_->replayNext = 0;
+    // The record says which stroke points went together; the worker adds none of its own.
+    impl_->worker.setMergeStrokePoints(record == nullptr);
+}
 std::string DesktopEditor::openRequested() const { return impl_->panels.openRequested; }
 
 bool DesktopEditor::discardRecoveryRequested() const { return impl_->panels.discardRecoveryRequested; }

@@ -91,6 +91,8 @@ void EditingSession::apply(const Command& given)
     const bool stroke = command.kind == Command::Kind::StrokeBegin || command.kind == Command::Kind::StrokeMove;
     // A move with no stroke begins one: the record says so, so that it reads as what happened.
     if (command.kind == Command::Kind::StrokeMove && !stroke_.active) command.kind = Command::Kind::StrokeBegin;
+    // Merged points wait only for the stroke's next point: anything else applies them first.
+    if (command.kind != Command::Kind::StrokeMove) flushMerged();
     const bool placed = stroke && placeStroke(command);
     record_.commands.push_back({frameNumber_, time_, command});
     lastCommand_ = time_;
@@ -102,8 +104,8 @@ void EditingSession::apply(const Command& given)
         break;
     case Command::Kind::StrokeMove:
         if (!placed) break; // off the surface for now
-        if (brush_.mode == "move") dragStroke(*command.point, command.pressure);
-        else moveStroke(at(), command.pressure);
+        if (brush_.mode == "move") dragStroke(*command.point, command.pressure, command.mergedWithNext);
+        else moveStroke(at(), command.pressure, command.mergedWithNext);
         break;
     case Command::Kind::StrokeEnd: endStroke(); break;
     case Command::Kind::SetBrush:
@@ -235,9 +237,16 @@ void EditingSession::beginStroke(const Placement& at, double pressure)
     if (brush_.mode != "move") applyOp(strokeOpJson(brush_, {stampCentre(at, pressure)}, pressure));
 }
 
-void EditingSession::dragStroke(const std::array<double, 3>& point, double pressure)
+void EditingSession::dragStroke(const std::array<double, 3>& point, double pressure, bool merged)
 {
     stroke_.lastPoint = stroke_.lastStamp = Placement{point, std::nullopt};
+    // Each step drags by the whole way from the grabbed point: a step merged with the next is left out.
+    stroke_.pendingDrag.reset();
+    if (merged) {
+        stroke_.pendingDrag = point;
+        stroke_.pendingPressure = pressure;
+        return;
+    }
     const std::array<double, 3> offset{point[0] - stroke_.grab[0], point[1] - stroke_.grab[1], point[2] - stroke_.grab[2]};
     // Grab drags the surface as the stroke found it by the whole way from where it was grabbed (Blender's
     // grab): the last step is put back first, so that the grabbed point stays under the pointer however
@@ -255,7 +264,7 @@ void EditingSession::dragStroke(const std::array<double, 3>& point, double press
     if (distanceBetween(point, stroke_.grab) > 0.0) applyOp(strokeOpJson(brush_, {stroke_.grab}, pressure, offset));
 }
 
-void EditingSession::moveStroke(const Placement& at, double pressure)
+void EditingSession::moveStroke(const Placement& at, double pressure, bool merged)
 {
     if (!stroke_.active) return beginStroke(at, pressure);
     // Stamps every `spacing` along the pointer's path; CSG brushes sweep from the last stamp through the
@@ -279,12 +288,26 @@ void EditingSession::moveStroke(const Placement& at, double pressure)
     }
     stroke_.travelled = stamps.empty() ? stroke_.travelled + length : length - (along - spacing);
     stroke_.lastPoint = at;
-    if (stamps.empty()) return;
-    std::vector<std::array<double, 3>> path;
-    if (!isReshapingMode(brush_.mode)) path.push_back(stampCentre(stroke_.lastStamp, pressure));
-    for (const Placement& p : stamps) path.push_back(stampCentre(p, pressure));
-    stroke_.lastStamp = stamps.back();
-    nlohmann::json op = strokeOpJson(brush_, path, pressure);
+    if (!stamps.empty()) {
+        std::vector<std::array<double, 3>>& path = stroke_.pendingPath;
+        if (path.empty() && !isReshapingMode(brush_.mode)) path.push_back(stampCentre(stroke_.lastStamp, pressure));
+        for (const Placement& p : stamps) path.push_back(stampCentre(p, pressure));
+        stroke_.lastStamp = stamps.back();
+        stroke_.pendingPressure = pressure;
+    }
+    if (!merged) flushMerged();
+}
+
+void EditingSession::flushMerged()
+{
+    if (stroke_.pendingDrag) {
+        const std::array<double, 3> point = *stroke_.pendingDrag;
+        dragStroke(point, stroke_.pendingPressure, false);
+    }
+    if (stroke_.pendingPath.empty()) return;
+    const std::vector<std::array<double, 3>> path = std::move(stroke_.pendingPath);
+    stroke_.pendingPath.clear();
+    nlohmann::json op = strokeOpJson(brush_, path, stroke_.pendingPressure);
     // Inflate and deflate change the surface by at most distance x strength per stroke (accumulate: per stamp).
     if ((brush_.mode == "inflate" || brush_.mode == "deflate") && !brush_.accumulate) op["stroke"] = "continue";
     applyOp(op);
@@ -293,6 +316,7 @@ void EditingSession::moveStroke(const Placement& at, double pressure)
 void EditingSession::endStroke()
 {
     if (!stroke_.active) return;
+    flushMerged();
     // Leaves a grab put back as they were are no change.
     std::vector<LeafChange> changes;
     changes.reserve(stroke_.changes.size());

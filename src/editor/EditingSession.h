@@ -129,6 +129,10 @@ private:
         std::size_t decoded = 0;
         std::optional<std::string> maskBefore; // the mask as the stroke found it (VoxelMask::encode())
         std::unique_ptr<StrokeStart> start;    // inflate and deflate: the stroke's start where they reached
+        // Merged points not applied yet: a stretch's stamps (its pressure), or a grab's last drag.
+        std::vector<std::array<double, 3>> pendingPath;
+        std::optional<std::array<double, 3>> pendingDrag;
+        double pendingPressure = 1.0;
     };
     /// Fills in the point (and normal) of a stroke command from its ray; false when the ray meets no
     /// surface (the command then changes nothing).
@@ -136,8 +140,11 @@ private:
     std::optional<SurfaceHit> castAtStrokeStart(const Ray& ray);
     std::array<double, 3> stampCentre(const Placement& at, double pressure) const;
     void beginStroke(const Placement& at, double pressure);
-    void moveStroke(const Placement& at, double pressure);
-    void dragStroke(const std::array<double, 3>& point, double pressure);
+    /// `merged`: the stamps wait for the next point's (Command::mergedWithNext).
+    void moveStroke(const Placement& at, double pressure, bool merged);
+    void dragStroke(const std::array<double, 3>& point, double pressure, bool merged);
+    /// Applies what merged stroke points left waiting.
+    void flushMerged();
     void endStroke();
     void applyOp(const nlohmann::json& op);
     void putBack(const HistoryStep& step);

@@ -90,6 +90,7 @@ nlohmann::json commandJson(const Command& c)
         if (c.normal) j["normal"] = *c.normal;
         if (c.ray) j["ray"] = {{"origin", c.ray->origin}, {"direction", c.ray->direction}};
         j["pressure"] = c.pressure;
+        if (c.mergedWithNext) j["merged"] = true;
         break;
     case Command::Kind::SetBrush: j["brush"] = brushSettingsJson(c.brush.value_or(BrushSettings{})); break;
     case Command::Kind::Save:
@@ -143,7 +144,12 @@ Command parseCommand(const nlohmann::json& j, const std::string& where)
         if (j.contains("normal")) c.normal = vec3(j.at("normal"), where + ".normal");
         if (j.contains("pressure")) c.pressure = finite(j.at("pressure"), where + ".pressure");
         if (!(c.pressure > 0.0 && c.pressure <= 1.0)) fail(where + ".pressure", "must be in (0, 1]");
-        allow({"point", "pressure", "ray", "normal"});
+        if (j.contains("merged")) {
+            if (!j.at("merged").is_boolean()) fail(where + ".merged", "must be true or false");
+            if (c.kind != Command::Kind::StrokeMove) fail(where + ".merged", "belongs to stroke moves");
+            c.mergedWithNext = j.at("merged").get<bool>();
+        }
+        allow({"point", "pressure", "ray", "normal", "merged"});
         break;
     case Command::Kind::SetBrush:
         try {

@@ -46,6 +46,10 @@ struct Command {
     std::optional<Ray> ray;
     std::optional<std::array<double, 3>> normal;
     double pressure = 1.0;
+    /// StrokeMove: the stamps this point adds go with those of the next point, as one op (the edit
+    /// worker merges pending points of a stroke so that a slow brush keeps up; a grab applies only the
+    /// last drag). Recorded ("merged": true), so a replay merges the same.
+    bool mergedWithNext = false;
     std::optional<BrushSettings> brush; // SetBrush only: a session holds many commands, few of them brushes
     render::Camera camera;
     std::string path;

@@ -2,6 +2,7 @@
 
 #include "editor/BrushSettings.h"
 
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 
@@ -75,6 +76,12 @@ FrameReport SessionWorker::frame(double time, const std::array<int, 2>& viewport
     return report;
 }
 
+void SessionWorker::setMergeStrokePoints(bool merge)
+{
+    std::lock_guard<std::mutex> lock(mutex_);
+    options_.mergeStrokePoints = merge;
+}
+
 std::size_t SessionWorker::pending() const
 {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -110,6 +117,15 @@ void SessionWorker::run()
         Task task = std::move(queue_.front());
         queue_.pop_front();
         running_ = true;
+        // A stroke point with the stroke's next point already waiting behind it (frames aside) goes with
+        // it, as one op: a brush slower than the pointer keeps up instead of falling further behind.
+        if (!task.frame && task.command.kind == Command::Kind::StrokeMove) {
+            const auto next = std::find_if(queue_.begin(), queue_.end(), [](const Task& t) { return !t.frame; });
+            const bool merge = options_.mergeStrokePoints && next != queue_.end() && next->command.kind == Command::Kind::StrokeMove &&
+                               mergedRun_ < kMaxMergedPoints;
+            task.command.mergedWithNext = merge;
+            mergedRun_ = merge ? mergedRun_ + 1 : 0;
+        }
         // A save is the one command slow enough (a whole scene written) that the frame says so meanwhile.
         if (!task.frame && task.command.kind == Command::Kind::Save)
             snapshot_.busy = "saving " + (task.command.path.empty() ? session_.scenePath() : task.command.path);

@@ -31,12 +31,19 @@ struct SessionSnapshot {
     std::string busy; // what a slow command under way is doing ("saving ..."), else empty
 };
 
+/// The most stroke points the worker merges into one op (Command::mergedWithNext).
+constexpr int kMaxMergedPoints = 32;
+
 struct SessionWorkerOptions {
     /// Runs on the worker before each command and frame it takes on (tests inject delays here).
     std::function<void()> beforeTask;
     /// Runs on the worker after each: the command (null for a frame) and the milliseconds it took
     /// (benchmarks). The session may be read there: it is the worker's.
     std::function<void(const Command* command, double milliseconds)> afterTask;
+    /// Whether a stroke point goes with the next one already waiting (Command::mergedWithNext): a live
+    /// session keeps up with the pointer so; a replay, whose record says which points went together,
+    /// must not merge others (what waits depends on timing).
+    bool mergeStrokePoints = true;
 };
 
 class SessionWorker {
@@ -57,6 +64,8 @@ public:
     /// of the frame (its clock, autosave when due), ordered with the commands.
     FrameReport frame(double time, const std::array<int, 2>& viewport);
 
+    /// Turns merging of waiting stroke points on or off from now on (a window starting a replay).
+    void setMergeStrokePoints(bool merge);
     /// Commands and frames queued or under way.
     std::size_t pending() const;
     /// Waits until the worker has done everything submitted (tests, closing a scene).
@@ -96,6 +105,7 @@ private:
     mutable std::condition_variable wake_, idle_;
     std::deque<Task> queue_;
     bool running_ = false; // a task taken off the queue and not finished
+    int mergedRun_ = 0;    // stroke points merged in a row so far
     bool stopping_ = false;
     SessionSnapshot snapshot_;
     std::vector<std::string> failures_;
