@@ -376,7 +376,8 @@ TEST_CASE("editor: a grab's drag steps waiting together apply as its last one, e
     camera.kind = Command::Kind::SetCamera;
     camera.camera.eye = {0.0, 0.0, 80.0};
     camera.camera.target = {0.0, 0.0, 0.0};
-    std::vector<Command> drag{brushCommand("move", 5.0, 1.0), strokeTowards(Command::Kind::StrokeBegin, 0.0, 0.0)};
+    // The drag starts with a move (a move with no stroke begins one, and goes in at once).
+    std::vector<Command> drag{brushCommand("move", 5.0, 1.0), strokeTowards(Command::Kind::StrokeMove, 0.0, 0.0)};
     for (int m = 1; m <= 6; ++m) drag.push_back(strokeTowards(Command::Kind::StrokeMove, 1.5 * m, 0.5 * m));
     drag.push_back(kind(Command::Kind::StrokeEnd));
     const auto open = [&](const std::string& path) {
@@ -413,4 +414,13 @@ TEST_CASE("editor: a grab's drag steps waiting together apply as its last one, e
     CHECK(std::count_if(commands.begin(), commands.end(), [](const RecordedCommand& rc) { return rc.command.mergedWithNext; }) == 5);
     CHECK(merged->stats().stampsApplied < direct->stats().stampsApplied);
     CHECK(identical(committed(*merged), committed(*direct)));
+    // The record, merges included, goes through its file and replays to the same scene.
+    saveSessionRecord(merged->record(), dir.file("s.json"));
+    const SessionRecord loaded = loadSessionRecord(dir.file("s.json"));
+    REQUIRE(loaded.commands.size() == commands.size());
+    for (std::size_t i = 0; i < commands.size(); ++i) CHECK(loaded.commands[i].command.mergedWithNext == commands[i].command.mergedWithNext);
+    std::filesystem::copy_file(a, dir.file("c.vdb"));
+    EditingSession replayed(dir.file("c.vdb"), quietSession());
+    replaySession(replayed, loaded);
+    CHECK(identical(committed(replayed), committed(*direct)));
 }

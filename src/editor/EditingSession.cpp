@@ -90,7 +90,10 @@ void EditingSession::apply(const Command& given)
     Command command = given;
     const bool stroke = command.kind == Command::Kind::StrokeBegin || command.kind == Command::Kind::StrokeMove;
     // A move with no stroke begins one: the record says so, so that it reads as what happened.
-    if (command.kind == Command::Kind::StrokeMove && !stroke_.active) command.kind = Command::Kind::StrokeBegin;
+    if (command.kind == Command::Kind::StrokeMove && !stroke_.active) {
+        command.kind = Command::Kind::StrokeBegin;
+        command.mergedWithNext = false; // a stroke's first stamp goes in at once
+    }
     // Merged points wait only for the stroke's next point: anything else applies them first.
     if (command.kind != Command::Kind::StrokeMove) flushMerged();
     const bool placed = stroke && placeStroke(command);
