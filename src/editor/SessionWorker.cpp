@@ -138,6 +138,8 @@ void SessionWorker::run()
             else session_.apply(task.command);
         } catch (const std::exception& e) {
             failure = std::string(task.frame ? "the autosave" : commandName(task.command.kind)) + " failed: " + e.what();
+        } catch (...) {
+            failure = std::string(task.frame ? "the autosave" : commandName(task.command.kind)) + " failed";
         }
         if (options_.afterTask)
             options_.afterTask(task.frame ? nullptr : &task.command,
