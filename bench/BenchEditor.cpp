@@ -202,14 +202,12 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
     // The rotated tool stamp, alone in its frame, twice: the first builds the tool's fields (once per
     // session), the second is the stamp reported.
     const std::string tool = makeTool(dir, voxel);
-    std::size_t toolFrame = plan.size();
     for (const double dz : {-40.0, -80.0}) {
         const auto toolAt = session.pick({cx + 40 * voxel, 400 * voxel, cz + dz * voxel}, {0, -1, 0});
         if (!toolAt) continue;
         Command stamp;
         stamp.kind = Command::Kind::ApplyOp;
         stamp.op = {{"mode", "add"}, {"brush", {{"shape", "grid"}, {"file", tool}}}, {"at", toolAt->point}, {"rotate", {20, 35, 10}}};
-        toolFrame = plan.size();
         plan.push_back({stamp});
         planMode.push_back("tool");
         plan.push_back({});
@@ -291,8 +289,7 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
             }
             FrameReport report;
             s.streamMs = timeMs([&] { report = worker.frame(double(i) / 90.0, kViewport); });
-            render::StreamedSceneChunks::SyncReport sync;
-            s.meshMs = timeMs([&] { sync = chunks.sync(session.scene(), renderer, kMeshBudgetSeconds); });
+            s.meshMs = timeMs([&] { chunks.sync(session.scene(), renderer, kMeshBudgetSeconds); });
             const render::FrameStats stats = renderer.render({{worker.camera(), &small, {}}});
             s.recordMs = stats.cpuMs;
             s.cpuMs = s.submitMs + s.streamMs + s.meshMs + s.recordMs; // the device's work (lavapipe's too) is apart

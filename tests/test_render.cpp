@@ -616,22 +616,14 @@ TEST_CASE("render: a sync within a meshing budget meshes a brick a call, draws e
     Renderer renderer(*context);
     renderer.setMaterials(scene.store().materials());
     StreamedSceneChunks chunks;
-    const auto overlap = [](const BrickKey& p, const BrickKey& q) {
-        for (std::size_t a = 0; a < 3; ++a) {
-            const int64_t plo = int64_t(p.brick[a]) * (int64_t(kBrickEdge) << p.level), phi = plo + (int64_t(kBrickEdge) << p.level);
-            const int64_t qlo = int64_t(q.brick[a]) * (int64_t(kBrickEdge) << q.level), qhi = qlo + (int64_t(kBrickEdge) << q.level);
-            if (qhi <= plo || phi <= qlo) return false;
-        }
-        return true;
-    };
     // Every shown brick where something was drawn before is drawn: by its own mesh, or by drawn bricks
     // overlapping it (standing in). Regions coming into view for the first time have nothing to keep.
     const auto covered = [&](const std::vector<BrickKey>& drawnBefore) {
         const std::vector<BrickKey> drawn = chunks.drawnBricks();
         for (const BrickKey& key : scene.shownBricks()) {
             if (chunks.chunkOf(key)) continue;
-            if (std::none_of(drawnBefore.begin(), drawnBefore.end(), [&](const BrickKey& d) { return overlap(key, d); })) continue;
-            if (std::none_of(drawn.begin(), drawn.end(), [&](const BrickKey& d) { return overlap(key, d); })) return false;
+            if (std::none_of(drawnBefore.begin(), drawnBefore.end(), [&](const BrickKey& d) { return bricksOverlap(key, d); })) continue;
+            if (std::none_of(drawn.begin(), drawn.end(), [&](const BrickKey& d) { return bricksOverlap(key, d); })) return false;
         }
         return true;
     };

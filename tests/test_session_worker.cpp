@@ -48,6 +48,35 @@ Volume committed(EditingSession& session)
     return session.scene().store().loadLevel(0);
 }
 
+/// Holds the edit worker before its next task while closed (SessionWorkerOptions::beforeTask).
+class Gate {
+public:
+    explicit Gate(bool closed) : closed_(closed) {}
+    void set(bool closed)
+    {
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            closed_ = closed;
+        }
+        changed_.notify_all();
+    }
+    /// Options whose worker waits at the gate before each task.
+    SessionWorkerOptions options()
+    {
+        SessionWorkerOptions o;
+        o.beforeTask = [this] {
+            std::unique_lock<std::mutex> lock(mutex_);
+            changed_.wait(lock, [&] { return !closed_; });
+        };
+        return o;
+    }
+
+private:
+    std::mutex mutex_;
+    std::condition_variable changed_;
+    bool closed_;
+};
+
 Command brushCommand(const std::string& mode, double radius, double strength)
 {
     Command c;
@@ -225,16 +254,9 @@ TEST_CASE("editor: the frame thread submits strokes, undo and frames while the e
     EditingSession session(dir.file("b.vdb"), quietSession());
     session.apply(camera);
     stream(session);
-    std::mutex gate;
-    std::condition_variable opened;
-    bool open = false;
-    SessionWorkerOptions options;
-    options.beforeTask = [&] {
-        std::unique_lock<std::mutex> lock(gate);
-        opened.wait(lock, [&] { return open; });
-    };
+    Gate gate(true);
     {
-        SessionWorker worker(session, options);
+        SessionWorker worker(session, gate.options());
         // Everything goes in while the worker is held: none of it waits on an edit.
         for (const Command& c : commands) worker.submit(c);
         worker.frame(1.0, kViewport);
@@ -242,11 +264,7 @@ TEST_CASE("editor: the frame thread submits strokes, undo and frames while the e
         CHECK(worker.brush().mode == "smooth"); // the panels show the brush at once
         CHECK(worker.snapshot().commandsApplied == 0);
         CHECK(session.pick({0.0, 0.0, 80.0}, {0.0, 0.0, -1.0})); // the frame's picks go on meanwhile
-        {
-            std::lock_guard<std::mutex> lock(gate);
-            open = true;
-        }
-        opened.notify_all();
+        gate.set(false);
         worker.waitIdle();
         CHECK(worker.pending() == 0);
         const SessionSnapshot done = worker.snapshot();
@@ -323,22 +341,12 @@ TEST_CASE("editor: a session killed while the edit worker holds pending strokes 
             options.recordPath = recordPath;
             options.idleAutosaveSeconds = 0.5; // the frame at 10 s finds the session idle: it autosaves
             EditingSession session(ball, options);
-            std::mutex gate;
-            bool held = false;
-            std::condition_variable never;
-            SessionWorkerOptions workerOptions;
-            workerOptions.beforeTask = [&] {
-                std::unique_lock<std::mutex> lock(gate);
-                never.wait(lock, [&] { return !held; });
-            };
-            SessionWorker worker(session, workerOptions);
+            Gate gate(false);
+            SessionWorker worker(session, gate.options());
             for (const Command& c : applied) worker.submit(c);
             worker.frame(10.0, kViewport);
             worker.waitIdle();
-            {
-                std::lock_guard<std::mutex> lock(gate);
-                held = true;
-            }
+            gate.set(true); // what comes next stays pending
             for (const Command& c : pending) worker.submit(c);
             worker.frame(11.0, kViewport);
             std::raise(SIGKILL); // strokes pending, no destructor, no save
@@ -393,21 +401,10 @@ TEST_CASE("editor: a grab's drag steps waiting together apply as its last one, e
     for (const Command& c : drag) direct->apply(c);
     auto merged = open(dir.file("b.vdb"));
     {
-        std::mutex gate;
-        bool held = true;
-        std::condition_variable opened;
-        SessionWorkerOptions options;
-        options.beforeTask = [&] {
-            std::unique_lock<std::mutex> lock(gate);
-            opened.wait(lock, [&] { return !held; });
-        };
-        SessionWorker worker(*merged, options);
+        Gate gate(true);
+        SessionWorker worker(*merged, gate.options());
         for (const Command& c : drag) worker.submit(c);
-        {
-            std::lock_guard<std::mutex> lock(gate);
-            held = false;
-        }
-        opened.notify_all();
+        gate.set(false);
         worker.waitIdle();
     }
     const auto& commands = merged->record().commands;

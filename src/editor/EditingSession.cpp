@@ -145,8 +145,7 @@ void EditingSession::applyOp(const nlohmann::json& op)
         if (!stroke_.maskBefore) stroke_.maskBefore = scene_->mask().encode();
         // Inflate and deflate keep the stroke's start where they reach, to be measured against it.
         StrokeStart* start = nullptr;
-        const std::optional<FieldBrushOp>& field = script.ops.front().field;
-        if (field && (field->mode == FieldMode::Inflate || field->mode == FieldMode::Deflate) && !brush_.accumulate && stroke_.active) {
+        if (capsPerStroke() && stroke_.active) {
             if (!stroke_.start) stroke_.start = std::make_unique<StrokeStart>(scene_->store().voxelSize());
             start = stroke_.start.get();
         }
@@ -311,9 +310,13 @@ void EditingSession::flushMerged()
     const std::vector<std::array<double, 3>> path = std::move(stroke_.pendingPath);
     stroke_.pendingPath.clear();
     nlohmann::json op = strokeOpJson(brush_, path, stroke_.pendingPressure);
-    // Inflate and deflate change the surface by at most distance x strength per stroke (accumulate: per stamp).
-    if ((brush_.mode == "inflate" || brush_.mode == "deflate") && !brush_.accumulate) op["stroke"] = "continue";
+    if (capsPerStroke()) op["stroke"] = "continue";
     applyOp(op);
+}
+
+bool EditingSession::capsPerStroke() const
+{
+    return (brush_.mode == "inflate" || brush_.mode == "deflate") && !brush_.accumulate;
 }
 
 void EditingSession::endStroke()

@@ -145,6 +145,9 @@ private:
     void dragStroke(const std::array<double, 3>& point, double pressure, bool merged);
     /// Applies what merged stroke points left waiting.
     void flushMerged();
+    /// Whether the brush changes the surface by at most distance x strength per stroke, measured against
+    /// the stroke's start (inflate and deflate that do not accumulate).
+    bool capsPerStroke() const;
     void endStroke();
     void applyOp(const nlohmann::json& op);
     void putBack(const HistoryStep& step);

@@ -25,6 +25,9 @@ SessionSnapshot snapshotOf(const EditingSession& session)
     return s;
 }
 
+/// Where a save command writes.
+std::string savedPath(const Command& save, const EditingSession& session) { return save.path.empty() ? session.scenePath() : save.path; }
+
 } // namespace
 
 SessionWorker::SessionWorker(EditingSession& session, SessionWorkerOptions options)
@@ -128,7 +131,7 @@ void SessionWorker::run()
         }
         // A save is the one command slow enough (a whole scene written) that the frame says so meanwhile.
         if (!task.frame && task.command.kind == Command::Kind::Save)
-            snapshot_.busy = "saving " + (task.command.path.empty() ? session_.scenePath() : task.command.path);
+            snapshot_.busy = "saving " + savedPath(task.command, session_);
         lock.unlock();
         if (options_.beforeTask) options_.beforeTask();
         std::string failure;
@@ -149,7 +152,7 @@ void SessionWorker::run()
         published.commandsApplied = snapshot_.commandsApplied + (task.frame ? 0 : 1);
         const bool saved = !task.frame && task.command.kind == Command::Kind::Save && failure.empty();
         published.saves = snapshot_.saves + (saved ? 1 : 0);
-        published.lastSavedPath = saved ? (task.command.path.empty() ? session_.scenePath() : task.command.path) : snapshot_.lastSavedPath;
+        published.lastSavedPath = saved ? savedPath(task.command, session_) : snapshot_.lastSavedPath;
         snapshot_ = std::move(published);
         if (!failure.empty()) failures_.push_back(std::move(failure));
         running_ = false;

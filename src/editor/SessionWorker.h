@@ -82,8 +82,7 @@ public:
     const StreamingScene& scene() const { return session_.scene(); }
     const std::string& scenePath() const { return session_.scenePath(); }
     uint64_t recoveredEdits() const { return session_.recoveredEdits(); }
-    /// The session, for what is safe from any thread (scene(), pick(), scenePath(), recoveredEdits()),
-    /// and, once waitIdle() returned, for anything.
+    /// The session: for pick() from any thread, and, once waitIdle() returned, for anything.
     EditingSession& session() { return session_; }
     const EditingSession& session() const { return session_; }
 

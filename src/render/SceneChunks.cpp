@@ -80,21 +80,6 @@ VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOp
     return out;
 }
 
-namespace {
-
-/// Whether two bricks (of any levels) share level-0 voxels.
-bool overlap(const BrickKey& a, const BrickKey& b)
-{
-    for (std::size_t i = 0; i < 3; ++i) {
-        const int64_t aLo = int64_t(a.brick[i]) * (int64_t(kBrickEdge) << a.level), aHi = aLo + (int64_t(kBrickEdge) << a.level);
-        const int64_t bLo = int64_t(b.brick[i]) * (int64_t(kBrickEdge) << b.level), bHi = bLo + (int64_t(kBrickEdge) << b.level);
-        if (aHi <= bLo || bHi <= aLo) return false;
-    }
-    return true;
-}
-
-} // namespace
-
 StreamedSceneChunks::SyncReport StreamedSceneChunks::sync(const StreamingScene& scene, Renderer& renderer, double budgetSeconds)
 {
     const auto start = Clock::now();
@@ -106,16 +91,15 @@ StreamedSceneChunks::SyncReport StreamedSceneChunks::sync(const StreamingScene& 
     const std::vector<BrickKey> shown = scene.shownBricks();
     report.shown = shown.size();
     // What needs a mesh: edited bricks (drawn with their old mesh meanwhile) first, then new ones.
-    std::vector<std::pair<BrickKey, uint64_t>> edited, fresh;
+    std::vector<BrickKey> edited, fresh;
     for (const BrickKey& key : shown) {
-        const uint64_t version = scene.brickVersion(key);
         const auto it = uploaded_.find(key);
-        if (it == uploaded_.end()) fresh.push_back({key, version});
-        else if (it->second.version != version) edited.push_back({key, version});
+        if (it == uploaded_.end()) fresh.push_back(key);
+        else if (it->second.version != scene.brickVersion(key)) edited.push_back(key);
     }
     std::vector<BrickKey> waiting;
     for (const auto* list : {&edited, &fresh})
-        for (const auto& [key, version] : *list) {
+        for (const BrickKey& key : *list) {
             if (report.meshed > 0 && secondsSince(start) >= budgetSeconds) {
                 waiting.push_back(key);
                 continue;
@@ -141,7 +125,7 @@ StreamedSceneChunks::SyncReport StreamedSceneChunks::sync(const StreamingScene& 
     for (const BrickKey& key : waiting)
         if (!uploaded_.count(key)) unmeshed.push_back(key);
     for (auto it = uploaded_.begin(); it != uploaded_.end();) {
-        const bool standsIn = std::any_of(unmeshed.begin(), unmeshed.end(), [&](const BrickKey& k) { return overlap(k, it->first); });
+        const bool standsIn = std::any_of(unmeshed.begin(), unmeshed.end(), [&](const BrickKey& k) { return bricksOverlap(k, it->first); });
         if (shownSet.count(it->first) || standsIn) {
             ++it;
             continue;

@@ -30,6 +30,17 @@ inline LeafAlignedBox brickBox(const IndexCoord& brick)
     return {{brick[0] * kBrickEdge, brick[1] * kBrickEdge, brick[2] * kBrickEdge}, kBrickEdge};
 }
 
+/// Whether two bricks, of any levels, share level-0 voxels (a brick of level k spans kBrickEdge << k).
+inline bool bricksOverlap(const BrickKey& a, const BrickKey& b)
+{
+    for (std::size_t i = 0; i < 3; ++i) {
+        const int64_t aLo = int64_t(a.brick[i]) * (int64_t(kBrickEdge) << a.level), aHi = aLo + (int64_t(kBrickEdge) << a.level);
+        const int64_t bLo = int64_t(b.brick[i]) * (int64_t(kBrickEdge) << b.level), bHi = bLo + (int64_t(kBrickEdge) << b.level);
+        if (aHi <= bLo || bHi <= aLo) return false;
+    }
+    return true;
+}
+
 /// File extension of a store; every other extension is a native .vdb.
 constexpr const char* kStoreExtension = ".vdbclay";
 /// Whether a path names a store (by its extension, any case).

@@ -30,7 +30,6 @@ public:
 
     /// The stroke's starting state: right in every box kept so far (empty elsewhere).
     const Volume& volume() const { return start_; }
-    std::size_t boxesKept() const { return kept_.size(); }
 
 private:
     Volume start_;
