@@ -1,8 +1,8 @@
 // bench editor: the desktop editor's frame without the window. A stroke-heavy session (r=32 strokes of
 // every mode, mirror symmetry on) replayed at 90 Hz on a synthetic terrain store of at least 10^9 voxels
 // of bounds: each frame submits its commands to the edit worker as they arrive on the recorded clock
-// (never waiting for them), then does what the editor's frame thread does: streaming, re-meshing the
-// changed bricks, upload recording. Reports the frame thread's CPU time p50/p99 and the frames over
+// (never waiting for them), then does what the editor's frame thread does: streaming, taking the meshes
+// the mesh workers finished (asking them for the changed bricks), upload recording. Reports the frame thread's CPU time p50/p99 and the frames over
 // 11.1 ms, edit-to-visible latency in frames per mode, the worker's time per stroke step and the most
 // commands pending, triangles, upload bytes per frame and resident memory against the budget; the
 // rotated 64^3 tool stamp; OpenVDB's stamp and re-mesh of the same region.
@@ -43,7 +43,7 @@ constexpr std::array<int, 2> kViewport{1920, 1080};
 constexpr double kRadius = 32.0;
 
 constexpr double kFrameMs = 1000.0 / 90.0;
-constexpr double kMeshBudgetSeconds = 0.004; // as the window's frame (DesktopEditor)
+constexpr int kMeshThreads = 1; // as the window's (DesktopEditor)
 
 struct FrameSample {
     double cpuMs = 0.0, submitMs = 0.0, streamMs = 0.0, meshMs = 0.0, recordMs = 0.0;
@@ -142,7 +142,7 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
     f.device = context.deviceName();
     render::Renderer renderer(context);
     renderer.setMaterials(session.scene().materials());
-    render::StreamedSceneChunks chunks;
+    render::StreamedSceneChunks chunks(session.scene(), kMeshThreads);
     render::OffscreenTarget small(context, 480, 270); // lavapipe's fill grows with pixels; selection is 1080p's
 
     Command camera;
@@ -154,8 +154,9 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
     session.apply(camera);
     for (int i = 0; i < 200; ++i) { // settle the view
         const FrameReport r = session.frame(0.0, kViewport);
-        chunks.sync(session.scene(), renderer);
-        if (r.settled && r.pending == 0) break;
+        const uint64_t meshesWaiting = chunks.sync(session.scene(), renderer).waiting;
+        chunks.waitForMeshes();
+        if (r.settled && r.pending == 0 && meshesWaiting == 0) break;
         session.scene().waitForLoads();
     }
     renderer.render({{session.camera(), &small, {}}});
@@ -289,7 +290,7 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
             }
             FrameReport report;
             s.streamMs = timeMs([&] { report = worker.frame(double(i) / 90.0, kViewport); });
-            s.meshMs = timeMs([&] { chunks.sync(session.scene(), renderer, kMeshBudgetSeconds); });
+            s.meshMs = timeMs([&] { chunks.sync(session.scene(), renderer); });
             const render::FrameStats stats = renderer.render({{worker.camera(), &small, {}}});
             s.recordMs = stats.cpuMs;
             s.cpuMs = s.submitMs + s.streamMs + s.meshMs + s.recordMs; // the device's work (lavapipe's too) is apart

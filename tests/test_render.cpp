@@ -687,6 +687,94 @@ TEST_CASE("render: a sync within a meshing budget meshes a brick a call, draws e
     requireNoValidationMessages(*context);
 }
 
+TEST_CASE("render: chunks meshed on workers upload only what is finished, keep every view covered meanwhile, and settle to the shown bricks' meshes", "[render][worker]")
+{
+    auto context = validatedContext();
+    TempDir dir;
+    const std::string path = dir.file("scene.vdbclay");
+    writeStoreFile(multiBrickScene(), path);
+    {
+        SceneStore store = SceneStore::open(path, StoreAccess::ReadWrite);
+        buildStoreLod(store, 2);
+    }
+    StreamingOptions streaming;
+    streaming.memoryBudgetBytes = 64ull << 20;
+    streaming.pixelTolerance = 0.5;
+    streaming.access = StoreAccess::ReadWrite;
+    StreamingScene scene(path, streaming);
+    Viewer viewer;
+    viewer.position = {90.0, 60.0, 110.0};
+    viewer.fovDegrees = 45.0;
+    viewer.viewport = {64, 64};
+    const auto settle = [&] {
+        FrameReport report;
+        for (int i = 0; i < 50 && !(report.settled && report.pending == 0); ++i) {
+            report = scene.frame(viewer);
+            scene.waitForLoads();
+        }
+    };
+    settle();
+    Renderer renderer(*context);
+    renderer.setMaterials(scene.store().materials());
+    StreamedSceneChunks chunks(scene, 1);
+    const auto stale = [&] {
+        std::size_t n = 0;
+        for (const BrickKey& key : scene.shownBricks()) n += chunks.versionOf(key) != scene.brickVersion(key);
+        return n;
+    };
+    // The first sync only asks: nothing is meshed on this thread.
+    const std::size_t shown = scene.shownBricks().size();
+    REQUIRE(shown > 4);
+    StreamedSceneChunks::SyncReport first = chunks.sync(scene, renderer);
+    CHECK(first.meshed == 0);
+    CHECK(first.waiting == shown);
+    const auto settleMeshes = [&](const std::vector<BrickKey>& drawnBefore) {
+        for (int i = 0; i < 100; ++i) {
+            chunks.waitForMeshes();
+            const StreamedSceneChunks::SyncReport r = chunks.sync(scene, renderer);
+            // Wherever something was drawn before, something is drawn still.
+            const std::vector<BrickKey> drawn = chunks.drawnBricks();
+            for (const BrickKey& key : scene.shownBricks())
+                if (std::any_of(drawnBefore.begin(), drawnBefore.end(), [&](const BrickKey& d) { return bricksOverlap(key, d); }))
+                    CHECK(std::any_of(drawn.begin(), drawn.end(), [&](const BrickKey& d) { return bricksOverlap(key, d); }));
+            if (r.waiting == 0) return;
+        }
+    };
+    settleMeshes({});
+    CHECK(stale() == 0);
+    CHECK(chunks.meshesInProgress() == 0);
+
+    // An edit: the bricks it changed are meshed again on the workers, and drawn with their old meshes meanwhile.
+    double top = 0.0; // on the surface where four bricks meet (x = y = 0), found along +z
+    {
+        const Volume fine = scene.residentLevel0();
+        for (int32_t k = 400; k > 0 && top == 0.0; --k)
+            if (fine.materialAt({0, 0, k}) != kEmptyMaterial) top = k * fine.voxelSize();
+    }
+    REQUIRE(top > 0.0);
+    const StreamingScene::EditReport edit = scene.sculpt(parseStrokeScript(
+        nlohmann::json{{"ops", {{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 5}}}, {"at", {0.2, 0.3, top}}}}}}.dump()));
+    REQUIRE(edit.bricksChanged >= 2);
+    scene.frame(viewer);
+    REQUIRE(stale() >= 1);
+    settleMeshes(chunks.drawnBricks());
+    CHECK(stale() == 0);
+
+    // The view moves far off: coarse bricks replace fine ones, which stand in until those are meshed.
+    viewer.position = {900.0, 600.0, 1100.0};
+    const std::vector<BrickKey> drawnNear = chunks.drawnBricks();
+    settle();
+    settleMeshes(drawnNear);
+    CHECK(stale() == 0);
+    const std::vector<BrickKey> drawn = chunks.drawnBricks(), nowShown = scene.shownBricks();
+    CHECK(std::set<BrickKey>(drawn.begin(), drawn.end()) == std::set<BrickKey>(nowShown.begin(), nowShown.end()));
+    CHECK(chunks.takeMeshFailures().empty());
+    // Another scene is refused.
+    StreamingScene other(path, StreamingOptions{});
+    CHECK_THROWS_AS(chunks.sync(other, renderer), std::logic_error);
+    requireNoValidationMessages(*context);
+}
+
 TEST_CASE("cli: render writes the picture it is asked for, bad arguments and a missing device fail cleanly", "[render][cli]")
 {
     TempDir dir;

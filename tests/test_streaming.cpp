@@ -1,6 +1,7 @@
 // Streaming a store by view under a memory budget: which bricks a view selects, the budget held over a
 // flight, dirty bricks that survive eviction, a budget too small for one brick, and autosave against
 // SIGKILL at random moments.
+#include "render/BrickMeshWorkers.h"
 #include "scene/SceneStore.h"
 #include "scene/StoreLod.h"
 #include "scene/StreamingScene.h"
@@ -15,6 +16,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <atomic>
 #include <chrono>
 #include <cstdlib>
 #include <cmath>
@@ -609,4 +611,81 @@ TEST_CASE("an edit in empty space, where no brick was stored, shows at once", "[
     const auto mesh = scene.meshBrick({0, brick});
     REQUIRE(mesh);
     CHECK(mesh->mesh.triangleCount() > 100);
+}
+
+TEST_CASE("meshes made on workers while edits, loads and evictions run beside them settle to the meshes each brick makes afresh", "[streaming][worker]")
+{
+    TempDir dir;
+    const std::string path = makeTerrain(dir);
+    StreamingOptions options = roomyEditableOptions();
+    StreamingScene scene(path, options);
+    const Viewer near = lookingAt({30, 70, 30}, {128, 30, 128}), away = lookingAt({250, 70, 250}, {128, 30, 128});
+    settleView(scene, near);
+    // What a frame thread draws: per brick, the version and hash of the last mesh it took.
+    render::BrickMeshWorkers workers(scene, 2);
+    std::map<BrickKey, std::pair<uint64_t, uint64_t>> drawn;
+    const auto syncOnce = [&] {
+        for (const render::BrickMeshWorkers::Finished& f : workers.takeFinished()) {
+            drawn[f.key] = {f.version, f.hash};
+            CHECK(f.packed.bytes.empty() == (f.packed.indexCount == 0));
+        }
+        const std::vector<BrickKey> shown = scene.shownBricks();
+        const std::vector<uint64_t> versions = scene.brickVersions(shown);
+        std::vector<BrickKey> stale;
+        for (std::size_t i = 0; i < shown.size(); ++i) {
+            const auto it = drawn.find(shown[i]);
+            if (it == drawn.end() || it->second.first != versions[i]) stale.push_back(shown[i]);
+        }
+        workers.request(stale);
+        return stale.size();
+    };
+
+    // Stamps across brick faces on one thread; on this one, frames that turn the view away and back (loads
+    // and evictions), picks through the trees, and meshes asked for and taken.
+    std::atomic<bool> editing{true};
+    std::thread edits([&] {
+        std::mt19937 rng{29};
+        const char* modes[] = {"add", "remove", "paint", "smooth"};
+        for (int i = 0; i < 16; ++i) {
+            const int radius = std::uniform_int_distribution<int>(2, 6)(rng);
+            std::array<double, 3> at{std::uniform_int_distribution<int>(8, 120)(rng) * 1.0, 30.0, std::uniform_int_distribution<int>(8, 120)(rng) * 1.0};
+            if (i % 2 == 0) at[std::size_t(i % 4 == 0 ? 0 : 2)] = 64.0 + std::uniform_int_distribution<int>(-4, 4)(rng);
+            nlohmann::json op{{"mode", modes[i % 4]}, {"brush", {{"shape", "sphere"}, {"radius", radius}}}, {"at", at}};
+            if (i % 4 == 2) op["material"] = "red";
+            const nlohmann::json materials = nlohmann::json::array({{{"name", "red"}, {"color", {0.8, 0.1, 0.1}}}});
+            scene.sculpt(parseStrokeScript(nlohmann::json{{"materials", materials}, {"ops", {op}}}.dump()));
+        }
+        editing = false;
+    });
+    uint64_t frames = 0, picked = 0;
+    while (editing) {
+        scene.frame(frames++ % 40 < 30 ? near : away);
+        scene.visitResidentLevels([&](const std::vector<const Volume*>& levels, const StreamingScene::FinestResidentAt&) {
+            picked += levels[0]->materialAt({64, 30, 64}) != kEmptyMaterial;
+        });
+        syncOnce();
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    edits.join();
+    CHECK(frames > 0);
+    (void)picked;
+
+    // Settled, every shown brick's last mesh is of its version and is what the brick makes afresh.
+    std::size_t stale = 1;
+    for (int i = 0; i < 100 && stale > 0; ++i) {
+        scene.frame(near);
+        scene.waitForLoads();
+        stale = syncOnce();
+        workers.waitIdle();
+    }
+    CHECK(stale == 0);
+    CHECK(workers.takeFailures().empty());
+    for (const BrickKey& key : scene.shownBricks()) {
+        INFO("brick " << key.level << " " << key.brick[0] << "," << key.brick[1] << "," << key.brick[2]);
+        const auto fresh = scene.meshBrickAfresh(key);
+        REQUIRE(fresh);
+        REQUIRE(drawn.count(key));
+        CHECK(drawn.at(key).first == scene.brickVersion(key));
+        CHECK(drawn.at(key).second == fresh->hash);
+    }
 }

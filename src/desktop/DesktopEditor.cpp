@@ -73,9 +73,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-/// Meshing the frame thread does per frame (at least one brick): a 90 Hz frame is 11.1 ms. The bricks
-/// left wait for the next frames, drawn with their old meshes meanwhile.
-constexpr double kMeshBudgetSeconds = 0.004;
+/// Threads meshing the shown bricks (the frame only uploads what they finished): one leaves the other
+/// core to the edit worker, and CMS spreads a brick's leaves over TBB's threads.
+constexpr int kMeshThreads = 1;
 
 double msBetween(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
 
@@ -150,7 +150,7 @@ struct DesktopEditor::Impl {
     VkSurfaceKHR surface = VK_NULL_HANDLE;
     std::unique_ptr<render::SwapchainTarget> swapchain;
     std::unique_ptr<render::Renderer> renderer;
-    render::StreamedSceneChunks chunks;
+    render::StreamedSceneChunks chunks; // meshes made on workers
     VkDescriptorPool imguiPool = VK_NULL_HANDLE;
     bool imguiReady = false;
     DesktopPanels panels;
@@ -188,7 +188,7 @@ struct DesktopEditor::Impl {
         return render::materialLook(session.scene().store().voxelSize(), std::filesystem::path(session.scenePath()).parent_path().string());
     }
 
-    Impl(DesktopEditor& editor, EditingSession& s, const DesktopOptions& o) : self(editor), session(s), options(o), worker(s)
+    Impl(DesktopEditor& editor, EditingSession& s, const DesktopOptions& o) : self(editor), session(s), options(o), chunks(s.scene(), kMeshThreads), worker(s)
     {
         configFolder = options.configFolder.value_or(defaultConfigFolder());
         std::string warning;
@@ -691,7 +691,11 @@ struct DesktopEditor::Impl {
         }
         figures.pendingEdits = worker.pending();
         const auto streamed = Clock::now();
-        figures.meshesWaiting = chunks.sync(session.scene(), *renderer, kMeshBudgetSeconds).waiting;
+        figures.meshesWaiting = chunks.sync(session.scene(), *renderer).waiting;
+        for (const std::string& failure : chunks.takeMeshFailures()) {
+            panels.status = failure;
+            std::cerr << "vdbclay: " << failure << "\n";
+        }
         figures.bricksShown = session.scene().shownBricks().size();
         MaterialTable materials = session.scene().materials();
         // A material defined or changed: its colour at once, its picture once a worker has read it.
@@ -808,7 +812,11 @@ const std::string& DesktopEditor::title() const { return impl_->title; }
 uint64_t DesktopEditor::validationMessages() const { return impl_->context ? impl_->context->validationMessages() : 0; }
 EditingSession& DesktopEditor::session() { return impl_->session; }
 
-void DesktopEditor::finishEdits() { impl_->worker.waitIdle(); }
+void DesktopEditor::finishEdits()
+{
+    impl_->worker.waitIdle();
+    impl_->chunks.waitForMeshes();
+}
 
 void DesktopEditor::submit(const Command& command) { impl_->apply(command); }
 void DesktopEditor::replay(const SessionRecord* record)

@@ -86,8 +86,9 @@ public:
     const std::string& title() const;
     uint64_t validationMessages() const;
     EditingSession& session();
-    /// Waits until the edit worker has applied every command the window gave it (the window's frames
-    /// never wait; tests and a scene being closed do).
+    /// Waits until the edit worker has applied every command the window gave it, and the mesh workers
+    /// have made the meshes the last frame asked for (the window's frames never wait; tests and a scene
+    /// being closed do).
     void finishEdits();
     /// A command as the window's input gives one: to the edit worker (tests).
     void submit(const Command& command);

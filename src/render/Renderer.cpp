@@ -115,14 +115,6 @@ struct Renderer::Impl {
         int level = 0;
         uint64_t lastDrawn = 0;
     };
-    struct PendingChunk {
-        std::vector<uint8_t> bytes; // vertices, then uint32 indices
-        VkDeviceSize indexOffset = 0;
-        uint32_t indexCount = 0;
-        float lo[3], hi[3];
-        int level = 0;
-    };
-
     VulkanContext& context;
     RendererOptions options;
     VkRenderPass compatiblePass = VK_NULL_HANDLE;
@@ -142,7 +134,7 @@ struct Renderer::Impl {
     VkQueryPool queries = VK_NULL_HANDLE;
 
     std::unordered_map<ChunkId, GpuChunk> chunks;
-    std::map<ChunkId, PendingChunk> pending;
+    std::map<ChunkId, PackedChunk> pending;
     std::set<ChunkId> removals;
     std::vector<ChunkId> evicted;
     ShadingOptions shading;
@@ -341,8 +333,8 @@ struct Renderer::Impl {
             ringOffset = (ringOffset + size + 15) / 16 * 16;
             chunk.indexOffset = p.indexOffset;
             chunk.indexCount = p.indexCount;
-            std::copy(p.lo, p.lo + 3, chunk.lo);
-            std::copy(p.hi, p.hi + 3, chunk.hi);
+            std::copy(p.lo.begin(), p.lo.end(), chunk.lo);
+            std::copy(p.hi.begin(), p.hi.end(), chunk.hi);
             chunk.level = p.level;
             chunks.emplace(id, chunk);
             ++stats.chunksUploaded;
@@ -503,35 +495,16 @@ struct Renderer::Impl {
     }
 };
 
-Renderer::Renderer(VulkanContext& context, const RendererOptions& options)
-    : impl_(std::make_unique<Impl>(context, options))
+PackedChunk packChunk(const Mesh& mesh, int level, const VertexShading& shading)
 {
-}
-
-Renderer::~Renderer() = default;
-
-std::vector<std::string> Renderer::setMaterials(const MaterialTable& materials, const MaterialLook& look, PictureLoading loading)
-{
-    return impl_->setMaterials(materials, look, loading);
-}
-
-bool Renderer::picturesReady() const { return impl_->picturesReady(); }
-
-void Renderer::setChunk(ChunkId id, const Mesh& mesh, int level, const VertexShading& shading)
-{
-    impl_->removals.erase(id);
-    if (mesh.triangles.empty()) {
-        impl_->pending.erase(id);
-        if (impl_->chunks.count(id)) impl_->removals.insert(id);
-        return;
-    }
-    Impl::PendingChunk p;
+    PackedChunk p;
+    if (mesh.triangles.empty()) return p;
     p.level = level;
     const std::size_t nv = mesh.positions.size();
     std::vector<GpuVertex> vertices(nv);
     for (int a = 0; a < 3; ++a) {
-        p.lo[a] = std::numeric_limits<float>::max();
-        p.hi[a] = std::numeric_limits<float>::lowest();
+        p.lo[std::size_t(a)] = std::numeric_limits<float>::max();
+        p.hi[std::size_t(a)] = std::numeric_limits<float>::lowest();
     }
     const uint32_t levelBits = uint32_t(std::clamp(level, 0, 127)) << 16;
     for (std::size_t i = 0; i < nv; ++i) {
@@ -539,8 +512,8 @@ void Renderer::setChunk(ChunkId id, const Mesh& mesh, int level, const VertexSha
         for (int a = 0; a < 3; ++a) {
             v.position[a] = mesh.positions[i][std::size_t(a)];
             v.normal[a] = i < mesh.normals.size() ? mesh.normals[i][std::size_t(a)] : 0.0f;
-            p.lo[a] = std::min(p.lo[a], v.position[a]);
-            p.hi[a] = std::max(p.hi[a], v.position[a]);
+            p.lo[std::size_t(a)] = std::min(p.lo[std::size_t(a)], v.position[a]);
+            p.hi[std::size_t(a)] = std::max(p.hi[std::size_t(a)], v.position[a]);
         }
         const uint32_t material = i < mesh.materials.size() ? mesh.materials[i] : 1u;
         const uint32_t open = shading.occlusion && i < shading.occlusion->size() ? (*shading.occlusion)[i] : 255u;
@@ -579,7 +552,37 @@ void Renderer::setChunk(ChunkId id, const Mesh& mesh, int level, const VertexSha
     p.bytes.resize(vertexBytes + indices.size() * sizeof(uint32_t));
     std::memcpy(p.bytes.data(), vertices.data(), vertexBytes);
     std::memcpy(p.bytes.data() + vertexBytes, indices.data(), indices.size() * sizeof(uint32_t));
-    impl_->pending[id] = std::move(p);
+    return p;
+}
+
+Renderer::Renderer(VulkanContext& context, const RendererOptions& options)
+    : impl_(std::make_unique<Impl>(context, options))
+{
+}
+
+Renderer::~Renderer() = default;
+
+std::vector<std::string> Renderer::setMaterials(const MaterialTable& materials, const MaterialLook& look, PictureLoading loading)
+{
+    return impl_->setMaterials(materials, look, loading);
+}
+
+bool Renderer::picturesReady() const { return impl_->picturesReady(); }
+
+void Renderer::setChunk(ChunkId id, const Mesh& mesh, int level, const VertexShading& shading)
+{
+    setPackedChunk(id, packChunk(mesh, level, shading));
+}
+
+void Renderer::setPackedChunk(ChunkId id, PackedChunk chunk)
+{
+    impl_->removals.erase(id);
+    if (chunk.bytes.empty()) {
+        impl_->pending.erase(id);
+        if (impl_->chunks.count(id)) impl_->removals.insert(id);
+        return;
+    }
+    impl_->pending[id] = std::move(chunk);
 }
 
 void Renderer::removeChunk(ChunkId id)

@@ -42,6 +42,19 @@ struct VertexShading {
     const std::vector<uint32_t>* blend = nullptr;    // MaterialBlend: colours blend with the material beside
 };
 
+/// A chunk's vertices and indices as the GPU takes them (packChunk): packed on any thread (a mesh
+/// worker), queued on the renderer's (Renderer::setPackedChunk) with nothing left to compute.
+struct PackedChunk {
+    std::vector<uint8_t> bytes; // vertices, then uint32 indices; empty: the mesh has no triangles
+    VkDeviceSize indexOffset = 0;
+    uint32_t indexCount = 0;
+    std::array<float, 3> lo{0, 0, 0}, hi{0, 0, 0}; // bounds of the vertices
+    int level = 0;
+};
+/// Packs a mesh as Renderer::setChunk draws it. Throws std::invalid_argument for a triangle naming a
+/// vertex the mesh lacks.
+PackedChunk packChunk(const Mesh& mesh, int level = 0, const VertexShading& shading = VertexShading());
+
 class Renderer {
 public:
     Renderer(VulkanContext& context, const RendererOptions& options = {});
@@ -64,6 +77,8 @@ public:
     /// `level` (< 128) is what the lod view shows. Without a blend, a triangle shows its own material
     /// alone; with one, each vertex's colour is its own and the other material's, mixed by the share.
     void setChunk(ChunkId id, const Mesh& mesh, int level = 0, const VertexShading& shading = VertexShading());
+    /// The same with the packing done (packChunk): what the frame thread calls for meshes made on workers.
+    void setPackedChunk(ChunkId id, PackedChunk chunk);
     /// Frees the chunk's buffers at the next frame (its brick was evicted or it became empty).
     void removeChunk(ChunkId id);
     bool hasChunk(ChunkId id) const;

@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
+#include <stdexcept>
 #include <limits>
 #include <iterator>
 #include <set>
@@ -80,8 +82,23 @@ VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOp
     return out;
 }
 
+StreamedSceneChunks::StreamedSceneChunks(const StreamingScene& scene, int meshThreads)
+    : meshes_(Meshes::OnWorkers), scene_(&scene), workers_(std::make_unique<BrickMeshWorkers>(scene, meshThreads))
+{
+}
+
+void StreamedSceneChunks::waitForMeshes() const
+{
+    if (workers_) workers_->waitIdle();
+}
+
+std::size_t StreamedSceneChunks::meshesInProgress() const { return workers_ ? workers_->pending() : 0; }
+
+std::vector<std::string> StreamedSceneChunks::takeMeshFailures() { return workers_ ? workers_->takeFailures() : std::vector<std::string>{}; }
+
 StreamedSceneChunks::SyncReport StreamedSceneChunks::sync(const StreamingScene& scene, Renderer& renderer, double budgetSeconds)
 {
+    if (meshes_ == Meshes::OnWorkers && &scene != scene_) throw std::logic_error("chunks meshed on workers synced with another scene");
     const auto start = Clock::now();
     SyncReport report;
     const std::vector<ChunkId> evicted = renderer.takeEvicted();
@@ -89,38 +106,53 @@ StreamedSceneChunks::SyncReport StreamedSceneChunks::sync(const StreamingScene& 
     for (auto it = uploaded_.begin(); it != uploaded_.end();)
         it = evictedSet.count(it->second.id) ? uploaded_.erase(it) : std::next(it);
     const std::vector<BrickKey> shown = scene.shownBricks();
+    const std::set<BrickKey> shownSet(shown.begin(), shown.end());
     report.shown = shown.size();
-    // What needs a mesh: edited bricks (drawn with their old mesh meanwhile) first, then new ones.
-    std::vector<BrickKey> edited, fresh;
-    for (const BrickKey& key : shown) {
+    // A mesh equal to the one drawn is not uploaded again, only marked as of its version.
+    const auto uploadChanged = [&](const BrickKey& key, uint64_t version, uint64_t hash, const std::function<PackedChunk()>& pack) {
+        ++report.meshed;
         const auto it = uploaded_.find(key);
-        if (it == uploaded_.end()) fresh.push_back(key);
-        else if (it->second.version != scene.brickVersion(key)) edited.push_back(key);
+        if (it != uploaded_.end() && it->second.meshHash == hash) {
+            it->second.version = version;
+            return;
+        }
+        const ChunkId id = it != uploaded_.end() ? it->second.id : nextId_++;
+        renderer.setPackedChunk(id, pack());
+        uploaded_[key] = {id, version, hash};
+        ++report.uploaded;
+    };
+    if (workers_)
+        for (BrickMeshWorkers::Finished& f : workers_->takeFinished())
+            if (shownSet.count(f.key)) uploadChanged(f.key, f.version, f.hash, [&] { return std::move(f.packed); });
+    // What needs a mesh: edited bricks (drawn with their old mesh meanwhile) first, then new ones.
+    const std::vector<uint64_t> versions = scene.brickVersions(shown);
+    std::vector<BrickKey> edited, fresh;
+    for (std::size_t i = 0; i < shown.size(); ++i) {
+        const auto it = uploaded_.find(shown[i]);
+        if (it == uploaded_.end()) fresh.push_back(shown[i]);
+        else if (it->second.version != versions[i]) edited.push_back(shown[i]);
     }
     std::vector<BrickKey> waiting;
-    for (const auto* list : {&edited, &fresh})
-        for (const BrickKey& key : *list) {
-            if (report.meshed > 0 && secondsSince(start) >= budgetSeconds) {
-                waiting.push_back(key);
-                continue;
+    if (workers_) {
+        waiting = edited;
+        waiting.insert(waiting.end(), fresh.begin(), fresh.end());
+        workers_->request(waiting);
+    } else {
+        for (const auto* list : {&edited, &fresh})
+            for (const BrickKey& key : *list) {
+                if (report.meshed > 0 && secondsSince(start) >= budgetSeconds) {
+                    waiting.push_back(key);
+                    continue;
+                }
+                const std::shared_ptr<const StreamingScene::BrickMesh> m =
+                    meshes_ == Meshes::KeptByScene ? scene.meshBrick(key) : scene.meshBrickAfresh(key);
+                if (m)
+                    uploadChanged(key, m->version, m->hash,
+                                  [&] { return packChunk(m->mesh, key.level, {&m->occlusion, &m->masked, &m->blend}); });
             }
-            const std::shared_ptr<const StreamingScene::BrickMesh> m =
-                meshes_ == Meshes::KeptByScene ? scene.meshBrick(key) : scene.meshBrickAfresh(key);
-            if (!m) continue;
-            ++report.meshed;
-            const auto it = uploaded_.find(key);
-            if (it != uploaded_.end() && it->second.meshHash == m->hash) {
-                it->second.version = m->version;
-                continue;
-            }
-            const ChunkId id = it != uploaded_.end() ? it->second.id : nextId_++;
-            renderer.setChunk(id, m->mesh, key.level, {&m->occlusion, &m->masked, &m->blend});
-            uploaded_[key] = {id, m->version, m->hash};
-            ++report.uploaded;
-        }
+    }
     report.waiting = waiting.size();
     // Bricks no longer shown go, unless a shown brick they overlap has no mesh yet.
-    const std::set<BrickKey> shownSet(shown.begin(), shown.end());
     std::vector<BrickKey> unmeshed;
     for (const BrickKey& key : waiting)
         if (!uploaded_.count(key)) unmeshed.push_back(key);

@@ -3,12 +3,14 @@
 #pragma once
 
 #include "mesher/Mesher.h"
+#include "render/BrickMeshWorkers.h"
 #include "render/Renderer.h"
 #include "scene/StreamingScene.h"
 
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <memory>
 
 namespace vdbclay::render {
 
@@ -32,9 +34,14 @@ class StreamedSceneChunks {
 public:
     /// Where the meshes live: kept by the scene under its budget (a view that draws every frame), or made
     /// apart and dropped once uploaded, so that drawing changes nothing the scene reports (its resident
-    /// bytes, what its budget lets it refine: pictures of a flight that is being measured).
-    enum class Meshes { KeptByScene, Apart };
+    /// bytes, what its budget lets it refine: pictures of a flight that is being measured). Both are
+    /// made within sync(); OnWorkers (the constructor taking the scene) has them made, kept by the scene,
+    /// on worker threads, and sync() only takes those finished.
+    enum class Meshes { KeptByScene, Apart, OnWorkers };
     explicit StreamedSceneChunks(Meshes meshes = Meshes::KeptByScene) : meshes_(meshes) {}
+    /// Meshes made on `meshThreads` workers (BrickMeshWorkers) for `scene`, the only scene synced; the
+    /// scene outlives this.
+    StreamedSceneChunks(const StreamingScene& scene, int meshThreads);
 
     struct SyncReport {
         uint64_t meshed = 0;   // bricks whose mesh was taken again (their content or their neighbourhood changed)
@@ -47,10 +54,17 @@ public:
     /// After scene.frame(): takes the meshes of the shown bricks that are new or whose version changed
     /// (StreamingScene::meshBrick makes them), uploads the meshes that changed, drops the bricks not shown.
     /// Within `budgetSeconds` of meshing (at least one brick a call): edited bricks first, then new ones,
-    /// in the order the scene shows them; the rest wait for later calls. Meanwhile a brick keeps its old
-    /// mesh, and the meshes of bricks no longer shown stay while a shown brick they overlap has none yet
-    /// (a parent stands in for its children, children for their parent), so the view never opens a hole.
+    /// in the order the scene shows them; the rest wait for later calls. OnWorkers: uploads what the
+    /// workers finished and asks them for the rest, in the same order, meshing nothing itself (the
+    /// budget does not apply). Meanwhile a brick keeps its old mesh, and the meshes of bricks no longer
+    /// shown stay while a shown brick they overlap has none yet (a parent stands in for its children,
+    /// children for their parent), so the view never opens a hole.
     SyncReport sync(const StreamingScene& scene, Renderer& renderer, double budgetSeconds = std::numeric_limits<double>::infinity());
+    /// OnWorkers: waits until the workers have finished what the last sync asked for (0 otherwise).
+    void waitForMeshes() const;
+    /// OnWorkers: bricks asked of the workers and not finished yet; what meshing threw since the last call.
+    std::size_t meshesInProgress() const;
+    std::vector<std::string> takeMeshFailures();
 
     /// The chunk a shown brick is drawn as, if it has one.
     std::optional<ChunkId> chunkOf(const BrickKey& key) const;
@@ -66,6 +80,8 @@ private:
         uint64_t meshHash; // of its mesh: a brick meshed again to the same mesh is not uploaded again
     };
     Meshes meshes_;
+    const StreamingScene* scene_ = nullptr; // OnWorkers: the scene the workers mesh
+    std::unique_ptr<BrickMeshWorkers> workers_;
     std::map<BrickKey, Uploaded> uploaded_;
     ChunkId nextId_ = ChunkId(1) << 62; // apart from leaf ids
 };

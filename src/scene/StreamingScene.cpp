@@ -23,6 +23,7 @@
 #include <unordered_map>
 #include <unordered_set>
 #include <mutex>
+#include <shared_mutex>
 #include <stdexcept>
 #include <thread>
 #include <utility>
@@ -93,9 +94,18 @@ struct StreamingScene::Impl {
     std::vector<std::set<IndexCoord>> present; // per level: stored bricks and the parents of present ones
     std::unordered_map<BrickKey, uint64_t, BrickKeyHash> estimates;
     // The resident bricks of each level share one tree, so the nodes above the leaves cost little per brick.
+    // Guarded by `trees`, everything else by `mutex`: meshing and ray casts read the trees for a long
+    // while without the lock that the frame's selection needs. A thread needing both takes `trees` first.
     std::vector<Volume> levelVolumes;
+    mutable std::shared_mutex trees;
+    // Evicted bricks whose content is still in the trees: cleared by the next thread to hold the trees
+    // alone (loads, edits), so that evicting needs the lock only.
+    std::vector<BrickKey> pendingClears;
 
     mutable std::mutex mutex;
+    // The store's own connection (`scene`: autosaves, the editor's marks, edits' page-ins), taken after
+    // `mutex` when both are needed: an autosave writes with this alone, so that frames go on meanwhile.
+    mutable std::mutex storeMutex;
     std::condition_variable wake, idle;
     std::unordered_map<BrickKey, Resident, BrickKeyHash> resident;
     std::deque<BrickKey> queue;
@@ -120,7 +130,7 @@ struct StreamingScene::Impl {
     std::deque<std::pair<uint64_t, BlockChange>> leafLog;
     uint64_t leafLogSeq = 0, leafLogFloor = 0;
     std::vector<BrickKey> shown;
-    LodCut cut; // the shown bricks and the rest of the split bricks' children
+    std::shared_ptr<const LodCut> cut = std::make_shared<LodCut>(); // the shown bricks and the rest of the split bricks' children
     MaterialTable materials; // the scene's, with what edits defined since the last autosave
     VoxelMask mask;          // as edits left it; maskDirty until autosaved
     bool maskDirty = false;
@@ -191,7 +201,7 @@ struct StreamingScene::Impl {
             lo[std::size_t(a)] = int64_t(key.brick[std::size_t(a)]) * own;
             hi[std::size_t(a)] = lo[std::size_t(a)] + own;
         }
-        for (const LodBrick& other : cut.bricks()) {
+        for (const LodBrick& other : cut->bricks()) {
             if (!LodCut::touches(other, lo, hi)) continue;
             v += hash(other) * 0x100000001B3ull;
             const auto r = resident.find({other.level, other.brick});
@@ -252,20 +262,76 @@ struct StreamingScene::Impl {
         meshed.insert(key);
     }
 
-    /// The mesh of a resident brick as its data and the cut make it now. `inPieces`: made and kept in
-    /// pieces per leaf, re-using those of `old` (optional) where no edit since reached them (above level
-    /// 0 only the transition cells, which read the finer levels, are made again); `inputs` is then
-    /// meshVersionLocked(key, true). Lock held.
-    std::shared_ptr<const BrickMesh> makeMesh(const BrickKey& key, bool inPieces = false, const BrickMeshPieces* old = nullptr,
-                                              uint64_t inputs = 0) const
+    /// What a brick's mesh is made from beside the level trees, taken under the lock so that meshing
+    /// runs without it.
+    struct MeshInputs {
+        BrickKey key;
+        std::shared_ptr<const LodCut> cut;
+        /// Made and kept in pieces per leaf, re-using those of `old` where no edit since reached them
+        /// (above level 0 only the transition cells, which read the finer levels, are made again).
+        bool inPieces = false;
+        std::shared_ptr<const BrickMeshPieces> old;
+        bool reuse = false;               // `old`'s pieces hold where `changed` does not reach
+        std::vector<BlockChange> changed; // level-0 leaves edits changed since `old`, near the brick
+        uint64_t inputs = 0;              // meshVersionLocked(key, true)
+        uint64_t version = 0;             // meshVersionLocked(key)
+        uint64_t leafLogSeq = 0;
+        VoxelMask mask;
+    };
+
+    /// The inputs of a resident brick's mesh as the scene holds them now. Lock held.
+    MeshInputs meshInputsLocked(const BrickKey& key, bool inPieces = false, std::shared_ptr<const BrickMeshPieces> old = nullptr) const
+    {
+        MeshInputs in;
+        in.key = key;
+        in.cut = cut;
+        in.inPieces = inPieces && cut->shows({key.level, key.brick});
+        in.inputs = meshVersionLocked(key, true);
+        in.version = meshVersionLocked(key);
+        in.leafLogSeq = leafLogSeq;
+        in.mask = mask;
+        if (!in.inPieces) return in;
+        in.reuse = old && old->inputs == in.inputs && old->leafLogSeq >= leafLogFloor;
+        in.old = std::move(old);
+        if (!in.reuse || key.level != 0) return in;
+        // The leaves edits changed since `old`, near enough for this brick's cells or occlusion to read
+        // (edits change level 0; the levels above change by loads).
+        std::map<IndexCoord, BlockChange> changedAt; // per leaf, the bounds of all its changes
+        for (auto it = leafLog.rbegin(); it != leafLog.rend() && it->first > in.old->leafLogSeq; ++it) {
+            const BlockChange& c = it->second;
+            if (!inPiecesBox(key, c.origin, 2 * kLeafDim)) continue;
+            const auto [at, added] = changedAt.emplace(c.origin, c);
+            if (!added)
+                for (std::size_t a = 0; a < 3; ++a) {
+                    at->second.min[a] = std::min(at->second.min[a], c.min[a]);
+                    at->second.max[a] = std::max(at->second.max[a], c.max[a]);
+                }
+        }
+        for (const auto& entry : changedAt) in.changed.push_back(entry.second);
+        return in;
+    }
+
+    /// Whether leaf `c` lies within `grow` voxels of the leaves whose chunks a brick's pieces hold.
+    static bool inPiecesBox(const BrickKey& key, const IndexCoord& c, int32_t grow)
+    {
+        for (std::size_t a = 0; a < 3; ++a) {
+            const int32_t lo = key.brick[a] * kBrickEdge, hi = lo + kBrickEdge + kLeafDim;
+            if (c[a] < lo - grow || c[a] >= hi + grow) return false;
+        }
+        return true;
+    }
+
+    /// The mesh of a resident brick made from `in` and the level trees (`trees` held, shared or not).
+    std::shared_ptr<const BrickMesh> makeMesh(const MeshInputs& in) const
     {
         std::vector<const Volume*> levelsOf;
         for (const Volume& v : levelVolumes) levelsOf.push_back(&v);
+        const BrickKey& key = in.key;
         auto out = std::make_shared<BrickMesh>();
         const LodBrick brick{key.level, key.brick};
         const Volume& volume = *levelsOf[std::size_t(key.level)];
-        if (inPieces && cut.shows(brick)) {
-            out->pieces = remeshPieces(key, levelsOf, old, inputs);
+        if (in.inPieces) {
+            out->pieces = remeshPieces(in, levelsOf);
             // Each piece's occlusion (low byte) and blend (the three above) welded along as one value.
             std::vector<const MeshChunk*> chunks;
             std::vector<std::vector<uint32_t>> shading(out->pieces->leaves.size());
@@ -285,19 +351,19 @@ struct StreamingScene::Impl {
                 out->occlusion[v] = uint8_t(welded[v] & 0xffu);
                 out->blend[v] = welded[v] >> 8;
             }
-            appendLodTransitions(levelsOf, cut, brick, out->mesh);
+            appendLodTransitions(levelsOf, *in.cut, brick, out->mesh);
             const std::vector<uint8_t> transitions = vertexOcclusion(volume, out->mesh, welded.size());
             out->occlusion.insert(out->occlusion.end(), transitions.begin(), transitions.end());
             const std::vector<uint32_t> transitionBlend = vertexMaterialBlend(volume, out->mesh, welded.size());
             out->blend.insert(out->blend.end(), transitionBlend.begin(), transitionBlend.end());
         } else {
             // A brick outside the last frame's cut (asked for directly) is meshed alone at its level.
-            out->mesh = meshLodBrick(levelsOf, cut.shows(brick) ? cut : LodCut({brick}), brick, options.meshing);
+            out->mesh = meshLodBrick(levelsOf, in.cut->shows(brick) ? *in.cut : LodCut({brick}), brick, options.meshing);
             out->occlusion = vertexOcclusion(volume, out->mesh);
             out->blend = vertexMaterialBlend(volume, out->mesh);
         }
-        out->masked = maskedVertices(mask, out->mesh, scene.voxelSize());
-        out->version = meshVersionLocked(key);
+        out->masked = maskedVertices(in.mask, out->mesh, scene.voxelSize());
+        out->version = in.version;
         out->hash = contentHash(out->mesh);
         for (uint8_t o : out->occlusion) out->hash = (out->hash ^ o) * 1099511628211ull;
         for (uint8_t m : out->masked) out->hash = (out->hash ^ m) * 1099511628211ull;
@@ -345,48 +411,23 @@ struct StreamingScene::Impl {
         }
     }
 
-    /// The pieces of a brick's mesh of the current cut: those of `old` where they still hold (the same
-    /// loads around, and no edit logged since reached the leaf), the rest meshed now. Lock held.
-    std::shared_ptr<const BrickMeshPieces> remeshPieces(const BrickKey& key, const std::vector<const Volume*>& levelsOf,
-                                                        const BrickMeshPieces* old, uint64_t inputs) const
+    /// The pieces of a brick's mesh of `in`'s cut: those of `in.old` where they still hold (the same
+    /// loads around, and no edit logged since reached the leaf), the rest meshed now.
+    std::shared_ptr<const BrickMeshPieces> remeshPieces(const MeshInputs& in, const std::vector<const Volume*>& levelsOf) const
     {
         auto next = std::make_shared<BrickMeshPieces>();
-        next->inputs = inputs;
-        next->leafLogSeq = leafLogSeq;
+        next->inputs = in.inputs;
+        next->leafLogSeq = in.leafLogSeq;
+        const BrickKey& key = in.key;
         const LodBrick brick{key.level, key.brick};
-        std::array<int32_t, 3> lo{}, hi{}; // the leaves whose chunks the brick holds, [lo, hi)
-        for (int a = 0; a < 3; ++a) {
-            lo[std::size_t(a)] = key.brick[std::size_t(a)] * kBrickEdge;
-            hi[std::size_t(a)] = lo[std::size_t(a)] + kBrickEdge + kLeafDim;
-        }
-        const auto inBox = [&](const IndexCoord& c, int32_t grow) {
-            for (std::size_t a = 0; a < 3; ++a)
-                if (c[a] < lo[a] - grow || c[a] >= hi[a] + grow) return false;
-            return true;
-        };
-        const bool reuse = old && old->inputs == next->inputs && old->leafLogSeq >= leafLogFloor;
-        // The leaves edits changed since `old`, near enough for this brick's cells or occlusion to read
-        // (edits change level 0; the levels above change by loads).
-        std::map<IndexCoord, BlockChange> changedAt; // per leaf, the bounds of all its changes
-        if (reuse && key.level == 0)
-            for (auto it = leafLog.rbegin(); it != leafLog.rend() && it->first > old->leafLogSeq; ++it) {
-                const BlockChange& c = it->second;
-                if (!inBox(c.origin, 2 * kLeafDim)) continue;
-                const auto [at, added] = changedAt.emplace(c.origin, c);
-                if (!added)
-                    for (std::size_t a = 0; a < 3; ++a) {
-                        at->second.min[a] = std::min(at->second.min[a], c.min[a]);
-                        at->second.max[a] = std::max(at->second.max[a], c.max[a]);
-                    }
-            }
-        std::vector<BlockChange> changed;
-        for (const auto& entry : changedAt) changed.push_back(entry.second);
+        const bool reuse = in.reuse;
+        const std::vector<BlockChange>& changed = in.changed;
         std::vector<IndexCoord> remesh; // sorted
         if (reuse) {
             for (const IndexCoord& leaf : leavesAffectedBy(changed, options.meshing))
-                if (inBox(leaf, 0)) remesh.push_back(leaf);
+                if (inPiecesBox(key, leaf, 0)) remesh.push_back(leaf);
         }
-        std::vector<MeshChunk> fresh = meshLodBrickChunks(levelsOf, cut, brick, options.meshing, reuse ? &remesh : nullptr);
+        std::vector<MeshChunk> fresh = meshLodBrickChunks(levelsOf, *in.cut, brick, options.meshing, reuse ? &remesh : nullptr);
         // Occlusion samples reach 3.5 voxels beyond a chunk's cells (which end a voxel past its leaf): the
         // leaves whose reach meets a change.
         std::set<IndexCoord> occludedAgain;
@@ -402,7 +443,7 @@ struct StreamingScene::Impl {
             }
         std::vector<std::shared_ptr<const LeafMesh>> kept;
         if (reuse)
-            for (const auto& leaf : old->leaves)
+            for (const auto& leaf : in.old->leaves)
                 if (!std::binary_search(remesh.begin(), remesh.end(), leaf->chunk.leafOrigin)) {
                     if (!occludedAgain.count(leaf->chunk.leafOrigin)) kept.push_back(leaf);
                     else fresh.push_back(leaf->chunk); // occluded again below
@@ -439,18 +480,28 @@ struct StreamingScene::Impl {
         }
     }
 
-    /// Removes a resident brick (and its mesh) from memory. Lock held.
+    /// Removes a resident brick (and its mesh); its content leaves the trees with the next
+    /// clearEvicted(). Lock held.
     void evict(std::unordered_map<BrickKey, Resident, BrickKeyHash>::iterator it)
     {
         dropMesh(it->first, it->second);
         residentBytes -= it->second.bytes;
-        fillRegion(levelVolumes[std::size_t(it->first.level)], brickBox(it->first.brick), kEmptyMaterial);
+        pendingClears.push_back(it->first);
         resident.erase(it);
     }
 
-    /// Puts a loaded brick into its level's tree and accounts for it. Lock held.
+    /// Takes the content of evicted bricks out of the trees. `trees` held alone, and the lock.
+    void clearEvicted()
+    {
+        for (const BrickKey& key : pendingClears)
+            if (!resident.count(key)) fillRegion(levelVolumes[std::size_t(key.level)], brickBox(key.brick), kEmptyMaterial);
+        pendingClears.clear();
+    }
+
+    /// Puts a loaded brick into its level's tree and accounts for it. `trees` held alone, and the lock.
     void install(const BrickKey& key, DecodedRegion&& brick, uint64_t bytes, uint64_t bytesReadFromStore)
     {
+        clearEvicted();
         pasteRegion(levelVolumes[std::size_t(key.level)], std::move(brick));
         Resident r{bytes, frameNumber, false, ++versions, {}, nullptr, 0, 0};
         r.loadVersion = r.version;
@@ -462,13 +513,14 @@ struct StreamingScene::Impl {
     }
 
     /// Evicts least recently used bricks outside `keep` until `needed` more bytes fit. Dirty bricks are
-    /// committed first (all of them, so the store never holds half an edit). Lock held.
-    bool makeRoom(uint64_t needed, std::unique_lock<std::mutex>& lock)
+    /// committed first (all of them, so the store never holds half an edit) when `mayAutosave` (the caller
+    /// holds `trees`, which the autosave reads); else only clean bricks go. Lock held.
+    bool makeRoom(uint64_t needed, bool mayAutosave)
     {
         while (residentBytes + inFlightBytes + needed > options.memoryBudgetBytes) {
             auto victim = resident.end();
             for (auto it = resident.begin(); it != resident.end(); ++it) {
-                if (wanted.count(it->first) || pinned.count(it->first)) continue;
+                if (wanted.count(it->first) || pinned.count(it->first) || (it->second.dirty && !mayAutosave)) continue;
                 if (victim == resident.end() || it->second.lastUsed < victim->second.lastUsed) victim = it;
             }
             if (victim == resident.end()) return false;
@@ -479,13 +531,13 @@ struct StreamingScene::Impl {
             evict(victim);
             ++evictions;
         }
-        (void)lock;
         return true;
     }
 
     void work(const BrickStore& reader)
     {
         std::unique_lock<std::mutex> lock(mutex);
+        std::unique_lock<std::shared_mutex> treesHeld(trees, std::defer_lock);
         while (true) {
             wake.wait(lock, [&] { return stopping || !queue.empty(); });
             if (stopping) return;
@@ -506,6 +558,7 @@ struct StreamingScene::Impl {
             } catch (...) {
                 unreadable = true; // a damaged brick shows as missing; sculpting it reports the error
             }
+            treesHeld.lock();
             lock.lock();
             inFlight.erase(key);
             inFlightBytes -= estimate;
@@ -514,9 +567,10 @@ struct StreamingScene::Impl {
             if (loaded && !resident.count(key)) {
                 const uint64_t bytes = loaded->memoryBytes();
                 estimates[key] = bytes; // the next frames budget with what it really takes
-                if (wanted.count(key) && makeRoom(bytes, lock)) install(key, std::move(*loaded), bytes, payloadBytes);
+                if (wanted.count(key) && makeRoom(bytes, true)) install(key, std::move(*loaded), bytes, payloadBytes);
             }
-            if (queue.empty() && inFlight.empty()) idle.notify_all();
+            treesHeld.unlock();
+            if (inFlight.empty()) idle.notify_all();
         }
     }
 
@@ -524,22 +578,30 @@ struct StreamingScene::Impl {
 
     /// Loads the level-0 bricks an edit touches that are not resident: the shown ones stay if the budget
     /// allows, else only the edit's are wanted and the view's make room (the next frame asks for them
-    /// again). Returns the bricks loaded. Lock held (released while reading).
-    uint64_t pageInForEdit(const std::vector<IndexCoord>& bricks, std::unique_lock<std::mutex>& lock)
+    /// again). The bricks are pinned (the caller unpins them). Returns the bricks loaded. `trees` and
+    /// the lock held (both released while reading).
+    uint64_t pageInForEdit(const std::vector<IndexCoord>& bricks, std::unique_lock<std::shared_mutex>& treesHeld, std::unique_lock<std::mutex>& lock)
     {
+        for (const IndexCoord& b : bricks) pinned.insert({0, b});
         wanted.clear();
         wanted.insert(shown.begin(), shown.end());
         for (const IndexCoord& b : bricks) wanted.insert({0, b});
         const auto makeRoomForEdit = [&](uint64_t bytes) {
-            if (makeRoom(bytes, lock)) return true;
+            if (makeRoom(bytes, true)) return true;
             // Only the edit's bricks are wanted now. The loads under way finish first (they are then
             // dropped): what they would take must not decide whether the edit fits, or the same session
-            // would refuse different edits from run to run.
+            // would refuse different edits from run to run. Loads finish with the trees held.
             wanted.clear();
             for (const IndexCoord& b : bricks) wanted.insert({0, b});
             queue.clear();
-            idle.wait(lock, [&] { return inFlight.empty(); });
-            return makeRoom(bytes, lock);
+            while (!inFlight.empty()) {
+                treesHeld.unlock();
+                idle.wait(lock, [&] { return inFlight.empty(); });
+                lock.unlock();
+                treesHeld.lock();
+                lock.lock();
+            }
+            return makeRoom(bytes, true);
         };
         uint64_t pagedIn = 0;
         for (const IndexCoord& b : bricks) {
@@ -547,8 +609,12 @@ struct StreamingScene::Impl {
             if (resident.count(key)) continue;
             const std::size_t materialCount = materials.size(); // as a loader does: an autosave may run meanwhile
             lock.unlock();
+            treesHeld.unlock();
             uint64_t payloadBytes = 0;
+            std::unique_lock<std::mutex> store(storeMutex);
             DecodedRegion brick = scene.readBrick(0, b, scene.bricks(), materialCount, &payloadBytes);
+            store.unlock();
+            treesHeld.lock();
             lock.lock();
             if (resident.count(key)) continue; // a loader got there first
             const uint64_t bytes = brick.memoryBytes();
@@ -559,12 +625,25 @@ struct StreamingScene::Impl {
         return pagedIn;
     }
 
-    /// A volume holding the resident level-0 bricks listed, to edit apart from the loaders' trees. Lock held.
-    Volume workCopy(const std::vector<IndexCoord>& bricks) const
+    /// Unpins an edit's bricks with the lock held again, whatever happens.
+    struct Unpin {
+        Impl& s;
+        std::unique_lock<std::mutex>& lock;
+        const std::vector<IndexCoord>& bricks;
+        ~Unpin()
+        {
+            if (!lock.owns_lock()) lock.lock();
+            for (const IndexCoord& b : bricks) s.pinned.erase({0, b});
+        }
+    };
+
+    /// A volume holding the resident level-0 bricks listed, to edit apart from the loaders' trees.
+    /// `trees` held.
+    Volume workCopy(const std::vector<IndexCoord>& bricks, const MaterialTable& materialsNow, const VoxelMask& maskNow) const
     {
         Volume work(scene.voxelSize());
-        work.materials() = materials;
-        work.mask() = mask;
+        work.materials() = materialsNow;
+        work.mask() = maskNow;
         for (const IndexCoord& b : bricks) pasteRegion(work, levelVolumes[0], brickBox(b));
         return work;
     }
@@ -607,22 +686,28 @@ struct StreamingScene::Impl {
         }
     }
 
-    /// Takes brick `b`'s content from `work` when it changed (at `leaves`, changedLeaves): dirty, a new
+    /// Pastes brick `b`'s content from `work` into level 0 when it changed (at `leaves`, changedLeaves)
+    /// and returns what the brick now takes. `trees` held alone.
+    uint64_t pasteBrick(const IndexCoord& b, const Volume& work, const std::vector<BlockChange>& leaves)
+    {
+        if (leaves.empty()) return 0;
+        pasteRegion(levelVolumes[0], work, brickBox(b));
+        return regionMemoryBytes(levelVolumes[0], brickBox(b));
+    }
+
+    /// Accounts for brick `b` pasted where it changed (at `leaves`; pasteBrick gave `bytes`): dirty, a new
     /// version, the leaves logged, and the sides whose neighbours read what changed (those `reached` came
     /// within reach of) bumped. Lock held.
-    bool commitBrick(const IndexCoord& b, const Volume& work, const std::vector<VoxelRange>& reached, const std::vector<BlockChange>& leaves)
+    bool commitBrick(const IndexCoord& b, uint64_t bytes, const std::vector<VoxelRange>& reached, const std::vector<BlockChange>& leaves)
     {
-        Volume& fine = levelVolumes[0];
+        if (leaves.empty()) return false;
         Resident& r = resident.at({0, b});
         const LeafAlignedBox box = brickBox(b);
-        if (leaves.empty()) return false;
-        pasteRegion(fine, work, box);
         logLeafChanges(leaves);
         // A brick the store did not hold (an edit in empty space) is shown from now on, not from the
         // autosave that stores it: the view walks the bricks present and their ancestors.
         IndexCoord up = b;
         for (int k = 0; k <= levels && present[std::size_t(k)].insert(up).second; ++k) up = parentBrick(up);
-        const uint64_t bytes = regionMemoryBytes(fine, box);
         residentBytes = residentBytes - r.bytes + bytes;
         r.bytes = bytes;
         r.dirty = true;
@@ -646,43 +731,77 @@ struct StreamingScene::Impl {
         return true;
     }
 
-    uint64_t autosaveLocked()
+    /// What an autosave writes, taken under the lock: the store is written without it.
+    struct SaveBatch {
+        std::vector<BrickKey> dirty; // sorted
+        MaterialTable materials;
+        VoxelMask mask;
+        bool maskDirty = false;
+        uint64_t edits = 0;
+    };
+
+    SaveBatch saveBatchLocked() const
     {
-        std::vector<std::pair<BrickKey, Resident*>> dirty;
-        for (auto& [key, r] : resident)
-            if (r.dirty) dirty.push_back({key, &r});
-        std::sort(dirty.begin(), dirty.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-        Volume& fine = levelVolumes[0];
-        fine.materials() = materials;
-        // Materials defined since (even ones no voxel uses yet) are saved with the bricks, or alone.
-        const bool newMaterials = !(materials == scene.materials());
-        if (dirty.empty() && committedEdits(scene) == edits && !newMaterials && !maskDirty) return 0;
-        StoreTransaction transaction(scene.bricks());
-        for (auto& [key, r] : dirty) {
-            if (const std::optional<BrickRecord> record = encodeBrick(fine, key.brick)) {
-                scene.bricks().put(key, *record);
-                present[0].insert(key.brick);
-            } else {
-                scene.bricks().erase(key);
-            }
-        }
+        SaveBatch batch;
+        for (const auto& [key, r] : resident)
+            if (r.dirty) batch.dirty.push_back(key);
+        std::sort(batch.dirty.begin(), batch.dirty.end());
+        batch.materials = materials;
+        batch.mask = mask;
+        batch.maskDirty = maskDirty;
+        batch.edits = edits;
+        return batch;
+    }
+
+    /// Writes a batch in one transaction, with the LOD pyramid above its bricks brought up to date;
+    /// nothing when there is nothing new. `trees` held (read) and `storeMutex`, not the lock.
+    LodRefresh writeBatch(const SaveBatch& batch)
+    {
         LodRefresh lod;
-        if (newMaterials) scene.setMaterials(materials);
-        if (maskDirty) scene.setMask(mask);
-        if (!dirty.empty()) {
+        // Materials defined since (even ones no voxel uses yet) are saved with the bricks, or alone.
+        const bool newMaterials = !(batch.materials == scene.materials());
+        if (batch.dirty.empty() && committedEdits(scene) == batch.edits && !newMaterials && !batch.maskDirty) return lod;
+        const Volume& fine = levelVolumes[0]; // holds `materials` (edits set both)
+        StoreTransaction transaction(scene.bricks());
+        for (const BrickKey& key : batch.dirty) {
+            if (const std::optional<BrickRecord> record = encodeBrick(fine, key.brick)) scene.bricks().put(key, *record);
+            else scene.bricks().erase(key);
+        }
+        if (newMaterials) scene.setMaterials(batch.materials);
+        if (batch.maskDirty) scene.setMask(batch.mask);
+        if (!batch.dirty.empty()) {
             scene.forgetBounds();
             std::vector<IndexCoord> bricks;
-            for (auto& [key, r] : dirty) bricks.push_back(key.brick);
+            for (const BrickKey& key : batch.dirty) bricks.push_back(key.brick);
             if (lodFollowsEdits(scene)) lod = updateStoreLod(scene, bricks);
             else if (levels > 0) scene.setLod(levels, true);
         }
-        scene.bricks().putMeta(kEditCountKey, std::to_string(edits));
+        scene.bricks().putMeta(kEditCountKey, std::to_string(batch.edits));
         transaction.commit();
-        for (auto& [key, r] : dirty) r->dirty = false;
-        maskDirty = false;
+        return lod;
+    }
+
+    /// After writeBatch: its bricks are clean (edits wait for `trees`, held since the batch was taken),
+    /// the mask too unless it changed meanwhile, and the coarse bricks it rewrote go. Lock held.
+    uint64_t finishSaveLocked(const SaveBatch& batch, const LodRefresh& lod)
+    {
+        for (const BrickKey& key : batch.dirty) {
+            const auto it = resident.find(key);
+            if (it != resident.end()) it->second.dirty = false;
+        }
+        if (mask == batch.mask) maskDirty = false;
         lodBricksWritten += lod.bricksWritten();
         forgetCoarseBricks(lod);
-        return dirty.size();
+        return batch.dirty.size();
+    }
+
+    /// An autosave with the lock held throughout (making room for a load or an edit). `trees` held
+    /// (read), and the lock.
+    uint64_t autosaveLocked()
+    {
+        const SaveBatch batch = saveBatchLocked();
+        std::lock_guard<std::mutex> store(storeMutex);
+        return finishSaveLocked(batch, writeBatch(batch));
     }
 
     /// Coarse bricks an autosave rewrote: resident copies go (the view loads them again), as do loads
@@ -817,7 +936,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     }
     s.wanted.clear();
     for (std::size_t i = 0; i < accepted; ++i) s.wanted.insert(needed[order[i]]);
-    s.makeRoom(0, lock);
+    s.makeRoom(0, false); // the frame never autosaves: dirty bricks wait for an edit's or a load's room
     // Looked up after makeRoom: an autosave it ran may have dropped rewritten coarse bricks.
     std::vector<char> isResident(needed.size());
     for (std::size_t i = 0; i < needed.size(); ++i) isResident[i] = s.resident.count(needed[i]) > 0;
@@ -857,7 +976,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     std::vector<LodBrick> cut;
     for (const BrickKey& k : s.shown) cut.push_back({k.level, k.brick});
     for (const BrickKey& k : unshown) cut.push_back({k.level, k.brick});
-    s.cut = LodCut(cut);
+    s.cut = std::make_shared<const LodCut>(cut);
     // Meshes are kept for the shown bricks only: a brick that left the view is meshed again if it returns.
     for (auto it = s.meshed.begin(); it != s.meshed.end();) {
         const BrickKey key = *it++;
@@ -901,26 +1020,19 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
         return std::vector<IndexCoord>(s.present[0].begin(), s.present[0].end());
     });
     EditReport report;
-    std::unique_lock<std::mutex> lock(s.mutex);
-    report.bricksPagedIn = s.pageInForEdit(bricks, lock);
-    report.pageInSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    Volume work = s.workCopy(bricks);
-    // The script runs outside the lock, so that selection, loads, meshing and picks go on meanwhile: its
+    // The script runs outside the locks, so that selection, loads, meshing and picks go on meanwhile: its
     // bricks stay resident (pinned), and only this thread changes level 0 where they are (edits are
     // applied one at a time, from one thread).
-    for (const IndexCoord& b : bricks) s.pinned.insert({0, b});
-    struct Unpin { // with the lock held again, whatever happens
-        Impl& s;
-        std::unique_lock<std::mutex>& lock;
-        const std::vector<IndexCoord>& bricks;
-        ~Unpin()
-        {
-            if (!lock.owns_lock()) lock.lock();
-            for (const IndexCoord& b : bricks) s.pinned.erase({0, b});
-        }
-    };
-    const Unpin unpin{s, lock, bricks};
+    std::unique_lock<std::shared_mutex> trees(s.trees);
+    std::unique_lock<std::mutex> lock(s.mutex);
+    const Impl::Unpin unpin{s, lock, bricks};
+    report.bricksPagedIn = s.pageInForEdit(bricks, trees, lock);
+    report.pageInSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const MaterialTable materialsNow = s.materials;
+    const VoxelMask maskNow = s.mask;
     lock.unlock();
+    Volume work = s.workCopy(bricks, materialsNow, maskNow);
+    trees.unlock();
     const Volume before = work.clone();
     report.ops = runStrokeScript(work, script, {}, stroke);
     std::vector<Impl::VoxelRange> reached;
@@ -930,8 +1042,13 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
         leaves[i] = Impl::changedLeaves(bricks[i], before, work, reached);
         if (changes) Impl::recordLeafChanges(leaves[i], before, work, *changes);
     }
+    trees.lock();
+    s.levelVolumes[0].materials() = work.materials();
+    std::vector<uint64_t> bytes(bricks.size());
+    for (std::size_t i = 0; i < bricks.size(); ++i) bytes[i] = s.pasteBrick(bricks[i], work, leaves[i]);
     lock.lock();
-    for (std::size_t i = 0; i < bricks.size(); ++i) report.bricksChanged += s.commitBrick(bricks[i], work, reached, leaves[i]);
+    s.clearEvicted();
+    for (std::size_t i = 0; i < bricks.size(); ++i) report.bricksChanged += s.commitBrick(bricks[i], bytes[i], reached, leaves[i]);
     s.materials = work.materials();
     if (work.mask() != s.mask) {
         const VoxelMask old = std::move(s.mask);
@@ -945,7 +1062,7 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
 
 std::optional<std::pair<IndexCoord, IndexCoord>> StreamingScene::storeBounds() const
 {
-    std::lock_guard<std::mutex> lock(impl_->mutex);
+    std::lock_guard<std::mutex> store(impl_->storeMutex);
     return impl_->scene.bounds();
 }
 
@@ -988,13 +1105,19 @@ StreamingScene::EditReport StreamingScene::restoreLeaves(const std::vector<LeafI
     }
     const std::vector<IndexCoord> bricks(brickSet.begin(), brickSet.end());
     EditReport report;
+    std::unique_lock<std::shared_mutex> trees(s.trees);
     std::unique_lock<std::mutex> lock(s.mutex);
-    report.bricksPagedIn = s.pageInForEdit(bricks, lock);
+    const Impl::Unpin unpin{s, lock, bricks};
+    report.bricksPagedIn = s.pageInForEdit(bricks, trees, lock);
     report.pageInSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    Volume work = s.workCopy(bricks);
+    Volume work = s.workCopy(bricks, s.materials, s.mask);
     for (const LeafImage& leaf : leaves)
         pasteRegion(work, decodeRegion(leaf.bytes, {leaf.origin, kLeafDim}, s.scene.voxelSize(), s.materials.size(), "the edit history"));
-    for (const IndexCoord& b : bricks) report.bricksChanged += s.commitBrick(b, work, reached, Impl::changedLeaves(b, s.levelVolumes[0], work, reached));
+    s.clearEvicted();
+    for (const IndexCoord& b : bricks) {
+        const std::vector<BlockChange> changed = Impl::changedLeaves(b, s.levelVolumes[0], work, reached);
+        report.bricksChanged += s.commitBrick(b, s.pasteBrick(b, work, changed), reached, changed);
+    }
     ++s.edits;
     return report;
 }
@@ -1014,6 +1137,7 @@ uint64_t StreamingScene::edits() const
 void StreamingScene::visitResidentLevels(const std::function<void(const std::vector<const Volume*>&, const FinestResidentAt&)>& visit) const
 {
     const Impl& s = *impl_;
+    std::shared_lock<std::shared_mutex> trees(s.trees);
     std::lock_guard<std::mutex> lock(s.mutex);
     std::vector<const Volume*> levels;
     for (const Volume& v : s.levelVolumes) levels.push_back(&v);
@@ -1027,13 +1151,13 @@ void StreamingScene::visitResidentLevels(const std::function<void(const std::vec
 
 std::optional<std::string> StreamingScene::meta(const std::string& key) const
 {
-    std::lock_guard<std::mutex> lock(impl_->mutex);
+    std::lock_guard<std::mutex> store(impl_->storeMutex);
     return impl_->scene.bricks().meta(key);
 }
 
 void StreamingScene::commitMeta(const std::string& key, const std::string& value)
 {
-    std::lock_guard<std::mutex> lock(impl_->mutex);
+    std::lock_guard<std::mutex> store(impl_->storeMutex);
     StoreTransaction transaction(impl_->scene.bricks());
     impl_->scene.bricks().putMeta(key, value);
     transaction.commit();
@@ -1041,8 +1165,20 @@ void StreamingScene::commitMeta(const std::string& key, const std::string& value
 
 uint64_t StreamingScene::autosave()
 {
-    std::lock_guard<std::mutex> lock(impl_->mutex);
-    return impl_->autosaveLocked();
+    Impl& s = *impl_;
+    // Level 0 cannot change while the batch is written (edits and loads wait for the trees); the lock is
+    // held only to take the batch and to mark it saved.
+    std::shared_lock<std::shared_mutex> trees(s.trees);
+    std::unique_lock<std::mutex> lock(s.mutex);
+    const Impl::SaveBatch batch = s.saveBatchLocked();
+    lock.unlock();
+    LodRefresh lod;
+    {
+        std::lock_guard<std::mutex> store(s.storeMutex);
+        lod = s.writeBatch(batch);
+    }
+    lock.lock();
+    return s.finishSaveLocked(batch, lod);
 }
 
 uint64_t StreamingScene::lodBricksWritten() const
@@ -1082,7 +1218,7 @@ uint64_t StreamingScene::residentMeshBytes() const
 
 uint64_t StreamingScene::residentActiveVoxels() const
 {
-    std::lock_guard<std::mutex> lock(impl_->mutex);
+    std::shared_lock<std::shared_mutex> trees(impl_->trees);
     uint64_t total = 0;
     for (const Volume& level : impl_->levelVolumes) total += level.stats().activeVoxels;
     return total;
@@ -1116,38 +1252,59 @@ uint64_t StreamingScene::brickVersion(const BrickKey& key) const
     return impl_->meshVersionLocked(key);
 }
 
+std::vector<uint64_t> StreamingScene::brickVersions(const std::vector<BrickKey>& keys) const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    std::vector<uint64_t> out;
+    out.reserve(keys.size());
+    for (const BrickKey& key : keys) out.push_back(impl_->meshVersionLocked(key));
+    return out;
+}
+
 std::shared_ptr<const StreamingScene::BrickMesh> StreamingScene::meshBrick(const BrickKey& key) const
 {
     Impl& s = *impl_;
-    // Under the lock: loaders paste bricks into the same level trees.
+    // The trees shared for the whole time (loads and edits paste into them), the lock only while the
+    // inputs are taken and the mesh is kept: selection goes on meanwhile.
+    std::shared_lock<std::shared_mutex> trees(s.trees);
     std::unique_lock<std::mutex> lock(s.mutex);
-    const auto it = s.resident.find(key);
+    auto it = s.resident.find(key);
     if (it == s.resident.end()) return nullptr;
     if (it->second.mesh && it->second.mesh->version == s.meshVersionLocked(key)) return it->second.mesh;
     // A mesh made again for edits (the loads around unchanged) is made in pieces, so that the next
     // edits re-mesh only the leaves they reach; others are made whole and take less memory.
     const uint64_t inputs = s.meshVersionLocked(key, true);
     const bool forEdits = it->second.mesh && it->second.meshInputs == inputs;
-    std::shared_ptr<const BrickMesh> out = s.makeMesh(key, forEdits, forEdits ? it->second.mesh->pieces.get() : nullptr, inputs);
+    const Impl::MeshInputs in = s.meshInputsLocked(key, forEdits, forEdits ? it->second.mesh->pieces : nullptr);
+    lock.unlock();
+    std::shared_ptr<const BrickMesh> out = s.makeMesh(in);
+    lock.lock();
+    it = s.resident.find(key);
+    if (it == s.resident.end()) return out; // evicted meanwhile (its content is still in the trees)
     s.learnMeshShare(it->second, *out);
     // Kept if the budget holds it (other bricks may make room); else made again when asked for.
     s.dropMesh(key, it->second);
-    if (s.makeRoom(out->bytes, lock)) {
+    if (s.makeRoom(out->bytes, true)) {
         const auto kept = s.resident.find(key); // makeRoom may have evicted it, if it was not wanted
-        if (kept != s.resident.end()) s.keepMesh(key, kept->second, out, inputs);
+        if (kept != s.resident.end()) s.keepMesh(key, kept->second, out, in.inputs);
     }
     return out;
 }
 
 std::shared_ptr<const StreamingScene::BrickMesh> StreamingScene::meshBrickAfresh(const BrickKey& key) const
 {
-    std::lock_guard<std::mutex> lock(impl_->mutex);
-    if (!impl_->resident.count(key)) return nullptr;
-    return impl_->makeMesh(key);
+    const Impl& s = *impl_;
+    std::shared_lock<std::shared_mutex> trees(s.trees);
+    std::unique_lock<std::mutex> lock(s.mutex);
+    if (!s.resident.count(key)) return nullptr;
+    const Impl::MeshInputs in = s.meshInputsLocked(key);
+    lock.unlock();
+    return s.makeMesh(in);
 }
 
 Volume StreamingScene::residentLevel0() const
 {
+    std::shared_lock<std::shared_mutex> trees(impl_->trees);
     std::lock_guard<std::mutex> lock(impl_->mutex);
     Volume out = impl_->levelVolumes[0].clone();
     out.materials() = impl_->materials;

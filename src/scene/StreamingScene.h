@@ -144,6 +144,8 @@ public:
     /// (loaded again, sculpted), the bricks of the view's cut that touch it, or theirs; 0 when the brick
     /// is not resident.
     uint64_t brickVersion(const BrickKey& key) const;
+    /// brickVersion of each brick, under one lock.
+    std::vector<uint64_t> brickVersions(const std::vector<BrickKey>& keys) const;
     /// The mesh of a resident brick on its own level's lattice (meshLodBrick with the scene's
     /// StreamingOptions::meshing: vertex-aligned, with transition cells where the last frame's cut shows
     /// a finer brick beside it), in world units, with the version (brickVersion) it was made at; nullptr
