@@ -14,6 +14,7 @@
 
 #include <random>
 #include <set>
+#include <tuple>
 
 using namespace vdbclay;
 using namespace vdbclay::test;
@@ -185,6 +186,46 @@ TEST_CASE("lod mesh: random cuts of random scenes are closed 2-manifolds", "[lod
             INFO("scene " << index << " trial " << trial);
             // A small part can vanish at a coarse level: an empty cut is closed too.
             requireClosed(meshCut(levels, shown), volume.voxelSize(), shown, false);
+        }
+    }
+}
+
+TEST_CASE("lod cut: the bricks touching a box, looked up around it, are exactly those a pass over the cut finds", "[lod]")
+{
+    // Random cuts of an octree of levels 0-4 (a brick split into its children or not), and boxes of
+    // every size near and across brick faces, negative coordinates included.
+    std::mt19937 rng(91);
+    for (int trial = 0; trial < 40; ++trial) {
+        std::vector<LodBrick> bricks;
+        std::vector<LodBrick> stack;
+        for (int32_t x = -1; x <= 0; ++x)
+            for (int32_t z = -1; z <= 0; ++z) stack.push_back({4, {x, 0, z}});
+        const int splitOdds = 1 + trial % 4; // from few to many splits
+        while (!stack.empty()) {
+            const LodBrick b = stack.back();
+            stack.pop_back();
+            if (b.level > 0 && int(rng() % 5) < splitOdds) {
+                for (int c = 0; c < 8; ++c)
+                    stack.push_back({b.level - 1, {2 * b.brick[0] + (c & 1), 2 * b.brick[1] + ((c >> 1) & 1), 2 * b.brick[2] + ((c >> 2) & 1)}});
+            } else {
+                bricks.push_back(b);
+            }
+        }
+        const LodCut cut(bricks);
+        for (int box = 0; box < 50; ++box) {
+            const int level = int(rng() % 5);
+            const int64_t span = int64_t(kLodBrickVoxels) << level;
+            LodCut::Point lo, hi;
+            for (std::size_t a = 0; a < 3; ++a) {
+                lo[a] = (int64_t(rng() % 4) - 2) * span + (box % 3 == 0 ? int64_t(rng() % 3) - 1 : 0);
+                hi[a] = lo[a] + (box % 2 == 0 ? span : int64_t(rng() % 200));
+            }
+            std::set<std::tuple<int, int32_t, int32_t, int32_t>> found, expected;
+            cut.forEachTouching(lo, hi, [&](const LodBrick& b) { CHECK(found.insert({b.level, b.brick[0], b.brick[1], b.brick[2]}).second); });
+            for (const LodBrick& b : cut.bricks())
+                if (LodCut::touches(b, lo, hi)) expected.insert({b.level, b.brick[0], b.brick[1], b.brick[2]});
+            INFO("trial " << trial << " box " << box << " of " << bricks.size() << " bricks");
+            CHECK(found == expected);
         }
     }
 }

@@ -82,6 +82,41 @@ bool LodCut::touches(const LodBrick& b, const Point& lo, const Point& hi)
     return true;
 }
 
+void LodCut::forEachTouching(const Point& lo, const Point& hi, const std::function<void(const LodBrick&)>& fn) const
+{
+    if (list_.empty()) return;
+    // Per level, the bricks b with b * span <= hi and (b + 1) * span >= lo on every axis.
+    const auto floorDiv = [](int64_t v, int64_t d) { return v >= 0 ? v / d : -((-v + d - 1) / d); };
+    std::vector<std::array<std::array<int64_t, 2>, 3>> ranges;
+    uint64_t candidates = 0;
+    for (int level = finest_; level <= coarsest_; ++level) {
+        const int64_t span = brickSpan(level);
+        std::array<std::array<int64_t, 2>, 3> r{};
+        uint64_t count = 1;
+        for (std::size_t a = 0; a < 3; ++a) {
+            r[a] = {-floorDiv(-lo[a], span) - 1, floorDiv(hi[a], span)};
+            count *= uint64_t(std::max<int64_t>(0, r[a][1] - r[a][0] + 1));
+        }
+        ranges.push_back(r);
+        candidates += count;
+        if (candidates > list_.size()) break;
+    }
+    if (candidates > list_.size()) {
+        for (const LodBrick& b : list_)
+            if (touches(b, lo, hi)) fn(b);
+        return;
+    }
+    for (int level = finest_; level <= coarsest_; ++level) {
+        const auto& r = ranges[std::size_t(level - finest_)];
+        for (int64_t x = r[0][0]; x <= r[0][1]; ++x)
+            for (int64_t y = r[1][0]; y <= r[1][1]; ++y)
+                for (int64_t z = r[2][0]; z <= r[2][1]; ++z) {
+                    const LodBrick b{level, {int32_t(x), int32_t(y), int32_t(z)}};
+                    if (shown_.count(b)) fn(b);
+                }
+    }
+}
+
 std::vector<LodBrick> LodCut::finerTouching(const Point& lo, const Point& hi, int level) const
 {
     std::vector<LodBrick> out;

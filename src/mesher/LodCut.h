@@ -55,6 +55,10 @@ public:
     std::vector<LodBrick> finerTouching(const Point& lo, const Point& hi, int level) const;
     /// Whether brick b's closed box touches the closed box [lo, hi].
     static bool touches(const LodBrick& b, const Point& lo, const Point& hi);
+    /// Calls `fn` with each brick of the cut that touches the closed box [lo, hi], in no set order: by
+    /// looking up the bricks of each level around the box where they are fewer than the cut's (a brick's
+    /// neighbourhood), else by a pass over the cut.
+    void forEachTouching(const Point& lo, const Point& hi, const std::function<void(const LodBrick&)>& fn) const;
     /// The level of the shown brick whose open box holds the point strictly inside [lo, hi] (a cell's
     /// middle), or -1 where no brick is shown.
     int levelAround(const Point& lo, const Point& hi) const;

@@ -201,11 +201,10 @@ struct StreamingScene::Impl {
             lo[std::size_t(a)] = int64_t(key.brick[std::size_t(a)]) * own;
             hi[std::size_t(a)] = lo[std::size_t(a)] + own;
         }
-        for (const LodBrick& other : cut->bricks()) {
-            if (!LodCut::touches(other, lo, hi)) continue;
+        cut->forEachTouching(lo, hi, [&](const LodBrick& other) {
             v += hash(other) * 0x100000001B3ull;
             const auto r = resident.find({other.level, other.brick});
-            if (r == resident.end()) continue;
+            if (r == resident.end()) return;
             // Which side of `other` this brick lies on, and how far into it this brick's mesh reads.
             std::array<int, 3> towards{};
             const int64_t otherSize = int64_t(kLodBrickVoxels) << other.level;
@@ -216,7 +215,7 @@ struct StreamingScene::Impl {
             const int reachClass = std::clamp(key.level - other.level, 0, kReachClasses - 1);
             v += (loadsOnly ? r->second.loadVersion : r->second.sides[std::size_t(reachClass)][std::size_t(directionIndex(towards))]) *
                  0xC2B2AE3D27D4EB4Full;
-        }
+        });
         return v;
     }
 
@@ -498,11 +497,12 @@ struct StreamingScene::Impl {
         pendingClears.clear();
     }
 
-    /// Puts a loaded brick into its level's tree and accounts for it. `trees` held alone, and the lock.
-    void install(const BrickKey& key, DecodedRegion&& brick, uint64_t bytes, uint64_t bytesReadFromStore)
+    /// Accounts for a loaded brick and puts it into its level's tree, after the evicted bricks' content
+    /// has left. `trees` held alone, and the lock (released while pasting: the frame goes on, and no
+    /// reader of the trees sees the brick before it is whole).
+    void install(const BrickKey& key, DecodedRegion&& brick, uint64_t bytes, uint64_t bytesReadFromStore, std::unique_lock<std::mutex>& lock)
     {
-        clearEvicted();
-        pasteRegion(levelVolumes[std::size_t(key.level)], std::move(brick));
+        const std::vector<BrickKey> clears = std::exchange(pendingClears, {});
         Resident r{bytes, frameNumber, false, ++versions, {}, nullptr, 0, 0};
         r.loadVersion = r.version;
         for (auto& c : r.sides) c.fill(r.version);
@@ -510,28 +510,48 @@ struct StreamingScene::Impl {
         residentBytes += bytes;
         bytesRead += bytesReadFromStore;
         ++loads;
+        lock.unlock();
+        for (const BrickKey& evicted : clears) fillRegion(levelVolumes[std::size_t(evicted.level)], brickBox(evicted.brick), kEmptyMaterial);
+        pasteRegion(levelVolumes[std::size_t(key.level)], std::move(brick));
+        lock.lock();
     }
 
-    /// Evicts least recently used bricks outside `keep` until `needed` more bytes fit. Dirty bricks are
-    /// committed first (all of them, so the store never holds half an edit) when `mayAutosave` (the caller
-    /// holds `trees`, which the autosave reads); else only clean bricks go. Lock held.
-    bool makeRoom(uint64_t needed, bool mayAutosave)
+    /// Evicts least recently used clean bricks outside `wanted` and `pinned` until `needed` more bytes
+    /// fit. Lock held.
+    bool makeRoom(uint64_t needed)
     {
         while (residentBytes + inFlightBytes + needed > options.memoryBudgetBytes) {
             auto victim = resident.end();
             for (auto it = resident.begin(); it != resident.end(); ++it) {
-                if (wanted.count(it->first) || pinned.count(it->first) || (it->second.dirty && !mayAutosave)) continue;
+                if (wanted.count(it->first) || pinned.count(it->first) || it->second.dirty) continue;
                 if (victim == resident.end() || it->second.lastUsed < victim->second.lastUsed) victim = it;
             }
             if (victim == resident.end()) return false;
-            if (victim->second.dirty) {
-                autosaveLocked();
-                continue;
-            }
             evict(victim);
             ++evictions;
         }
         return true;
+    }
+
+    /// Whether dirty bricks take room makeRoom could give once they are saved. Lock held.
+    bool dirtyInTheWay() const
+    {
+        return std::any_of(resident.begin(), resident.end(),
+                           [&](const auto& entry) { return entry.second.dirty && !wanted.count(entry.first) && !pinned.count(entry.first); });
+    }
+
+    /// makeRoom, autosaving first (all the dirty bricks, so the store never holds half an edit) when dirty
+    /// bricks stand in the way. `trees` and the lock held, both released while the autosave writes.
+    bool makeRoomSaving(uint64_t needed, std::unique_lock<std::shared_mutex>& treesHeld, std::unique_lock<std::mutex>& lock)
+    {
+        if (makeRoom(needed)) return true;
+        if (!dirtyInTheWay()) return false;
+        lock.unlock();
+        treesHeld.unlock();
+        autosave();
+        treesHeld.lock();
+        lock.lock();
+        return makeRoom(needed);
     }
 
     void work(const BrickStore& reader)
@@ -567,7 +587,19 @@ struct StreamingScene::Impl {
             if (loaded && !resident.count(key)) {
                 const uint64_t bytes = loaded->memoryBytes();
                 estimates[key] = bytes; // the next frames budget with what it really takes
-                if (wanted.count(key) && makeRoom(bytes, true)) install(key, std::move(*loaded), bytes, payloadBytes);
+                if (wanted.count(key)) {
+                    if (makeRoom(bytes)) {
+                        install(key, std::move(*loaded), bytes, payloadBytes, lock);
+                    } else if (dirtyInTheWay()) {
+                        // Saved without the locks, so that frames go on; the brick is read again when the
+                        // next frame asks for it (an autosave may have rewritten it).
+                        lock.unlock();
+                        treesHeld.unlock();
+                        autosave();
+                        treesHeld.lock();
+                        lock.lock();
+                    }
+                }
             }
             treesHeld.unlock();
             if (inFlight.empty()) idle.notify_all();
@@ -587,7 +619,7 @@ struct StreamingScene::Impl {
         wanted.insert(shown.begin(), shown.end());
         for (const IndexCoord& b : bricks) wanted.insert({0, b});
         const auto makeRoomForEdit = [&](uint64_t bytes) {
-            if (makeRoom(bytes, true)) return true;
+            if (makeRoomSaving(bytes, treesHeld, lock)) return true;
             // Only the edit's bricks are wanted now. The loads under way finish first (they are then
             // dropped): what they would take must not decide whether the edit fits, or the same session
             // would refuse different edits from run to run. Loads finish with the trees held.
@@ -601,7 +633,7 @@ struct StreamingScene::Impl {
                 treesHeld.lock();
                 lock.lock();
             }
-            return makeRoom(bytes, true);
+            return makeRoomSaving(bytes, treesHeld, lock);
         };
         uint64_t pagedIn = 0;
         for (const IndexCoord& b : bricks) {
@@ -619,7 +651,8 @@ struct StreamingScene::Impl {
             if (resident.count(key)) continue; // a loader got there first
             const uint64_t bytes = brick.memoryBytes();
             if (!makeRoomForEdit(bytes)) throw std::runtime_error("the edit reaches more bricks than the memory budget holds");
-            install(key, std::move(brick), bytes, payloadBytes);
+            if (resident.count(key)) continue; // a loader got there while an autosave made room
+            install(key, std::move(brick), bytes, payloadBytes, lock);
             ++pagedIn;
         }
         return pagedIn;
@@ -795,13 +828,22 @@ struct StreamingScene::Impl {
         return batch.dirty.size();
     }
 
-    /// An autosave with the lock held throughout (making room for a load or an edit). `trees` held
-    /// (read), and the lock.
-    uint64_t autosaveLocked()
+    /// Writes the dirty bricks (StreamingScene::autosave), neither `trees` nor the lock held on entry:
+    /// level 0 cannot change while the batch is written (edits and loads wait for the trees), and the
+    /// lock is held only to take the batch and to mark it saved, so that frames go on meanwhile.
+    uint64_t autosave()
     {
+        std::shared_lock<std::shared_mutex> treesRead(trees);
+        std::unique_lock<std::mutex> lock(mutex);
         const SaveBatch batch = saveBatchLocked();
-        std::lock_guard<std::mutex> store(storeMutex);
-        return finishSaveLocked(batch, writeBatch(batch));
+        lock.unlock();
+        LodRefresh lod;
+        {
+            std::lock_guard<std::mutex> store(storeMutex);
+            lod = writeBatch(batch);
+        }
+        lock.lock();
+        return finishSaveLocked(batch, lod);
     }
 
     /// Coarse bricks an autosave rewrote: resident copies go (the view loads them again), as do loads
@@ -899,7 +941,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     selection.pixelTolerance = s.options.pixelTolerance;
     selection.voxelSize = s.scene.voxelSize();
     selection.levels = s.levels;
-    // Under the lock: an autosave on a loader thread (evicting a dirty brick) adds to `present`.
+    // Under the lock: edits add to `present`.
     std::unique_lock<std::mutex> lock(s.mutex);
     // The levels above edited bricks are rebuilt when they are saved: until then the view shows level 0
     // there.
@@ -936,7 +978,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     }
     s.wanted.clear();
     for (std::size_t i = 0; i < accepted; ++i) s.wanted.insert(needed[order[i]]);
-    s.makeRoom(0, false); // the frame never autosaves: dirty bricks wait for an edit's or a load's room
+    s.makeRoom(0); // the frame never autosaves: dirty bricks wait for an edit's or a load's room
     // Looked up after makeRoom: an autosave it ran may have dropped rewritten coarse bricks.
     std::vector<char> isResident(needed.size());
     for (std::size_t i = 0; i < needed.size(); ++i) isResident[i] = s.resident.count(needed[i]) > 0;
@@ -1163,23 +1205,7 @@ void StreamingScene::commitMeta(const std::string& key, const std::string& value
     transaction.commit();
 }
 
-uint64_t StreamingScene::autosave()
-{
-    Impl& s = *impl_;
-    // Level 0 cannot change while the batch is written (edits and loads wait for the trees); the lock is
-    // held only to take the batch and to mark it saved.
-    std::shared_lock<std::shared_mutex> trees(s.trees);
-    std::unique_lock<std::mutex> lock(s.mutex);
-    const Impl::SaveBatch batch = s.saveBatchLocked();
-    lock.unlock();
-    LodRefresh lod;
-    {
-        std::lock_guard<std::mutex> store(s.storeMutex);
-        lod = s.writeBatch(batch);
-    }
-    lock.lock();
-    return s.finishSaveLocked(batch, lod);
-}
+uint64_t StreamingScene::autosave() { return impl_->autosave(); }
 
 uint64_t StreamingScene::lodBricksWritten() const
 {
@@ -1284,7 +1310,7 @@ std::shared_ptr<const StreamingScene::BrickMesh> StreamingScene::meshBrick(const
     s.learnMeshShare(it->second, *out);
     // Kept if the budget holds it (other bricks may make room); else made again when asked for.
     s.dropMesh(key, it->second);
-    if (s.makeRoom(out->bytes, true)) {
+    if (s.makeRoom(out->bytes)) {
         const auto kept = s.resident.find(key); // makeRoom may have evicted it, if it was not wanted
         if (kept != s.resident.end()) s.keepMesh(key, kept->second, out, in.inputs);
     }
