@@ -33,7 +33,7 @@ struct FrameFigures {
     double presentMs = 0.0; // acquiring and presenting the swapchain image
     uint64_t bricksShown = 0;
     uint64_t pendingEdits = 0; // commands queued for the edit worker or under way
-    uint64_t meshesWaiting = 0; // shown bricks whose new mesh waits for a later frame (the meshing budget)
+    uint64_t meshesWaiting = 0; // shown bricks whose new mesh the mesh worker has not finished
 };
 
 struct CustomBrushPart {

@@ -33,6 +33,8 @@ public:
     VkDeviceSize usedBytes() const { return used_; }
     VkDeviceSize reservedBytes() const { return reserved_; }
     std::size_t blockCount() const { return blocks_.size(); }
+    VkDeviceMemory blockMemory(uint32_t block) const { return blocks_[block].memory; }
+    VkDeviceSize blockSize(uint32_t block) const { return blocks_[block].size; }
 
 private:
     struct Block {

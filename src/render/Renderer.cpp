@@ -105,11 +105,15 @@ std::array<float, 16> viewProjection(const Camera& camera, double aspect)
     return out;
 }
 
+constexpr VkBufferUsageFlags kChunkUsage = VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+
 struct Renderer::Impl {
+    // A chunk lives in its heap block's buffer (one buffer per block, bound to the whole block), so draws
+    // bind a block once and address chunks by first index and vertex offset.
     struct GpuChunk {
-        VkBuffer buffer = VK_NULL_HANDLE;
         GpuAllocation allocation;
-        VkDeviceSize indexOffset = 0;
+        uint32_t firstIndex = 0;   // in the block's buffer, as uint32 indices
+        int32_t vertexOffset = 0;  // in the block's buffer, as vertices
         uint32_t indexCount = 0;
         float lo[3], hi[3];
         int level = 0;
@@ -120,7 +124,10 @@ struct Renderer::Impl {
     VkRenderPass compatiblePass = VK_NULL_HANDLE;
     std::unique_ptr<Pipelines> pipelines;
     GpuHeap heap;
+    VkMemoryRequirements chunkRequirements{}; // of a buffer with the chunks' usage: memory types, alignment
+    std::vector<VkBuffer> blockBuffers;       // per heap block
     std::unique_ptr<HostBuffer> staging, uniforms, materialBuffer;
+    std::unique_ptr<HostBuffer> drawCommands; // a frame's indirect draws: one per visible chunk and view
     std::unique_ptr<TextureArray> textures;
     std::string textureKey;               // what the textures were loaded for
     bool texturesFinal = false;           // false: a stand-in while the pictures load
@@ -148,6 +155,17 @@ struct Renderer::Impl {
         compatiblePass = createRenderPass(device, o.colourFormat, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
         pipelines = std::make_unique<Pipelines>(c, compatiblePass);
         staging = std::make_unique<HostBuffer>(c, std::max<uint64_t>(o.stagingBytes, 1 << 20), VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
+        {
+            VkBufferCreateInfo probe{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+            probe.size = 1 << 16;
+            probe.usage = kChunkUsage;
+            VkBuffer buffer = VK_NULL_HANDLE;
+            check(vkCreateBuffer(device, &probe, nullptr, &buffer), "vkCreateBuffer");
+            vkGetBufferMemoryRequirements(device, buffer, &chunkRequirements);
+            vkDestroyBuffer(device, buffer, nullptr);
+            // Chunks start on a vertex (their indices are offset by whole vertices).
+            chunkRequirements.alignment = std::max<VkDeviceSize>(chunkRequirements.alignment, sizeof(GpuVertex));
+        }
         const VkDeviceSize align = std::max<VkDeviceSize>(c.properties().limits.minUniformBufferOffsetAlignment, 16);
         uniformStride = (sizeof(ViewUniforms) + align - 1) / align * align;
         uniforms = std::make_unique<HostBuffer>(c, uniformStride * kMaxViews, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT);
@@ -187,7 +205,7 @@ struct Renderer::Impl {
     {
         VkDevice device = context.device();
         vkDeviceWaitIdle(device);
-        for (auto& [id, c] : chunks) vkDestroyBuffer(device, c.buffer, nullptr);
+        for (VkBuffer b : blockBuffers) vkDestroyBuffer(device, b, nullptr);
         if (queries) vkDestroyQueryPool(device, queries, nullptr);
         if (fence) vkDestroyFence(device, fence, nullptr);
         if (cmd) vkFreeCommandBuffers(device, context.commandPool(), 1, &cmd);
@@ -276,10 +294,31 @@ struct Renderer::Impl {
     {
         auto it = chunks.find(id);
         if (it == chunks.end()) return;
-        vkDestroyBuffer(context.device(), it->second.buffer, nullptr);
         heap.free(it->second.allocation);
         chunks.erase(it);
         ++stats.chunksFreed;
+    }
+
+    /// The buffer bound to the whole of a heap block, made when the block is first used.
+    VkBuffer blockBuffer(uint32_t block)
+    {
+        while (blockBuffers.size() <= block) {
+            const uint32_t b = uint32_t(blockBuffers.size());
+            VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+            info.size = heap.blockSize(b);
+            info.usage = kChunkUsage;
+            VkBuffer buffer = VK_NULL_HANDLE;
+            check(vkCreateBuffer(context.device(), &info, nullptr, &buffer), "vkCreateBuffer");
+            VkMemoryRequirements req;
+            vkGetBufferMemoryRequirements(context.device(), buffer, &req);
+            if (req.size > heap.blockSize(b)) {
+                vkDestroyBuffer(context.device(), buffer, nullptr);
+                throw VulkanError("a mesh block's buffer needs more memory than its block holds");
+            }
+            check(vkBindBufferMemory(context.device(), buffer, heap.blockMemory(b), 0), "vkBindBufferMemory");
+            blockBuffers.push_back(buffer);
+        }
+        return blockBuffers[block];
     }
 
     void beginCommands()
@@ -318,20 +357,15 @@ struct Renderer::Impl {
             }
             if (chunks.count(id)) destroyChunk(id, stats), --stats.chunksFreed; // replaced, not freed
             GpuChunk chunk;
-            VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
-            info.size = size;
-            info.usage = VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-            check(vkCreateBuffer(context.device(), &info, nullptr, &chunk.buffer), "vkCreateBuffer");
-            VkMemoryRequirements req;
-            vkGetBufferMemoryRequirements(context.device(), chunk.buffer, &req);
+            VkMemoryRequirements req = chunkRequirements;
+            req.size = size;
             chunk.allocation = heap.allocate(req);
-            check(vkBindBufferMemory(context.device(), chunk.buffer, chunk.allocation.memory, chunk.allocation.offset),
-                  "vkBindBufferMemory");
             std::memcpy(staging->data() + ringOffset, p.bytes.data(), size);
-            VkBufferCopy copy{ringOffset, 0, size};
-            vkCmdCopyBuffer(cmd, staging->buffer(), chunk.buffer, 1, &copy);
+            VkBufferCopy copy{ringOffset, chunk.allocation.offset, size};
+            vkCmdCopyBuffer(cmd, staging->buffer(), blockBuffer(chunk.allocation.block), 1, &copy);
             ringOffset = (ringOffset + size + 15) / 16 * 16;
-            chunk.indexOffset = p.indexOffset;
+            chunk.firstIndex = uint32_t((chunk.allocation.offset + p.indexOffset) / sizeof(uint32_t));
+            chunk.vertexOffset = int32_t(chunk.allocation.offset / sizeof(GpuVertex));
             chunk.indexCount = p.indexCount;
             std::copy(p.lo.begin(), p.lo.end(), chunk.lo);
             std::copy(p.hi.begin(), p.hi.end(), chunk.hi);
@@ -393,6 +427,13 @@ struct Renderer::Impl {
         }
 
         std::set<int> levels;
+        // Room for every chunk in every view (the last frame, waited for, no longer reads the buffer).
+        const std::size_t commandsNeeded = std::max<std::size_t>(chunks.size() * views.size(), 1);
+        if (!drawCommands || drawCommands->size() < commandsNeeded * sizeof(VkDrawIndexedIndirectCommand))
+            drawCommands = std::make_unique<HostBuffer>(context, 2 * commandsNeeded * sizeof(VkDrawIndexedIndirectCommand),
+                                                        VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT);
+        std::size_t commandsUsed = 0;
+        const std::size_t maxDrawsPerCall = std::max<uint32_t>(1, context.properties().limits.maxDrawIndirectCount);
         // Views that share a target are drawn in one render pass, which clears the target once.
         std::vector<RenderTarget*> targets;
         for (const auto& v : views) {
@@ -437,14 +478,36 @@ struct Renderer::Impl {
                 }
                 const float noTint[4] = {0, 0, 0, 0};
                 const float lineTint[4] = {0.05f, 0.05f, 0.05f, 1.0f};
+                // The view's draws, a block's together: one indirect draw per block and pipeline.
+                std::stable_sort(visible.begin(), visible.end(),
+                                 [](const GpuChunk* a, const GpuChunk* b) { return a->allocation.block < b->allocation.block; });
+                auto* commands = reinterpret_cast<VkDrawIndexedIndirectCommand*>(drawCommands->data()) + commandsUsed;
+                for (std::size_t i = 0; i < visible.size(); ++i)
+                    commands[i] = {visible[i]->indexCount, 1, visible[i]->firstIndex, visible[i]->vertexOffset, 0};
+                const std::size_t viewCommands = commandsUsed;
+                commandsUsed += visible.size();
                 auto drawChunks = [&](VkPipeline pipeline, const float* tint) {
                     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
                     vkCmdPushConstants(cmd, pipelines->layout(), VK_SHADER_STAGE_FRAGMENT_BIT, 0, 16, tint);
-                    for (const GpuChunk* c : visible) {
+                    for (std::size_t first = 0; first < visible.size();) {
+                        const uint32_t block = visible[first]->allocation.block;
+                        std::size_t last = first;
+                        while (last < visible.size() && visible[last]->allocation.block == block) ++last;
+                        const VkBuffer buffer = blockBuffers[block];
                         const VkDeviceSize zero = 0;
-                        vkCmdBindVertexBuffers(cmd, 0, 1, &c->buffer, &zero);
-                        vkCmdBindIndexBuffer(cmd, c->buffer, c->indexOffset, VK_INDEX_TYPE_UINT32);
-                        vkCmdDrawIndexed(cmd, c->indexCount, 1, 0, 0, 0);
+                        vkCmdBindVertexBuffers(cmd, 0, 1, &buffer, &zero);
+                        vkCmdBindIndexBuffer(cmd, buffer, 0, VK_INDEX_TYPE_UINT32);
+                        if (context.supportsMultiDrawIndirect()) {
+                            for (std::size_t from = first; from < last; from += maxDrawsPerCall) {
+                                const uint32_t count = uint32_t(std::min<std::size_t>(last - from, maxDrawsPerCall));
+                                vkCmdDrawIndexedIndirect(cmd, drawCommands->buffer(), (viewCommands + from) * sizeof(VkDrawIndexedIndirectCommand),
+                                                         count, sizeof(VkDrawIndexedIndirectCommand));
+                            }
+                        } else {
+                            for (std::size_t i = first; i < last; ++i)
+                                vkCmdDrawIndexed(cmd, visible[i]->indexCount, 1, visible[i]->firstIndex, visible[i]->vertexOffset, 0);
+                        }
+                        first = last;
                     }
                 };
                 drawChunks(pipelines->surface(), noTint);

@@ -148,6 +148,7 @@ VulkanContext::VulkanContext(const ContextOptions& options)
     VkPhysicalDeviceFeatures available{};
     vkGetPhysicalDeviceFeatures(physical_, &available);
     fillModeNonSolid_ = available.fillModeNonSolid == VK_TRUE;
+    multiDrawIndirect_ = available.multiDrawIndirect == VK_TRUE;
 
     const float priority = 1.0f;
     VkDeviceQueueCreateInfo queueInfo{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
@@ -156,6 +157,7 @@ VulkanContext::VulkanContext(const ContextOptions& options)
     queueInfo.pQueuePriorities = &priority;
     VkPhysicalDeviceFeatures features{};
     features.fillModeNonSolid = available.fillModeNonSolid;
+    features.multiDrawIndirect = available.multiDrawIndirect;
     std::vector<const char*> deviceExtensions;
     if (options.swapchain) deviceExtensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
     VkDeviceCreateInfo deviceInfo{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};

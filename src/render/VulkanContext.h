@@ -49,6 +49,8 @@ public:
     const VkPhysicalDeviceProperties& properties() const { return properties_; }
     std::string deviceName() const { return properties_.deviceName; }
     bool supportsWireframe() const { return fillModeNonSolid_; }
+    /// Whether one indirect draw call may draw many chunks (multiDrawIndirect, enabled where offered).
+    bool supportsMultiDrawIndirect() const { return multiDrawIndirect_; }
     /// Nanoseconds per timestamp tick, 0 when the queue has no timestamps.
     double timestampPeriodNs() const { return timestampPeriod_; }
 
@@ -78,6 +80,7 @@ private:
     VkPhysicalDeviceProperties properties_{};
     VkPhysicalDeviceMemoryProperties memory_{};
     bool fillModeNonSolid_ = false;
+    bool multiDrawIndirect_ = false;
     double timestampPeriod_ = 0.0;
     bool validation_ = false;
     std::atomic<uint64_t> messages_{0};
