@@ -719,12 +719,12 @@ struct StreamingScene::Impl {
         }
     }
 
-    /// Pastes brick `b`'s content from `work` into level 0 when it changed (at `leaves`, changedLeaves)
-    /// and returns what the brick now takes. `trees` held alone.
+    /// Pastes the leaves of brick `b` that changed (`leaves`, changedLeaves) from `work` into level 0 and
+    /// returns what the brick now takes. `trees` held alone.
     uint64_t pasteBrick(const IndexCoord& b, const Volume& work, const std::vector<BlockChange>& leaves)
     {
         if (leaves.empty()) return 0;
-        pasteRegion(levelVolumes[0], work, brickBox(b));
+        for (const BlockChange& leaf : leaves) pasteRegion(levelVolumes[0], work, LeafAlignedBox{leaf.origin, kLeafDim});
         return regionMemoryBytes(levelVolumes[0], brickBox(b));
     }
 
@@ -1075,14 +1075,18 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
     lock.unlock();
     Volume work = s.workCopy(bricks, materialsNow, maskNow);
     trees.unlock();
-    const Volume before = work.clone();
     report.ops = runStrokeScript(work, script, {}, stroke);
     std::vector<Impl::VoxelRange> reached;
     for (const ScriptOp& op : script.ops) reached.push_back(voxelsReachedBy(op, s.scene.voxelSize()));
+    // Level 0 still holds these bricks as they were (only this thread changes them): compared with the
+    // trees shared, which leaves meshing and picks going.
     std::vector<std::vector<BlockChange>> leaves(bricks.size());
-    for (std::size_t i = 0; i < bricks.size(); ++i) {
-        leaves[i] = Impl::changedLeaves(bricks[i], before, work, reached);
-        if (changes) Impl::recordLeafChanges(leaves[i], before, work, *changes);
+    {
+        std::shared_lock<std::shared_mutex> before(s.trees);
+        for (std::size_t i = 0; i < bricks.size(); ++i) {
+            leaves[i] = Impl::changedLeaves(bricks[i], s.levelVolumes[0], work, reached);
+            if (changes) Impl::recordLeafChanges(leaves[i], s.levelVolumes[0], work, *changes);
+        }
     }
     trees.lock();
     s.levelVolumes[0].materials() = work.materials();
@@ -1152,14 +1156,21 @@ StreamingScene::EditReport StreamingScene::restoreLeaves(const std::vector<LeafI
     const Impl::Unpin unpin{s, lock, bricks};
     report.bricksPagedIn = s.pageInForEdit(bricks, trees, lock);
     report.pageInSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    Volume work = s.workCopy(bricks, s.materials, s.mask);
-    for (const LeafImage& leaf : leaves)
-        pasteRegion(work, decodeRegion(leaf.bytes, {leaf.origin, kLeafDim}, s.scene.voxelSize(), s.materials.size(), "the edit history"));
     s.clearEvicted();
-    for (const IndexCoord& b : bricks) {
-        const std::vector<BlockChange> changed = Impl::changedLeaves(b, s.levelVolumes[0], work, reached);
-        report.bricksChanged += s.commitBrick(b, s.pasteBrick(b, work, changed), reached, changed);
+    const MaterialTable materialsNow = s.materials;
+    const VoxelMask maskNow = s.mask;
+    lock.unlock(); // the images are decoded, compared and pasted with the trees alone: frames go on
+    Volume work = s.workCopy(bricks, materialsNow, maskNow);
+    for (const LeafImage& leaf : leaves)
+        pasteRegion(work, decodeRegion(leaf.bytes, {leaf.origin, kLeafDim}, s.scene.voxelSize(), materialsNow.size(), "the edit history"));
+    std::vector<std::vector<BlockChange>> changed(bricks.size());
+    std::vector<uint64_t> bytes(bricks.size());
+    for (std::size_t i = 0; i < bricks.size(); ++i) {
+        changed[i] = Impl::changedLeaves(bricks[i], s.levelVolumes[0], work, reached);
+        bytes[i] = s.pasteBrick(bricks[i], work, changed[i]);
     }
+    lock.lock();
+    for (std::size_t i = 0; i < bricks.size(); ++i) report.bricksChanged += s.commitBrick(bricks[i], bytes[i], reached, changed[i]);
     ++s.edits;
     return report;
 }
