@@ -320,6 +320,7 @@ TEST_CASE("edits page bricks in, and dirty bricks evicted for the view lose noth
     const std::string path = makeTerrain(dir);
     Volume reference = loadScene(path);
     const StrokeScript script = parseStrokeScript(stampScript(30, 3, 8.0, 50.0)); // one corner of bricks
+    const StrokeScript again = parseStrokeScript(stampScript(10, 5, 8.0, 50.0));
     {
         StreamingOptions options;
         options.access = StoreAccess::ReadWrite;
@@ -341,8 +342,13 @@ TEST_CASE("edits page bricks in, and dirty bricks evicted for the view lose noth
         scene.autosave();
         CHECK(scene.dirtyBricks() == 0);
         CHECK(StreamingScene::committedEdits(scene.store()) == script.ops.size());
+        // Edits there again: the bricks the first edit kept a copy of were evicted and come back from
+        // the store.
+        CHECK(scene.sculpt(again).bricksPagedIn > 0);
+        scene.autosave();
     }
     runStrokeScript(reference, script);
+    runStrokeScript(reference, again);
     CHECK(identical(loadScene(path), reference));
     // The autosaves kept the pyramid current.
     SceneStore scene = SceneStore::open(path, StoreAccess::ReadOnly);

@@ -115,6 +115,11 @@ struct StreamingScene::Impl {
     BrickSet damaged;       // bricks the store could not give: shown by their ancestors, not loaded again
     BrickSet wanted;        // the current frame's accepted selection and fallbacks
     BrickSet pinned;        // level-0 bricks an edit is working on outside the lock: never evicted
+    // The last edit's volume and bricks, equal to level 0 there (only edits change resident level-0
+    // bricks, one at a time; a brick evicted clean loads again as it was): the next edit copies only
+    // the bricks it reaches beyond them. The editing thread's alone.
+    std::optional<Volume> lastWork;
+    std::set<IndexCoord> lastWorkBricks;
     uint64_t residentBytes = 0, inFlightBytes = 0; // resident: bricks and meshes
     uint64_t meshBytes = 0;
     double meshShare = 0.0; // a mesh's bytes over its brick's, lately: estimates what a brick's mesh will take
@@ -670,15 +675,29 @@ struct StreamingScene::Impl {
         }
     };
 
-    /// A volume holding the resident level-0 bricks listed, to edit apart from the loaders' trees.
-    /// `trees` held.
-    Volume workCopy(const std::vector<IndexCoord>& bricks, const MaterialTable& materialsNow, const VoxelMask& maskNow) const
+    /// A volume holding the resident level-0 bricks listed, to edit apart from the loaders' trees: the
+    /// last edit's, the bricks it held that this edit does not reach cleared, the others copied from
+    /// level 0. `trees` held.
+    Volume takeWork(const std::vector<IndexCoord>& bricks, const MaterialTable& materialsNow, const VoxelMask& maskNow)
     {
-        Volume work(scene.voxelSize());
+        Volume work = lastWork ? std::move(*lastWork) : Volume(scene.voxelSize());
+        lastWork.reset();
+        const std::set<IndexCoord> reached(bricks.begin(), bricks.end());
+        for (const IndexCoord& b : lastWorkBricks)
+            if (!reached.count(b)) fillRegion(work, brickBox(b), kEmptyMaterial);
+        for (const IndexCoord& b : bricks)
+            if (!lastWorkBricks.count(b)) pasteRegion(work, levelVolumes[0], brickBox(b));
+        lastWorkBricks.clear();
         work.materials() = materialsNow;
         work.mask() = maskNow;
-        for (const IndexCoord& b : bricks) pasteRegion(work, levelVolumes[0], brickBox(b));
         return work;
+    }
+
+    /// Keeps an edit's volume for the next, once level 0 holds what it holds for `bricks`.
+    void keepWork(Volume&& work, const std::vector<IndexCoord>& bricks)
+    {
+        lastWork = std::move(work);
+        lastWorkBricks = std::set<IndexCoord>(bricks.begin(), bricks.end());
     }
 
     /// The leaf boxes of brick `b` where `work` differs from `fine`, with the bounds of what differs;
@@ -1073,7 +1092,7 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
     const MaterialTable materialsNow = s.materials;
     const VoxelMask maskNow = s.mask;
     lock.unlock();
-    Volume work = s.workCopy(bricks, materialsNow, maskNow);
+    Volume work = s.takeWork(bricks, materialsNow, maskNow);
     trees.unlock();
     report.ops = runStrokeScript(work, script, {}, stroke);
     std::vector<Impl::VoxelRange> reached;
@@ -1103,6 +1122,7 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
         s.noteMaskChange(old);
     }
     s.edits += script.ops.size();
+    s.keepWork(std::move(work), bricks);
     return report;
 }
 
@@ -1160,7 +1180,7 @@ StreamingScene::EditReport StreamingScene::restoreLeaves(const std::vector<LeafI
     const MaterialTable materialsNow = s.materials;
     const VoxelMask maskNow = s.mask;
     lock.unlock(); // the images are decoded, compared and pasted with the trees alone: frames go on
-    Volume work = s.workCopy(bricks, materialsNow, maskNow);
+    Volume work = s.takeWork(bricks, materialsNow, maskNow);
     for (const LeafImage& leaf : leaves)
         pasteRegion(work, decodeRegion(leaf.bytes, {leaf.origin, kLeafDim}, s.scene.voxelSize(), materialsNow.size(), "the edit history"));
     std::vector<std::vector<BlockChange>> changed(bricks.size());
@@ -1172,6 +1192,7 @@ StreamingScene::EditReport StreamingScene::restoreLeaves(const std::vector<LeafI
     lock.lock();
     for (std::size_t i = 0; i < bricks.size(); ++i) report.bricksChanged += s.commitBrick(bricks[i], bytes[i], reached, changed[i]);
     ++s.edits;
+    s.keepWork(std::move(work), bricks);
     return report;
 }
 
