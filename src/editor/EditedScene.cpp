@@ -152,7 +152,7 @@ void saveScene(StreamingScene& scene, const PreparedScene& prepared, const std::
         scene.commitMeta(kSavedEditsKey, std::to_string(scene.edits()));
         return;
     }
-    Volume volume = scene.store().loadLevel(0);
+    Volume volume = scene.storedLevel0();
     if (isStorePath(target)) {
         writeStoreFile(volume, target);
         return;

@@ -25,7 +25,7 @@ std::string absolute(const std::string& path) { return std::filesystem::absolute
 Volume committedScene(EditingSession& session)
 {
     session.autosave();
-    return session.scene().store().loadLevel(0);
+    return session.scene().storedLevel0();
 }
 
 /// The files an export must never replace: the scene and the store it is edited through.

@@ -1360,6 +1360,12 @@ std::shared_ptr<const StreamingScene::BrickMesh> StreamingScene::meshBrickAfresh
     return s.makeMesh(in);
 }
 
+Volume StreamingScene::storedLevel0() const
+{
+    std::lock_guard<std::mutex> store(impl_->storeMutex);
+    return impl_->scene.loadLevel(0);
+}
+
 Volume StreamingScene::residentLevel0() const
 {
     std::shared_lock<std::shared_mutex> trees(impl_->trees);

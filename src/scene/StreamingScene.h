@@ -132,6 +132,9 @@ public:
     std::optional<std::pair<IndexCoord, IndexCoord>> storeBounds() const;
     /// The resident level-0 bricks, for checks: a volume holding them (dirty content included).
     Volume residentLevel0() const;
+    /// Level 0 as the store holds it (as of the last autosave), read through the store's connection under
+    /// its lock: safe beside an autosave a load or an edit runs on another thread.
+    Volume storedLevel0() const;
 
     /// What the last frame showed, without overlaps: each selected brick where it is resident; where a
     /// selected brick is not, the finest resident ancestor that stands for all of its selected
