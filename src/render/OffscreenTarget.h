@@ -47,6 +47,7 @@ public:
     /// Records the copy of the colour and depth images into host memory (after the render pass).
     void recordReadback(VkCommandBuffer cmd) const;
     void recordAfterPass(VkCommandBuffer cmd) const override { recordReadback(cmd); }
+    bool readsBack() const override { return true; }
     /// The pixels copied by the last readback that completed.
     Image colour() const;
     /// Depth per pixel, reversed (1 at the near plane, falling towards 0 with distance, exactly

@@ -17,6 +17,12 @@ public:
     virtual void recordOverlay(VkCommandBuffer) {}
     /// Recorded after the render pass (a readback of the pixels).
     virtual void recordAfterPass(VkCommandBuffer) const {}
+    /// Whether the caller reads the drawn pixels once Renderer::render returns (the frame is then waited
+    /// for); else the frame runs on while the next one is prepared.
+    virtual bool readsBack() const { return false; }
+    /// Signalled when the frame drawn into it is finished (a swapchain image's present waits for it);
+    /// none by default.
+    virtual VkSemaphore finishedSemaphore() const { return VK_NULL_HANDLE; }
 };
 
 } // namespace vdbclay::render

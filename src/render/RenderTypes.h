@@ -86,8 +86,10 @@ struct FrameStats {
     uint64_t gpuMemoryBytes = 0;     // mesh buffers resident on the device after the frame
     uint64_t residentChunks = 0;
     double cpuMs = 0.0;              // recording: culling, upload copies and draw commands
-    double gpuMs = 0.0;              // device time of the frame (timestamp queries), 0 when unavailable
-    double submitWaitMs = 0.0;       // wall time from submission to completion
+    double gpuMs = 0.0;              // device time of the last frame finished (timestamp queries; this frame's when a
+                                     // target reads back, else the one before), 0 when unavailable
+    double submitWaitMs = 0.0;       // wall time waiting for the device: for the frame before (at the start) and, when
+                                     // a target reads back, for this one
     std::vector<int> levelsShown;    // sorted, unique levels of the chunks drawn
 };
 

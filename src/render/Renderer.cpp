@@ -147,6 +147,9 @@ struct Renderer::Impl {
     ShadingOptions shading;
     std::optional<BrushOverlay> brush;
     uint64_t frameNumber = 0;
+    bool submitted = false;  // commands submitted and not yet waited for (a frame drawn into a swapchain image)
+    bool timedFrame = false; // those commands hold the frame's timestamps
+    double lastGpuMs = 0.0;  // of the last frame finished
 
     Impl(VulkanContext& c, const RendererOptions& o)
         : context(c), options(o), heap(c, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)
@@ -328,16 +331,41 @@ struct Renderer::Impl {
         check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
     }
 
-    void submitAndWait()
+    /// Ends and submits the commands recorded, signalling `signal` when they are done.
+    void submit(const std::vector<VkSemaphore>& signal = {})
     {
         check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
         VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
         submit.commandBufferCount = 1;
         submit.pCommandBuffers = &cmd;
+        submit.signalSemaphoreCount = uint32_t(signal.size());
+        submit.pSignalSemaphores = signal.data();
         check(vkResetFences(context.device(), 1, &fence), "vkResetFences");
         check(vkQueueSubmit(context.queue(), 1, &submit, fence), "vkQueueSubmit");
+        submitted = true;
+    }
+
+    /// Waits for the commands submitted last, so that the command buffer, the staging ring, the uniforms,
+    /// the draw commands and freed chunk memory may be used again; takes the frame's GPU time.
+    void finishSubmitted()
+    {
+        if (!submitted) return;
         check(vkWaitForFences(context.device(), 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
         check(vkResetCommandBuffer(cmd, 0), "vkResetCommandBuffer");
+        submitted = false;
+        if (queries && timedFrame) {
+            uint64_t ticks[2] = {0, 0};
+            if (vkGetQueryPoolResults(context.device(), queries, 0, 2, sizeof(ticks), ticks, sizeof(uint64_t),
+                                      VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS)
+                lastGpuMs = double(ticks[1] - ticks[0]) * context.timestampPeriodNs() * 1e-6;
+        }
+        timedFrame = false;
+    }
+
+    void submitAndWait()
+    {
+        submit();
+        finishSubmitted();
     }
 
     /// Records the copies of the queued chunks through the staging ring; when the ring is full the
@@ -417,6 +445,11 @@ struct Renderer::Impl {
         if (views.size() > std::size_t(kMaxViews))
             throw std::invalid_argument("a frame draws at most " + std::to_string(kMaxViews) + " views");
         ++frameNumber;
+        // The previous frame ran on while this one was prepared (its target presents later, waiting on
+        // its semaphore): its resources are used again from here.
+        const auto waited = Clock::now();
+        finishSubmitted();
+        stats.submitWaitMs = msSince(waited);
         beginCommands();
         for (ChunkId id : removals) destroyChunk(id, stats);
         removals.clear();
@@ -526,15 +559,19 @@ struct Renderer::Impl {
         }
         if (queries) vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queries, 1);
         stats.cpuMs = msSince(start);
-        const auto submitted = Clock::now();
-        submitAndWait();
-        stats.submitWaitMs = msSince(submitted);
-        if (queries) {
-            uint64_t ticks[2] = {0, 0};
-            if (vkGetQueryPoolResults(context.device(), queries, 0, 2, sizeof(ticks), ticks, sizeof(uint64_t),
-                                      VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS)
-                stats.gpuMs = double(ticks[1] - ticks[0]) * context.timestampPeriodNs() * 1e-6;
+        const auto submittedAt = Clock::now();
+        std::vector<VkSemaphore> finished;
+        bool readBack = false;
+        for (RenderTarget* target : targets) {
+            if (const VkSemaphore s = target->finishedSemaphore()) finished.push_back(s);
+            readBack = readBack || target->readsBack();
         }
+        submit(finished);
+        timedFrame = queries != VK_NULL_HANDLE;
+        // Pixels read back are waited for; a frame presented runs on while the next one is prepared.
+        if (readBack) finishSubmitted();
+        stats.submitWaitMs += msSince(submittedAt);
+        stats.gpuMs = lastGpuMs;
         enforceBudget(stats);
         stats.gpuMemoryBytes = heap.usedBytes();
         stats.residentChunks = chunks.size();

@@ -11,7 +11,9 @@ struct SwapchainTarget::Image : RenderTarget {
     SwapchainTarget* owner = nullptr;
     VkImageView view = VK_NULL_HANDLE;
     VkFramebuffer framebufferHandle = VK_NULL_HANDLE;
+    VkSemaphore finished = VK_NULL_HANDLE; // the frame drawn into it is done: its present waits for it
     int width() const override { return owner->width_; }
+    VkSemaphore finishedSemaphore() const override { return finished; }
     int height() const override { return owner->height_; }
     VkRenderPass renderPass() const override { return owner->renderPass_; }
     VkFramebuffer framebuffer() const override { return framebufferHandle; }
@@ -115,6 +117,8 @@ void SwapchainTarget::create(int width, int height)
         fb.height = extent.height;
         fb.layers = 1;
         check(vkCreateFramebuffer(context_.device(), &fb, nullptr, &target->framebufferHandle), "vkCreateFramebuffer");
+        VkSemaphoreCreateInfo semaphore{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
+        check(vkCreateSemaphore(context_.device(), &semaphore, nullptr, &target->finished), "vkCreateSemaphore");
         images_.push_back(std::move(target));
     }
 }
@@ -125,6 +129,7 @@ void SwapchainTarget::destroy()
     for (auto& image : images_) {
         vkDestroyFramebuffer(device, image->framebufferHandle, nullptr);
         vkDestroyImageView(device, image->view, nullptr);
+        vkDestroySemaphore(device, image->finished, nullptr);
     }
     images_.clear();
     if (depthView_) vkDestroyImageView(device, depthView_, nullptr);
@@ -153,6 +158,8 @@ bool SwapchainTarget::present()
     VkPresentInfoKHR info{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
     info.swapchainCount = 1;
     info.pSwapchains = &swapchain_;
+    info.waitSemaphoreCount = 1;
+    info.pWaitSemaphores = &images_[current_]->finished;
     info.pImageIndices = &current_;
     const VkResult r = vkQueuePresentKHR(context_.queue(), &info);
     if (r == VK_ERROR_OUT_OF_DATE_KHR || r == VK_SUBOPTIMAL_KHR) return false;

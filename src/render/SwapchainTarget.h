@@ -1,5 +1,6 @@
 // A window's swapchain as render targets: one per image (colour from the swapchain, one shared depth
-// image: frames are drawn one at a time), acquired with a fence and presented once drawn.
+// image: the device draws one frame at a time), acquired with a fence and presented once drawn (the
+// present waits on the image's semaphore, which the frame's submission signals).
 #pragma once
 
 #include "render/RenderTarget.h"
@@ -32,7 +33,8 @@ public:
     /// Waits for the next image and returns it as a target; nullptr when the swapchain no longer matches
     /// the window (call resize).
     RenderTarget* acquire();
-    /// Presents the image acquired last (drawn and waited for). False when the swapchain must be resized.
+    /// Presents the image acquired last, once the frame drawn into it is done. False when the swapchain
+    /// must be resized.
     bool present();
     /// Makes the swapchain again for the window's new size (0 x 0 while minimized: nothing to draw).
     void resize(int width, int height);
