@@ -1,6 +1,7 @@
 #include "render/SceneChunks.h"
 
 #include "mesher/VertexMask.h"
+#include "render/BrickMeshWorkers.h"
 #include "mesher/VertexMaterialBlend.h"
 #include "mesher/VertexOcclusion.h"
 #include "render/Framing.h"
@@ -82,10 +83,17 @@ VolumeUpload uploadVolume(Renderer& renderer, const Volume& volume, const MeshOp
     return out;
 }
 
+StreamedSceneChunks::StreamedSceneChunks(Meshes meshes) : meshes_(meshes)
+{
+    if (meshes == Meshes::OnWorkers) throw std::invalid_argument("chunks meshed on workers are made for a scene");
+}
+
 StreamedSceneChunks::StreamedSceneChunks(const StreamingScene& scene, int meshThreads)
     : meshes_(Meshes::OnWorkers), scene_(&scene), workers_(std::make_unique<BrickMeshWorkers>(scene, meshThreads))
 {
 }
+
+StreamedSceneChunks::~StreamedSceneChunks() = default;
 
 void StreamedSceneChunks::waitForMeshes() const
 {

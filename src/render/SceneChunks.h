@@ -3,7 +3,6 @@
 #pragma once
 
 #include "mesher/Mesher.h"
-#include "render/BrickMeshWorkers.h"
 #include "render/Renderer.h"
 #include "scene/StreamingScene.h"
 
@@ -13,6 +12,8 @@
 #include <memory>
 
 namespace vdbclay::render {
+
+class BrickMeshWorkers;
 
 /// The chunk id of a leaf of a whole volume (leaves within +-2^22 voxels of the origin).
 ChunkId leafChunkId(const std::array<int32_t, 3>& leafOrigin);
@@ -38,10 +39,14 @@ public:
     /// made within sync(); OnWorkers (the constructor taking the scene) has them made, kept by the scene,
     /// on worker threads, and sync() only takes those finished.
     enum class Meshes { KeptByScene, Apart, OnWorkers };
-    explicit StreamedSceneChunks(Meshes meshes = Meshes::KeptByScene) : meshes_(meshes) {}
+    /// KeptByScene or Apart (OnWorkers needs the scene: the constructor below).
+    explicit StreamedSceneChunks(Meshes meshes = Meshes::KeptByScene);
     /// Meshes made on `meshThreads` workers (BrickMeshWorkers) for `scene`, the only scene synced; the
     /// scene outlives this.
     StreamedSceneChunks(const StreamingScene& scene, int meshThreads);
+    ~StreamedSceneChunks();
+    StreamedSceneChunks(const StreamedSceneChunks&) = delete;
+    StreamedSceneChunks& operator=(const StreamedSceneChunks&) = delete;
 
     struct SyncReport {
         uint64_t meshed = 0;   // bricks whose mesh was taken again (their content or their neighbourhood changed)
