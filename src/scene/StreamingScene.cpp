@@ -142,6 +142,7 @@ struct StreamingScene::Impl {
     // Per brick, the last content version at which the mask changed over it: its mesh's darkening.
     std::unordered_map<BrickKey, uint64_t, BrickKeyHash> maskStamps;
     bool stopping = false;
+    bool autosaveWanted = false; // the frame found dirty bricks in the budget's way: a loader saves them
     std::vector<std::unique_ptr<BrickStore>> readers; // one per worker
     std::vector<std::thread> workers;
 
@@ -559,13 +560,30 @@ struct StreamingScene::Impl {
         return makeRoom(needed);
     }
 
+    /// An autosave a loader runs to make room: one that fails leaves the bricks dirty (still resident),
+    /// and the editor's own autosave, which reports errors, tries again.
+    void autosaveOnLoader()
+    {
+        try {
+            autosave();
+        } catch (...) {
+        }
+    }
+
     void work(const BrickStore& reader)
     {
         std::unique_lock<std::mutex> lock(mutex);
         std::unique_lock<std::shared_mutex> treesHeld(trees, std::defer_lock);
         while (true) {
-            wake.wait(lock, [&] { return stopping || !queue.empty(); });
+            wake.wait(lock, [&] { return stopping || autosaveWanted || !queue.empty(); });
             if (stopping) return;
+            if (autosaveWanted) {
+                autosaveWanted = false;
+                lock.unlock();
+                autosaveOnLoader();
+                lock.lock();
+                continue;
+            }
             const BrickKey key = queue.front();
             queue.pop_front();
             const uint64_t estimate = estimateOf(key);
@@ -600,7 +618,7 @@ struct StreamingScene::Impl {
                         // next frame asks for it (an autosave may have rewritten it).
                         lock.unlock();
                         treesHeld.unlock();
-                        autosave();
+                        autosaveOnLoader();
                         treesHeld.lock();
                         lock.lock();
                     }
@@ -997,7 +1015,9 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     }
     s.wanted.clear();
     for (std::size_t i = 0; i < accepted; ++i) s.wanted.insert(needed[order[i]]);
-    s.makeRoom(0); // the frame never autosaves: dirty bricks wait for an edit's or a load's room
+    // The frame never autosaves (it would wait for the store): dirty bricks in the budget's way are saved by
+    // a loader, and go at a later frame.
+    if (!s.makeRoom(0) && s.dirtyInTheWay()) s.autosaveWanted = true;
     // Looked up after makeRoom: an autosave it ran may have dropped rewritten coarse bricks.
     std::vector<char> isResident(needed.size());
     for (std::size_t i = 0; i < needed.size(); ++i) isResident[i] = s.resident.count(needed[i]) > 0;
