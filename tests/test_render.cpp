@@ -586,33 +586,68 @@ TEST_CASE("render: a store streamed under a small budget draws what the .vdb dra
     requireNoValidationMessages(*context);
 }
 
+namespace {
+
+/// The multi-brick scene in a store with two levels of detail, opened for editing (a 64 MB budget, half a
+/// pixel of error), and a 64x64 view of it from (90, 60, 110).
+struct EditableStore {
+    TempDir dir;
+    std::string path = dir.file("scene.vdbclay");
+    std::unique_ptr<StreamingScene> scene;
+    Viewer viewer;
+
+    EditableStore()
+    {
+        writeStoreFile(multiBrickScene(), path);
+        {
+            SceneStore store = SceneStore::open(path, StoreAccess::ReadWrite);
+            buildStoreLod(store, 2);
+        }
+        StreamingOptions streaming;
+        streaming.memoryBudgetBytes = 64ull << 20;
+        streaming.pixelTolerance = 0.5;
+        streaming.access = StoreAccess::ReadWrite;
+        scene = std::make_unique<StreamingScene>(path, streaming);
+        viewer.position = {90.0, 60.0, 110.0};
+        viewer.fovDegrees = 45.0;
+        viewer.viewport = {64, 64};
+    }
+    /// Frames (waiting for the loads) until the view is settled and nothing is pending.
+    void settle()
+    {
+        FrameReport report;
+        for (int i = 0; i < 50 && !(report.settled && report.pending == 0); ++i) {
+            report = scene->frame(viewer);
+            scene->waitForLoads();
+        }
+    }
+    /// The height of the surface where four bricks meet (x = y = 0), found along +z; 0 when none.
+    double topAtOrigin() const
+    {
+        const Volume fine = scene->residentLevel0();
+        for (int32_t k = 400; k > 0; --k)
+            if (fine.materialAt({0, 0, k}) != kEmptyMaterial) return k * fine.voxelSize();
+        return 0.0;
+    }
+};
+
+/// Shown bricks whose drawn chunk is missing or older than the brick.
+std::size_t staleChunks(const StreamingScene& scene, const StreamedSceneChunks& chunks)
+{
+    std::size_t n = 0;
+    for (const BrickKey& key : scene.shownBricks()) n += chunks.versionOf(key) != scene.brickVersion(key);
+    return n;
+}
+
+} // namespace
+
 TEST_CASE("render: a sync within a meshing budget meshes a brick a call, draws edited bricks with their old meshes meanwhile, and never opens a hole", "[render]")
 {
     auto context = validatedContext();
-    TempDir dir;
-    const std::string path = dir.file("scene.vdbclay");
-    writeStoreFile(multiBrickScene(), path);
-    {
-        SceneStore store = SceneStore::open(path, StoreAccess::ReadWrite);
-        buildStoreLod(store, 2);
-    }
-    StreamingOptions streaming;
-    streaming.memoryBudgetBytes = 64ull << 20;
-    streaming.pixelTolerance = 0.5;
-    streaming.access = StoreAccess::ReadWrite;
-    StreamingScene scene(path, streaming);
-    Viewer viewer;
-    viewer.position = {90.0, 60.0, 110.0};
-    viewer.fovDegrees = 45.0;
-    viewer.viewport = {64, 64};
-    const auto settle = [&] {
-        FrameReport report;
-        for (int i = 0; i < 50 && !(report.settled && report.pending == 0); ++i) {
-            report = scene.frame(viewer);
-            scene.waitForLoads();
-        }
-    };
-    settle();
+    EditableStore store;
+    StreamingScene& scene = *store.scene;
+    Viewer& viewer = store.viewer;
+    store.settle();
     Renderer renderer(*context);
     renderer.setMaterials(scene.store().materials());
     StreamedSceneChunks chunks;
@@ -627,11 +662,7 @@ TEST_CASE("render: a sync within a meshing budget meshes a brick a call, draws e
         }
         return true;
     };
-    const auto stale = [&] {
-        std::size_t n = 0;
-        for (const BrickKey& key : scene.shownBricks()) n += chunks.versionOf(key) != scene.brickVersion(key);
-        return n;
-    };
+    const auto stale = [&] { return staleChunks(scene, chunks); };
     // A budget of nothing: one brick a call, until every shown brick has its mesh.
     const std::size_t shown = scene.shownBricks().size();
     REQUIRE(shown > 4);
@@ -645,12 +676,7 @@ TEST_CASE("render: a sync within a meshing budget meshes a brick a call, draws e
 
     // An edit: the bricks it changed keep their old meshes, drawn, until their turn.
     // On the surface where four bricks meet (x = y = 0), found along +z.
-    double top = 0.0;
-    {
-        const Volume fine = scene.residentLevel0();
-        for (int32_t k = 400; k > 0 && top == 0.0; --k)
-            if (fine.materialAt({0, 0, k}) != kEmptyMaterial) top = k * fine.voxelSize();
-    }
+    const double top = store.topAtOrigin();
     REQUIRE(top > 0.0);
     const StreamingScene::EditReport edit = scene.sculpt(parseStrokeScript(
         nlohmann::json{{"ops", {{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 5}}}, {"at", {0.2, 0.3, top}}}}}}.dump()));
@@ -671,7 +697,7 @@ TEST_CASE("render: a sync within a meshing budget meshes a brick a call, draws e
     // replacements are meshed.
     const std::vector<BrickKey> drawnNear = chunks.drawnBricks();
     viewer.position = {900.0, 600.0, 1100.0};
-    settle();
+    store.settle();
     REQUIRE(stale() > 1);
     const std::vector<BrickKey> farShown = scene.shownBricks();
     CHECK(std::any_of(farShown.begin(), farShown.end(), [](const BrickKey& k) { return k.level > 0; })); // coarse bricks replace fine ones
@@ -690,38 +716,13 @@ TEST_CASE("render: a sync within a meshing budget meshes a brick a call, draws e
 TEST_CASE("render: chunks meshed on workers upload only what is finished, keep every view covered meanwhile, and settle to the shown bricks' meshes", "[render][worker]")
 {
     auto context = validatedContext();
-    TempDir dir;
-    const std::string path = dir.file("scene.vdbclay");
-    writeStoreFile(multiBrickScene(), path);
-    {
-        SceneStore store = SceneStore::open(path, StoreAccess::ReadWrite);
-        buildStoreLod(store, 2);
-    }
-    StreamingOptions streaming;
-    streaming.memoryBudgetBytes = 64ull << 20;
-    streaming.pixelTolerance = 0.5;
-    streaming.access = StoreAccess::ReadWrite;
-    StreamingScene scene(path, streaming);
-    Viewer viewer;
-    viewer.position = {90.0, 60.0, 110.0};
-    viewer.fovDegrees = 45.0;
-    viewer.viewport = {64, 64};
-    const auto settle = [&] {
-        FrameReport report;
-        for (int i = 0; i < 50 && !(report.settled && report.pending == 0); ++i) {
-            report = scene.frame(viewer);
-            scene.waitForLoads();
-        }
-    };
-    settle();
+    EditableStore store;
+    StreamingScene& scene = *store.scene;
+    store.settle();
     Renderer renderer(*context);
     renderer.setMaterials(scene.store().materials());
     StreamedSceneChunks chunks(scene, 1);
-    const auto stale = [&] {
-        std::size_t n = 0;
-        for (const BrickKey& key : scene.shownBricks()) n += chunks.versionOf(key) != scene.brickVersion(key);
-        return n;
-    };
+    const auto stale = [&] { return staleChunks(scene, chunks); };
     // The first sync only asks: nothing is meshed on this thread.
     const std::size_t shown = scene.shownBricks().size();
     REQUIRE(shown > 4);
@@ -745,32 +746,27 @@ TEST_CASE("render: chunks meshed on workers upload only what is finished, keep e
     CHECK(chunks.meshesInProgress() == 0);
 
     // An edit: the bricks it changed are meshed again on the workers, and drawn with their old meshes meanwhile.
-    double top = 0.0; // on the surface where four bricks meet (x = y = 0), found along +z
-    {
-        const Volume fine = scene.residentLevel0();
-        for (int32_t k = 400; k > 0 && top == 0.0; --k)
-            if (fine.materialAt({0, 0, k}) != kEmptyMaterial) top = k * fine.voxelSize();
-    }
+    const double top = store.topAtOrigin(); // on the surface where four bricks meet
     REQUIRE(top > 0.0);
     const StreamingScene::EditReport edit = scene.sculpt(parseStrokeScript(
         nlohmann::json{{"ops", {{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 5}}}, {"at", {0.2, 0.3, top}}}}}}.dump()));
     REQUIRE(edit.bricksChanged >= 2);
-    scene.frame(viewer);
+    scene.frame(store.viewer);
     REQUIRE(stale() >= 1);
     settleMeshes(chunks.drawnBricks());
     CHECK(stale() == 0);
 
     // The view moves far off: coarse bricks replace fine ones, which stand in until those are meshed.
-    viewer.position = {900.0, 600.0, 1100.0};
+    store.viewer.position = {900.0, 600.0, 1100.0};
     const std::vector<BrickKey> drawnNear = chunks.drawnBricks();
-    settle();
+    store.settle();
     settleMeshes(drawnNear);
     CHECK(stale() == 0);
     const std::vector<BrickKey> drawn = chunks.drawnBricks(), nowShown = scene.shownBricks();
     CHECK(std::set<BrickKey>(drawn.begin(), drawn.end()) == std::set<BrickKey>(nowShown.begin(), nowShown.end()));
     CHECK(chunks.takeMeshFailures().empty());
     // Another scene is refused.
-    StreamingScene other(path, StreamingOptions{});
+    StreamingScene other(store.path, StreamingOptions{});
     CHECK_THROWS_AS(chunks.sync(other, renderer), std::logic_error);
     requireNoValidationMessages(*context);
 }
