@@ -663,18 +663,18 @@ TEST_CASE("meshes made on workers while edits, loads and evictions run beside th
         }
         editing = false;
     });
-    uint64_t frames = 0, picked = 0;
+    uint64_t frames = 0;
     while (editing) {
         scene.frame(frames++ % 40 < 30 ? near : away);
+        // A pick's read of the trees, beside the edits' pastes and the meshes' reads.
         scene.visitResidentLevels([&](const std::vector<const Volume*>& levels, const StreamingScene::FinestResidentAt&) {
-            picked += levels[0]->materialAt({64, 30, 64}) != kEmptyMaterial;
+            REQUIRE(levels.size() == std::size_t(scene.levels()) + 1);
+            (void)levels[0]->materialAt({64, 30, 64});
         });
         syncOnce();
         std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
     edits.join();
-    CHECK(frames > 0);
-    (void)picked;
 
     // Settled, every shown brick's last mesh is of its version and is what the brick makes afresh.
     std::size_t stale = 1;
