@@ -20,6 +20,11 @@ namespace vdbclay {
 
 namespace {
 
+/// Smooth blurs the old surface's distance capped at this many voxels. Blurring and thresholding a
+/// capped distance moves the surface by its mean curvature as blurring the whole distance does (to
+/// first order, as the MBO scheme does with an indicator), the distances are rebuilt only this near
+/// the surface, and at a leaf's half-diagonal the capped field still tells a leaf's side.
+constexpr double kSmoothBandVoxels = 8.0;
 
 /// A box of a lattice grid's points, [lo, hi] per axis (indices into the grid).
 struct PointRange {
@@ -79,23 +84,30 @@ struct LatticeGrid {
     {
         return Vec3d(origin[0] + i, origin[1] + j, origin[2] + k) * voxelSize;
     }
-    /// Trilinear at a world point (clamped to the box).
+    /// Trilinear at a world point (clamped to the box); exact at the lattice's points.
     double sample(const Vec3d& world) const
     {
+        std::size_t at[3];
         double f[3];
-        int32_t c[3];
         for (int a = 0; a < 3; ++a) {
-            const double q = std::clamp(world[a] / voxelSize - origin[std::size_t(a)], 0.0, double(dims[std::size_t(a)] - 1));
-            c[a] = std::min(int32_t(q), dims[std::size_t(a)] - 2 < 0 ? 0 : dims[std::size_t(a)] - 2);
-            f[a] = q - c[a];
+            const int32_t n = dims[std::size_t(a)];
+            const double q = std::clamp(world[a] / voxelSize - origin[std::size_t(a)], 0.0, double(n - 1));
+            const int32_t c = std::min(int32_t(q), std::max(n - 2, 0));
+            at[a] = std::size_t(c);
+            f[a] = q - c;
         }
-        double out = 0.0;
-        for (int corner = 0; corner < 8; ++corner) {
-            const int dx = corner & 1, dy = (corner >> 1) & 1, dz = corner >> 2;
-            const double w = (dx ? f[0] : 1 - f[0]) * (dy ? f[1] : 1 - f[1]) * (dz ? f[2] : 1 - f[2]);
-            if (w != 0.0) out += w * at(c[0] + dx, c[1] + dy, c[2] + dz);
-        }
-        return out;
+        // Strides to the far corners; a grid one point thick along an axis reads its one point twice.
+        const std::size_t sz = dims[2] > 1 ? 1 : 0, sy = dims[1] > 1 ? std::size_t(dims[2]) : 0,
+                          sx = dims[0] > 1 ? std::size_t(dims[1]) * std::size_t(dims[2]) : 0;
+        const float* p = &values[index(int32_t(at[0]), int32_t(at[1]), int32_t(at[2]))];
+        const auto lerp = [](double a, double b, double t) { return a * (1.0 - t) + b * t; };
+        const auto alongZ = [&](std::size_t o) { return lerp(p[o], p[o + sz], f[2]); };
+        return lerp(lerp(alongZ(0), alongZ(sy), f[1]), lerp(alongZ(sx), alongZ(sx + sy), f[1]), f[0]);
+    }
+    /// The value at a lattice point, clamped to the box.
+    double atPoint(const std::array<int32_t, 3>& ijk) const
+    {
+        return at(ijk[0] - origin[0], ijk[1] - origin[1], ijk[2] - origin[2]);
     }
     /// The largest change per world unit between neighbouring points of a range (bounds the
     /// interpolant's gradient there).
@@ -151,6 +163,22 @@ public:
         double d = std::max(sign_ * grid_.sample(world), brush_.distance(world));
         if (notInside_) d = std::max(d, -notInside_->sample(world));
         return d;
+    }
+    /// The kernel's voxels lie on the grids' lattice: their values are read, not interpolated.
+    void distances(const LatticePatch& patch, double* out) const override
+    {
+        if (patch.voxelSize != grid_.voxelSize || (notInside_ && notInside_->voxelSize != grid_.voxelSize))
+            return SdfField::distances(patch, out);
+        brush_.distances(patch, out);
+        for (int32_t i = 0; i < patch.count; ++i)
+            for (int32_t j = 0; j < patch.count; ++j)
+                for (int32_t k = 0; k < patch.count; ++k, ++out) {
+                    const std::array<int32_t, 3> ijk{patch.first[0] + patch.stride * i, patch.first[1] + patch.stride * j,
+                                                     patch.first[2] + patch.stride * k};
+                    double d = std::max(sign_ * grid_.atPoint(ijk), *out);
+                    if (notInside_) d = std::max(d, -notInside_->atPoint(ijk));
+                    *out = d;
+                }
     }
     WorldBounds bounds() const override { return brush_.bounds(); }
     double innerRadius() const override { return brush_.innerRadius(); }
@@ -324,6 +352,50 @@ void checkFalloffCurve(const FalloffCurve& curve)
         if (!(w >= 0.0 && w <= 1.0)) throw std::invalid_argument("a falloff curve's weights lie in [0, 1]");
 }
 
+namespace {
+
+/// The most a falloff's weight changes per world unit of depth (infinite for the constant falloff's
+/// step at the rim).
+double falloffSlope(Falloff falloff, double innerRadius, const FalloffCurve& curve)
+{
+    if (!(innerRadius > 0.0) || falloff == Falloff::Constant) return std::numeric_limits<double>::infinity();
+    if (falloff == Falloff::Linear) return 1.0 / innerRadius;
+    if (falloff == Falloff::Curve && curve.size() >= 2) {
+        double steepest = 0.0;
+        for (std::size_t i = 0; i + 1 < curve.size(); ++i) steepest = std::max(steepest, std::fabs(curve[i + 1] - curve[i]));
+        return steepest * double(curve.size() - 1) / innerRadius;
+    }
+    return 1.5 / innerRadius; // smoothstep's steepest, at half depth
+}
+
+/// The root in [0, 1] of a strictly falling g with g(0) >= 0 >= g(1), by regula falsi (the Illinois
+/// variant, which keeps both ends moving).
+template <typename G>
+double fallingRoot(const G& g)
+{
+    double lo = 0.0, hi = 1.0, glo = g(lo), ghi = g(hi);
+    if (glo <= 0.0) return lo;
+    if (ghi >= 0.0) return hi;
+    int side = 0;
+    for (int it = 0; it < 60 && hi - lo > 1e-9; ++it) {
+        const double t = std::clamp((lo * ghi - hi * glo) / (ghi - glo), lo, hi);
+        const double gt = g(t);
+        if (gt == 0.0) return t;
+        if (gt > 0.0) {
+            lo = t, glo = gt;
+            if (side == 1) ghi *= 0.5;
+            side = 1;
+        } else {
+            hi = t, ghi = gt;
+            if (side == -1) glo *= 0.5;
+            side = -1;
+        }
+    }
+    return 0.5 * (lo + hi);
+}
+
+} // namespace
+
 int smoothingRadiusVoxels(const SdfField& brush, double voxelSize)
 {
     return std::clamp(int(std::lround(brush.innerRadius() / (2.0 * voxelSize))), 1, 12);
@@ -404,7 +476,9 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     // reads it (the band); farther, its magnitude is capped. The region is what opBounds promises a store
     // pages in (fieldBrushRegion), so a streamed scene and a whole volume read the same voxels. A move
     // only carries values along: their signs, and exact distances near the surface it drags.
-    double band = op.mode == FieldMode::Move ? 6.0 * h : fieldBrushReach(brush, op, h);
+    double band = op.mode == FieldMode::Move     ? 6.0 * h
+                  : op.mode == FieldMode::Smooth ? std::min(fieldBrushReach(brush, op, h), kSmoothBandVoxels * h)
+                                                 : fieldBrushReach(brush, op, h);
     const WorldBounds region = fieldBrushRegion(brush, op, h);
     Vec3d centroid(0.0), normal(0.0); // flatten's plane
     if (op.mode == FieldMode::Flatten) {
@@ -528,10 +602,27 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
         // g(t) = w(x - t offset) - t on [0, 1] (g(0) >= 0 >= g(1), so there is one). A long drag folds
         // the trailing side over itself and x then has several sources: x is solid if any of them is
         // (the smallest of their fields), so the dragged bump stays whole however far it goes.
+        // A point moves at most `moved`, so a lattice point's new value lies within that of its old
+        // one. Farther from the surface than that and the reach of the cells the surface crosses, the
+        // old value less `moved` keeps its side and bounds its distance; only the points nearer search
+        // for their sources.
+        // When w changes by less than 1 over the drag (w's slope times the drag under 1), g falls
+        // strictly and its one root is found by regula falsi; otherwise g is sampled for every root.
         constexpr int kSamples = 16, kBisections = 24;
+        const double moved = op.strength * op.offset.length(), searched = moved + 3.0 * h;
+        const bool oneSource = moved * falloffSlope(op.falloff, inner, op.curve) < 0.999;
         forEachPoint(inBrush, [&](int32_t i, int32_t j, int32_t k) {
+            const double here = old.values[old.index(i, j, k)];
+            if (std::fabs(here) > searched) {
+                next.values[old.index(i, j, k)] = float(here > 0.0 ? here - moved : here + moved);
+                return;
+            }
             const Vec3d x = old.pointOf(i, j, k);
             const auto g = [&](double t) { return weightAt(x - op.offset * t) - t; };
+            if (oneSource) {
+                next.values[old.index(i, j, k)] = float(old.sample(x - op.offset * fallingRoot(g)));
+                return;
+            }
             double best = std::numeric_limits<double>::infinity();
             double t0 = 0.0, g0 = g(0.0);
             if (g0 == 0.0) best = old.sample(x);
@@ -613,8 +704,12 @@ EditStats applyBlendedAdd(Volume& volume, const SdfField& brush, const CsgOp& op
     const GrownField reach(brush, width);
     const PointRange inReach = pointsWithin(old, reach.bounds());
     LatticeGrid next = old;
+    // Where the old distance is capped (the surface lies beyond the band), the fillet adds nothing the
+    // exact add has not: the point keeps its old value and the brush need not be evaluated there.
+    const float capped = float(band * (1.0 - 1e-6));
     forEachPoint(inReach, [&](int32_t i, int32_t j, int32_t k) {
         const std::size_t n = old.index(i, j, k);
+        if (std::fabs(old.values[n]) >= capped) return;
         const double a = old.values[n], b = brush.distance(old.pointOf(i, j, k));
         const double t = std::max(width - std::fabs(a - b), 0.0) / width;
         next.values[n] = float(std::min(a, b) - 0.25 * width * t * t);

@@ -46,13 +46,20 @@ struct Box {
 
 bool inRegion(MaterialId m, MaterialId region) { return region == kEmptyMaterial ? m != kEmptyMaterial : m == region; }
 
-/// How far a lattice point lies from the surface near one crossing, in voxels: the tangent-plane distance
-/// where the crossing's plane stands for the surface, and a lower bound through the crossing point
-/// farther along the plane.
-inline float crossingDistance(const Crossing& c, const Vec3d& p)
+/// A crossing as the distance propagation reads it: its point relative to the box's origin (small
+/// numbers, exact enough in float) and its normal, packed into 24 bytes.
+struct SurfaceSeed {
+    float x, y, z, nx, ny, nz;
+};
+
+/// How far lattice point (i, j, k) of the box lies from the surface near one crossing, in voxels: the
+/// tangent-plane distance where the crossing's plane stands for the surface, and a lower bound through
+/// the crossing point farther along the plane.
+inline float seedDistance(const SurfaceSeed& c, float i, float j, float k)
 {
-    const Vec3d r = p - c.point;
-    return float(std::max(std::fabs(c.normal.dot(r)), r.length() - kPlaneReach));
+    const float rx = i - c.x, ry = j - c.y, rz = k - c.z;
+    const float plane = std::fabs(c.nx * rx + c.ny * ry + c.nz * rz);
+    return std::max(plane, std::sqrt(rx * rx + ry * ry + rz * rz) - float(kPlaneReach));
 }
 
 /// Unsigned distances to the region's boundary, in voxels. Each lattice point within two voxels of a
@@ -68,7 +75,14 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
 {
     std::vector<float> d(box.size(), std::numeric_limits<float>::max());
     std::vector<int32_t> nearest(box.size(), -1);
-    auto point = [&](int i, int j, int k) { return Vec3d(i + box.origin[0], j + box.origin[1], k + box.origin[2]); };
+    std::vector<SurfaceSeed> seeds(crossings.size());
+    for (std::size_t id = 0; id < crossings.size(); ++id) {
+        const Crossing& c = crossings[id];
+        seeds[id] = {float(c.point[0] - box.origin[0]), float(c.point[1] - box.origin[1]), float(c.point[2] - box.origin[2]),
+                     float(c.normal[0]), float(c.normal[1]), float(c.normal[2])};
+    }
+    const std::size_t sentinel = crossings.size();
+    seeds.push_back({std::numeric_limits<float>::max(), 0.0f, 0.0f, 0.0f, 0.0f, 0.0f});
     for (std::size_t id = 0; id < crossings.size(); ++id) {
         const Crossing& c = crossings[id];
         if (inRegion(c.before, region) == inRegion(c.after, region)) continue;
@@ -79,14 +93,14 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
                 for (int k = base[2] - 1; k <= base[2] + 2; ++k) {
                     // A tool's box keeps a margin round its crossings; a box cut from a scene does not.
                     if (i < 0 || j < 0 || k < 0 || i >= box.dims[0] || j >= box.dims[1] || k >= box.dims[2]) continue;
-                    const float candidate = crossingDistance(c, point(i, j, k));
+                    const float candidate = seedDistance(seeds[id], float(i), float(j), float(k));
                     const std::size_t n = box.index(i, j, k);
                     if (candidate < d[n]) d[n] = candidate, nearest[n] = int32_t(id);
                 }
     }
     const int nx = box.dims[0], ny = box.dims[1], nz = box.dims[2];
-    // Blocks of 4^3 points: those within the band of a seeded point's block.
-    constexpr int kBlock = 4;
+    // Blocks of 2^3 points: those within the band of a seeded point's block.
+    constexpr int kBlock = 2;
     const bool banded = std::isfinite(band);
     const int bx = (nx + kBlock - 1) / kBlock, by = (ny + kBlock - 1) / kBlock, bz = (nz + kBlock - 1) / kBlock;
     const auto blockIndex = [&](int i, int j, int k) {
@@ -119,19 +133,31 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
     struct Step {
         int di, dj, dk;
         std::ptrdiff_t offset; // in the arrays
-        float length;
     };
-    std::vector<Step> earlier; // the 13 neighbours a forward raster scan has visited
+    constexpr std::size_t kEarlier = 13;
+    std::array<Step, kEarlier> earlier; // the 13 neighbours a forward raster scan has visited
+    std::size_t filled = 0;
     for (int di = -1; di <= 1; ++di)
         for (int dj = -1; dj <= 1; ++dj)
             for (int dk = -1; dk <= 1; ++dk)
-                if (di * 9 + dj * 3 + dk < 0)
-                    earlier.push_back({di, dj, dk, (std::ptrdiff_t(di) * ny + dj) * nz + dk, float(std::sqrt(double(di * di + dj * dj + dk * dk)))});
+                if (di * 9 + dj * 3 + dk < 0) earlier[filled++] = {di, dj, dk, (std::ptrdiff_t(di) * ny + dj) * nz + dk};
+    // A point keeps the nearest of its own crossing and those of its 13 visited neighbours. Every
+    // candidate is evaluated (a bound on which can win turns few away this close to the surface, and
+    // costs a branch the processor cannot predict); the best is written once.
     auto offer = [&](int i, int j, int k, int sign) {
         if (banded && !nearBlock[blockIndex(i, j, k)]) return;
         const std::size_t n = box.index(i, j, k);
-        const Vec3d p = point(i, j, k);
+        const float pi = float(i), pj = float(j), pk = float(k);
+        float best = d[n];
+        int32_t bestId = nearest[n];
         const bool inner = i > 0 && j > 0 && k > 0 && i < nx - 1 && j < ny - 1 && k < nz - 1;
+        if (banded && inner && best >= band) {
+            // A neighbour's crossing lies at most a step (< 1.75) nearer to this point than to the
+            // neighbour: none can bring it within the band unless a neighbour lies within band + 1.75.
+            float nearestNeighbour = std::numeric_limits<float>::max();
+            for (const Step& s : earlier) nearestNeighbour = std::min(nearestNeighbour, d[std::size_t(std::ptrdiff_t(n) + sign * s.offset)]);
+            if (nearestNeighbour >= band + 1.75f) return;
+        }
         for (const Step& s : earlier) {
             std::size_t q;
             if (inner) {
@@ -141,13 +167,15 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
                 if (a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz) continue;
                 q = box.index(a, b, c);
             }
+            // A point no crossing has reached yet reads the far sentinel, which never wins.
             const int32_t id = nearest[q];
-            // crossingDistance changes by at most the step between two points: q's crossing cannot
-            // beat n's when q lies that much farther from it.
-            if (id < 0 || id == nearest[n] || d[q] - s.length >= d[n]) continue;
-            const float candidate = crossingDistance(crossings[std::size_t(id)], p);
-            if (candidate < d[n]) d[n] = candidate, nearest[n] = id;
+            const float candidate = seedDistance(seeds[id < 0 ? sentinel : std::size_t(id)], pi, pj, pk);
+            const bool closer = candidate < best;
+            best = closer ? candidate : best;
+            bestId = closer ? id : bestId;
         }
+        d[n] = best;
+        nearest[n] = bestId;
     };
     // Each pass in wavefronts of rows: row (i, j) reads rows (i - 1, j - 1..j + 1) and (i, j - 1) of its
     // pass (mirrored for the backward one), all on earlier fronts 2i + j, so a front's rows run in
