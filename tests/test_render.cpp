@@ -501,6 +501,73 @@ TEST_CASE("render: uploads happen once per new or changed chunk, removed and ove
     requireNoValidationMessages(*context);
 }
 
+namespace {
+
+/// An offscreen image drawn as a window's swapchain image is: nothing reads it back, so frames run on
+/// while the next ones are recorded.
+class PresentedTarget : public RenderTarget {
+public:
+    explicit PresentedTarget(OffscreenTarget& image) : image_(image) {}
+    int width() const override { return image_.width(); }
+    int height() const override { return image_.height(); }
+    VkRenderPass renderPass() const override { return image_.renderPass(); }
+    VkFramebuffer framebuffer() const override { return image_.framebuffer(); }
+
+private:
+    OffscreenTarget& image_;
+};
+
+} // namespace
+
+TEST_CASE("render: frames in flight keep a replaced chunk's memory until the frames that may draw it end, then draw the new one", "[render]")
+{
+    auto context = validatedContext();
+    Volume small(1.0), large(1.0);
+    apply(small, CsgMode::Add, sphere(6.0), at(Vec3d(0.0)));
+    apply(large, CsgMode::Add, sphere(10.0), at(Vec3d(0.0)));
+    const Mesh before = meshVolume(small, cmsOptions()), after = meshVolume(large, cmsOptions());
+    Renderer renderer(*context);
+    OffscreenTarget image(*context, 48, 48);
+    PresentedTarget presented(image);
+    const RenderView view{frontCamera(60.0), &presented, {}};
+    renderer.setChunk(1, before);
+    const FrameStats first = renderer.render({view});
+    REQUIRE(first.chunksUploaded == 1);
+    const uint64_t beforeBytes = first.gpuMemoryBytes;
+    CHECK(first.gpuBytesAwaitingFree == 0);
+
+    // Replaced: the new mesh is resident at once, the old one's memory waits for the frames in flight
+    // (this one and the one before) and returns when this frame's slot comes round again.
+    renderer.setChunk(1, after);
+    const FrameStats replaced = renderer.render({view});
+    CHECK(replaced.chunksUploaded == 1);
+    CHECK(replaced.residentChunks == 1);
+    CHECK(replaced.gpuMemoryBytes > beforeBytes);
+    CHECK(replaced.gpuBytesAwaitingFree == beforeBytes);
+    CHECK(renderer.gpuMemoryBytes() == replaced.gpuMemoryBytes);
+    const FrameStats next = renderer.render({view});
+    CHECK(next.gpuBytesAwaitingFree == beforeBytes);
+    const FrameStats settled = renderer.render({view});
+    CHECK(settled.gpuBytesAwaitingFree == 0);
+    CHECK(settled.gpuMemoryBytes == replaced.gpuMemoryBytes);
+
+    // Removed while frames run on, then a readback: the picture is the new sphere's alone, and an empty
+    // scene draws nothing once its memory is back.
+    RenderView readBack{frontCamera(60.0), &image, {}};
+    renderer.render({readBack});
+    const double pixel = pixelOnPlane(readBack.camera, 48, 0.0);
+    std::size_t covered = 0;
+    for (bool c : coverage(image)) covered += c;
+    CHECK(std::fabs(double(covered) - M_PI * std::pow(10.0 / pixel, 2.0)) < 0.15 * M_PI * std::pow(10.0 / pixel, 2.0));
+    renderer.removeChunk(1);
+    for (int frame = 0; frame < 3; ++frame) renderer.render({view});
+    const FrameStats empty = renderer.render({readBack});
+    CHECK(empty.gpuMemoryBytes == 0);
+    CHECK(empty.gpuBytesAwaitingFree == 0);
+    for (bool c : coverage(image)) CHECK_FALSE(c);
+    requireNoValidationMessages(*context);
+}
+
 TEST_CASE("render: a store streamed under a small budget draws what the .vdb draws at level 0, an edit re-uploads only its bricks", "[render]")
 {
     auto context = validatedContext();

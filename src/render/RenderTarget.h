@@ -23,6 +23,9 @@ public:
     /// Signalled when the frame drawn into it is finished (a swapchain image's present waits for it);
     /// none by default.
     virtual VkSemaphore finishedSemaphore() const { return VK_NULL_HANDLE; }
+    /// Waited for on the device before the frame writes its pixels (a swapchain image, until the
+    /// presentation engine lets go of it): the CPU records meanwhile. None by default.
+    virtual VkSemaphore readySemaphore() const { return VK_NULL_HANDLE; }
 };
 
 } // namespace vdbclay::render

@@ -84,6 +84,7 @@ struct FrameStats {
     uint64_t uploadBytes = 0;        // this frame
     uint64_t chunksFreed = 0;        // this frame
     uint64_t gpuMemoryBytes = 0;     // mesh buffers resident on the device after the frame
+    uint64_t gpuBytesAwaitingFree = 0; // mesh buffers removed, kept until the frames in flight that may draw them end
     uint64_t residentChunks = 0;
     double cpuMs = 0.0;              // recording: culling, upload copies and draw commands
     double gpuMs = 0.0;              // device time of the last frame finished (timestamp queries; this frame's when a

@@ -46,6 +46,9 @@ struct ViewUniforms {
 static_assert(sizeof(ViewUniforms) == 336, "ViewUniforms must match common.glsl");
 
 constexpr int kMaxViews = 8;
+/// Frames recorded while the device still runs earlier ones: the CPU prepares frame N + 1 while frame N
+/// draws, and waits only for frame N - 1.
+constexpr int kFramesInFlight = 2;
 
 glm::dmat4 viewProjectionMatrix(const Camera& c, double aspect)
 {
@@ -126,8 +129,21 @@ struct Renderer::Impl {
     GpuHeap heap;
     VkMemoryRequirements chunkRequirements{}; // of a buffer with the chunks' usage: memory types, alignment
     std::vector<VkBuffer> blockBuffers;       // per heap block
-    std::unique_ptr<HostBuffer> staging, uniforms, materialBuffer;
-    std::unique_ptr<HostBuffer> drawCommands; // a frame's indirect draws: one per visible chunk and view
+    /// What one frame in flight owns until its fence signals: its commands, its part of the uniforms,
+    /// its staging ring and indirect draws, and the chunk memory freed while it may still draw from it.
+    struct FrameSlot {
+        VkCommandBuffer cmd = VK_NULL_HANDLE;
+        VkFence fence = VK_NULL_HANDLE;
+        std::unique_ptr<HostBuffer> staging;
+        std::unique_ptr<HostBuffer> drawCommands; // one indirect draw per visible chunk and view
+        std::vector<GpuAllocation> freed;        // returned to the heap once the fence signals
+        bool submitted = false;                  // commands submitted and not yet waited for
+        bool timed = false;                      // those commands hold the frame's timestamps
+    };
+    std::array<FrameSlot, kFramesInFlight> slots;
+    std::size_t current = 0;        // the slot recorded now
+    VkDeviceSize awaitingFree = 0;  // bytes of the slots' freed lists
+    std::unique_ptr<HostBuffer> uniforms, materialBuffer;
     std::unique_ptr<TextureArray> textures;
     std::string textureKey;               // what the textures were loaded for
     bool texturesFinal = false;           // false: a stand-in while the pictures load
@@ -136,9 +152,8 @@ struct Renderer::Impl {
     VkDeviceSize uniformStride = 0;
     VkDescriptorPool descriptorPool = VK_NULL_HANDLE;
     VkDescriptorSet descriptorSet = VK_NULL_HANDLE;
-    VkCommandBuffer cmd = VK_NULL_HANDLE;
-    VkFence fence = VK_NULL_HANDLE;
-    VkQueryPool queries = VK_NULL_HANDLE;
+    VkCommandBuffer cmd = VK_NULL_HANDLE; // the current slot's
+    VkQueryPool queries = VK_NULL_HANDLE;  // two timestamps per slot
 
     std::unordered_map<ChunkId, GpuChunk> chunks;
     std::map<ChunkId, PackedChunk> pending;
@@ -147,9 +162,7 @@ struct Renderer::Impl {
     ShadingOptions shading;
     std::optional<BrushOverlay> brush;
     uint64_t frameNumber = 0;
-    bool submitted = false;  // commands submitted and not yet waited for (a frame drawn into a swapchain image)
-    bool timedFrame = false; // those commands hold the frame's timestamps
-    double lastGpuMs = 0.0;  // of the last frame finished
+    double lastGpuMs = 0.0; // of the last frame finished
 
     Impl(VulkanContext& c, const RendererOptions& o)
         : context(c), options(o), heap(c, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)
@@ -157,7 +170,6 @@ struct Renderer::Impl {
         VkDevice device = c.device();
         compatiblePass = createRenderPass(device, o.colourFormat, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
         pipelines = std::make_unique<Pipelines>(c, compatiblePass);
-        staging = std::make_unique<HostBuffer>(c, std::max<uint64_t>(o.stagingBytes, 1 << 20), VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
         {
             VkBufferCreateInfo probe{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
             probe.size = 1 << 16;
@@ -171,7 +183,7 @@ struct Renderer::Impl {
         }
         const VkDeviceSize align = std::max<VkDeviceSize>(c.properties().limits.minUniformBufferOffsetAlignment, 16);
         uniformStride = (sizeof(ViewUniforms) + align - 1) / align * align;
-        uniforms = std::make_unique<HostBuffer>(c, uniformStride * kMaxViews, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT);
+        uniforms = std::make_unique<HostBuffer>(c, uniformStride * kMaxViews * kFramesInFlight, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT);
 
         VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, 1},
                                          {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1},
@@ -189,17 +201,21 @@ struct Renderer::Impl {
         check(vkAllocateDescriptorSets(device, &setAlloc, &descriptorSet), "vkAllocateDescriptorSets");
         setMaterials(MaterialTable(), {}, PictureLoading::Wait);
 
-        VkCommandBufferAllocateInfo cmdAlloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-        cmdAlloc.commandPool = c.commandPool();
-        cmdAlloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-        cmdAlloc.commandBufferCount = 1;
-        check(vkAllocateCommandBuffers(device, &cmdAlloc, &cmd), "vkAllocateCommandBuffers");
-        VkFenceCreateInfo fenceInfo{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-        check(vkCreateFence(device, &fenceInfo, nullptr, &fence), "vkCreateFence");
+        for (FrameSlot& slot : slots) {
+            VkCommandBufferAllocateInfo cmdAlloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+            cmdAlloc.commandPool = c.commandPool();
+            cmdAlloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+            cmdAlloc.commandBufferCount = 1;
+            check(vkAllocateCommandBuffers(device, &cmdAlloc, &slot.cmd), "vkAllocateCommandBuffers");
+            VkFenceCreateInfo fenceInfo{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+            check(vkCreateFence(device, &fenceInfo, nullptr, &slot.fence), "vkCreateFence");
+            slot.staging = std::make_unique<HostBuffer>(c, std::max<uint64_t>(o.stagingBytes, 1 << 20), VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
+        }
+        cmd = slots[current].cmd;
         if (c.timestampPeriodNs() > 0.0) {
             VkQueryPoolCreateInfo q{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
             q.queryType = VK_QUERY_TYPE_TIMESTAMP;
-            q.queryCount = 2;
+            q.queryCount = 2 * kFramesInFlight;
             check(vkCreateQueryPool(device, &q, nullptr, &queries), "vkCreateQueryPool");
         }
     }
@@ -210,8 +226,10 @@ struct Renderer::Impl {
         vkDeviceWaitIdle(device);
         for (VkBuffer b : blockBuffers) vkDestroyBuffer(device, b, nullptr);
         if (queries) vkDestroyQueryPool(device, queries, nullptr);
-        if (fence) vkDestroyFence(device, fence, nullptr);
-        if (cmd) vkFreeCommandBuffers(device, context.commandPool(), 1, &cmd);
+        for (FrameSlot& slot : slots) {
+            if (slot.fence) vkDestroyFence(device, slot.fence, nullptr);
+            if (slot.cmd) vkFreeCommandBuffers(device, context.commandPool(), 1, &slot.cmd);
+        }
         if (descriptorPool) vkDestroyDescriptorPool(device, descriptorPool, nullptr);
         pipelines.reset();
         if (compatiblePass) vkDestroyRenderPass(device, compatiblePass, nullptr);
@@ -232,7 +250,7 @@ struct Renderer::Impl {
         // Entry 0 (empty) is never drawn; it gets the default colour so a stray id still shows.
         const std::size_t count = table.size() + 1;
         const VkDeviceSize bytes = count * 2 * 4 * sizeof(float);
-        vkDeviceWaitIdle(context.device()); // the last frame may still read the table and the textures
+        finishAll(); // the frames in flight may still read the table and the textures
         std::vector<VkWriteDescriptorSet> writes;
         const auto write = [&](uint32_t binding, VkDescriptorType type) -> VkWriteDescriptorSet& {
             VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
@@ -293,11 +311,14 @@ struct Renderer::Impl {
         return textureErrors;
     }
 
+    /// The chunk is gone from the next draws at once; its memory returns to the heap when the frames
+    /// that may still draw it are done (those in flight end before the current slot's fence signals).
     void destroyChunk(ChunkId id, FrameStats& stats)
     {
         auto it = chunks.find(id);
         if (it == chunks.end()) return;
-        heap.free(it->second.allocation);
+        slots[current].freed.push_back(it->second.allocation);
+        awaitingFree += it->second.allocation.size;
         chunks.erase(it);
         ++stats.chunksFreed;
     }
@@ -331,41 +352,64 @@ struct Renderer::Impl {
         check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
     }
 
-    /// Ends and submits the commands recorded, signalling `signal` when they are done.
-    void submit(const std::vector<VkSemaphore>& signal = {})
+    /// Ends and submits the current slot's commands, signalling `signal` when they are done; they draw
+    /// (colour output onwards) once `wait` is signalled.
+    void submit(const std::vector<VkSemaphore>& signal = {}, const std::vector<VkSemaphore>& wait = {})
     {
-        check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+        FrameSlot& slot = slots[current];
+        check(vkEndCommandBuffer(slot.cmd), "vkEndCommandBuffer");
         VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+        const std::vector<VkPipelineStageFlags> stages(wait.size(), VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT);
+        submit.waitSemaphoreCount = uint32_t(wait.size());
+        submit.pWaitSemaphores = wait.data();
+        submit.pWaitDstStageMask = stages.data();
         submit.commandBufferCount = 1;
-        submit.pCommandBuffers = &cmd;
+        submit.pCommandBuffers = &slot.cmd;
         submit.signalSemaphoreCount = uint32_t(signal.size());
         submit.pSignalSemaphores = signal.data();
-        check(vkResetFences(context.device(), 1, &fence), "vkResetFences");
-        check(vkQueueSubmit(context.queue(), 1, &submit, fence), "vkQueueSubmit");
-        submitted = true;
+        check(vkResetFences(context.device(), 1, &slot.fence), "vkResetFences");
+        check(vkQueueSubmit(context.queue(), 1, &submit, slot.fence), "vkQueueSubmit");
+        slot.submitted = true;
     }
 
-    /// Waits for the commands submitted last, so that the command buffer, the staging ring, the uniforms,
-    /// the draw commands and freed chunk memory may be used again; takes the frame's GPU time.
-    void finishSubmitted()
+    /// Waits for a slot's commands, so that its command buffer, staging ring, uniforms and draw commands
+    /// may be used again and the chunk memory freed meanwhile returns to the heap (a fence also covers
+    /// every submission before it); takes that frame's GPU time.
+    void finishSlot(std::size_t index)
     {
-        if (!submitted) return;
-        check(vkWaitForFences(context.device(), 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
-        check(vkResetCommandBuffer(cmd, 0), "vkResetCommandBuffer");
-        submitted = false;
-        if (queries && timedFrame) {
+        FrameSlot& slot = slots[index];
+        if (!slot.submitted) return;
+        check(vkWaitForFences(context.device(), 1, &slot.fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+        check(vkResetCommandBuffer(slot.cmd, 0), "vkResetCommandBuffer");
+        slot.submitted = false;
+        for (const GpuAllocation& a : slot.freed) {
+            awaitingFree -= a.size;
+            heap.free(a);
+        }
+        slot.freed.clear();
+        if (queries && slot.timed) {
             uint64_t ticks[2] = {0, 0};
-            if (vkGetQueryPoolResults(context.device(), queries, 0, 2, sizeof(ticks), ticks, sizeof(uint64_t),
+            if (vkGetQueryPoolResults(context.device(), queries, uint32_t(2 * index), 2, sizeof(ticks), ticks, sizeof(uint64_t),
                                       VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS)
                 lastGpuMs = double(ticks[1] - ticks[0]) * context.timestampPeriodNs() * 1e-6;
         }
-        timedFrame = false;
+        slot.timed = false;
     }
 
+    /// The chunks' device memory, less what waits to be freed.
+    VkDeviceSize chunkBytes() const { return heap.usedBytes() - awaitingFree; }
+
+    /// Waits for every frame in flight.
+    void finishAll()
+    {
+        for (std::size_t k = 1; k <= slots.size(); ++k) finishSlot((current + k) % slots.size());
+    }
+
+    /// Mid-frame, when the staging ring is full: the copies so far are submitted and waited for.
     void submitAndWait()
     {
         submit();
-        finishSubmitted();
+        finishSlot(current);
     }
 
     /// Records the copies of the queued chunks through the staging ring; when the ring is full the
@@ -373,12 +417,13 @@ struct Renderer::Impl {
     void recordUploads(FrameStats& stats)
     {
         VkDeviceSize ringOffset = 0;
+        HostBuffer& staging = *slots[current].staging;
         for (auto& [id, p] : pending) {
             const VkDeviceSize size = p.bytes.size();
-            if (size > staging->size())
+            if (size > staging.size())
                 throw std::runtime_error("a mesh chunk of " + std::to_string(size) + " bytes exceeds the staging ring of " +
-                                         std::to_string(staging->size()) + " bytes");
-            if (ringOffset + size > staging->size()) {
+                                         std::to_string(staging.size()) + " bytes");
+            if (ringOffset + size > staging.size()) {
                 submitAndWait();
                 beginCommands();
                 ringOffset = 0;
@@ -388,9 +433,9 @@ struct Renderer::Impl {
             VkMemoryRequirements req = chunkRequirements;
             req.size = size;
             chunk.allocation = heap.allocate(req);
-            std::memcpy(staging->data() + ringOffset, p.bytes.data(), size);
+            std::memcpy(staging.data() + ringOffset, p.bytes.data(), size);
             VkBufferCopy copy{ringOffset, chunk.allocation.offset, size};
-            vkCmdCopyBuffer(cmd, staging->buffer(), blockBuffer(chunk.allocation.block), 1, &copy);
+            vkCmdCopyBuffer(cmd, staging.buffer(), blockBuffer(chunk.allocation.block), 1, &copy);
             ringOffset = (ringOffset + size + 15) / 16 * 16;
             chunk.firstIndex = uint32_t((chunk.allocation.offset + p.indexOffset) / sizeof(uint32_t));
             chunk.vertexOffset = int32_t(chunk.allocation.offset / sizeof(GpuVertex));
@@ -445,23 +490,28 @@ struct Renderer::Impl {
         if (views.size() > std::size_t(kMaxViews))
             throw std::invalid_argument("a frame draws at most " + std::to_string(kMaxViews) + " views");
         ++frameNumber;
-        // The previous frame ran on while this one was prepared (its target presents later, waiting on
-        // its semaphore): its resources are used again from here.
+        // Frames run on while later ones are prepared (a target presents later, waiting on its
+        // semaphore): this slot's last frame, kFramesInFlight ago, must be done before its resources are
+        // used again.
+        current = (current + 1) % slots.size();
+        cmd = slots[current].cmd;
         const auto waited = Clock::now();
-        finishSubmitted();
+        finishSlot(current);
         stats.submitWaitMs = msSince(waited);
         beginCommands();
         for (ChunkId id : removals) destroyChunk(id, stats);
         removals.clear();
         recordUploads(stats);
+        const uint32_t firstQuery = uint32_t(2 * current);
         if (queries) {
-            vkCmdResetQueryPool(cmd, queries, 0, 2);
-            vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, queries, 0);
+            vkCmdResetQueryPool(cmd, queries, firstQuery, 2);
+            vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, queries, firstQuery);
         }
 
         std::set<int> levels;
-        // Room for every chunk in every view (the last frame, waited for, no longer reads the buffer).
+        // Room for every chunk in every view (this slot's last frame, waited for, no longer reads it).
         const std::size_t commandsNeeded = std::max<std::size_t>(chunks.size() * views.size(), 1);
+        std::unique_ptr<HostBuffer>& drawCommands = slots[current].drawCommands;
         if (!drawCommands || drawCommands->size() < commandsNeeded * sizeof(VkDrawIndexedIndirectCommand))
             drawCommands = std::make_unique<HostBuffer>(context, 2 * commandsNeeded * sizeof(VkDrawIndexedIndirectCommand),
                                                         VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT);
@@ -489,13 +539,14 @@ struct Renderer::Impl {
                 if (v.target != target) continue;
                 std::array<int, 4> vp = v.viewport;
                 if (vp[2] <= 0 || vp[3] <= 0) vp = {0, 0, target->width(), target->height()};
-                auto* u = reinterpret_cast<ViewUniforms*>(uniforms->data() + uniformStride * vi);
+                const std::size_t uniformSlot = current * kMaxViews + vi;
+                auto* u = reinterpret_cast<ViewUniforms*>(uniforms->data() + uniformStride * uniformSlot);
                 fillUniforms(*u, v.camera, vp[2], vp[3]);
                 VkViewport viewport{float(vp[0]), float(vp[1]), float(vp[2]), float(vp[3]), 0.0f, 1.0f};
                 VkRect2D scissor{{vp[0], vp[1]}, {uint32_t(vp[2]), uint32_t(vp[3])}};
                 vkCmdSetViewport(cmd, 0, 1, &viewport);
                 vkCmdSetScissor(cmd, 0, 1, &scissor);
-                const uint32_t dynamicOffset = uint32_t(uniformStride * vi);
+                const uint32_t dynamicOffset = uint32_t(uniformStride * uniformSlot);
                 vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelines->layout(), 0, 1, &descriptorSet, 1,
                                         &dynamicOffset);
                 const Frustum frustum = frustumOf(viewProjectionMatrix(v.camera, double(vp[2]) / double(vp[3])));
@@ -557,23 +608,25 @@ struct Renderer::Impl {
             vkCmdEndRenderPass(cmd);
             target->recordAfterPass(cmd);
         }
-        if (queries) vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queries, 1);
+        if (queries) vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queries, firstQuery + 1);
         stats.cpuMs = msSince(start);
         const auto submittedAt = Clock::now();
-        std::vector<VkSemaphore> finished;
+        std::vector<VkSemaphore> finished, ready;
         bool readBack = false;
         for (RenderTarget* target : targets) {
             if (const VkSemaphore s = target->finishedSemaphore()) finished.push_back(s);
+            if (const VkSemaphore s = target->readySemaphore()) ready.push_back(s);
             readBack = readBack || target->readsBack();
         }
-        submit(finished);
-        timedFrame = queries != VK_NULL_HANDLE;
-        // Pixels read back are waited for; a frame presented runs on while the next one is prepared.
-        if (readBack) finishSubmitted();
+        submit(finished, ready);
+        slots[current].timed = queries != VK_NULL_HANDLE;
+        // Pixels read back are waited for; a frame presented runs on while the next ones are prepared.
+        if (readBack) finishSlot(current);
         stats.submitWaitMs += msSince(submittedAt);
         stats.gpuMs = lastGpuMs;
         enforceBudget(stats);
-        stats.gpuMemoryBytes = heap.usedBytes();
+        stats.gpuMemoryBytes = chunkBytes();
+        stats.gpuBytesAwaitingFree = awaitingFree;
         stats.residentChunks = chunks.size();
         stats.levelsShown.assign(levels.begin(), levels.end());
         return stats;
@@ -582,13 +635,13 @@ struct Renderer::Impl {
     /// Frees the chunks drawn longest ago (never this frame's) while over the budget.
     void enforceBudget(FrameStats& stats)
     {
-        if (heap.usedBytes() <= options.gpuBudgetBytes) return;
+        if (chunkBytes() <= options.gpuBudgetBytes) return;
         std::vector<std::pair<uint64_t, ChunkId>> byAge;
         for (const auto& [id, c] : chunks)
             if (c.lastDrawn < frameNumber) byAge.emplace_back(c.lastDrawn, id);
         std::sort(byAge.begin(), byAge.end());
         for (const auto& [age, id] : byAge) {
-            if (heap.usedBytes() <= options.gpuBudgetBytes) break;
+            if (chunkBytes() <= options.gpuBudgetBytes) break;
             destroyChunk(id, stats);
             evicted.push_back(id);
         }
@@ -705,7 +758,7 @@ std::vector<ChunkId> Renderer::takeEvicted()
     return out;
 }
 
-uint64_t Renderer::gpuMemoryBytes() const { return impl_->heap.usedBytes(); }
+uint64_t Renderer::gpuMemoryBytes() const { return impl_->chunkBytes(); }
 double Renderer::pipelineBuildMs() const { return impl_->pipelines->buildMs(); }
 const VulkanContext& Renderer::context() const { return impl_->context; }
 

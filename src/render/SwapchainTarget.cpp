@@ -12,8 +12,10 @@ struct SwapchainTarget::Image : RenderTarget {
     VkImageView view = VK_NULL_HANDLE;
     VkFramebuffer framebufferHandle = VK_NULL_HANDLE;
     VkSemaphore finished = VK_NULL_HANDLE; // the frame drawn into it is done: its present waits for it
+    VkSemaphore acquired = VK_NULL_HANDLE; // of its last acquire: the frame's submission waits for it
     int width() const override { return owner->width_; }
     VkSemaphore finishedSemaphore() const override { return finished; }
+    VkSemaphore readySemaphore() const override { return acquired; }
     int height() const override { return owner->height_; }
     VkRenderPass renderPass() const override { return owner->renderPass_; }
     VkFramebuffer framebuffer() const override { return framebufferHandle; }
@@ -40,8 +42,6 @@ SwapchainTarget::SwapchainTarget(const VulkanContext& context, VkSurfaceKHR surf
             if (format_ == VK_FORMAT_UNDEFINED && f.format == wanted && f.colorSpace == VK_COLOR_SPACE_SRGB_NONLINEAR_KHR) format_ = wanted;
     if (format_ == VK_FORMAT_UNDEFINED) throw VulkanError("the window offers no RGBA8 or BGRA8 UNORM surface format");
     renderPass_ = createRenderPass(context.device(), format_, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR);
-    VkFenceCreateInfo fence{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-    check(vkCreateFence(context.device(), &fence, nullptr, &acquired_), "vkCreateFence");
     create(width, height);
 }
 
@@ -49,7 +49,6 @@ SwapchainTarget::~SwapchainTarget()
 {
     vkDeviceWaitIdle(context_.device());
     destroy();
-    vkDestroyFence(context_.device(), acquired_, nullptr);
     vkDestroyRenderPass(context_.device(), renderPass_, nullptr);
 }
 
@@ -121,6 +120,13 @@ void SwapchainTarget::create(int width, int height)
         check(vkCreateSemaphore(context_.device(), &semaphore, nullptr, &target->finished), "vkCreateSemaphore");
         images_.push_back(std::move(target));
     }
+    for (std::size_t i = 0; i <= images_.size(); ++i) {
+        VkSemaphoreCreateInfo semaphore{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
+        VkSemaphore s = VK_NULL_HANDLE;
+        check(vkCreateSemaphore(context_.device(), &semaphore, nullptr, &s), "vkCreateSemaphore");
+        acquireSemaphores_.push_back(s);
+    }
+    nextAcquire_ = 0;
 }
 
 void SwapchainTarget::destroy()
@@ -132,6 +138,8 @@ void SwapchainTarget::destroy()
         vkDestroySemaphore(device, image->finished, nullptr);
     }
     images_.clear();
+    for (VkSemaphore s : acquireSemaphores_) vkDestroySemaphore(device, s, nullptr);
+    acquireSemaphores_.clear();
     if (depthView_) vkDestroyImageView(device, depthView_, nullptr);
     if (depth_) vkDestroyImage(device, depth_, nullptr);
     if (depthMemory_) vkFreeMemory(device, depthMemory_, nullptr);
@@ -145,11 +153,12 @@ void SwapchainTarget::destroy()
 RenderTarget* SwapchainTarget::acquire()
 {
     if (!swapchain_) return nullptr;
-    const VkResult r = vkAcquireNextImageKHR(context_.device(), swapchain_, UINT64_MAX, VK_NULL_HANDLE, acquired_, &current_);
+    const VkSemaphore ready = acquireSemaphores_[nextAcquire_];
+    const VkResult r = vkAcquireNextImageKHR(context_.device(), swapchain_, UINT64_MAX, ready, VK_NULL_HANDLE, &current_);
     if (r == VK_ERROR_OUT_OF_DATE_KHR) return nullptr;
     if (r != VK_SUBOPTIMAL_KHR) check(r, "vkAcquireNextImageKHR");
-    check(vkWaitForFences(context_.device(), 1, &acquired_, VK_TRUE, UINT64_MAX), "vkWaitForFences");
-    check(vkResetFences(context_.device(), 1, &acquired_), "vkResetFences");
+    nextAcquire_ = (nextAcquire_ + 1) % acquireSemaphores_.size();
+    images_[current_]->acquired = ready;
     return images_[current_].get();
 }
 

@@ -1,5 +1,6 @@
-// A window's swapchain as render targets: one per image (colour from the swapchain, one shared depth
-// image: the device draws one frame at a time), acquired with a fence and presented once drawn (the
+// A window's swapchain as render targets: one per image (colour from the swapchain, one depth image the
+// frames in flight share: the render pass orders their writes), acquired without waiting (the frame's
+// submission waits on the device for the image's acquire semaphore) and presented once drawn (the
 // present waits on the image's semaphore, which the frame's submission signals).
 #pragma once
 
@@ -30,8 +31,9 @@ public:
     /// What every target draws over the scene, inside its render pass (the menus).
     void setOverlay(std::function<void(VkCommandBuffer)> overlay) { overlay_ = std::move(overlay); }
 
-    /// Waits for the next image and returns it as a target; nullptr when the swapchain no longer matches
-    /// the window (call resize).
+    /// The next image as a target (the device waits for it, not the caller); nullptr when the swapchain
+    /// no longer matches the window (call resize). A target acquired must be drawn before the next
+    /// acquire, and a renderer keeps fewer frames in flight than the swapchain has images.
     RenderTarget* acquire();
     /// Presents the image acquired last, once the frame drawn into it is done. False when the swapchain
     /// must be resized.
@@ -49,7 +51,9 @@ private:
     VkFormat format_ = VK_FORMAT_UNDEFINED;
     VkRenderPass renderPass_ = VK_NULL_HANDLE;
     VkSwapchainKHR swapchain_ = VK_NULL_HANDLE;
-    VkFence acquired_ = VK_NULL_HANDLE;
+    std::vector<VkSemaphore> acquireSemaphores_; // a ring, one more than the images: a semaphore is used
+                                                 // again only once the frame that waited on it is done
+    std::size_t nextAcquire_ = 0;
     VkImage depth_ = VK_NULL_HANDLE;
     VkDeviceMemory depthMemory_ = VK_NULL_HANDLE;
     VkImageView depthView_ = VK_NULL_HANDLE;
