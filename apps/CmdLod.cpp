@@ -214,15 +214,15 @@ public:
             throw std::runtime_error(std::string("cannot draw the frames: ") + e.what());
         }
         renderer_ = std::make_unique<render::Renderer>(*context_);
-        const std::string folder = std::filesystem::path(scene.store().path()).parent_path().string();
-        for (const std::string& w : renderer_->setMaterials(scene.store().materials(), render::materialLook(scene.store().voxelSize(), folder)))
+        const std::string folder = std::filesystem::path(scene.storePath()).parent_path().string();
+        for (const std::string& w : renderer_->setMaterials(scene.materials(), render::materialLook(scene.voxelSize(), folder)))
             std::cerr << "vdbclay: warning: " << w << "\n";
         render::ShadingOptions shading;
         shading.mode = render::parseViewMode(o.frameView);
         renderer_->setShading(shading);
         target_ = std::make_unique<render::OffscreenTarget>(*context_, width_, height_);
-        const auto box = scene.store().bounds();
-        const double voxel = scene.store().voxelSize();
+        const auto box = scene.storeBounds();
+        const double voxel = scene.voxelSize();
         if (box)
             for (int a = 0; a < 3; ++a) {
                 lo_[std::size_t(a)] = box->first[std::size_t(a)] * voxel;

@@ -82,7 +82,7 @@ Command brushCommand(const std::string& mode, double radius, const nlohmann::jso
 /// sphere of the brush's radius united in (the stamp) and volumeToMesh of the result (the re-mesh).
 std::pair<double, double> openvdbStampAndRemesh(const StreamingScene& scene, const std::array<double, 3>& at)
 {
-    const double voxel = scene.store().voxelSize();
+    const double voxel = scene.voxelSize();
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec3I> triangles;
     for (const BrickKey& key : scene.shownBricks()) {
@@ -135,7 +135,7 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
     SessionOptions options;
     options.memoryBudgetBytes = budget;
     EditingSession session(store, options);
-    const double voxel = session.scene().store().voxelSize();
+    const double voxel = session.scene().voxelSize();
     const double cx = extent * 0.5 * voxel, cz = extent * 0.5 * voxel;
 
     render::VulkanContext context;

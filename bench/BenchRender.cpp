@@ -115,7 +115,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     options.access = StoreAccess::ReadWrite;
     StreamingScene scene(store, options);
     render::Renderer renderer(context);
-    renderer.setMaterials(scene.store().materials());
+    renderer.setMaterials(scene.materials());
     render::StreamedSceneChunks chunks;
     // Fill costs on lavapipe grow with the pixels; the selection is the 1080p view's whatever the target.
     render::OffscreenTarget small(context, 480, 270);
@@ -169,7 +169,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     chunks.sync(scene, renderer);
     renderer.render({{cameraOf(v), &small, {}}});
     const Volume resident = scene.residentLevel0();
-    const double voxel = scene.store().voxelSize();
+    const double voxel = scene.voxelSize();
     const int32_t sx = int32_t((v.position[0] + lookAhead * 0.5) / voxel), sz = int32_t(v.position[2] / voxel);
     int32_t sy = 0;
     for (int32_t y = int32_t(extent); y > -int32_t(extent); --y)

@@ -54,7 +54,7 @@ SessionOptions quiet()
 Volume committed(EditingSession& session)
 {
     session.autosave();
-    return session.scene().store().loadLevel(0);
+    return session.scene().storedLevel0();
 }
 
 /// Drives the menus through ImGui's input: this frame's pointer and left button, when set.

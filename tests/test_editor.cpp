@@ -88,7 +88,7 @@ Command simple(Command::Kind kind)
 Volume committed(EditingSession& session)
 {
     session.autosave();
-    return session.scene().store().loadLevel(0);
+    return session.scene().storedLevel0();
 }
 
 /// Random strokes of every mode on a terrain: each starts where a ray from above meets the surface (the

@@ -619,7 +619,7 @@ TEST_CASE("render: a store streamed under a small budget draws what the .vdb dra
         scene.waitForLoads();
     }
     Renderer renderer(*context);
-    renderer.setMaterials(scene.store().materials());
+    renderer.setMaterials(scene.materials());
     StreamedSceneChunks chunks;
     const auto firstSync = chunks.sync(scene, renderer);
     OffscreenTarget target(*context, size, size);
@@ -716,7 +716,7 @@ TEST_CASE("render: a sync within a meshing budget meshes a brick a call, draws e
     Viewer& viewer = store.viewer;
     store.settle();
     Renderer renderer(*context);
-    renderer.setMaterials(scene.store().materials());
+    renderer.setMaterials(scene.materials());
     StreamedSceneChunks chunks;
     // Every shown brick where something was drawn before is drawn: by its own mesh, or by drawn bricks
     // overlapping it (standing in). Regions coming into view for the first time have nothing to keep.
@@ -787,7 +787,7 @@ TEST_CASE("render: chunks meshed on workers upload only what is finished, keep e
     StreamingScene& scene = *store.scene;
     store.settle();
     Renderer renderer(*context);
-    renderer.setMaterials(scene.store().materials());
+    renderer.setMaterials(scene.materials());
     StreamedSceneChunks chunks(scene, 1);
     const auto stale = [&] { return staleChunks(scene, chunks); };
     // The first sync only asks: nothing is meshed on this thread.

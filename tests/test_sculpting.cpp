@@ -336,7 +336,7 @@ TEST_CASE("replay: a session of rays replays to the same scene and every recorde
     CHECK(replayed.stats().placementsDiffering == 0);
     replayed.autosave();
     EditingSession original(dir.file("a.vdb"), quietSession());
-    CHECK(identical(original.scene().store().loadLevel(0), replayed.scene().store().loadLevel(0)));
+    CHECK(identical(original.scene().storedLevel0(), replayed.scene().storedLevel0()));
 }
 
 TEST_CASE("editor: orbit about a pivot keeps the pivot where it is on the screen, axis views look along the axes", "[editor][camera]")

@@ -45,7 +45,7 @@ std::string makeBall(const TempDir& dir, const std::string& name)
 Volume committed(EditingSession& session)
 {
     session.autosave();
-    return session.scene().store().loadLevel(0);
+    return session.scene().storedLevel0();
 }
 
 /// Holds the edit worker before its next task while closed (SessionWorkerOptions::beforeTask).

@@ -338,10 +338,10 @@ TEST_CASE("edits page bricks in, and dirty bricks evicted for the view lose noth
         evictions += scene.frame(lookingAt({400.0, 60, 220.0}, {200, 30, 200})).evictions;
         CHECK(evictions > 0);
         // Evicting an edited brick committed every edit first (the store never holds half an edit).
-        CHECK(StreamingScene::committedEdits(scene.store()) == script.ops.size());
+        CHECK(scene.committedEditsStored() == script.ops.size());
         scene.autosave();
         CHECK(scene.dirtyBricks() == 0);
-        CHECK(StreamingScene::committedEdits(scene.store()) == script.ops.size());
+        CHECK(scene.committedEditsStored() == script.ops.size());
         // Edits there again: the bricks the first edit kept a copy of were evicted and come back from
         // the store.
         CHECK(scene.sculpt(again).bricksPagedIn > 0);
@@ -606,7 +606,7 @@ TEST_CASE("an edit in empty space, where no brick was stored, shows at once", "[
     // High above the terrain: the bricks there were never stored, at any level.
     const std::array<double, 3> at{100.0, 230.0, 100.0};
     const IndexCoord brick{int32_t(at[0]) / kBrickEdge, int32_t(at[1]) / kBrickEdge, int32_t(at[2]) / kBrickEdge};
-    REQUIRE_FALSE(scene.store().bricks().get({0, brick}));
+    REQUIRE(scene.storedBricks({brick}).stats().empty);
     const Viewer view = lookingAt({100, 230, 160}, at);
     settleView(scene, view);
     const nlohmann::json op{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 6}}}, {"at", at}};

@@ -185,7 +185,7 @@ struct DesktopEditor::Impl {
 
     render::MaterialLook look() const
     {
-        return render::materialLook(session.scene().store().voxelSize(), std::filesystem::path(session.scenePath()).parent_path().string());
+        return render::materialLook(session.scene().voxelSize(), std::filesystem::path(session.scenePath()).parent_path().string());
     }
 
     Impl(DesktopEditor& editor, EditingSession& s, const DesktopOptions& o) : self(editor), session(s), options(o), chunks(s.scene(), kMeshThreads), worker(s)
@@ -321,7 +321,7 @@ struct DesktopEditor::Impl {
         cursorX = x;
         cursorY = y;
         if (adjust == Adjust::Radius) {
-            adjusted.radius = std::max(worker.brush().radius * std::exp((x - adjustFromX) / 150.0), 0.1 * session.scene().store().voxelSize());
+            adjusted.radius = std::max(worker.brush().radius * std::exp((x - adjustFromX) / 150.0), 0.1 * session.scene().voxelSize());
         } else if (adjust == Adjust::Strength) {
             adjusted.strength = std::clamp(worker.brush().strength + (x - adjustFromX) / 300.0, 0.0, 1.0);
         }
@@ -467,7 +467,7 @@ struct DesktopEditor::Impl {
             return apply(c);
         case KeyAction::BrushSmaller:
         case KeyAction::BrushLarger:
-            b.radius = std::max(b.radius * (*bound == KeyAction::BrushLarger ? 1.15 : 1.0 / 1.15), 0.1 * session.scene().store().voxelSize());
+            b.radius = std::max(b.radius * (*bound == KeyAction::BrushLarger ? 1.15 : 1.0 / 1.15), 0.1 * session.scene().voxelSize());
             return setBrush(b);
         case KeyAction::BrushWeaker:
         case KeyAction::BrushStronger:

@@ -1,7 +1,6 @@
 #include "desktop/DesktopPanels.h"
 
 #include "editor/SceneFileActions.h"
-#include "scene/SceneStore.h"
 #include "sculpt/FieldBrushes.h"
 #include "vdb_hermite/AtomicFile.h"
 
@@ -242,7 +241,7 @@ void DesktopPanels::brushPanel(SessionWorker& session, std::vector<Command>& out
         ImGui::EndCombo();
     }
     float radius = float(b.radius);
-    const float voxel = float(session.scene().store().voxelSize());
+    const float voxel = float(session.scene().voxelSize());
     if (ImGui::SliderFloat("Radius", &radius, voxel, 200.0f * voxel, "%.2f", ImGuiSliderFlags_Logarithmic)) {
         b.radius = std::max(radius, 0.01f * voxel);
         changed = true;

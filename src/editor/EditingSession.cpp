@@ -27,7 +27,7 @@ std::pair<std::array<double, 3>, std::array<double, 3>> EditingSession::shownBox
 {
     const std::vector<BrickKey> shown = scene_->shownBricks();
     if (shown.empty()) return sceneBox();
-    const double h = scene_->store().voxelSize();
+    const double h = scene_->voxelSize();
     std::array<double, 3> lo{}, hi{};
     lo.fill(std::numeric_limits<double>::infinity());
     hi.fill(-std::numeric_limits<double>::infinity());
@@ -43,7 +43,7 @@ std::pair<std::array<double, 3>, std::array<double, 3>> EditingSession::shownBox
 
 std::pair<std::array<double, 3>, std::array<double, 3>> EditingSession::sceneBox() const
 {
-    const double h = scene_->store().voxelSize();
+    const double h = scene_->voxelSize();
     std::array<double, 3> lo{-32 * h, -32 * h, -32 * h}, hi{32 * h, 32 * h, 32 * h};
     if (const auto bounds = scene_->storeBounds())
         for (std::size_t a = 0; a < 3; ++a) {
@@ -65,8 +65,8 @@ EditingSession::EditingSession(const std::string& scenePath, const SessionOption
     const auto [lo, hi] = sceneBox();
     camera_ = render::framingCamera(lo, hi, 16.0 / 9.0);
     unsaved_ = prepared_.recoveredEdits > 0;
-    brush_.radius = 8.0 * scene_->store().voxelSize();
-    brush_.distance = 2.0 * scene_->store().voxelSize();
+    brush_.radius = 8.0 * scene_->voxelSize();
+    brush_.distance = 2.0 * scene_->voxelSize();
 }
 
 EditingSession::~EditingSession()
@@ -146,7 +146,7 @@ void EditingSession::applyOp(const nlohmann::json& op)
         // Inflate and deflate keep the stroke's start where they reach, to be measured against it.
         StrokeStart* start = nullptr;
         if (capsPerStroke() && stroke_.active) {
-            if (!stroke_.start) stroke_.start = std::make_unique<StrokeStart>(scene_->store().voxelSize());
+            if (!stroke_.start) stroke_.start = std::make_unique<StrokeStart>(scene_->voxelSize());
             start = stroke_.start.get();
         }
         const StreamingScene::EditReport report = scene_->sculpt(script, &changes, start);
@@ -184,7 +184,7 @@ bool EditingSession::placeStroke(Command& command)
     if (command.point) {
         // A replay: the recorded placement is what happened; the ray checks that it still places the same
         // where the finest data are resident now (a replay streams on its own clock).
-        if (point && finest && distanceBetween(*point, *command.point) > 1e-6 * scene_->store().voxelSize()) {
+        if (point && finest && distanceBetween(*point, *command.point) > 1e-6 * scene_->voxelSize()) {
             if (stats_.placementsDiffering++ == 0)
                 notify("a replayed stroke point differs from where its recorded ray now meets the surface; the recorded point is used");
         }
@@ -197,7 +197,7 @@ bool EditingSession::placeStroke(Command& command)
 
 std::optional<SurfaceHit> EditingSession::castAtStrokeStart(const Ray& ray)
 {
-    const double h = scene_->store().voxelSize();
+    const double h = scene_->voxelSize();
     if (!stroke_.before) stroke_.before = std::make_unique<Volume>(h);
     const std::size_t materials = scene_->materials().size();
     for (; stroke_.decoded < stroke_.changes.size(); ++stroke_.decoded) {
@@ -272,7 +272,7 @@ void EditingSession::moveStroke(const Placement& at, double pressure, bool merge
     // Stamps every `spacing` along the pointer's path; CSG brushes sweep from the last stamp through the
     // new ones (no gaps at any speed), reshaping brushes reshape the new stamps once each.
     const double scale = brush_.pressure == PressureTarget::Size ? std::clamp(pressure, 0.05, 1.0) : 1.0;
-    const double spacing = std::max(brush_.spacing * brush_.radius * scale, 1e-3 * scene_->store().voxelSize());
+    const double spacing = std::max(brush_.spacing * brush_.radius * scale, 1e-3 * scene_->voxelSize());
     const Placement from = stroke_.lastPoint;
     std::vector<Placement> stamps;
     const double length = distanceBetween(at.point, from.point);

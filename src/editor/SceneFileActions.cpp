@@ -29,13 +29,13 @@ Volume committedScene(EditingSession& session)
 }
 
 /// The files an export must never replace: the scene and the store it is edited through.
-std::vector<std::string> sessionInputs(const EditingSession& session) { return {session.scenePath(), session.scene().store().path()}; }
+std::vector<std::string> sessionInputs(const EditingSession& session) { return {session.scenePath(), session.scene().storePath()}; }
 
 } // namespace
 
 nlohmann::json importIntoScene(const EditingSession& session, const std::string& path, const std::string& material)
 {
-    const double voxelSize = session.scene().store().voxelSize();
+    const double voxelSize = session.scene().voxelSize();
     Volume volume(voxelSize);
     if (isMeshPath(path)) {
         VoxelizeOptions options;
@@ -82,8 +82,7 @@ nlohmann::json makeToolFromBox(EditingSession& session, const WorldBounds& box, 
             throw std::invalid_argument("a tool's box needs finite corners, each minimum below its maximum");
     checkOutput(path, OutputForm::NativeVolume, sessionInputs(session));
     session.autosave();
-    const SceneStore& store = session.scene().store();
-    const double vs = store.voxelSize();
+    const double vs = session.scene().voxelSize();
     std::vector<IndexCoord> bricks;
     IndexCoord lo, hi;
     double count = 1.0;
@@ -96,10 +95,7 @@ nlohmann::json makeToolFromBox(EditingSession& session, const WorldBounds& box, 
     for (int32_t x = lo[0]; x <= hi[0]; ++x)
         for (int32_t y = lo[1]; y <= hi[1]; ++y)
             for (int32_t z = lo[2]; z <= hi[2]; ++z) bricks.push_back({x, y, z});
-    Volume volume(vs);
-    volume.materials() = store.materials();
-    store.loadBricks(0, bricks, volume);
-    saveVolume(toolFromScene(std::move(volume), box), path);
+    saveVolume(toolFromScene(session.scene().storedBricks(bricks), box), path);
     return {{"shape", "grid"}, {"file", absolute(path)}};
 }
 

@@ -85,9 +85,9 @@ Picture renderVolume(VulkanContext& context, const Volume& volume, const Picture
 Picture renderStreamed(VulkanContext& context, const StreamingScene& scene, const Camera& camera, const PictureRequest& request)
 {
     Renderer renderer(context);
-    const std::string folder = std::filesystem::path(scene.store().path()).parent_path().string();
+    const std::string folder = std::filesystem::path(scene.storePath()).parent_path().string();
     const std::vector<std::string> warnings =
-        renderer.setMaterials(scene.materials(), materialLook(scene.store().voxelSize(), folder)); // edits define materials before an autosave stores them
+        renderer.setMaterials(scene.materials(), materialLook(scene.voxelSize(), folder)); // edits define materials before an autosave stores them
     StreamedSceneChunks chunks;
     const StreamedSceneChunks::SyncReport sync = chunks.sync(scene, renderer);
     Picture p = draw(context, renderer, camera, request);
@@ -104,8 +104,8 @@ Picture renderStore(VulkanContext& context, const std::string& path, const Pictu
     options.pixelTolerance = request.pixelTolerance;
     StreamingScene scene(path, options);
     Camera camera;
-    const double voxel = scene.store().voxelSize();
-    const auto box = scene.store().bounds();
+    const double voxel = scene.voxelSize();
+    const auto box = scene.storeBounds();
     std::array<double, 3> lo{0, 0, 0}, hi{1, 1, 1};
     if (box) {
         lo = worldOf(box->first, voxel);

@@ -1302,7 +1302,14 @@ uint64_t StreamingScene::residentActiveVoxels() const
     return total;
 }
 
-const SceneStore& StreamingScene::store() const { return impl_->scene; }
+double StreamingScene::voxelSize() const { return impl_->scene.voxelSize(); }
+const std::string& StreamingScene::storePath() const { return impl_->scene.path(); }
+
+uint64_t StreamingScene::committedEditsStored() const
+{
+    std::lock_guard<std::mutex> store(impl_->storeMutex);
+    return committedEdits(impl_->scene);
+}
 
 int StreamingScene::levels() const { return impl_->levels; }
 
@@ -1384,6 +1391,15 @@ Volume StreamingScene::storedLevel0() const
 {
     std::lock_guard<std::mutex> store(impl_->storeMutex);
     return impl_->scene.loadLevel(0);
+}
+
+Volume StreamingScene::storedBricks(const std::vector<IndexCoord>& bricks) const
+{
+    std::lock_guard<std::mutex> store(impl_->storeMutex);
+    Volume out(impl_->scene.voxelSize());
+    out.materials() = impl_->scene.materials();
+    impl_->scene.loadBricks(0, bricks, out);
+    return out;
 }
 
 Volume StreamingScene::residentLevel0() const

@@ -126,7 +126,13 @@ public:
     /// Active voxels of the resident bricks summed over every level, each on its own lattice: the
     /// surface (in voxel^2 of its level) that residentBytes() holds.
     uint64_t residentActiveVoxels() const;
-    const SceneStore& store() const;
+    /// What stays as the store was opened: its lattice and file. The store itself is not handed out:
+    /// its connection is the loaders' and autosave's, under the scene's locks (storeBounds,
+    /// storedLevel0, storedBricks, materials read it safely).
+    double voxelSize() const;
+    const std::string& storePath() const;
+    /// Edits (script ops) the store holds as committed by the last autosave.
+    uint64_t committedEditsStored() const;
     /// The store's bounds (SceneStore::bounds), read under the scene's lock: safe beside an autosave on
     /// another thread.
     std::optional<std::pair<IndexCoord, IndexCoord>> storeBounds() const;
@@ -135,6 +141,8 @@ public:
     /// Level 0 as the store holds it (as of the last autosave), read through the store's connection under
     /// its lock: safe beside an autosave a load or an edit runs on another thread.
     Volume storedLevel0() const;
+    /// Level-0 bricks as the store holds them, the same way.
+    Volume storedBricks(const std::vector<IndexCoord>& bricks) const;
 
     /// What the last frame showed, without overlaps: each selected brick where it is resident; where a
     /// selected brick is not, the finest resident ancestor that stands for all of its selected
