@@ -140,7 +140,9 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
 
     render::VulkanContext context;
     f.device = context.deviceName();
-    render::Renderer renderer(context);
+    render::RendererOptions interactive; // as the window's frames
+    interactive.uploadBytesPerFrame = render::kInteractiveUploadBytesPerFrame;
+    render::Renderer renderer(context, interactive);
     renderer.setMaterials(session.scene().materials());
     render::StreamedSceneChunks chunks(session.scene(), kMeshThreads);
     render::OffscreenTarget small(context, 480, 270); // lavapipe's fill grows with pixels; selection is 1080p's

@@ -114,7 +114,9 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     options.memoryBudgetBytes = budget;
     options.access = StoreAccess::ReadWrite;
     StreamingScene scene(store, options);
-    render::Renderer renderer(context);
+    render::RendererOptions interactive; // as a window's frames: the flight's uploads are spread over frames
+    interactive.uploadBytesPerFrame = render::kInteractiveUploadBytesPerFrame;
+    render::Renderer renderer(context, interactive);
     renderer.setMaterials(scene.materials());
     render::StreamedSceneChunks chunks;
     // Fill costs on lavapipe grow with the pixels; the selection is the 1080p view's whatever the target.
@@ -128,7 +130,8 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
         const Viewer v = viewerAt(x, z, height, lookAhead);
         settle(scene, v);
         chunks.sync(scene, renderer);
-        const render::FrameStats s = renderer.render({{cameraOf(v), &small, {}}});
+        render::FrameStats s = renderer.render({{cameraOf(v), &small, {}}});
+        while (renderer.uploadsWaiting() > 0) s = renderer.render({{cameraOf(v), &small, {}}}); // the complete view
         f.viewTriangles.push_back(double(s.triangles));
         f.maxChunks = std::max(f.maxChunks, s.chunksDrawn);
         f.maxGpuBytes = std::max(f.maxGpuBytes, s.gpuMemoryBytes);
@@ -168,6 +171,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     settle(scene, v);
     chunks.sync(scene, renderer);
     renderer.render({{cameraOf(v), &small, {}}});
+    while (renderer.uploadsWaiting() > 0) renderer.render({{cameraOf(v), &small, {}}});
     const Volume resident = scene.residentLevel0();
     const double voxel = scene.voxelSize();
     const int32_t sx = int32_t((v.position[0] + lookAhead * 0.5) / voxel), sz = int32_t(v.position[2] / voxel);
@@ -190,13 +194,20 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     f.stampTotalMs = millisecondsSince(stampStart);
     // Then the frame that uploads them: its recording (staging copies included) counts to the upload;
     // the device's copy and draw are apart (lavapipe's draw is all CPU).
-    const render::FrameStats after = renderer.render({{cameraOf(v), &small, {}}});
+    // Frames until every re-meshed chunk is up (one unless the uploads pass the frame's budget).
+    render::FrameStats after = renderer.render({{cameraOf(v), &small, {}}});
     f.stampUploadMs = after.cpuMs;
     f.stampGpuMs = after.gpuMs;
+    f.stampChunksUploaded = after.chunksUploaded;
+    while (renderer.uploadsWaiting() > 0) {
+        after = renderer.render({{cameraOf(v), &small, {}}});
+        f.stampUploadMs += after.cpuMs;
+        f.stampGpuMs += after.gpuMs;
+        f.stampChunksUploaded += after.chunksUploaded;
+    }
     f.stampTotalMs += f.stampUploadMs;
     f.stampBricksMeshed = sync.meshed;
     f.stampBricks = edit.bricksChanged;
-    f.stampChunksUploaded = after.chunksUploaded;
     // OpenVDB on the same bricks: the union of their meshes as one surface.
     Mesh changed;
     for (const BrickKey& key : scene.shownBricks()) {

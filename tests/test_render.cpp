@@ -568,6 +568,77 @@ TEST_CASE("render: frames in flight keep a replaced chunk's memory until the fra
     requireNoValidationMessages(*context);
 }
 
+TEST_CASE("render: a frame uploads within its budget, oldest queued first, and while uploads wait no removal opens a hole", "[render]")
+{
+    auto context = validatedContext();
+    Volume volume(1.0);
+    apply(volume, CsgMode::Add, sphere(12.0), at(Vec3d(0.0)));
+    std::vector<Mesh> left, right; // by the chunks' leaves, either side of x = 0
+    for (const MeshChunk& c : meshVolumeChunks(volume, cmsOptions()))
+        if (!c.mesh.triangles.empty()) (c.leafOrigin[0] < 0 ? left : right).push_back(c.mesh);
+    REQUIRE(left.size() > 2);
+    REQUIRE(right.size() > 2);
+    uint64_t leftBytes = 0, allBytes = 0;
+    for (const Mesh& m : left) leftBytes += packChunk(m, 0, {}).bytes.size();
+    allBytes = leftBytes;
+    for (const Mesh& m : right) allBytes += packChunk(m, 0, {}).bytes.size();
+
+    RendererOptions options;
+    options.uploadBytesPerFrame = leftBytes; // the left half fits a frame exactly
+    Renderer renderer(*context, options);
+    ChunkId next = 0;
+    for (const Mesh& m : left) renderer.setChunk(++next, m);
+    for (const Mesh& m : right) renderer.setChunk(++next, m);
+    const ChunkId count = next;
+    OffscreenTarget target(*context, 64, 64);
+    const RenderView view{frontCamera(60.0), &target, {}};
+
+    // The first frame takes the chunks queued first, as many as its budget holds: the left half alone.
+    const FrameStats first = renderer.render({view});
+    CHECK(first.uploadBytes == leftBytes);
+    CHECK(first.chunksUploaded == left.size());
+    CHECK(first.chunksWaitingUpload == right.size());
+    CHECK(renderer.uploadsWaiting() == right.size());
+    const std::vector<bool> leftOnly = coverage(target);
+    int drawnLeft = 0, drawnRight = 0;
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x)
+            if (leftOnly[std::size_t(y * 64 + x)]) ++(x < 32 ? drawnLeft : drawnRight);
+    CHECK(drawnLeft > 100);
+    CHECK(drawnRight < drawnLeft / 10);
+    const FrameStats second = renderer.render({view});
+    CHECK(second.chunksUploaded == right.size());
+    CHECK(second.chunksWaitingUpload == 0);
+    const std::vector<bool> whole = coverage(target);
+
+    // The sphere handed over to new chunks a third of it per frame: the old ones are drawn until the
+    // uploads are done, so every frame covers the sphere whole, and then the old ones go.
+    RendererOptions third = options;
+    third.uploadBytesPerFrame = allBytes / 3 + 1;
+    Renderer handover(*context, third);
+    for (ChunkId id = 1; id <= count; ++id) handover.setChunk(id, id <= left.size() ? left[id - 1] : right[id - 1 - left.size()]);
+    handover.render({view});
+    while (handover.uploadsWaiting() > 0) handover.render({view});
+    for (ChunkId id = 1; id <= count; ++id) {
+        handover.removeChunk(id);
+        handover.setChunk(count + id, id <= left.size() ? left[id - 1] : right[id - 1 - left.size()]);
+    }
+    int frames = 0;
+    uint64_t uploaded = 0, freed = 0;
+    for (; frames < 10 && (frames == 0 || handover.uploadsWaiting() > 0 || freed < count); ++frames) {
+        const FrameStats s = handover.render({view});
+        uploaded += s.chunksUploaded;
+        freed += s.chunksFreed;
+        CHECK(s.uploadBytes <= third.uploadBytesPerFrame);
+        CHECK(coverage(target) == whole);
+    }
+    CHECK(uploaded == count);
+    CHECK(freed == count);
+    CHECK(frames >= 3);
+    CHECK(handover.chunkCount() == count);
+    requireNoValidationMessages(*context);
+}
+
 TEST_CASE("render: a store streamed under a small budget draws what the .vdb draws at level 0, an edit re-uploads only its bricks", "[render]")
 {
     auto context = validatedContext();

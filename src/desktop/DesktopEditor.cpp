@@ -544,6 +544,7 @@ struct DesktopEditor::Impl {
         swapchain = std::make_unique<render::SwapchainTarget>(*context, surface, fw, fh);
         render::RendererOptions ro;
         ro.colourFormat = swapchain->format();
+        ro.uploadBytesPerFrame = render::kInteractiveUploadBytesPerFrame;
         renderer = std::make_unique<render::Renderer>(*context, ro);
         drawnMaterials = session.scene().materials();
         for (const std::string& w : renderer->setMaterials(drawnMaterials, look(), render::Renderer::PictureLoading::Background))
@@ -739,6 +740,7 @@ struct DesktopEditor::Impl {
         render::fitNearPlane(view.camera, lo, hi);
         view.target = target;
         lastStats = renderer->render({view});
+        figures.uploadsWaiting = lastStats.chunksWaitingUpload;
         const auto drawn = Clock::now();
         if (!swapchain->present()) swapchain->resize(fw, fh);
         const auto presented = Clock::now();

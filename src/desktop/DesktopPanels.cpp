@@ -529,8 +529,9 @@ void DesktopPanels::statsPanel(const SessionWorker& session, const FrameFigures&
         ImGui::TextWrapped("screen error %s px (target %s)%s", nothingShown ? "-" : figure(f.stream.screenError, "%.2f").c_str(),
                            nothingShown ? "-" : figure(f.stream.targetError, "%.2f").c_str(), f.stream.budgetLimited ? ", budget-limited" : "");
         const SessionSnapshot done = session.snapshot();
-        ImGui::TextWrapped("pending edits %llu (the edit worker's last frame: %s ms), meshes waiting %llu", (unsigned long long)f.pendingEdits,
-                           figure(done.stats.editMsLastFrame, "%.1f").c_str(), (unsigned long long)f.meshesWaiting);
+        ImGui::TextWrapped("pending edits %llu (the edit worker's last frame: %s ms), meshes waiting %llu, uploads waiting %llu",
+                           (unsigned long long)f.pendingEdits, figure(done.stats.editMsLastFrame, "%.1f").c_str(),
+                           (unsigned long long)f.meshesWaiting, (unsigned long long)f.uploadsWaiting);
         ImGui::TextWrapped("undo %zu, redo %zu, history %.1f MiB (+%.1f spilled)", done.undoDepth, done.redoDepth,
                            double(done.historyBytes) / 1048576.0, double(done.historySpilledBytes) / 1048576.0);
         ImGui::TextWrapped("edits %llu, autosaves %llu%s", (unsigned long long)session.scene().edits(), (unsigned long long)done.stats.autosaves,

@@ -34,6 +34,7 @@ struct FrameFigures {
     uint64_t bricksShown = 0;
     uint64_t pendingEdits = 0; // commands queued for the edit worker or under way
     uint64_t meshesWaiting = 0; // shown bricks whose new mesh the mesh worker has not finished
+    uint64_t uploadsWaiting = 0; // meshes finished and left by the frame's upload budget for later frames
 };
 
 struct CustomBrushPart {

@@ -83,6 +83,7 @@ struct FrameStats {
     uint64_t chunksUploaded = 0;     // this frame
     uint64_t uploadBytes = 0;        // this frame
     uint64_t chunksFreed = 0;        // this frame
+    uint64_t chunksWaitingUpload = 0; // queued chunks a frame's upload budget left for later frames
     uint64_t gpuMemoryBytes = 0;     // mesh buffers resident on the device after the frame
     uint64_t gpuBytesAwaitingFree = 0; // mesh buffers removed, kept until the frames in flight that may draw them end
     uint64_t residentChunks = 0;

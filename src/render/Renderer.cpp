@@ -49,6 +49,8 @@ constexpr int kMaxViews = 8;
 /// Frames recorded while the device still runs earlier ones: the CPU prepares frame N + 1 while frame N
 /// draws, and waits only for frame N - 1.
 constexpr int kFramesInFlight = 2;
+/// Frames removals wait at most for the uploads queued before them.
+constexpr int kRemovalWaitFrames = 8;
 
 glm::dmat4 viewProjectionMatrix(const Camera& c, double aspect)
 {
@@ -156,8 +158,16 @@ struct Renderer::Impl {
     VkQueryPool queries = VK_NULL_HANDLE;  // two timestamps per slot
 
     std::unordered_map<ChunkId, GpuChunk> chunks;
-    std::map<ChunkId, PackedChunk> pending;
+    /// Chunks to upload, in the order they were first queued (a new version keeps its place).
+    struct Queued {
+        PackedChunk chunk;
+        uint64_t order = 0;
+    };
+    std::unordered_map<ChunkId, Queued> pending;
+    std::map<uint64_t, ChunkId> pendingOrder;
+    uint64_t nextOrder = 0;
     std::set<ChunkId> removals;
+    int removalsWaited = 0; // frames the removals have waited for uploads
     std::vector<ChunkId> evicted;
     ShadingOptions shading;
     std::optional<BrushOverlay> brush;
@@ -412,14 +422,38 @@ struct Renderer::Impl {
         finishSlot(current);
     }
 
-    /// Records the copies of the queued chunks through the staging ring; when the ring is full the
-    /// copies so far are submitted and waited for, and the ring starts over.
+    void queueChunk(ChunkId id, PackedChunk chunk)
+    {
+        auto it = pending.find(id);
+        if (it != pending.end()) {
+            it->second.chunk = std::move(chunk);
+            return;
+        }
+        pending.emplace(id, Queued{std::move(chunk), nextOrder});
+        pendingOrder.emplace(nextOrder++, id);
+    }
+
+    void unqueueChunk(ChunkId id)
+    {
+        auto it = pending.find(id);
+        if (it == pending.end()) return;
+        pendingOrder.erase(it->second.order);
+        pending.erase(it);
+    }
+
+    /// Records the copies of the queued chunks through the staging ring, oldest first, within the
+    /// frame's upload budget (always one chunk at least); when the ring is full the copies so far are
+    /// submitted and waited for, and the ring starts over.
     void recordUploads(FrameStats& stats)
     {
         VkDeviceSize ringOffset = 0;
         HostBuffer& staging = *slots[current].staging;
-        for (auto& [id, p] : pending) {
+        const uint64_t budget = options.uploadBytesPerFrame;
+        while (!pendingOrder.empty()) {
+            const ChunkId id = pendingOrder.begin()->second;
+            const PackedChunk& p = pending.at(id).chunk;
             const VkDeviceSize size = p.bytes.size();
+            if (budget > 0 && stats.uploadBytes > 0 && stats.uploadBytes + size > budget) break;
             if (size > staging.size())
                 throw std::runtime_error("a mesh chunk of " + std::to_string(size) + " bytes exceeds the staging ring of " +
                                          std::to_string(staging.size()) + " bytes");
@@ -446,8 +480,9 @@ struct Renderer::Impl {
             chunks.emplace(id, chunk);
             ++stats.chunksUploaded;
             stats.uploadBytes += size;
+            unqueueChunk(id);
         }
-        pending.clear();
+        stats.chunksWaitingUpload = pending.size();
         VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
         barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
         barrier.dstAccessMask = VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT;
@@ -499,9 +534,14 @@ struct Renderer::Impl {
         finishSlot(current);
         stats.submitWaitMs = msSince(waited);
         beginCommands();
-        for (ChunkId id : removals) destroyChunk(id, stats);
-        removals.clear();
         recordUploads(stats);
+        // Removals go with the uploads that usually replace them: while some wait for a later frame, so
+        // do the removals (a few frames at most, so that memory is not held for long).
+        if (pending.empty() || ++removalsWaited > kRemovalWaitFrames) {
+            for (ChunkId id : removals) destroyChunk(id, stats);
+            removals.clear();
+            removalsWaited = 0;
+        }
         const uint32_t firstQuery = uint32_t(2 * current);
         if (queries) {
             vkCmdResetQueryPool(cmd, queries, firstQuery, 2);
@@ -731,18 +771,19 @@ void Renderer::setPackedChunk(ChunkId id, PackedChunk chunk)
 {
     impl_->removals.erase(id);
     if (chunk.bytes.empty()) {
-        impl_->pending.erase(id);
-        if (impl_->chunks.count(id)) impl_->removals.insert(id);
+        removeChunk(id);
         return;
     }
-    impl_->pending[id] = std::move(chunk);
+    impl_->queueChunk(id, std::move(chunk));
 }
 
 void Renderer::removeChunk(ChunkId id)
 {
-    impl_->pending.erase(id);
+    impl_->unqueueChunk(id);
     if (impl_->chunks.count(id)) impl_->removals.insert(id);
 }
+
+std::size_t Renderer::uploadsWaiting() const { return impl_->pending.size(); }
 
 bool Renderer::hasChunk(ChunkId id) const { return impl_->chunks.count(id) || impl_->pending.count(id); }
 std::size_t Renderer::chunkCount() const { return impl_->chunks.size(); }

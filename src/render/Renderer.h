@@ -23,9 +23,18 @@ class RenderTarget;
 
 using ChunkId = uint64_t;
 
+/// What an interactive frame uploads at most (RendererOptions::uploadBytesPerFrame): about a millisecond
+/// of copying, well inside a 90 Hz frame.
+constexpr uint64_t kInteractiveUploadBytesPerFrame = 8ull << 20;
+
 struct RendererOptions {
     uint64_t gpuBudgetBytes = 1ull << 30; // mesh buffers; chunks not drawn lately are freed beyond it
-    uint64_t stagingBytes = 16ull << 20;  // the staging ring: uploads beyond it in one frame flush early
+    uint64_t stagingBytes = 16ull << 20;  // the staging ring per frame in flight: uploads beyond it in one frame flush early
+    /// Chunk bytes a frame uploads at most (0: every chunk queued); the rest wait, in the order they were
+    /// queued, for later frames, and a chunk replaced is drawn as it was until its new version is up. A
+    /// window's frame sets it (a frame then never copies more than this, nor waits on a full staging
+    /// ring); a picture leaves it at 0.
+    uint64_t uploadBytesPerFrame = 0;
     VkFormat colourFormat = VK_FORMAT_R8G8B8A8_UNORM; // of every target drawn into (a swapchain's may differ)
 };
 
@@ -79,8 +88,12 @@ public:
     void setChunk(ChunkId id, const Mesh& mesh, int level = 0, const VertexShading& shading = VertexShading());
     /// The same with the packing done (packChunk): what the frame thread calls for meshes made on workers.
     void setPackedChunk(ChunkId id, PackedChunk chunk);
-    /// Frees the chunk's buffers at the next frame (its brick was evicted or it became empty).
+    /// Frees the chunk's buffers at a next frame (its brick was evicted or it became empty). While chunks
+    /// wait for their upload (uploadBytesPerFrame), removals wait with them (a few frames at most): what
+    /// replaces a removed chunk is usually among them, and the view keeps no hole meanwhile.
     void removeChunk(ChunkId id);
+    /// Chunks queued and not yet uploaded.
+    std::size_t uploadsWaiting() const;
     bool hasChunk(ChunkId id) const;
     std::size_t chunkCount() const;
 
