@@ -97,7 +97,8 @@ public:
     /// to make it as it is): those of undone strokes and of strokes that changed nothing are left out.
     nlohmann::json appliedScript() const;
     uint64_t frameNumber() const { return frameNumber_; }
-    StreamingScene& scene() { return *scene_; }
+    /// The scene, to look at (views, picks, meshes, figures): every change goes through apply(), so that
+    /// history, autosave and replays see it.
     const StreamingScene& scene() const { return *scene_; }
     const std::string& scenePath() const { return scenePath_; }
 

@@ -78,7 +78,6 @@ public:
     const render::Camera& camera() const { return camera_; }
     const BrushSettings& brush() const { return brush_; }
     // What is safe from any thread.
-    StreamingScene& scene() { return session_.scene(); }
     const StreamingScene& scene() const { return session_.scene(); }
     const std::string& scenePath() const { return session_.scenePath(); }
     uint64_t recoveredEdits() const { return session_.recoveredEdits(); }

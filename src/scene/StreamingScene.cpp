@@ -1076,7 +1076,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     return report;
 }
 
-void StreamingScene::waitForLoads()
+void StreamingScene::waitForLoads() const
 {
     Impl& s = *impl_;
     std::unique_lock<std::mutex> lock(s.mutex);

@@ -77,7 +77,7 @@ public:
     /// the least recently used bricks the view does not need when over budget, and reports.
     FrameReport frame(const Viewer& viewer);
     /// Waits until every queued load has finished (tests, and callers that want a complete view).
-    void waitForLoads();
+    void waitForLoads() const;
 
     struct EditReport {
         std::vector<ScriptOpReport> ops;
@@ -162,7 +162,9 @@ public:
     /// a finer brick beside it), in world units, with the version (brickVersion) it was made at; nullptr
     /// when the brick is not resident. The scene keeps it beside the brick, counted in the memory
     /// budget, until the brick's version changes, the brick leaves the view or is evicted: asking again
-    /// costs nothing. A mesh the budget cannot hold (other bricks being needed) is not kept.
+    /// costs nothing. To keep it, bricks the view no longer wants may be evicted (clean ones only: this
+    /// never writes the store); a mesh the budget cannot hold even so is not kept. Const as a cache is:
+    /// what the scene holds changes, not what it shows.
     struct BrickMeshPieces;
     struct BrickMesh {
         Mesh mesh;
