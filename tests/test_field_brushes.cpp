@@ -296,17 +296,31 @@ TEST_CASE("field brushes: the rebuilt distance is that of the nearest crossing, 
     const std::array<int32_t, 3> origin{-24, -24, -24}, dims{49, 49, 49};
     for (int scene = 0; scene < 6; ++scene) {
         Volume v(1.0);
+        // Drawn one at a time (an argument list's order of evaluation is the compiler's): the same scenes
+        // whatever builds the test.
+        const auto vec = [&](double lo, double hi) {
+            const double x = real(lo, hi), y = real(lo, hi), z = real(lo, hi);
+            return Vec3d(x, y, z);
+        };
         for (int i = 0; i < 3; ++i) {
-            const Vec3d c(real(-6, 6), real(-6, 6), real(-6, 6));
-            if (i % 2) apply(v, CsgMode::Add, box(Vec3d(real(3, 9), real(3, 9), real(3, 9))), at(c, Vec3d(real(0, 90), real(0, 90), 0.0)));
-            else apply(v, CsgMode::Add, sphere(real(4, 11)), at(c));
+            const Vec3d c = vec(-6, 6);
+            if (i % 2) {
+                const Vec3d half = vec(3, 9);
+                const double yaw = real(0, 90), pitch = real(0, 90);
+                apply(v, CsgMode::Add, box(half), at(c, Vec3d(yaw, pitch, 0.0)));
+            } else {
+                apply(v, CsgMode::Add, sphere(real(4, 11)), at(c));
+            }
         }
-        if (scene % 3 == 2) apply(v, CsgMode::Remove, sphere(real(3, 6)), at(Vec3d(real(-4, 4), real(-4, 4), real(-4, 4))));
+        if (scene % 3 == 2) {
+            const double radius = real(3, 6);
+            apply(v, CsgMode::Remove, sphere(radius), at(vec(-4, 4)));
+        }
         const float band = scene % 2 ? 5.0f : std::numeric_limits<float>::infinity();
         const SolidDistances solid = solidDistances(v, origin, dims, band);
         const std::vector<SurfaceSample> samples = surfaceSamples(v, origin, dims);
         REQUIRE(samples.size() > 100);
-        double worst = 0.0;
+        double worst = 0.0, nearWorst = 0.0;
         int checked = 0;
         for (int t = 0; t < 1500; ++t) {
             const std::array<int32_t, 3> p{int32_t(rng() % 49), int32_t(rng() % 49), int32_t(rng() % 49)};
@@ -326,15 +340,17 @@ TEST_CASE("field brushes: the rebuilt distance is that of the nearest crossing, 
             }
             if (exact > band - 0.5) continue; // where the cap begins
             // Never nearer than the nearest crossing (a minimum over fewer of them). Near the surface within
-            // a tenth of a voxel of it; farther, the crossing a neighbour passes on may miss the nearest
-            // by a few percent of the distance.
+            // a few hundredths of a voxel of it, a tenth or so at two voxels; farther, the crossing a
+            // neighbour passes on may miss the nearest by a few percent of the distance.
             CHECK(std::fabs(got) >= exact - 1e-4);
             if (exact < 2.5) worst = std::max(worst, std::fabs(got) - exact);
+            if (exact < 1.5) nearWorst = std::max(nearWorst, std::fabs(got) - exact);
             else CHECK(std::fabs(got) - exact < 0.1 + 0.05 * exact);
             ++checked;
         }
         INFO("scene " << scene);
         CHECK(checked > 100);
-        CHECK(worst < 0.1);
+        CHECK(nearWorst < 0.05);
+        CHECK(worst < 0.15);
     }
 }

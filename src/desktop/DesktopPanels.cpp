@@ -526,8 +526,14 @@ void DesktopPanels::statsPanel(const SessionWorker& session, const FrameFigures&
         ImGui::TextWrapped("shown %llu, pending %llu, hit rate %.0f%%", (unsigned long long)f.bricksShown, (unsigned long long)f.stream.pending,
                            100.0 * f.stream.hitRate());
         const bool nothingShown = f.bricksShown == 0;
-        ImGui::TextWrapped("screen error %s px (target %s)%s", nothingShown ? "-" : figure(f.stream.screenError, "%.2f").c_str(),
-                           nothingShown ? "-" : figure(f.stream.targetError, "%.2f").c_str(), f.stream.budgetLimited ? ", budget-limited" : "");
+        // A brick's error is its level's voxel projected at the brick's nearest point: at level 0 that is
+        // the data itself, not a loss (and a brick around the eye would show it as hundreds of pixels).
+        const bool finestOnly = !f.draw.levelsShown.empty() && f.draw.levelsShown.back() == 0;
+        if (!nothingShown && finestOnly)
+            ImGui::TextWrapped("screen error 0 px: every brick at level 0%s", f.stream.budgetLimited ? ", budget-limited" : "");
+        else
+            ImGui::TextWrapped("screen error %s px (target %s)%s", nothingShown ? "-" : figure(f.stream.screenError, "%.2f").c_str(),
+                               nothingShown ? "-" : figure(f.stream.targetError, "%.2f").c_str(), f.stream.budgetLimited ? ", budget-limited" : "");
         const SessionSnapshot done = session.snapshot();
         ImGui::TextWrapped("pending edits %llu (the edit worker's last frame: %s ms), meshes waiting %llu, uploads waiting %llu",
                            (unsigned long long)f.pendingEdits, figure(done.stats.editMsLastFrame, "%.1f").c_str(),
