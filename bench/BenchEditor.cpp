@@ -57,6 +57,9 @@ struct EditorFigures {
     std::vector<double> latencyFrames; // per edit: frames until the view showed it (1 = the frame it was submitted in)
     std::map<std::string, std::vector<double>> latencyByMode;
     std::map<std::string, std::vector<double>> stampMsByMode; // the worker's time per stroke step
+    /// Per mode: the worker's time over all its ops and the stroke points they applied (merged or not): a
+    /// figure that does not move with how many points the worker happened to merge.
+    std::map<std::string, std::pair<double, uint64_t>> msAndPointsByMode;
     std::vector<double> commandMs;                            // the worker's time per op it applied
     uint64_t mergedPoints = 0;                                // stroke points the worker merged into the next one's op
     double toolFrameMs = 0.0, toolEditMs = 0.0, toolMeshMs = 0.0, toolVisibleFrames = 0.0;
@@ -252,9 +255,12 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
             }
         } else if (command->mergedWithNext) {
             ++f.mergedPoints; // its stamps go with the next point's op, timed there
+            if (!mode.empty()) ++f.msAndPointsByMode[mode].second;
         } else if (!mode.empty()) {
             f.stampMsByMode[mode].push_back(ms);
             f.commandMs.push_back(ms);
+            f.msAndPointsByMode[mode].first += ms;
+            ++f.msAndPointsByMode[mode].second;
         }
     };
     std::vector<Waiting> waiting;
@@ -370,6 +376,10 @@ int benchEditor(bool json, bool quick, double memoryBudgetMb)
         out["edit_to_visible_frames"] = visible;
         for (const auto& [mode, ms] : f.stampMsByMode) steps[mode] = spread(ms);
         out["step_ms"] = steps;
+        nlohmann::json perPoint = nlohmann::json::object();
+        for (const auto& [mode, total] : f.msAndPointsByMode)
+            if (total.second > 0) perPoint[mode] = total.first / double(total.second);
+        out["ms_per_stroke_point"] = perPoint;
         out["triangles"] = uint64_t(mean(triangles));
         out["upload_bytes_per_frame"] = uint64_t(mean(upload));
         out["resident_bytes"] = uint64_t(maximum(resident));
@@ -413,6 +423,9 @@ int benchEditor(bool json, bool quick, double memoryBudgetMb)
     for (const auto& [mode, ms] : f.stampMsByMode)
         t.rows.push_back({"  op on the worker (a stroke step, or merged steps), " + mode + " (median / max)", fixed(median(ms), 1) + " / " + fixed(maximum(ms), 1) + " ms",
                           mode == "add" || mode == "remove" || mode == "paint" || mode == "erode" ? "<= 3 ms" : "<= 15 ms"});
+    for (const auto& [mode, total] : f.msAndPointsByMode)
+        if (total.second > 0)
+            t.rows.push_back({"  worker time per stroke point, " + mode + " (all its ops / points)", fixed(total.first / double(total.second), 1) + " ms", ""});
     t.rows.push_back({"64^3 rotated tool stamp: worker edit; frame that drew it (its re-mesh); frames until shown",
                       fixed(f.toolEditMs, 1) + " ms; " + fixed(f.toolFrameMs, 1) + " ms (" + fixed(f.toolMeshMs, 1) + "); " + fixed(f.toolVisibleFrames, 0),
                       "edit <= 2 ms"});
