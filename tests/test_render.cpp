@@ -405,6 +405,44 @@ TEST_CASE("render: the brush highlight covers exactly the surface inside the bru
         }
     CHECK(changedInside > 150);
     CHECK(changedOutside == 0);
+
+    // Up close, the near plane a millionth of the way to the face (as the editor fits it there): the
+    // preview's rays leave the eye exactly, so its disc is the same pixel for pixel (rays made from two
+    // points by the eye came out in blocks of pixels).
+    const std::array<double, 2> over{23.7, -17.3}; // off the axis: the eye's own coordinates are large
+    RenderView close{frontCamera(11.0), &target, {}};
+    close.camera.eye = {over[0], over[1], 11.0};
+    close.camera.target = {over[0], over[1], 0.0};
+    close.camera.nearPlane = 3e-6;
+    renderer.setBrush(std::nullopt);
+    renderer.render({close});
+    const Image closePlain = target.colour();
+    const std::array<double, 3> nearCentre{over[0] + 0.2, over[1] - 0.1, 8.5};
+    const double nearRadius = 1.0, nearDisc = std::sqrt(nearRadius * nearRadius - 0.5 * 0.5);
+    brush.params = {float(nearRadius), 0, 0, 0};
+    brush.worldToLocal = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -float(nearCentre[0]), -float(nearCentre[1]), -float(nearCentre[2]), 1};
+    brush.worldBoundsMin = {float(nearCentre[0] - nearRadius), float(nearCentre[1] - nearRadius), float(nearCentre[2] - nearRadius), 0};
+    brush.worldBoundsMax = {float(nearCentre[0] + nearRadius), float(nearCentre[1] + nearRadius), float(nearCentre[2] + nearRadius), 0};
+    renderer.setBrush(brush);
+    renderer.render({close});
+    const Image closePreviewed = target.colour();
+    const double closePixel = pixelOnPlane(close.camera, size, 8.0);
+    int closeInside = 0, closeMissed = 0, closeStray = 0, closeOutside = 0;
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const auto p = onPlane(close.camera, x, y, size, 8.0); // relative to the eye's x and y
+            const double r = std::hypot(over[0] + p[0] - nearCentre[0], over[1] + p[1] - nearCentre[1]);
+            const uint8_t *a = closePlain.pixel(x, y), *b = closePreviewed.pixel(x, y);
+            const bool changed = std::abs(int(a[0]) - int(b[0])) + std::abs(int(a[1]) - int(b[1])) + std::abs(int(a[2]) - int(b[2])) > 12;
+            if (r < nearDisc - 2.0 * closePixel) ++closeInside, closeMissed += !changed;
+            // Beyond the sphere's silhouette seen from the eye: 2.5 away, it spans asin(1 / 2.5) around its
+            // centre, 1.31 on the face.
+            if (r > 1.4) closeStray += changed, ++closeOutside;
+        }
+    CHECK(closeInside > 1000);
+    CHECK(closeMissed == 0);
+    CHECK(closeStray == 0);
+    CHECK(closeOutside > 20);
     requireNoValidationMessages(*context);
 }
 

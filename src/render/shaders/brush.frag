@@ -17,11 +17,13 @@ vec2 boxHits(vec3 o, vec3 d, vec3 lo, vec3 hi)
 
 void main()
 {
-    // Depth is reversed with the far plane at infinity: 1 is the near plane, 0 would be infinitely far.
-    vec4 nearH = view.invViewProj * vec4(ndc, 1.0, 1.0);
-    vec4 beyondH = view.invViewProj * vec4(ndc, 0.5, 1.0);
-    vec3 o = nearH.xyz / nearH.w;
-    vec3 d = normalize(beyondH.xyz / beyondH.w - o);
+    // Depth is reversed with the far plane at infinity: 1 is the near plane, 0 is infinitely far. The ray
+    // leaves the eye towards the pixel's point at infinity (w = 0 there, so its xyz is the direction):
+    // two unprojected points near the eye would differ by less than float resolves once the near plane
+    // hugs the surface (up close), and the rays came out in blocks of pixels.
+    vec4 farH = view.invViewProj * vec4(ndc, 0.0, 1.0);
+    vec3 o = view.eye.xyz;
+    vec3 d = normalize(farH.xyz - farH.w * o);
     vec2 span = boxHits(o, d, view.brushMin.xyz, view.brushMax.xyz);
     if (span.y < max(span.x, 0.0)) discard;
     float t = max(span.x, 0.0);
