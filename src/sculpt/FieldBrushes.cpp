@@ -1,6 +1,7 @@
 #include "sculpt/FieldBrushes.h"
 
 #include "sculpt/GridTool.h"
+#include "sculpt/Symmetry.h"
 #include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/VolumeRegions.h"
 
@@ -200,13 +201,18 @@ private:
 /// them are under 1% of the radius deep). What a move may change: the dragged surface stretches along it.
 class DraggedField : public SdfField {
 public:
-    DraggedField(const SdfField& brush, const Vec3d& offset) : brush_(brush), offset_(offset)
+    DraggedField(const SdfField& brush, const Vec3d& offset) : brush_(brush), offset_(offset), sphere_(roundSphere(brush))
     {
         const double spacing = std::max(0.125 * brush.innerRadius(), 1e-9);
         steps_ = int(std::min(std::ceil(offset.length() / spacing), 4096.0));
     }
     double distance(const Vec3d& world) const override
     {
+        if (sphere_) { // a round sphere swept along a segment: the capsule, exactly (it holds the samples' union)
+            const Vec3d rel = world - sphere_->first;
+            const double along = offset_.lengthSqr() > 0.0 ? std::clamp(rel.dot(offset_) / offset_.lengthSqr(), 0.0, 1.0) : 0.0;
+            return (rel - offset_ * along).length() - sphere_->second;
+        }
         double d = brush_.distance(world);
         for (int s = 1; s <= steps_; ++s) d = std::min(d, brush_.distance(world - offset_ * (double(s) / steps_)));
         return d;
@@ -222,11 +228,25 @@ public:
     }
     double innerRadius() const override { return brush_.innerRadius(); }
     double lipschitz() const override { return brush_.lipschitz(); }
-    double evaluationCost() const override { return brush_.evaluationCost() * (steps_ + 1); }
+    double evaluationCost() const override { return sphere_ ? 1.0 : brush_.evaluationCost() * (steps_ + 1); }
 
 private:
+    /// The centre and radius of a brush that is one round sphere (as placed, or a symmetry's copy of one).
+    static std::optional<std::pair<Vec3d, double>> roundSphere(const SdfField& field)
+    {
+        if (const auto* copy = dynamic_cast<const TransformedField*>(&field)) {
+            const auto inner = roundSphere(copy->original());
+            if (inner) return std::make_pair(copy->place(inner->first), inner->second);
+            return std::nullopt;
+        }
+        if (const auto* placed = dynamic_cast<const PlaceableField*>(&field); placed && placed->roundSphereRadius() > 0.0)
+            return std::make_pair(placed->translation(), placed->roundSphereRadius());
+        return std::nullopt;
+    }
+
     const SdfField& brush_;
     Vec3d offset_;
+    std::optional<std::pair<Vec3d, double>> sphere_;
     int steps_ = 0;
 };
 

@@ -38,6 +38,9 @@ public:
     double surfaceAreaBound() const override { return field_->surfaceAreaBound(); }
     double evaluationCost() const override { return field_->evaluationCost(); }
     double lipschitz() const override { return field_->lipschitz(); }
+    /// The field copied, and where the copy puts a point of it (A (p - c) + c).
+    const SdfField& original() const { return *field_; }
+    Vec3d place(const Vec3d& p) const { return linear_ * (p - center_) + center_; }
 
 private:
     std::shared_ptr<const SdfField> field_;
