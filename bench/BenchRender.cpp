@@ -121,6 +121,12 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     render::StreamedSceneChunks chunks;
     // Fill costs on lavapipe grow with the pixels; the selection is the 1080p view's whatever the target.
     render::OffscreenTarget small(context, 480, 270);
+    // Frames of a view until every queued chunk is up (the upload budget spreads a view over frames).
+    const auto drawComplete = [&](const Viewer& v) {
+        render::FrameStats s = renderer.render({{cameraOf(v), &small, {}}});
+        while (renderer.uploadsWaiting() > 0) s = renderer.render({{cameraOf(v), &small, {}}});
+        return s;
+    };
     const double height = 80.0, lookAhead = 200.0;
 
     // Complete views at stations across the terrain.
@@ -130,8 +136,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
         const Viewer v = viewerAt(x, z, height, lookAhead);
         settle(scene, v);
         chunks.sync(scene, renderer);
-        render::FrameStats s = renderer.render({{cameraOf(v), &small, {}}});
-        while (renderer.uploadsWaiting() > 0) s = renderer.render({{cameraOf(v), &small, {}}}); // the complete view
+        const render::FrameStats s = drawComplete(v);
         f.viewTriangles.push_back(double(s.triangles));
         f.maxChunks = std::max(f.maxChunks, s.chunksDrawn);
         f.maxGpuBytes = std::max(f.maxGpuBytes, s.gpuMemoryBytes);
@@ -170,8 +175,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     const Viewer v = viewerAt(extent * 0.5, extent * 0.5, height, lookAhead);
     settle(scene, v);
     chunks.sync(scene, renderer);
-    renderer.render({{cameraOf(v), &small, {}}});
-    while (renderer.uploadsWaiting() > 0) renderer.render({{cameraOf(v), &small, {}}});
+    drawComplete(v);
     const Volume resident = scene.residentLevel0();
     const double voxel = scene.voxelSize();
     const int32_t sx = int32_t((v.position[0] + lookAhead * 0.5) / voxel), sz = int32_t(v.position[2] / voxel);

@@ -154,7 +154,6 @@ struct Renderer::Impl {
     VkDeviceSize uniformStride = 0;
     VkDescriptorPool descriptorPool = VK_NULL_HANDLE;
     VkDescriptorSet descriptorSet = VK_NULL_HANDLE;
-    VkCommandBuffer cmd = VK_NULL_HANDLE; // the current slot's
     VkQueryPool queries = VK_NULL_HANDLE;  // two timestamps per slot
 
     std::unordered_map<ChunkId, GpuChunk> chunks;
@@ -221,7 +220,6 @@ struct Renderer::Impl {
             check(vkCreateFence(device, &fenceInfo, nullptr, &slot.fence), "vkCreateFence");
             slot.staging = std::make_unique<HostBuffer>(c, std::max<uint64_t>(o.stagingBytes, 1 << 20), VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
         }
-        cmd = slots[current].cmd;
         if (c.timestampPeriodNs() > 0.0) {
             VkQueryPoolCreateInfo q{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
             q.queryType = VK_QUERY_TYPE_TIMESTAMP;
@@ -359,7 +357,7 @@ struct Renderer::Impl {
     {
         VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
         begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-        check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
+        check(vkBeginCommandBuffer(slots[current].cmd, &begin), "vkBeginCommandBuffer");
     }
 
     /// Ends and submits the current slot's commands, signalling `signal` when they are done; they draw
@@ -447,6 +445,7 @@ struct Renderer::Impl {
     void recordUploads(FrameStats& stats)
     {
         VkDeviceSize ringOffset = 0;
+        const VkCommandBuffer cmd = slots[current].cmd; // the same buffer again after a mid-frame submit
         HostBuffer& staging = *slots[current].staging;
         const uint64_t budget = options.uploadBytesPerFrame;
         while (!pendingOrder.empty()) {
@@ -529,7 +528,7 @@ struct Renderer::Impl {
         // semaphore): this slot's last frame, kFramesInFlight ago, must be done before its resources are
         // used again.
         current = (current + 1) % slots.size();
-        cmd = slots[current].cmd;
+        const VkCommandBuffer cmd = slots[current].cmd;
         const auto waited = Clock::now();
         finishSlot(current);
         stats.submitWaitMs = msSince(waited);
@@ -537,7 +536,7 @@ struct Renderer::Impl {
         recordUploads(stats);
         // Removals go with the uploads that usually replace them: while some wait for a later frame, so
         // do the removals (a few frames at most, so that memory is not held for long).
-        if (pending.empty() || ++removalsWaited > kRemovalWaitFrames) {
+        if (!removals.empty() && (pending.empty() || ++removalsWaited > kRemovalWaitFrames)) {
             for (ChunkId id : removals) destroyChunk(id, stats);
             removals.clear();
             removalsWaited = 0;

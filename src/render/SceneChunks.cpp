@@ -1,9 +1,9 @@
 #include "render/SceneChunks.h"
 
 #include "mesher/VertexMask.h"
-#include "render/BrickMeshWorkers.h"
 #include "mesher/VertexMaterialBlend.h"
 #include "mesher/VertexOcclusion.h"
+#include "render/BrickMeshWorkers.h"
 #include "render/Framing.h"
 #include "scene/SceneStore.h"
 

@@ -143,6 +143,9 @@ struct StreamingScene::Impl {
     std::unordered_map<BrickKey, uint64_t, BrickKeyHash> maskStamps;
     bool stopping = false;
     bool autosaveWanted = false; // the frame found dirty bricks in the budget's way: a loader saves them
+    /// The edit count at which a loader's autosave last failed: the frame asks again only after an edit,
+    /// so that a store that refuses writes is not retried on every frame.
+    std::optional<uint64_t> loaderAutosaveFailedAt;
     std::vector<std::unique_ptr<BrickStore>> readers; // one per worker
     std::vector<std::thread> workers;
 
@@ -567,6 +570,8 @@ struct StreamingScene::Impl {
         try {
             autosave();
         } catch (...) {
+            std::lock_guard<std::mutex> lock(mutex);
+            loaderAutosaveFailedAt = edits;
         }
     }
 
@@ -1017,7 +1022,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     for (std::size_t i = 0; i < accepted; ++i) s.wanted.insert(needed[order[i]]);
     // The frame never autosaves (it would wait for the store): dirty bricks in the budget's way are saved by
     // a loader, and go at a later frame.
-    if (!s.makeRoom(0) && s.dirtyInTheWay()) s.autosaveWanted = true;
+    if (!s.makeRoom(0) && s.dirtyInTheWay() && s.loaderAutosaveFailedAt != s.edits) s.autosaveWanted = true;
     // Looked up after makeRoom: an autosave it ran may have dropped rewritten coarse bricks.
     std::vector<char> isResident(needed.size());
     for (std::size_t i = 0; i < needed.size(); ++i) isResident[i] = s.resident.count(needed[i]) > 0;
