@@ -266,7 +266,8 @@ struct BenchCommandOptions {
     std::string which;
     bool json = false;
     bool quick = false;
-    double memoryBudgetMb = 0.0; // stream only; 0: the benchmark's default
+    double memoryBudgetMb = 0.0; // stream, render and editor; 0: the benchmark's default
+    std::vector<int> extents;    // render only; empty: the benchmark's default
 };
 CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& options);
 int runBenchCommand(const BenchCommandOptions& options);

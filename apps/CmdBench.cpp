@@ -18,6 +18,9 @@ CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& o)
     cmd->add_option("--memory-budget", o.memoryBudgetMb, "stream, render and editor: the memory budget (stream: 192, or 2 with --quick; render and editor: 384)")
         ->type_name("MB")
         ->check(memoryBudget());
+    cmd->add_option("--extent", o.extents, "render: the terrain extents to run (default 1024 4096, or 512 768 with --quick)")
+        ->type_name("VOXELS")
+        ->check(CLI::Range(64, 16384));
     cmd->footer("csg     sphere creation, then median time of remove-sphere stamps on its surface\n"
                 "        vs createLevelSetSphere + csgDifference on a FloatGrid level set\n"
                 "memory  bytes per surface voxel of a sphere and a box vs a narrow-band level set\n"
@@ -51,7 +54,8 @@ int runBenchCommand(const BenchCommandOptions& o)
     if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool, render, editor or inputs)");
     if (o.memoryBudgetMb > 0.0 && o.which != "stream" && o.which != "render" && o.which != "editor")
         throw UsageError("--memory-budget is for 'bench stream', 'bench render' and 'bench editor'");
-    return bench::runBench(o.which, o.json, o.quick, o.memoryBudgetMb);
+    if (!o.extents.empty() && o.which != "render") throw UsageError("--extent is for 'bench render'");
+    return bench::runBench(o.which, o.json, o.quick, o.memoryBudgetMb, o.extents);
 }
 
 } // namespace vdbclay::cli

@@ -10,7 +10,7 @@ namespace vdbclay::bench {
 
 std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream", "import", "tool", "render", "editor", "inputs"}; }
 
-int runBench(const std::string& which, bool json, bool quick, double memoryBudgetMb)
+int runBench(const std::string& which, bool json, bool quick, double memoryBudgetMb, const std::vector<int>& extents)
 {
     openvdb::initialize(); // the FloatGrid baselines need the standard grid types registered
     if (which == "csg") return benchCsg(json, quick);
@@ -21,7 +21,7 @@ int runBench(const std::string& which, bool json, bool quick, double memoryBudge
     if (which == "stream") return benchStream(json, quick, memoryBudgetMb);
     if (which == "import") return benchImport(json, quick);
     if (which == "tool") return benchTool(json, quick);
-    if (which == "render") return benchRender(json, quick, memoryBudgetMb);
+    if (which == "render") return benchRender(json, quick, memoryBudgetMb, extents);
     if (which == "editor") return benchEditor(json, quick, memoryBudgetMb);
     if (which == "inputs") return benchInputs(json, quick);
     throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool, render, editor or inputs)");

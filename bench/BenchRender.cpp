@@ -35,11 +35,14 @@ namespace fs = std::filesystem;
 
 constexpr int kWidth = 1920, kHeight = 1080;
 
-Viewer viewerAt(double x, double z, double height, double lookAhead)
+/// A viewer `clearance` above the terrain's ground at (x, z), looking along +x `lookAhead` ahead and
+/// down by 0.7 clearance there (about 16 degrees): a flight over the ground, whatever its height.
+Viewer viewerAt(int extent, double x, double z, double clearance, double lookAhead)
 {
+    const double y = terrainGroundHeight(extent, x, z) + clearance;
     Viewer v;
-    v.position = {x, height, z};
-    v.target = {x + lookAhead, height * 0.3, z};
+    v.position = {x, y, z};
+    v.target = {x + lookAhead, y - 0.7 * clearance, z};
     v.fovDegrees = 60.0;
     v.viewport = {kWidth, kHeight};
     return v;
@@ -127,13 +130,13 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
         while (renderer.uploadsWaiting() > 0) s = renderer.render({{cameraOf(v), &small, {}}});
         return s;
     };
-    const double height = 80.0, lookAhead = 200.0;
+    const double clearance = 80.0, lookAhead = 200.0;
 
     // Complete views at stations across the terrain.
     const int stations = quick ? 2 : 4;
     for (int i = 0; i < stations; ++i) {
         const double x = extent * (0.1 + 0.2 * i), z = extent * (0.3 + 0.1 * i);
-        const Viewer v = viewerAt(x, z, height, lookAhead);
+        const Viewer v = viewerAt(extent, x, z, clearance, lookAhead);
         settle(scene, v);
         chunks.sync(scene, renderer);
         const render::FrameStats s = drawComplete(v);
@@ -156,7 +159,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     const double seconds = quick ? 1.5 : 4.0, speed = extent * 0.5 / seconds;
     const auto start = Clock::now();
     for (int frame = 0; frame < int(seconds * 90.0); ++frame) {
-        const Viewer v = viewerAt(extent * 0.15 + speed * frame / 90.0, extent * 0.5, height, lookAhead);
+        const Viewer v = viewerAt(extent, extent * 0.15 + speed * frame / 90.0, extent * 0.5, clearance, lookAhead);
         FrameReport report;
         const double select = timeMs([&] { report = scene.frame(v); });
         const double mesh = timeMs([&] { chunks.sync(scene, renderer); });
@@ -172,7 +175,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     }
 
     // A stamp of radius 32 on the surface in front of the camera, then its bricks re-meshed and uploaded.
-    const Viewer v = viewerAt(extent * 0.5, extent * 0.5, height, lookAhead);
+    const Viewer v = viewerAt(extent, extent * 0.5, extent * 0.5, clearance, lookAhead);
     settle(scene, v);
     chunks.sync(scene, renderer);
     drawComplete(v);
@@ -231,7 +234,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
 
 } // namespace
 
-int benchRender(bool json, bool quick, double memoryBudgetMb)
+int benchRender(bool json, bool quick, double memoryBudgetMb, const std::vector<int>& extents)
 {
     const uint64_t budget = memoryBudgetMb > 0.0 ? uint64_t(memoryBudgetMb * double(1 << 20)) : 384ull << 20;
     const ScratchDir scratch("render");
@@ -239,7 +242,7 @@ int benchRender(bool json, bool quick, double memoryBudgetMb)
 
     render::VulkanContext context;
     std::vector<TerrainFigures> terrains;
-    for (int extent : quick ? std::vector<int>{512, 768} : std::vector<int>{1024, 4096}) {
+    for (int extent : !extents.empty() ? extents : quick ? std::vector<int>{512, 768} : std::vector<int>{1024, 4096}) {
         if (!json) std::cerr << "bench render: terrain of extent " << extent << " ..." << std::endl;
         terrains.push_back(measureTerrain(context, extent, quick, budget, dir));
     }

@@ -1,6 +1,8 @@
 // The individual benchmarks (one translation unit each); see Bench.h.
 #pragma once
 
+#include <vector>
+
 namespace vdbclay::bench {
 
 int benchCsg(bool json, bool quick);
@@ -11,7 +13,7 @@ int benchWavelet(bool json, bool quick);
 int benchStream(bool json, bool quick, double memoryBudgetMb);
 int benchImport(bool json, bool quick);
 int benchTool(bool json, bool quick);
-int benchRender(bool json, bool quick, double memoryBudgetMb);
+int benchRender(bool json, bool quick, double memoryBudgetMb, const std::vector<int>& extents);
 int benchEditor(bool json, bool quick, double memoryBudgetMb);
 int benchInputs(bool json, bool quick);
 

@@ -54,14 +54,28 @@ ScratchDir::~ScratchDir()
     std::filesystem::remove_all(path_, ec);
 }
 
-std::string terrainStoreWithLod(const std::filesystem::path& dir, int extent)
+namespace {
+
+SynthOptions terrainSynthOptions(int extent)
 {
-    const std::string store = (dir / ("terrain-" + std::to_string(extent) + ".vdbclay")).string();
     SynthOptions synth;
     synth.kind = SynthKind::Terrain;
     synth.extent = extent;
     synth.seed = 7;
-    synthesizeStore(synth, store);
+    return synth;
+}
+
+} // namespace
+
+double terrainGroundHeight(int extent, double x, double z)
+{
+    return synthGroundHeight(terrainSynthOptions(extent), x, z);
+}
+
+std::string terrainStoreWithLod(const std::filesystem::path& dir, int extent)
+{
+    const std::string store = (dir / ("terrain-" + std::to_string(extent) + ".vdbclay")).string();
+    synthesizeStore(terrainSynthOptions(extent), store);
     SceneStore scene = SceneStore::open(store, StoreAccess::ReadWrite);
     buildStoreLod(scene, 0);
     return store;

@@ -56,9 +56,10 @@ private:
     std::filesystem::path path_;
 };
 
-/// A synthetic terrain store of `extent` voxels (seed 7, bench stream's kind) with its levels of detail,
-/// written into `dir`; returns its path.
+/// The benches' terrain of `extent` voxels (seed 7, bench stream's kind) as a store with its levels of detail, written into `dir`; returns its path.
 std::string terrainStoreWithLod(const std::filesystem::path& dir, int extent);
+/// Its ground's height at world (x, z): where a viewer stands clear of it.
+double terrainGroundHeight(int extent, double x, double z);
 
 /// A table printed in Markdown, so a run can be pasted into docs/BENCHMARKS.md.
 struct Table {

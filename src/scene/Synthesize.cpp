@@ -62,6 +62,19 @@ Brush placedBrush(const Primitive& p, const Vec3d& at, const Vec3d& rotation = V
     return Brush(p, pl);
 }
 
+TerrainParams terrainParams(const SynthOptions& o)
+{
+    const double vs = o.voxelSize, n = double(o.extent);
+    TerrainParams tp;
+    tp.baseHeight = n * 0.12 * vs;
+    tp.amplitude = n * 0.05 * vs;
+    tp.wavelength = n * 0.25 * vs;
+    tp.octaves = 5;
+    tp.seed = o.seed;
+    tp.spacing = vs;
+    return tp;
+}
+
 Recipe terrain(const SynthOptions& o)
 {
     Recipe r;
@@ -71,13 +84,7 @@ Recipe terrain(const SynthOptions& o)
     r.materials.define(material("default", {0.45f, 0.42f, 0.40f, 1.0f}, 0.8f));
     const MaterialId grass = r.materials.define(material("grass", {0.25f, 0.55f, 0.20f, 1.0f}, 0.3f));
     const MaterialId snow = r.materials.define(material("snow", {0.95f, 0.95f, 0.97f, 1.0f}, 0.1f));
-    TerrainParams tp;
-    tp.baseHeight = n * 0.12 * vs;
-    tp.amplitude = n * 0.05 * vs;
-    tp.wavelength = n * 0.25 * vs;
-    tp.octaves = 5;
-    tp.seed = o.seed;
-    tp.spacing = vs;
+    const TerrainParams tp = terrainParams(o);
     auto ground = std::make_shared<TerrainField>(tp);
     r.parts.push_back(ground);
     // The ground is cut to the scene's square and given a flat bottom inside its lowest bricks, so the
@@ -247,6 +254,12 @@ void validateSynthOptions(const SynthOptions& o)
     if (o.extent < 16 || o.extent > 65536)
         throw std::invalid_argument("--extent must lie in 16 .. 65536 voxels, not " + std::to_string(o.extent));
     Volume probe(o.voxelSize); // checks the voxel size
+}
+
+double synthGroundHeight(const SynthOptions& options, double x, double z)
+{
+    if (options.kind != SynthKind::Terrain) throw std::invalid_argument("only a terrain has a ground height");
+    return TerrainField(terrainParams(options)).height(x, z);
 }
 
 SynthReport synthesizeStore(const SynthOptions& options, const std::string& path, const Progress& progress)

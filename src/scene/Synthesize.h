@@ -36,6 +36,10 @@ struct SynthReport {
     uint64_t bytes = 0;       // payload bytes
 };
 
+/// A terrain's ground height (world units) at world (x, z), before its tunnels are carved: where a
+/// viewer flying over it stands clear of the ground. Throws std::invalid_argument for other kinds.
+double synthGroundHeight(const SynthOptions& options, double x, double z);
+
 /// Generates the scene into a new store at `path` (replaced only once complete, like writeStoreFile).
 SynthReport synthesizeStore(const SynthOptions& options, const std::string& path, const Progress& progress = {});
 
