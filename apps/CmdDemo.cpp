@@ -155,7 +155,7 @@ int runDemo(const DemoOptions& o)
     {
         SceneStore store = SceneStore::open(storePath, StoreAccess::ReadWrite);
         buildStoreLod(store, 2);
-        const Mesh coarse = meshLevelVolume(store.loadLevel(2), 2, meshOptions);
+        const Mesh coarse = meshVolume(store.loadLevel(2), meshOptions);
         writeMesh(coarse, volume.materials(), lodPath);
     }
     // The picture: without a Vulkan device the demo still writes everything else, and says why.

@@ -96,7 +96,7 @@ int runMesh(const MeshCommandOptions& o)
         if (level > 0 && scene.lodStale())
             std::cerr << "vdbclay: warning: the levels of detail predate the last edit; 'vdbclay lod build' refreshes them\n";
         const Volume volume = scene.loadLevel(level);
-        mesh = meshLevelVolume(volume, level, options);
+        mesh = meshVolume(volume, options); // a level's surface lies in place
         materials = scene.materials();
         voxelSize = volume.voxelSize();
     } else {

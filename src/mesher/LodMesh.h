@@ -7,23 +7,13 @@
 
 namespace vdbclay {
 
-/// Moves every vertex by `offset` (world units).
-void translateMesh(Mesh& mesh, const std::array<double, 3>& offset);
-
-/// The mesh of a level's Hermite data (level 0: the volume itself; level k: voxels 2^k times the fine
-/// size, as LodPyramid::coarseVolume or a store's level k holds), moved by the level's offset so it
-/// lies on the fine surface.
-Mesh meshLevelVolume(const Volume& levelVolume, int level, const MeshOptions& options = {});
-
 /// The mesh of level `level` of `pyramid` (built from `fine`), in world units: level 0 is the fine
-/// volume's own mesh; level k meshes the coarse Hermite data (LodPyramid::coarseVolume) and moves it by
-/// the level's offset.
+/// volume's own mesh; level k meshes the coarse Hermite data (LodPyramid::coarseVolume).
 Mesh meshLevel(const Volume& fine, const wavelet::LodPyramid& pyramid, int level, const MeshOptions& options = {});
 
 /// The mesh of one brick of a level-of-detail cut, on its level's own lattice, vertex-aligned: level k's
-/// point i is the level-0 point 2^k i, at world position i times level k's voxel size (no level offset,
-/// so every level's lattice lies on the finer ones'; a coarse level shows up to half its voxel off
-/// meshLevel's placement). `levels[k]`: level k's Hermite data (voxel size 2^k times level 0's), holding
+/// point i is the level-0 point 2^k i, at world position i times level k's voxel size (every level's
+/// lattice lies on the finer ones', and its data is resampled there: LodPyramid.h). `levels[k]`: level k's Hermite data (voxel size 2^k times level 0's), holding
 /// at least the cut's bricks of level k. Together the meshes of a cut's bricks are closed wherever the
 /// scene is: a brick's cells that touch a finer brick (transition cells) take the finer side's data
 /// where they meet it and are meshed by the transition mesher, and the kernel meshes the faces beside

@@ -26,6 +26,9 @@ using wavelet::LodBlock;
 
 /// Set once a pyramid's densities are stored beside its coarse bricks (absent in older stores).
 constexpr const char* kLodDensitiesKey = "lod_densities";
+/// Set once a pyramid's coarse bricks are resampled at their lattice points (wavelet/LodPyramid.h); an
+/// older pyramid's lie up to half a voxel off, and bricks refreshed beside them would not meet them.
+constexpr const char* kLodAlignedKey = "lod_aligned";
 /// Decoded density bricks kept between bricks of a pass (a brick's 26 neighbours are read again by
 /// the bricks after it): more for a whole build, less beside a streaming scene's budget.
 constexpr std::size_t kBuildCacheBytes = std::size_t(64) << 20;
@@ -375,6 +378,7 @@ int buildStoreLod(SceneStore& scene, int levels, const Progress& progress)
     LodPass(scene, levels, true, progress).run(scene.brickCoords(0));
     scene.setLod(levels, false);
     scene.bricks().putMeta(kLodDensitiesKey, "1");
+    scene.bricks().putMeta(kLodAlignedKey, "1");
     scene.storeBounds(); // a writer's pass over the store: the bounds of level 0 kept for readers
     transaction.commit();
     return levels;
@@ -382,7 +386,8 @@ int buildStoreLod(SceneStore& scene, int levels, const Progress& progress)
 
 bool lodFollowsEdits(const SceneStore& scene)
 {
-    return scene.lodLevels() > 0 && !scene.lodStale() && metaFlag(scene.bricks(), kLodDensitiesKey);
+    return scene.lodLevels() > 0 && !scene.lodStale() && metaFlag(scene.bricks(), kLodDensitiesKey) &&
+           metaFlag(scene.bricks(), kLodAlignedKey);
 }
 
 LodRefresh updateStoreLod(SceneStore& scene, const std::vector<IndexCoord>& changedBricks)

@@ -32,8 +32,9 @@ int lodLevelsFor(const SceneStore& scene);
 /// replacing what was there, in one transaction, brick by brick. Returns the level count.
 int buildStoreLod(SceneStore& scene, int levels, const Progress& progress = {});
 
-/// Whether the store's pyramid can follow edits brick by brick: built, not stale, and with its
-/// densities stored (a pyramid built by an older VDBClay has none; it is marked stale on an edit).
+/// Whether the store's pyramid can follow edits brick by brick: built, not stale, with its densities
+/// stored and its coarse bricks resampled at their lattice points (a pyramid built by an older VDBClay
+/// lacks either; it is marked stale on an edit, and `vdbclay lod build` makes it anew).
 bool lodFollowsEdits(const SceneStore& scene);
 
 /// Brings every built level up to date after the given level-0 bricks were rewritten: recomputes the

@@ -91,7 +91,7 @@ struct StreamingScene::Impl {
     StreamingOptions options;
     SceneStore scene;
     int levels = 0;
-    std::vector<std::set<IndexCoord>> present; // per level: stored bricks and the parents of present ones
+    BrickPresence present; // per level: stored bricks and the parents of present ones
     std::unordered_map<BrickKey, uint64_t, BrickKeyHash> estimates;
     // The resident bricks of each level share one tree, so the nodes above the leaves cost little per brick.
     // Guarded by `trees`, everything else by `mutex`: meshing and ray casts read the trees for a long
@@ -152,18 +152,19 @@ struct StreamingScene::Impl {
     Impl(const std::string& path, const StreamingOptions& o) : options(o), scene(SceneStore::open(path, o.access))
     {
         levels = scene.lodLevels();
-        present.resize(std::size_t(levels) + 1);
+        std::vector<std::set<IndexCoord>> stored(std::size_t(levels) + 1);
         uint64_t largest = 0;
         for (int k = 0; k <= levels; ++k) {
             scene.bricks().scan(k, [&](const BrickKey& key, const BrickSummary& s) {
-                present[std::size_t(k)].insert(key.brick);
+                stored[std::size_t(k)].insert(key.brick);
                 const uint64_t estimate = kEstimatedBytesPerBrick + kEstimatedBytesPerLeaf * s.leaves;
                 estimates[key] = estimate;
                 largest = std::max(largest, estimate);
             });
             if (k > 0)
-                for (const IndexCoord& b : present[std::size_t(k - 1)]) present[std::size_t(k)].insert(parentBrick(b));
+                for (const IndexCoord& b : stored[std::size_t(k - 1)]) stored[std::size_t(k)].insert(parentBrick(b));
         }
+        present = BrickPresence(stored);
         if (options.memoryBudgetBytes < largest)
             throw std::invalid_argument("a memory budget of " + std::to_string(options.memoryBudgetBytes >> 20) +
                                         " MB cannot hold one brick of this scene (the largest needs about " +
@@ -781,8 +782,7 @@ struct StreamingScene::Impl {
         logLeafChanges(leaves);
         // A brick the store did not hold (an edit in empty space) is shown from now on, not from the
         // autosave that stores it: the view walks the bricks present and their ancestors.
-        IndexCoord up = b;
-        for (int k = 0; k <= levels && present[std::size_t(k)].insert(up).second; ++k) up = parentBrick(up);
+        present.add(0, b);
         residentBytes = residentBytes - r.bytes + bytes;
         r.bytes = bytes;
         r.dirty = true;
@@ -895,7 +895,7 @@ struct StreamingScene::Impl {
         for (std::size_t i = 0; i < lod.changedBricks.size(); ++i)
             for (const IndexCoord& b : lod.changedBricks[i]) {
                 const BrickKey key{int(i) + 1, b};
-                present[std::size_t(key.level)].insert(b);
+                present.add(key.level, b);
                 estimates.erase(key);
                 if (inFlight.count(key)) staleInFlight.insert(key);
                 damaged.erase(key);
@@ -1103,7 +1103,7 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
                                  " MB holds (use a smaller brush, or a larger --memory-budget)");
     const std::vector<IndexCoord> bricks = bricksReachedBy(script, s.scene.voxelSize(), [&] {
         std::lock_guard<std::mutex> lock(s.mutex);
-        return std::vector<IndexCoord>(s.present[0].begin(), s.present[0].end());
+        return s.present.bricks(0);
     });
     EditReport report;
     // The script runs outside the locks, so that selection, loads, meshing and picks go on meanwhile: its

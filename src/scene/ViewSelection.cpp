@@ -86,19 +86,77 @@ void validateViewer(const Viewer& v)
     if (v.viewport[0] <= 0 || v.viewport[1] <= 0) throw std::invalid_argument("the viewport must have a positive size");
 }
 
+BrickPresence::BrickPresence(const std::vector<std::set<IndexCoord>>& stored)
+{
+    levels_.resize(stored.size());
+    for (std::size_t k = 0; k < stored.size(); ++k) {
+        Level& level = levels_[k];
+        level.sorted.assign(stored[k].begin(), stored[k].end());
+        level.children.reserve(stored[k].size());
+        for (const IndexCoord& b : stored[k]) level.children.emplace(b, uint8_t(0));
+    }
+    for (std::size_t k = 1; k < stored.size(); ++k)
+        for (const IndexCoord& b : stored[k - 1]) {
+            const auto parent = levels_[k].children.find(parentBrick(b));
+            if (parent == levels_[k].children.end()) throw std::invalid_argument("a stored brick's parent is not stored");
+            parent->second |= uint8_t(1u << ((b[0] & 1) + 2 * (b[1] & 1) + 4 * (b[2] & 1)));
+        }
+}
+
+bool BrickPresence::contains(int level, const IndexCoord& brick) const
+{
+    return level >= 0 && level < levelCount() && levels_[std::size_t(level)].children.count(brick) > 0;
+}
+
+uint8_t BrickPresence::children(int level, const IndexCoord& brick) const
+{
+    if (level <= 0 || level >= levelCount()) return 0;
+    const auto it = levels_[std::size_t(level)].children.find(brick);
+    return it == levels_[std::size_t(level)].children.end() ? uint8_t(0) : it->second;
+}
+
+bool BrickPresence::add(int level, const IndexCoord& brick)
+{
+    if (level < 0 || level >= levelCount()) throw std::invalid_argument("a brick's level is outside the presence's levels");
+    const auto insertSorted = [](std::vector<IndexCoord>& sorted, const IndexCoord& b) {
+        sorted.insert(std::lower_bound(sorted.begin(), sorted.end(), b), b);
+    };
+    Level& own = levels_[std::size_t(level)];
+    const bool added = own.children.emplace(brick, uint8_t(0)).second;
+    if (added) insertSorted(own.sorted, brick);
+    // Up the ancestors until one was there already (its own ancestors are then there too).
+    IndexCoord b = brick;
+    for (int k = level; k + 1 < levelCount(); ++k) {
+        const IndexCoord up = parentBrick(b);
+        Level& above = levels_[std::size_t(k + 1)];
+        const auto [it, inserted] = above.children.emplace(up, uint8_t(0));
+        it->second |= uint8_t(1u << ((b[0] & 1) + 2 * (b[1] & 1) + 4 * (b[2] & 1)));
+        if (!inserted) break;
+        insertSorted(above.sorted, up);
+        b = up;
+    }
+    return added;
+}
+
 std::vector<SelectedBrick> selectBricks(const Viewer& viewer, const SelectionOptions& options,
                                         const std::vector<std::set<IndexCoord>>& stored)
+{
+    return selectBricks(viewer, options, BrickPresence(stored));
+}
+
+std::vector<SelectedBrick> selectBricks(const Viewer& viewer, const SelectionOptions& options, const BrickPresence& stored)
 {
     validateViewer(viewer);
     const Frustum frustum(viewer);
     const double pixelsPerRadian = double(viewer.viewport[1]) / (2.0 * std::tan(viewer.fovDegrees * M_PI / 360.0));
-    const int top = std::min<int>(options.levels, int(stored.size()) - 1);
+    const int top = std::min<int>(options.levels, stored.levelCount() - 1);
     std::vector<SelectedBrick> out;
     if (top < 0) return out;
     // Depth-first from each top brick; a brick whose children are not stored (a level not built there)
     // is shown as it is.
     std::vector<BrickKey> stack;
-    for (auto it = stored[std::size_t(top)].rbegin(); it != stored[std::size_t(top)].rend(); ++it) stack.push_back({top, *it});
+    const std::vector<IndexCoord>& topBricks = stored.bricks(top);
+    for (auto it = topBricks.rbegin(); it != topBricks.rend(); ++it) stack.push_back({top, *it});
     while (!stack.empty()) {
         const BrickKey key = stack.back();
         stack.pop_back();
@@ -110,14 +168,11 @@ std::vector<SelectedBrick> selectBricks(const Viewer& viewer, const SelectionOpt
         const double voxel = options.voxelSize * double(1 << key.level);
         const double error = distance > 0.0 ? voxel * pixelsPerRadian / distance : 1e30;
         if (key.level > 0 && (error > options.pixelTolerance || (options.refineAlways && options.refineAlways->count(key)))) {
-            std::vector<BrickKey> children;
-            const std::set<IndexCoord>& below = stored[std::size_t(key.level - 1)];
-            for (int c = 0; c < 8; ++c) {
-                const IndexCoord child{2 * key.brick[0] + (c & 1), 2 * key.brick[1] + ((c >> 1) & 1), 2 * key.brick[2] + ((c >> 2) & 1)};
-                if (below.count(child)) children.push_back({key.level - 1, child});
-            }
-            if (!children.empty()) {
-                for (auto it = children.rbegin(); it != children.rend(); ++it) stack.push_back(*it);
+            const uint8_t children = stored.children(key.level, key.brick);
+            if (children != 0) {
+                for (int c = 7; c >= 0; --c)
+                    if (children & (1u << c))
+                        stack.push_back({key.level - 1, {2 * key.brick[0] + (c & 1), 2 * key.brick[1] + ((c >> 1) & 1), 2 * key.brick[2] + ((c >> 2) & 1)}});
                 continue;
             }
         }

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <set>
+#include <unordered_map>
 #include <unordered_set>
 #include <vector>
 
@@ -36,9 +37,45 @@ struct SelectedBrick {
     double distance = 0.0;    // world units, eye to the brick's nearest point
 };
 
-/// The bricks to show: every brick of `stored` (per level, the bricks that exist) in the frustum, at
-/// the coarsest level whose screen-space error is within the tolerance (or level 0), coarse regions
-/// first. `stored[k]` holds level k's brick coordinates.
+/// The bricks that exist per level, as the selection asks about them: each level's bricks in order, and
+/// per brick the mask of its children one level down (bit x + 2y + 4z of the child's place in it), so a
+/// brick is split with one lookup. Bricks are only ever added: an edit makes a new level-0 brick, an LOD
+/// update the coarse bricks above it.
+class BrickPresence {
+public:
+    BrickPresence() = default;
+    /// `stored[k]`: level k's bricks; each brick's parent must be stored one level up, where there is one.
+    explicit BrickPresence(const std::vector<std::set<IndexCoord>>& stored);
+
+    int levelCount() const { return int(levels_.size()); }
+    /// Level k's bricks, sorted.
+    const std::vector<IndexCoord>& bricks(int level) const { return levels_[std::size_t(level)].sorted; }
+    bool contains(int level, const IndexCoord& brick) const;
+    /// The children of a brick that exist (bit x + 2y + 4z); 0 when it has none or does not exist.
+    uint8_t children(int level, const IndexCoord& brick) const;
+    /// Adds a brick of `level` and every missing ancestor up to the top level; returns whether it was new.
+    bool add(int level, const IndexCoord& brick);
+
+private:
+    struct CoordHash {
+        std::size_t operator()(const IndexCoord& c) const
+        {
+            uint64_t h = 0x9E3779B97F4A7C15ull;
+            for (const int32_t v : c) h = (h ^ uint32_t(v)) * 0x100000001B3ull + (h >> 29);
+            return std::size_t(h ^ (h >> 32));
+        }
+    };
+    struct Level {
+        std::vector<IndexCoord> sorted;
+        std::unordered_map<IndexCoord, uint8_t, CoordHash> children;
+    };
+    std::vector<Level> levels_;
+};
+
+/// The bricks to show: every brick of `stored` in the frustum, at the coarsest level whose screen-space
+/// error is within the tolerance (or level 0), coarse regions first.
+std::vector<SelectedBrick> selectBricks(const Viewer& viewer, const SelectionOptions& options, const BrickPresence& stored);
+/// The same with `stored[k]` holding level k's brick coordinates.
 std::vector<SelectedBrick> selectBricks(const Viewer& viewer, const SelectionOptions& options,
                                         const std::vector<std::set<IndexCoord>>& stored);
 

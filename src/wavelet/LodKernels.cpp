@@ -18,34 +18,14 @@ constexpr int kHalf = kDim / 2;
 
 inline int offsetOf(int x, int y, int z) { return (x << (2 * kLeafLog2Dim)) | (y << kLeafLog2Dim) | z; }
 
-/// The densities and materials of a level-k block and two layers of voxels around it (12^3): the
-/// gradient at a crossing's far end reads one voxel beyond it.
+/// The densities and materials of a level-k block and two layers of voxels around it (12^3): a point's
+/// resampled density reads the voxel below it, and the gradient at a crossing's far end one point beyond.
 struct Surroundings {
     static constexpr int kRing = 2;
     static constexpr int kEdge = kDim + 2 * kRing;
     std::array<uint8_t, kEdge * kEdge * kEdge> density{};
     std::array<MaterialId, kEdge * kEdge * kEdge> material{};
     static int at(int x, int y, int z) { return ((x + kRing) * kEdge + (y + kRing)) * kEdge + (z + kRing); }
-    double densityAt(int x, int y, int z) const { return double(density[std::size_t(at(x, y, z))]); }
-    MaterialId solidMaterial(int x, int y, int z) const
-    {
-        const int i = at(x, y, z);
-        return density[std::size_t(i)] >= kSolidDensity ? material[std::size_t(i)] : kEmptyMaterial;
-    }
-    /// The density gradient at a voxel: central differences smoothed over the 3x3 cross-section
-    /// (Sobel weights), as the box-filtered occupancy is noisy at coarse levels.
-    std::array<double, 3> gradient(int x, int y, int z) const
-    {
-        std::array<double, 3> g{0.0, 0.0, 0.0};
-        for (int i = -1; i <= 1; ++i)
-            for (int j = -1; j <= 1; ++j) {
-                const double w = double((2 - std::abs(i)) * (2 - std::abs(j)));
-                g[0] += w * (densityAt(x + 1, y + i, z + j) - densityAt(x - 1, y + i, z + j));
-                g[1] += w * (densityAt(x + i, y + 1, z + j) - densityAt(x + i, y - 1, z + j));
-                g[2] += w * (densityAt(x + i, y + j, z + 1) - densityAt(x + i, y + j, z - 1));
-            }
-        return g;
-    }
 };
 
 Surroundings gather(const LevelSource& source, int level, const BlockOrigin& origin)
@@ -74,7 +54,74 @@ Surroundings gather(const LevelSource& source, int level, const BlockOrigin& ori
     return s;
 }
 
-HermiteLeafData coarseLeaf(const Surroundings& s)
+/// Level k's densities resampled at its lattice points. A level-k voxel's density stands for the cube of
+/// 2^k level-0 points it averages, centred (2^k - 1) / 2 level-0 voxels past its lattice point, while the
+/// cut shows level k's point i at level-0 point 2^k i (every level's lattice on the finer ones'). So a
+/// point takes the trilinear density at its own place: per axis, t = 1/2 + 2^-(k+1) of the voxel at it
+/// and the rest of the one below. Without it a coarse surface lies up to half its voxel off the fine one.
+/// Holds the block's points and one ring around them (the gradient's reach): -1 .. 9 per axis.
+struct AlignedField {
+    static constexpr int kRing = 1;
+    static constexpr int kEdge = kDim + 2 + 2 * kRing; // points -1 .. kDim + 1
+    std::array<double, kEdge * kEdge * kEdge> density{};
+    std::array<MaterialId, kEdge * kEdge * kEdge> material{}; // kEmptyMaterial where not solid
+    static int at(int x, int y, int z) { return ((x + kRing) * kEdge + (y + kRing)) * kEdge + (z + kRing); }
+    double densityAt(int x, int y, int z) const { return density[std::size_t(at(x, y, z))]; }
+    MaterialId solidMaterial(int x, int y, int z) const { return material[std::size_t(at(x, y, z))]; }
+    /// The density gradient at a point: central differences smoothed over the 3x3 cross-section
+    /// (Sobel weights), as the box-filtered occupancy is noisy at coarse levels.
+    std::array<double, 3> gradient(int x, int y, int z) const
+    {
+        std::array<double, 3> g{0.0, 0.0, 0.0};
+        for (int i = -1; i <= 1; ++i)
+            for (int j = -1; j <= 1; ++j) {
+                const double w = double((2 - std::abs(i)) * (2 - std::abs(j)));
+                g[0] += w * (densityAt(x + 1, y + i, z + j) - densityAt(x - 1, y + i, z + j));
+                g[1] += w * (densityAt(x + i, y + 1, z + j) - densityAt(x + i, y - 1, z + j));
+                g[2] += w * (densityAt(x + i, y + j, z + 1) - densityAt(x + i, y + j, z - 1));
+            }
+        return g;
+    }
+};
+
+AlignedField alignedField(const Surroundings& s, int level)
+{
+    // Weights per axis of the voxel at the point (t) and the one below (1 - t).
+    const double t = 0.5 + std::ldexp(1.0, -(level + 1));
+    const double weightOf[2] = {1.0 - t, t};
+    AlignedField out;
+    for (int x = -AlignedField::kRing; x <= kDim + 1; ++x)
+        for (int y = -AlignedField::kRing; y <= kDim + 1; ++y)
+            for (int z = -AlignedField::kRing; z <= kDim + 1; ++z) {
+                double density = 0.0;
+                MaterialId materials[8];
+                double solid[8];
+                for (int c = 0; c < 8; ++c) {
+                    const int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
+                    const int i = Surroundings::at(x - 1 + dx, y - 1 + dy, z - 1 + dz);
+                    solid[c] = weightOf[dx] * weightOf[dy] * weightOf[dz] * double(s.density[std::size_t(i)]);
+                    materials[c] = s.material[std::size_t(i)];
+                    density += solid[c];
+                }
+                const int at = AlignedField::at(x, y, z);
+                out.density[std::size_t(at)] = density;
+                if (density < kSolidDensity) continue; // material stays empty
+                // The material holding most of the point's solid (ties: the lower id), as the low-pass picks.
+                MaterialId best = kEmptyMaterial;
+                double bestWeight = 0.0;
+                for (int c = 0; c < 8; ++c) {
+                    if (materials[c] == kEmptyMaterial || solid[c] <= 0.0) continue;
+                    double weight = 0.0;
+                    for (int d = 0; d < 8; ++d)
+                        if (materials[d] == materials[c]) weight += solid[d];
+                    if (weight > bestWeight || (weight == bestWeight && materials[c] < best)) best = materials[c], bestWeight = weight;
+                }
+                out.material[std::size_t(at)] = best;
+            }
+    return out;
+}
+
+HermiteLeafData coarseLeaf(const AlignedField& s)
 {
     HermiteLeafData data;
     std::array<double, 3> gradient[2];
@@ -88,8 +135,8 @@ HermiteLeafData coarseLeaf(const Surroundings& s)
                     const int ux = x + (axis == 0), uy = y + (axis == 1), uz = z + (axis == 2);
                     const MaterialId to = s.solidMaterial(ux, uy, uz);
                     if (to == from) continue;
-                    const double dv = s.density[std::size_t(Surroundings::at(x, y, z))];
-                    const double du = s.density[std::size_t(Surroundings::at(ux, uy, uz))];
+                    const double dv = s.densityAt(x, y, z);
+                    const double du = s.densityAt(ux, uy, uz);
                     const bool occupancyChanges = (from == kEmptyMaterial) != (to == kEmptyMaterial);
                     const double threshold = kSolidDensity - 0.5;
                     const double t = occupancyChanges && du != dv ? std::clamp((threshold - dv) / (du - dv), 0.0, 1.0) : 0.5;
@@ -180,7 +227,7 @@ HermiteLeafData coarseBlockData(const LevelSource& source, int level, const Bloc
         uniform = v.uniform() && (i == 0 || v.material == material);
         material = v.material;
     }
-    if (!uniform) return coarseLeaf(gather(source, level, origin));
+    if (!uniform) return coarseLeaf(alignedField(gather(source, level, origin), level));
     HermiteLeafData data;
     data.material.fill(MaterialValue{material});
     return data;

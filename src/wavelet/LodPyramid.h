@@ -3,7 +3,10 @@
 // and the coarse Hermite data derived from it, which the same CMS mesher meshes at every level.
 //
 // Level k's voxel i stands for the cube of 2^k level-0 voxels starting at 2^k * i, so it sits at the
-// cube's centre, 2^k * i + (2^k - 1) / 2 in level-0 index space (levelOffset()). The field is kept in
+// cube's centre, 2^k * i + (2^k - 1) / 2 in level-0 index space (levelOffset()). The coarse Hermite data
+// resamples the field at level k's lattice points, point i at level-0 point 2^k * i, so that every
+// level's lattice lies on the finer ones' and each level's surface lies on the fine one in place (no
+// offset to add when meshing it). The field is kept in
 // blocks of 8^3 level-k voxels; a block exists where its footprint (8 * 2^k level-0 voxels per side)
 // holds a level-0 leaf. Elsewhere the footprint lies inside one tile of the volume, whose value stands
 // for every level.
@@ -74,8 +77,8 @@ public:
     /// The blocks of level k (1 .. levels()).
     const std::map<BlockOrigin, LodBlock>& blocks(int level) const;
 
-    /// Level k's Hermite data: a volume of voxel size 2^k times the fine one, whose mesh, moved by
-    /// levelOffset(k), approximates the fine surface. Materials are the fine volume's table.
+    /// Level k's Hermite data: a volume of voxel size 2^k times the fine one, whose mesh approximates the
+    /// fine surface in place. Materials are the fine volume's table.
     Volume coarseVolume(const Volume& fine, int level) const;
     /// Re-derives the coarse leaves around the given level-k blocks (an update's changedBlocks) in a
     /// volume coarseVolume() made, and returns what changed in it for the mesher (MeshChunkSet::update).
