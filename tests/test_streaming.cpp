@@ -622,12 +622,10 @@ TEST_CASE("after stamps anywhere (across brick faces too), every kept mesh is th
     checkKeptMeshesAfterStamps(lookingAt({30, 70, 30}, {128, 30, 128}), 1.0, 1); // a terrain this small is all level 0 at 1 px
 }
 
-// A known defect, found in stop 46 and not fixed yet: with level-0 bricks beside level-1 ones, a mesh
-// re-made from kept per-leaf pieces after an edit near the level boundary differs from a fresh one (a
-// level-0 brick's corner leaf by its subdivision, a level-1 brick by missing transition vertices); with
-// no pieces re-used it passes. [!shouldfail] keeps it in the suite: it fails the suite once fixed, so that
-// the tag comes off.
-TEST_CASE("kept meshes beside a coarser brick after stamps are the ones the bricks make now", "[streaming][!shouldfail]")
+// Beside a coarser brick, meshes read points of bricks the cut does not show (the level-0 brick past a
+// level-0 brick's face; the finer bricks on a coarse brick's faces, for its transition cells): a load or
+// an eviction of those must give the meshes that read them new versions.
+TEST_CASE("kept meshes beside a coarser brick after stamps are the ones the bricks make now", "[streaming]")
 {
     checkKeptMeshesAfterStamps(lookingAt({-60, 80, -60}, {128, 30, 128}), 10.0, 2); // level 0 near, level 1 far
 }

@@ -86,6 +86,12 @@ struct StreamingScene::Impl {
         std::shared_ptr<const BrickMesh> mesh; // the last made, while the brick is shown
         uint64_t meshInputs = 0;  // meshVersionLocked(key, true) when it was made
         uint64_t loadVersion = 0; // the version it was loaded at: changes other than edits
+        // A mesh also reads bricks the cut does not show, where they are in the trees: the points of a
+        // brick of its own level beside it (its face cells and a leaf beyond), and those of the finer
+        // bricks inside it on its faces (its transition cells). Set when such a brick's content enters
+        // or leaves its tree (noteContentMoved).
+        uint64_t besideMoved = 0; // a brick of its level beside it: its own cells read it
+        uint64_t finerMoved = 0;  // a finer brick inside it: its transition cells read it
     };
 
     StreamingOptions options;
@@ -200,7 +206,11 @@ struct StreamingScene::Impl {
         if (it == resident.end()) return 0;
         // Order-independent sums over the cut's bricks touching this one: which they are, and their content.
         uint64_t v = (loadsOnly ? it->second.loadVersion : it->second.version) * 0x9E3779B97F4A7C15ull;
+        // Pieces re-made per leaf are kept only while no brick beside moved (their face cells read it);
+        // finer bricks moving inside it change only the transition cells, which are made every time.
+        v += it->second.besideMoved * 0xD6E8FEB86659FD93ull;
         if (!loadsOnly) {
+            v += it->second.finerMoved * 0xA0761D6478BD642Full;
             const auto stamp = maskStamps.find(key);
             if (stamp != maskStamps.end()) v += stamp->second * 0xC2B2AE3D27D4EB4Full;
         }
@@ -503,8 +513,31 @@ struct StreamingScene::Impl {
     void clearEvicted()
     {
         for (const BrickKey& key : pendingClears)
-            if (!resident.count(key)) fillRegion(levelVolumes[std::size_t(key.level)], brickBox(key.brick), kEmptyMaterial);
+            if (!resident.count(key)) {
+                fillRegion(levelVolumes[std::size_t(key.level)], brickBox(key.brick), kEmptyMaterial);
+                noteContentMoved(key);
+            }
         pendingClears.clear();
+    }
+
+    /// A brick's content entered or left its level's tree (a load, or an evicted brick cleared): the
+    /// meshes that read it outside the cut get new versions. Those are the resident bricks of its level
+    /// beside it, and its ancestors (their transition cells take the finer side's points on their faces).
+    /// Lock held.
+    void noteContentMoved(const BrickKey& key)
+    {
+        const uint64_t stamp = ++versions;
+        for (int d = 0; d < 27; ++d) {
+            if (d == 13) continue;
+            const IndexCoord beside{key.brick[0] + d % 3 - 1, key.brick[1] + (d / 3) % 3 - 1, key.brick[2] + d / 9 - 1};
+            const auto it = resident.find({key.level, beside});
+            if (it != resident.end()) it->second.besideMoved = stamp;
+        }
+        for (BrickKey up = key; up.level < levels;) {
+            up = {up.level + 1, parentBrick(up.brick)};
+            const auto it = resident.find(up);
+            if (it != resident.end()) it->second.finerMoved = stamp;
+        }
     }
 
     /// Accounts for a loaded brick and puts it into its level's tree, after the evicted bricks' content
@@ -513,13 +546,16 @@ struct StreamingScene::Impl {
     void install(const BrickKey& key, DecodedRegion&& brick, uint64_t bytes, uint64_t bytesReadFromStore, std::unique_lock<std::mutex>& lock)
     {
         const std::vector<BrickKey> clears = std::exchange(pendingClears, {});
-        Resident r{bytes, frameNumber, false, ++versions, {}, nullptr, 0, 0};
+        Resident r{bytes, frameNumber, false, ++versions, {}, nullptr, 0, 0, 0, 0};
         r.loadVersion = r.version;
         for (auto& c : r.sides) c.fill(r.version);
         resident[key] = std::move(r);
         residentBytes += bytes;
         bytesRead += bytesReadFromStore;
         ++loads;
+        for (const BrickKey& evicted : clears)
+            if (!resident.count(evicted)) noteContentMoved(evicted);
+        noteContentMoved(key);
         lock.unlock();
         for (const BrickKey& evicted : clears) fillRegion(levelVolumes[std::size_t(evicted.level)], brickBox(evicted.brick), kEmptyMaterial);
         pasteRegion(levelVolumes[std::size_t(key.level)], std::move(brick));
