@@ -345,3 +345,57 @@ TEST_CASE("a store's bounds equal its volume's, kept by writers and found again 
     execSql(path, "UPDATE meta SET value = '1 2 3' WHERE key = 'bbox';");
     CHECK_THROWS_WITH(SceneStore::open(path, StoreAccess::ReadOnly).bounds(), Catch::Contains("'bbox'"));
 }
+
+TEST_CASE("coarse bricks' errors: kept beside the bricks, refused when damaged, absent from older stores", "[store][lod]")
+{
+    TempDir dir;
+    const std::string path = dir.file("e.vdbclay");
+    Volume v(1.0);
+    apply(v, CsgMode::Add, sphere(50.0), at(Vec3d(0.3, -0.2, 0.1)));
+    writeStoreFile(v, path);
+    {
+        SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
+        buildStoreLod(scene, 2);
+        // Every coarse brick has one; a smooth sphere's lie under the level's voxel (each level's box filter
+        // rounds the surface by about 0.3 of its voxel, and the levels' errors add up).
+        for (int k = 1; k <= 2; ++k)
+            for (const IndexCoord& b : scene.brickCoords(k)) {
+                const std::optional<double> error = scene.bricks().lodError({k, b});
+                REQUIRE(error);
+                CHECK(*error >= 0.0);
+                CHECK(*error < 0.75 * double(1 << k));
+            }
+        CHECK_FALSE(scene.bricks().lodError({0, scene.brickCoords(0).front()})); // level 0 is exact
+        // Gone with its brick when a level goes.
+        buildStoreLod(scene, 1);
+        std::size_t level2 = 0;
+        scene.bricks().scanLodErrors(2, [&](const IndexCoord&, double) { ++level2; });
+        CHECK(level2 == 0);
+        buildStoreLod(scene, 2);
+    }
+    SECTION("a damaged error row is refused with one line naming it")
+    {
+        for (const char* value : {"'abc'", "-1.0", "1e999", "X'00'"}) {
+            CAPTURE(value);
+            std::filesystem::copy_file(path, dir.file("bad.vdbclay"), std::filesystem::copy_options::overwrite_existing);
+            execSql(dir.file("bad.vdbclay"), std::string("UPDATE lod_errors SET error = ") + value + " WHERE level = 1;");
+            const SceneStore scene = SceneStore::open(dir.file("bad.vdbclay"), StoreAccess::ReadOnly);
+            CHECK_THROWS_WITH(scene.bricks().scanLodErrors(1, [](const IndexCoord&, double) {}), Catch::Contains("is not a length"));
+            CHECK_THROWS_AS(scene.bricks().lodError({1, scene.brickCoords(1).front()}), StoreError);
+        }
+    }
+    SECTION("a store written before errors were kept: read without them, given the table when written")
+    {
+        execSql(path, "DROP TABLE lod_errors;");
+        {
+            const SceneStore scene = SceneStore::open(path, StoreAccess::ReadOnly);
+            CHECK_FALSE(scene.bricks().lodError({1, scene.brickCoords(1).front()}));
+            std::size_t rows = 0;
+            scene.bricks().scanLodErrors(1, [&](const IndexCoord&, double) { ++rows; });
+            CHECK(rows == 0);
+        }
+        SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
+        buildStoreLod(scene, 2);
+        CHECK(scene.bricks().lodError({1, scene.brickCoords(1).front()}));
+    }
+}

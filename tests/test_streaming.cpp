@@ -758,3 +758,39 @@ TEST_CASE("meshes made on workers while edits, loads and evictions run beside th
         CHECK(drawn.at(key).second == fresh->hash);
     }
 }
+
+TEST_CASE("a brick's error, where its store keeps one, lets a view show it coarser, and never coarser than its voxel allows", "[streaming]")
+{
+    // The bound without an error is the voxel; a data error adds a quarter voxel and is capped there.
+    CHECK(lodShownError(std::nullopt, 4.0) == 4.0);
+    CHECK(lodShownError(0.5, 4.0) == 1.5);
+    CHECK(lodShownError(7.0, 4.0) == 4.0);
+    std::vector<std::set<IndexCoord>> stored(3);
+    for (int x = 0; x < 8; ++x)
+        for (int z = 0; z < 8; ++z) stored[0].insert({x, 0, z});
+    for (int k = 1; k < 3; ++k)
+        for (const IndexCoord& b : stored[std::size_t(k - 1)]) stored[std::size_t(k)].insert(parentBrick(b));
+    BrickPresence presence(stored);
+    SelectionOptions options;
+    options.levels = 2;
+    const Viewer view = lookingAt({-300, 200, -300}, {256, 0, 256});
+    const auto levelCounts = [&] {
+        std::array<int, 3> counts{};
+        for (const SelectedBrick& b : selectBricks(view, options, presence)) ++counts[std::size_t(b.key.level)];
+        return counts;
+    };
+    const std::array<int, 3> plain = levelCounts();
+    REQUIRE(plain[0] > 0);
+    // Smooth bricks (errors an eighth of their voxels): fewer bricks, none finer than before.
+    for (int k = 1; k < 3; ++k)
+        for (const IndexCoord& b : stored[std::size_t(k)]) presence.setShownError(k, b, lodShownError(0.0, double(1 << k)));
+    const std::array<int, 3> smooth = levelCounts();
+    CHECK(smooth[0] < plain[0]);
+    CHECK(smooth[0] + smooth[1] + smooth[2] < plain[0] + plain[1] + plain[2]);
+    // Errors at the voxel bound select as without them.
+    for (int k = 1; k < 3; ++k)
+        for (const IndexCoord& b : stored[std::size_t(k)]) presence.setShownError(k, b, lodShownError(99.0, double(1 << k)));
+    CHECK(levelCounts() == plain);
+    CHECK_THROWS_AS(presence.setShownError(1, {100, 0, 0}, 1.0), std::invalid_argument);
+    CHECK_THROWS_AS(presence.setShownError(1, *stored[1].begin(), -1.0), std::invalid_argument);
+}

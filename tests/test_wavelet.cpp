@@ -8,6 +8,7 @@
 #include "support/Sculpt.h"
 #include "support/TestUtil.h"
 #include "wavelet/Haar.h"
+#include "wavelet/LevelDeviation.h"
 #include "wavelet/LodPyramid.h"
 #include "wavelet/MixedLevels.h"
 #include "support/HermiteProbe.h"
@@ -329,4 +330,32 @@ TEST_CASE("a scene shown at mixed levels meshes watertight", "[wavelet][lod][mix
         const Volume allFine = mixedLevelVolume(v, pyramid, [](const BlockOrigin&) { return 0; });
         CHECK(changedBlocks(allFine, v).empty());
     }
+}
+
+TEST_CASE("level deviation: a coarse level of a smooth shape lies within a fraction of its voxel, a lost feature counts", "[wavelet][lod]")
+{
+    Volume v(1.0);
+    apply(v, CsgMode::Add, sphere(40.0), at(Vec3d(0.3, -0.2, 0.1)));
+    LodPyramid pyramid(3);
+    pyramid.build(v);
+    const std::array<double, 3> lo{-64.0, -64.0, -64.0}, hi{64.0, 64.0, 64.0};
+    constexpr double kUnmatched = 1000.0;
+    for (int k = 1; k <= 3; ++k) {
+        const Volume coarse = pyramid.coarseVolume(v, k);
+        const Volume fine = k == 1 ? v.clone() : pyramid.coarseVolume(v, k - 1);
+        const double voxel = coarse.voxelSize();
+        const double d = levelDeviation(coarse, fine, lo, hi, kUnmatched);
+        INFO("level " << k << ": " << d << " against voxel " << voxel);
+        CHECK(d > 0.0);
+        CHECK(d < 0.4 * voxel); // the box filter's rounding, not a voxel: the levels match in place
+        // Symmetric in what it measures: a level against itself lies nowhere off.
+        CHECK(levelDeviation(coarse, coarse, lo, hi, kUnmatched) == 0.0);
+    }
+    // A plate one level-0 voxel thick (lattice points y = 53 only) has half a level-1 voxel's density and
+    // vanishes there: its crossings find no surface near them.
+    apply(v, CsgMode::Add, box(Vec3d(20.0, 0.4, 20.0)), at(Vec3d(0.2, 53.0, 0.3)));
+    pyramid.build(v);
+    CHECK(levelDeviation(pyramid.coarseVolume(v, 1), v, lo, hi, kUnmatched) == kUnmatched);
+    // Nothing crosses an empty box.
+    CHECK(levelDeviation(pyramid.coarseVolume(v, 1), v, {200.0, 200.0, 200.0}, {264.0, 264.0, 264.0}, kUnmatched) == 0.0);
 }

@@ -80,6 +80,13 @@ public:
 
     virtual std::optional<std::string> meta(const std::string& key) const = 0;
     virtual void putMeta(const std::string& key, const std::string& value) = 0;
+    /// A coarse brick's geometric error (StoreLod.h: how far its surface may lie from level 0's, world
+    /// units), kept beside the bricks. Stores written before errors were kept have none.
+    virtual std::optional<double> lodError(const BrickKey& key) const = 0;
+    virtual void putLodError(const BrickKey& key, double error) = 0;
+    virtual void eraseLodError(const BrickKey& key) = 0;
+    /// Calls fn for every brick of a level that has an error, in key order.
+    virtual void scanLodErrors(int level, const std::function<void(const IndexCoord&, double)>& fn) const = 0;
 
     /// Puts and erases between begin() and commit() land together or not at all; commit() returns
     /// once they are on disk.

@@ -10,6 +10,7 @@
 #include <sqlite3.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -97,6 +98,7 @@ public:
             if (access != StoreAccess::ReadOnly) {
                 exec("PRAGMA journal_mode=WAL");
                 exec("PRAGMA synchronous=FULL");
+                createErrorTable();
                 // Bricks written from now on are of this version's form, which older builds cannot read.
                 if (pragmaInt("PRAGMA user_version") < kStoreFormatVersion)
                     exec(("PRAGMA user_version=" + std::to_string(kStoreFormatVersion)).c_str());
@@ -201,6 +203,58 @@ public:
         sqlite3_bind_text(s, 1, key.c_str(), int(key.size()), SQLITE_TRANSIENT);
         sqlite3_bind_text(s, 2, value.c_str(), int(value.size()), SQLITE_TRANSIENT);
         if (sqlite3_step(s) != SQLITE_DONE) fail("write the scene's metadata");
+    }
+
+    std::optional<double> lodError(const BrickKey& key) const override
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!errorSelect_) return std::nullopt;
+        sqlite3_stmt* s = errorSelect_->get();
+        const ResetOnExit reset{s};
+        bindKey(s, key);
+        const int rc = sqlite3_step(s);
+        if (rc == SQLITE_DONE) return std::nullopt;
+        if (rc != SQLITE_ROW) fail("read a brick's error");
+        return checkedError(s, 0, [&] { return "the error of brick " + describeKey(key); });
+    }
+
+    void putLodError(const BrickKey& key, double error) override
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!errorInsert_) throw std::logic_error("a read-only store keeps no errors");
+        sqlite3_stmt* s = errorInsert_->get();
+        const ResetOnExit reset{s};
+        bindKey(s, key);
+        sqlite3_bind_double(s, 5, error);
+        if (sqlite3_step(s) != SQLITE_DONE) fail("write a brick's error");
+    }
+
+    void eraseLodError(const BrickKey& key) override
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!errorRemove_) throw std::logic_error("a read-only store keeps no errors");
+        sqlite3_stmt* s = errorRemove_->get();
+        const ResetOnExit reset{s};
+        bindKey(s, key);
+        if (sqlite3_step(s) != SQLITE_DONE) fail("erase a brick's error");
+    }
+
+    void scanLodErrors(int level, const std::function<void(const IndexCoord&, double)>& fn) const override
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!errorSelect_) return;
+        Statement stmt(db_, "SELECT x, y, z, error FROM lod_errors WHERE level = ?1 ORDER BY x, y, z", path_);
+        sqlite3_stmt* s = stmt.get();
+        sqlite3_bind_int(s, 1, level);
+        int rc;
+        while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
+            const auto where = [&] { return "an error row of level " + std::to_string(level); };
+            IndexCoord brick{};
+            for (int a = 0; a < 3; ++a)
+                brick[std::size_t(a)] = int32_t(checkedInteger(s, a, -kMaxBrickCoordinate, kMaxBrickCoordinate, where, "xyz" + a));
+            fn(brick, checkedError(s, 3, where));
+        }
+        if (rc != SQLITE_DONE) fail("list the bricks' errors");
     }
 
     void begin() override
@@ -355,6 +409,32 @@ private:
         exec("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL) WITHOUT ROWID");
         exec("CREATE TABLE bricks (level INTEGER NOT NULL, x INTEGER NOT NULL, y INTEGER NOT NULL, z INTEGER NOT NULL, "
              "uniform INTEGER, leaves INTEGER NOT NULL, payload BLOB NOT NULL, PRIMARY KEY (level, x, y, z)) WITHOUT ROWID");
+        createErrorTable();
+    }
+
+    /// The coarse bricks' errors: a table of its own, added to stores written before it (older builds
+    /// read such a store as before and leave the table alone).
+    void createErrorTable()
+    {
+        exec("CREATE TABLE IF NOT EXISTS lod_errors (level INTEGER NOT NULL, x INTEGER NOT NULL, y INTEGER NOT NULL, "
+             "z INTEGER NOT NULL, error REAL NOT NULL, PRIMARY KEY (level, x, y, z)) WITHOUT ROWID");
+    }
+
+    std::string describeKey(const BrickKey& key) const
+    {
+        return "(" + std::to_string(key.brick[0]) + ", " + std::to_string(key.brick[1]) + ", " + std::to_string(key.brick[2]) +
+               ") of level " + std::to_string(key.level);
+    }
+
+    /// Column `col` of the current row as an error: a finite number, 0 or more.
+    template <typename Where>
+    double checkedError(sqlite3_stmt* s, int col, const Where& where) const
+    {
+        const double value = sqlite3_column_double(s, col);
+        const int type = sqlite3_column_type(s, col);
+        if ((type != SQLITE_FLOAT && type != SQLITE_INTEGER) || !std::isfinite(value) || value < 0.0)
+            throw StoreError("'" + path_ + "' is damaged: " + where() + " is not a length (a finite number, 0 or more)");
+        return value;
     }
 
     void checkSchema()
@@ -378,6 +458,12 @@ private:
         remove_ = std::make_unique<Statement>(db_, "DELETE FROM bricks WHERE level = ?1 AND x = ?2 AND y = ?3 AND z = ?4", path_);
         metaSelect_ = std::make_unique<Statement>(db_, "SELECT value FROM meta WHERE key = ?1", path_);
         metaInsert_ = std::make_unique<Statement>(db_, "INSERT OR REPLACE INTO meta (key, value) VALUES (?1, ?2)", path_);
+        if (pragmaInt("SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'lod_errors'") == 0) return;
+        errorSelect_ = std::make_unique<Statement>(db_, "SELECT error FROM lod_errors WHERE level = ?1 AND x = ?2 AND y = ?3 AND z = ?4", path_);
+        if (pragmaInt("PRAGMA query_only") != 0) return;
+        errorInsert_ = std::make_unique<Statement>(
+            db_, "INSERT OR REPLACE INTO lod_errors (level, x, y, z, error) VALUES (?1, ?2, ?3, ?4, ?5)", path_);
+        errorRemove_ = std::make_unique<Statement>(db_, "DELETE FROM lod_errors WHERE level = ?1 AND x = ?2 AND y = ?3 AND z = ?4", path_);
     }
 
     static void bindKey(sqlite3_stmt* s, const BrickKey& key)
@@ -392,6 +478,7 @@ private:
     bool inTransaction_ = false;
     mutable std::mutex mutex_; // one connection, used from the loader threads too
     std::unique_ptr<Statement> select_, insert_, remove_, metaSelect_, metaInsert_;
+    std::unique_ptr<Statement> errorSelect_, errorInsert_, errorRemove_; // null where the store has no error table
 };
 
 } // namespace

@@ -2,6 +2,7 @@
 
 #include "scene/DensityBrick.h"
 #include "vdb_hermite/NumberText.h"
+#include "wavelet/LevelDeviation.h"
 #include "wavelet/LodKernels.h"
 
 #include <tbb/blocked_range.h>
@@ -228,7 +229,10 @@ public:
     LodRefresh run(const std::vector<IndexCoord>& changedLevelZero)
     {
         std::set<IndexCoord> changed(changedLevelZero.begin(), changedLevelZero.end());
-        for (int k = 1; k <= levels_ && !changed.empty(); ++k) {
+        // Bricks of the level below whose surface or error changed: their parents' errors follow them,
+        // whether or not the parents' densities changed.
+        std::set<IndexCoord> moved = changed;
+        for (int k = 1; k <= levels_ && (!changed.empty() || !moved.empty()); ++k) {
             std::set<IndexCoord> targets;
             for (const IndexCoord& b : changed) targets.insert(parentBrick(b));
             std::map<IndexCoord, SlotSet> coarseSlots; // level-k blocks whose coarse data must be redone
@@ -238,11 +242,18 @@ public:
                 if (densityPass(k, t, coarseSlots)) changed.insert(t);
                 report(k, ++done, targets.size());
             }
+            std::set<IndexCoord> movedHere;
             done = 0;
             for (const auto& [brick, slots] : coarseSlots) {
-                coarsePass(k, brick, slots);
+                if (coarsePass(k, brick, slots)) movedHere.insert(brick);
                 report(k, ++done, coarseSlots.size());
             }
+            for (const IndexCoord& b : moved) {
+                const IndexCoord parent = parentBrick(b);
+                if (coarseSlots.count(parent) || movedHere.count(parent)) continue;
+                if (refreshError(k, parent)) movedHere.insert(parent);
+            }
+            moved = std::move(movedHere);
         }
         return std::move(result_);
     }
@@ -320,8 +331,9 @@ private:
         return true;
     }
 
-    /// Re-derives the coarse Hermite data of the given blocks of level-k brick `brick` and stores it.
-    void coarsePass(int k, const IndexCoord& brick, const SlotSet& slots)
+    /// Re-derives the coarse Hermite data of the given blocks of level-k brick `brick` and stores it, with
+    /// its error. Returns whether either changed.
+    bool coarsePass(int k, const IndexCoord& brick, const SlotSet& slots)
     {
         ++result_.hermiteBricksComputed;
         cache_.prefetch(k, neighbourBricks(brick));
@@ -334,10 +346,54 @@ private:
             if (slots.test(std::size_t(s))) origins.push_back(blockOfSlot(brick, s));
         wavelet::writeCoarseBlocks(StoreLevelSource(cache_, nullptr), k, origins, coarse);
         const std::optional<BrickRecord> after = encodeBrick(coarse, brick);
-        if (sameBrick(before[0], after)) return;
+        const bool errorChanged = storeError(k, brick, after ? std::optional<double>(dataError(k, brick, coarse)) : std::nullopt);
+        if (sameBrick(before[0], after)) return errorChanged;
         if (after) scene_.bricks().put({k, brick}, *after);
         else scene_.bricks().erase({k, brick});
         result_.changedBricks[std::size_t(k - 1)].push_back(brick);
+        return true;
+    }
+
+    /// Recomputes the error of a level-k brick whose record stays (the levels below it changed); returns
+    /// whether it changed.
+    bool refreshError(int k, const IndexCoord& brick)
+    {
+        Volume coarse(scene_.voxelSize() * double(1 << k));
+        coarse.materials() = scene_.materials();
+        std::vector<std::optional<BrickRecord>> record(1);
+        scene_.loadBricks(k, {brick}, coarse, {}, &record);
+        return storeError(k, brick, record[0] ? std::optional<double>(dataError(k, brick, coarse)) : std::nullopt);
+    }
+
+    /// Keeps a brick's error (nullopt: none); returns whether it differs from what was kept.
+    bool storeError(int k, const IndexCoord& brick, std::optional<double> error)
+    {
+        const std::optional<double> before = rebuilt_ ? std::nullopt : scene_.bricks().lodError({k, brick});
+        if (before == error) return false;
+        if (error) scene_.bricks().putLodError({k, brick}, *error);
+        else scene_.bricks().eraseLodError({k, brick});
+        result_.errors.emplace_back(BrickKey{k, brick}, error);
+        return true;
+    }
+
+    /// How far level k's surface in `brick` may lie from level 0's (StoreLod.h): its children's errors,
+    /// the largest (a child without one: its voxel), plus how far it lies from level k - 1's there.
+    double dataError(int k, const IndexCoord& brick, const Volume& coarse) const
+    {
+        const std::vector<IndexCoord> children = childBricks(brick);
+        Volume fine(scene_.voxelSize() * double(1 << (k - 1)));
+        fine.materials() = scene_.materials();
+        scene_.loadBricks(k - 1, children, fine);
+        double below = 0.0;
+        if (k > 1)
+            for (const IndexCoord& child : children)
+                below = std::max(below, scene_.bricks().lodError({k - 1, child}).value_or(fine.voxelSize()));
+        const double edge = double(kBrickEdge) * coarse.voxelSize();
+        const std::array<double, 3> lo{brick[0] * edge, brick[1] * edge, brick[2] * edge};
+        const std::array<double, 3> hi{lo[0] + edge, lo[1] + edge, lo[2] + edge};
+        // A feature one level lost or made counts a whole coarse voxel: the view then treats the brick
+        // as it treats one without an error (lodShownError caps there).
+        return below + wavelet::levelDeviation(coarse, fine, lo, hi, coarse.voxelSize());
     }
 
     SceneStore& scene_;
@@ -372,9 +428,13 @@ int buildStoreLod(SceneStore& scene, int levels, const Progress& progress)
         throw std::invalid_argument("a voxel size of " + formatNumber(scene.voxelSize()) + " leaves room for fewer than " +
                                     std::to_string(levels) + " levels");
     StoreTransaction transaction(scene.bricks());
-    for (int k = 1; k <= std::max(levels, scene.lodLevels()); ++k)
+    for (int k = 1; k <= std::max(levels, scene.lodLevels()); ++k) {
         for (const int level : {k, -k})
             for (const IndexCoord& b : scene.brickCoords(level)) scene.bricks().erase({level, b});
+        std::vector<IndexCoord> errors;
+        scene.bricks().scanLodErrors(k, [&](const IndexCoord& b, double) { errors.push_back(b); });
+        for (const IndexCoord& b : errors) scene.bricks().eraseLodError({k, b});
+    }
     LodPass(scene, levels, true, progress).run(scene.brickCoords(0));
     scene.setLod(levels, false);
     scene.bricks().putMeta(kLodDensitiesKey, "1");

@@ -6,6 +6,8 @@
 #include "scene/SceneStore.h"
 
 #include <cstdint>
+#include <optional>
+#include <utility>
 #include <vector>
 
 namespace vdbclay {
@@ -14,6 +16,8 @@ namespace vdbclay {
 struct LodRefresh {
     /// Per level (index k - 1 for level k): the coarse Hermite bricks whose stored record changed, sorted.
     std::vector<std::vector<IndexCoord>> changedBricks;
+    /// The coarse bricks' data errors the pass wrote (lodError), in order; nullopt where it erased one.
+    std::vector<std::pair<BrickKey, std::optional<double>>> errors;
     uint64_t densityBricksComputed = 0;
     uint64_t hermiteBricksComputed = 0;
 
@@ -25,6 +29,11 @@ struct LodRefresh {
     }
 };
 
+/// A coarse brick's data error, kept beside it (BrickStore::lodError): how far level k's surface may lie
+/// from level 0's, in world units. Level 1's is its distance from level 0 (wavelet::levelDeviation), and
+/// each level above adds its own distance from the level below to its children's largest error. Where
+/// a level lost or made a feature, the distance counts a whole voxel of that level.
+///
 /// The number of levels that brings level 0's bounds (its bricks') down to about one brick per side.
 int lodLevelsFor(const SceneStore& scene);
 

@@ -171,6 +171,12 @@ struct StreamingScene::Impl {
                 for (const IndexCoord& b : stored[std::size_t(k - 1)]) stored[std::size_t(k)].insert(parentBrick(b));
         }
         present = BrickPresence(stored);
+        for (int k = 1; k <= levels; ++k) {
+            const double voxel = scene.voxelSize() * double(1 << k);
+            scene.bricks().scanLodErrors(k, [&](const IndexCoord& b, double error) {
+                if (present.contains(k, b)) present.setShownError(k, b, lodShownError(error, voxel));
+            });
+        }
         if (options.memoryBudgetBytes < largest)
             throw std::invalid_argument("a memory budget of " + std::to_string(options.memoryBudgetBytes >> 20) +
                                         " MB cannot hold one brick of this scene (the largest needs about " +
@@ -928,6 +934,10 @@ struct StreamingScene::Impl {
     /// in flight, which may have read them half-written. Lock held.
     void forgetCoarseBricks(const LodRefresh& lod)
     {
+        for (const auto& [key, error] : lod.errors) {
+            present.add(key.level, key.brick);
+            present.setShownError(key.level, key.brick, error ? std::optional<double>(lodShownError(*error, scene.voxelSize() * double(1 << key.level))) : std::nullopt);
+        }
         for (std::size_t i = 0; i < lod.changedBricks.size(); ++i)
             for (const IndexCoord& b : lod.changedBricks[i]) {
                 const BrickKey key{int(i) + 1, b};

@@ -86,33 +86,55 @@ void validateViewer(const Viewer& v)
     if (v.viewport[0] <= 0 || v.viewport[1] <= 0) throw std::invalid_argument("the viewport must have a positive size");
 }
 
+double lodShownError(std::optional<double> dataError, double voxel)
+{
+    return dataError ? std::min(voxel, *dataError + 0.25 * voxel) : voxel;
+}
+
 BrickPresence::BrickPresence(const std::vector<std::set<IndexCoord>>& stored)
 {
     levels_.resize(stored.size());
     for (std::size_t k = 0; k < stored.size(); ++k) {
         Level& level = levels_[k];
         level.sorted.assign(stored[k].begin(), stored[k].end());
-        level.children.reserve(stored[k].size());
-        for (const IndexCoord& b : stored[k]) level.children.emplace(b, uint8_t(0));
+        level.bricks.reserve(stored[k].size());
+        for (const IndexCoord& b : stored[k]) level.bricks.emplace(b, Entry{});
     }
     for (std::size_t k = 1; k < stored.size(); ++k)
         for (const IndexCoord& b : stored[k - 1]) {
-            const auto parent = levels_[k].children.find(parentBrick(b));
-            if (parent == levels_[k].children.end()) throw std::invalid_argument("a stored brick's parent is not stored");
-            parent->second |= uint8_t(1u << ((b[0] & 1) + 2 * (b[1] & 1) + 4 * (b[2] & 1)));
+            const auto parent = levels_[k].bricks.find(parentBrick(b));
+            if (parent == levels_[k].bricks.end()) throw std::invalid_argument("a stored brick's parent is not stored");
+            parent->second.children |= uint8_t(1u << ((b[0] & 1) + 2 * (b[1] & 1) + 4 * (b[2] & 1)));
         }
 }
 
 bool BrickPresence::contains(int level, const IndexCoord& brick) const
 {
-    return level >= 0 && level < levelCount() && levels_[std::size_t(level)].children.count(brick) > 0;
+    return level >= 0 && level < levelCount() && levels_[std::size_t(level)].bricks.count(brick) > 0;
 }
 
 uint8_t BrickPresence::children(int level, const IndexCoord& brick) const
 {
     if (level <= 0 || level >= levelCount()) return 0;
-    const auto it = levels_[std::size_t(level)].children.find(brick);
-    return it == levels_[std::size_t(level)].children.end() ? uint8_t(0) : it->second;
+    const auto it = levels_[std::size_t(level)].bricks.find(brick);
+    return it == levels_[std::size_t(level)].bricks.end() ? uint8_t(0) : it->second.children;
+}
+
+std::optional<double> BrickPresence::shownError(int level, const IndexCoord& brick) const
+{
+    if (level < 0 || level >= levelCount()) return std::nullopt;
+    const auto it = levels_[std::size_t(level)].bricks.find(brick);
+    if (it == levels_[std::size_t(level)].bricks.end() || it->second.shownError < 0.0f) return std::nullopt;
+    return double(it->second.shownError);
+}
+
+void BrickPresence::setShownError(int level, const IndexCoord& brick, std::optional<double> error)
+{
+    if (error && !(*error >= 0.0 && std::isfinite(*error))) throw std::invalid_argument("a brick's error must be a length");
+    if (level < 0 || level >= levelCount()) throw std::invalid_argument("a brick's level is outside the presence's levels");
+    const auto it = levels_[std::size_t(level)].bricks.find(brick);
+    if (it == levels_[std::size_t(level)].bricks.end()) throw std::invalid_argument("an error for a brick that is not there");
+    it->second.shownError = error ? float(*error) : -1.0f;
 }
 
 bool BrickPresence::add(int level, const IndexCoord& brick)
@@ -122,15 +144,15 @@ bool BrickPresence::add(int level, const IndexCoord& brick)
         sorted.insert(std::lower_bound(sorted.begin(), sorted.end(), b), b);
     };
     Level& own = levels_[std::size_t(level)];
-    const bool added = own.children.emplace(brick, uint8_t(0)).second;
+    const bool added = own.bricks.emplace(brick, Entry{}).second;
     if (added) insertSorted(own.sorted, brick);
     // Up the ancestors until one was there already (its own ancestors are then there too).
     IndexCoord b = brick;
     for (int k = level; k + 1 < levelCount(); ++k) {
         const IndexCoord up = parentBrick(b);
         Level& above = levels_[std::size_t(k + 1)];
-        const auto [it, inserted] = above.children.emplace(up, uint8_t(0));
-        it->second |= uint8_t(1u << ((b[0] & 1) + 2 * (b[1] & 1) + 4 * (b[2] & 1)));
+        const auto [it, inserted] = above.bricks.emplace(up, Entry{});
+        it->second.children |= uint8_t(1u << ((b[0] & 1) + 2 * (b[1] & 1) + 4 * (b[2] & 1)));
         if (!inserted) break;
         insertSorted(above.sorted, up);
         b = up;
@@ -165,8 +187,9 @@ std::vector<SelectedBrick> selectBricks(const Viewer& viewer, const SelectionOpt
         const V3 hi{lo[0] + edge, lo[1] + edge, lo[2] + edge};
         if (!frustum.overlaps(lo, hi)) continue;
         const double distance = distanceToBox(viewer.position, lo, hi);
-        const double voxel = options.voxelSize * double(1 << key.level);
-        const double error = distance > 0.0 ? voxel * pixelsPerRadian / distance : 1e30;
+        // The brick's error: what its data lies off level 0's where it is known (lodShownError), else its voxel.
+        const double worldError = stored.shownError(key.level, key.brick).value_or(options.voxelSize * double(1 << key.level));
+        const double error = distance > 0.0 ? worldError * pixelsPerRadian / distance : 1e30;
         if (key.level > 0 && (error > options.pixelTolerance || (options.refineAlways && options.refineAlways->count(key)))) {
             const uint8_t children = stored.children(key.level, key.brick);
             if (children != 0) {

@@ -1,6 +1,7 @@
 // Which bricks a view needs, at which level: from the coarsest level down, a brick in the view frustum
-// is refined into its (up to) eight children while its screen-space error (its level's voxel size
-// projected at its distance) exceeds the tolerance. Pure geometry: no store access, no threads.
+// is refined into its (up to) eight children while its screen-space error exceeds the tolerance: how far
+// its surface may lie from level 0's (the data error its store keeps, else its level's voxel size),
+// projected at its distance. Pure geometry: no store access, no threads.
 #pragma once
 
 #include "scene/BrickStore.h"
@@ -8,6 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <set>
 #include <unordered_map>
 #include <unordered_set>
@@ -30,6 +32,12 @@ struct SelectionOptions {
     /// below them, so that an edit shows at once).
     const std::unordered_set<BrickKey, BrickKeyHash>* refineAlways = nullptr;
 };
+
+/// The error a view counts for a brick whose level has voxels of size `voxel`, in world units: its data
+/// error (StoreLod.h) plus a quarter voxel, what adaptive CMS cells may cut off a smooth surface (cells up
+/// to 8 voxels wide, split at a 15-degree normal spread, leave a sagitta of about 0.26 voxel), and never
+/// more than the voxel itself: the bound a brick without a data error is shown by.
+double lodShownError(std::optional<double> dataError, double voxel);
 
 struct SelectedBrick {
     BrickKey key;
@@ -55,6 +63,10 @@ public:
     uint8_t children(int level, const IndexCoord& brick) const;
     /// Adds a brick of `level` and every missing ancestor up to the top level; returns whether it was new.
     bool add(int level, const IndexCoord& brick);
+    /// The error a view counts for a brick (lodShownError, world units), where one was set.
+    std::optional<double> shownError(int level, const IndexCoord& brick) const;
+    /// Sets it (the brick must exist); nullopt forgets it.
+    void setShownError(int level, const IndexCoord& brick, std::optional<double> error);
 
 private:
     struct CoordHash {
@@ -65,9 +77,13 @@ private:
             return std::size_t(h ^ (h >> 32));
         }
     };
+    struct Entry {
+        uint8_t children = 0; // bit x + 2y + 4z
+        float shownError = -1.0f; // world units; negative: none
+    };
     struct Level {
         std::vector<IndexCoord> sorted;
-        std::unordered_map<IndexCoord, uint8_t, CoordHash> children;
+        std::unordered_map<IndexCoord, Entry, CoordHash> bricks;
     };
     std::vector<Level> levels_;
 };

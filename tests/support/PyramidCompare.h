@@ -41,13 +41,23 @@ inline bool sameRecords(const std::map<BrickKey, BrickRecord>& a, const std::map
     return true;
 }
 
-/// Whether the store's pyramid equals one built afresh from its level 0 (in a new store at `scratch`).
+/// Every coarse brick's error (BrickStore::lodError).
+inline std::map<BrickKey, double> pyramidErrors(const SceneStore& scene)
+{
+    std::map<BrickKey, double> out;
+    for (int k = 1; k <= scene.lodLevels(); ++k)
+        scene.bricks().scanLodErrors(k, [&](const IndexCoord& b, double error) { out.emplace(BrickKey{k, b}, error); });
+    return out;
+}
+
+/// Whether the store's pyramid, its bricks' errors included, equals one built afresh from its level 0
+/// (in a new store at `scratch`).
 inline bool pyramidEqualsRebuild(const SceneStore& scene, const std::string& scratch)
 {
     writeStoreFile(scene.loadLevel(0), scratch);
     SceneStore rebuilt = SceneStore::open(scratch, StoreAccess::ReadWrite);
     buildStoreLod(rebuilt, scene.lodLevels());
-    return sameRecords(pyramidRecords(scene), pyramidRecords(rebuilt));
+    return sameRecords(pyramidRecords(scene), pyramidRecords(rebuilt)) && pyramidErrors(scene) == pyramidErrors(rebuilt);
 }
 
 } // namespace vdbclay::test
