@@ -529,9 +529,11 @@ struct StreamingScene::Impl {
     /// A brick's content entered or left its level's tree (a load, or an evicted brick cleared): the
     /// meshes that read it outside the cut get new versions. Those are the resident bricks of its level
     /// beside it, and its ancestors (their transition cells take the finer side's points on their faces).
-    /// Lock held.
+    /// A brick of the cut needs none: the versions of the bricks beside it count its residency already,
+    /// and a cut that gains or loses it changes their versions too. Lock held.
     void noteContentMoved(const BrickKey& key)
     {
+        if (cut->shows({key.level, key.brick})) return;
         const uint64_t stamp = ++versions;
         for (int d = 0; d < 27; ++d) {
             if (d == 13) continue;
