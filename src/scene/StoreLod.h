@@ -29,11 +29,12 @@ struct LodRefresh {
     }
 };
 
-/// A coarse brick's data error, kept beside it (BrickStore::lodError): how far level k's surface may lie
-/// from level 0's, in world units. Level 1's is its distance from level 0 (wavelet::levelDeviation), and
-/// each level above adds its own distance from the level below to its children's largest error. Where
-/// a level lost or made a feature, the distance counts a whole voxel of that level.
-///
+// Each coarse brick's data error is kept beside it (BrickStore::lodError): how far level k's surface may
+// lie from level 0's, in world units. Level 1's is its distance from level 0 (wavelet::levelDeviation),
+// and each level above adds its own distance from the level below to its children's largest error.
+// Where a level lost or made a feature, the distance counts a whole voxel of that level. buildStoreLod
+// and updateStoreLod keep them current (LodRefresh::errors lists what a pass wrote).
+
 /// The number of levels that brings level 0's bounds (its bricks') down to about one brick per side.
 int lodLevelsFor(const SceneStore& scene);
 
