@@ -1,6 +1,7 @@
 // Streaming a store by view under a memory budget: which bricks a view selects, the budget held over a
 // flight, dirty bricks that survive eviction, a budget too small for one brick, and autosave against
 // SIGKILL at random moments.
+#include "mesher/MeshMetrics.h"
 #include "render/BrickMeshWorkers.h"
 #include "scene/SceneStore.h"
 #include "scene/StoreLod.h"
@@ -313,17 +314,20 @@ TEST_CASE("a damaged brick is reported, shown by its ancestors and not read agai
     const StreamingOptions options = roomyOptions();
     IndexCoord broken{};
     {
-        // Which level-0 brick the view loads, then one byte of its payload flipped (its checksum fails).
+        // A level-0 brick the view shows (not one loaded beside it for its points), then one byte of its
+        // payload flipped (its checksum fails).
         StreamingScene probe(path, options);
         probe.frame(view);
         probe.waitForLoads();
         REQUIRE(probe.frame(view).complete);
         SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
-        const Volume resident = probe.residentLevel0();
-        const std::vector<IndexCoord> loaded = occupiedBoxes(resident, kBrickEdge);
-        REQUIRE_FALSE(loaded.empty());
-        broken = {loaded.front()[0] / kBrickEdge, loaded.front()[1] / kBrickEdge, loaded.front()[2] / kBrickEdge};
-        std::optional<BrickRecord> record = scene.bricks().get({0, broken});
+        std::optional<BrickRecord> record;
+        for (const BrickKey& key : probe.shownBricks()) {
+            if (key.level != 0) continue;
+            record = scene.bricks().get(key);
+            broken = key.brick;
+            if (record && !record->uniform) break;
+        }
         REQUIRE((record && !record->uniform));
         record->payload[record->payload.size() / 2] ^= 0x5a;
         StoreTransaction transaction(scene.bricks());
@@ -793,4 +797,28 @@ TEST_CASE("a brick's error, where its store keeps one, lets a view show it coars
     CHECK(levelCounts() == plain);
     CHECK_THROWS_AS(presence.setShownError(1, {100, 0, 0}, 1.0), std::invalid_argument);
     CHECK_THROWS_AS(presence.setShownError(1, *stored[1].begin(), -1.0), std::invalid_argument);
+}
+
+TEST_CASE("a view of level 0 beside level 1 is closed: the bricks beside it whose points its meshes read are loaded too", "[streaming]")
+{
+    TempDir dir;
+    const std::string path = makeTerrain(dir);
+    StreamingOptions options = roomyOptions();
+    options.pixelTolerance = 10.0;
+    StreamingScene scene(path, options);
+    const Viewer view = lookingAt({-60, 80, -60}, {128, 30, 128});
+    settleView(scene, view);
+    std::set<int> levels;
+    Mesh all;
+    for (const BrickKey& key : scene.shownBricks()) {
+        levels.insert(key.level);
+        const Mesh& m = scene.meshBrick(key)->mesh;
+        const uint32_t base = uint32_t(all.positions.size());
+        all.positions.insert(all.positions.end(), m.positions.begin(), m.positions.end());
+        for (const auto& t : m.triangles) all.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    }
+    REQUIRE(levels.size() == 2);
+    // Welded a little wider than kMergeDistanceVoxels: the bricks compute a shared vertex apart, in floats.
+    const MeshTopology topology = analyzeTopology(all, 1e-3);
+    CHECK(topology.boundaryEdges == 0);
 }

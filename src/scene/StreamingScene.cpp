@@ -141,6 +141,8 @@ struct StreamingScene::Impl {
     std::deque<std::pair<uint64_t, BlockChange>> leafLog;
     uint64_t leafLogSeq = 0, leafLogFloor = 0;
     std::vector<BrickKey> shown;
+    // The bricks beside the last selection that its meshes read (frame()), and the selection they are of.
+    std::vector<BrickKey> besidesOf, besides;
     std::shared_ptr<const LodCut> cut = std::make_shared<LodCut>(); // the shown bricks and the rest of the split bricks' children
     MaterialTable materials; // the scene's, with what edits defined since the last autosave
     VoxelMask mask;          // as edits left it; maskDirty until autosaved
@@ -1066,8 +1068,43 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
         cost += bytes;
         if (it != s.resident.end()) it->second.lastUsed = s.frameNumber;
     }
+    // The bricks beside the selection whose points its meshes read (on the selected bricks' faces, a leaf
+    // beyond) where a coarser brick shows their region: needed too, after all the view shows, so that
+    // those meshes read the surface there, not the empty space of a brick not loaded (which capped a
+    // level-0 brick under a level-1 one with a false lid, open at its edges).
+    if (accepted == order.size()) {
+        std::vector<BrickKey> keys;
+        keys.reserve(selected.size());
+        for (const SelectedBrick& b : selected) keys.push_back(b.key);
+        if (keys != s.besidesOf) {
+            s.besidesOf = std::move(keys);
+            s.besides.clear();
+            std::unordered_set<BrickKey, BrickKeyHash> listed(needed.begin(), needed.end());
+            for (const BrickKey& key : s.besidesOf)
+                for (int d = 0; d < 27; ++d) {
+                    const BrickKey n{key.level, {key.brick[0] + d % 3 - 1, key.brick[1] + (d / 3) % 3 - 1, key.brick[2] + d / 9 - 1}};
+                    if (d != 13 && s.present.contains(n.level, n.brick) && listed.insert(n).second) s.besides.push_back(n);
+                }
+        }
+    } else {
+        s.besidesOf.clear();
+        s.besides.clear();
+    }
+    std::size_t besidesAccepted = 0;
+    for (; besidesAccepted < s.besides.size(); ++besidesAccepted) {
+        const BrickKey& key = s.besides[besidesAccepted];
+        const auto it = s.resident.find(key);
+        const uint64_t bytes = s.budgetedBytes(key, it != s.resident.end() ? &it->second : nullptr);
+        if (cost + bytes > s.options.memoryBudgetBytes) {
+            report.budgetLimited = true;
+            break;
+        }
+        cost += bytes;
+        if (it != s.resident.end()) it->second.lastUsed = s.frameNumber;
+    }
     s.wanted.clear();
     for (std::size_t i = 0; i < accepted; ++i) s.wanted.insert(needed[order[i]]);
+    s.wanted.insert(s.besides.begin(), s.besides.begin() + std::ptrdiff_t(besidesAccepted));
     // The frame never autosaves (it would wait for the store): dirty bricks in the budget's way are saved by
     // a loader, and go at a later frame.
     if (!s.makeRoom(0) && s.dirtyInTheWay() && s.loaderAutosaveFailedAt != s.edits) s.autosaveWanted = true;
@@ -1078,6 +1115,13 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     for (std::size_t i = 0; i < accepted; ++i) {
         const BrickKey& key = needed[order[i]];
         if (!isResident[order[i]] && !s.inFlight.count(key) && !s.damaged.count(key)) s.queue.push_back(key);
+    }
+    bool besidesResident = true;
+    for (std::size_t i = 0; i < besidesAccepted; ++i) {
+        const BrickKey& key = s.besides[i];
+        if (s.resident.count(key)) continue;
+        besidesResident = false;
+        if (!s.inFlight.count(key) && !s.damaged.count(key)) s.queue.push_back(key);
     }
     s.wake.notify_all();
 
@@ -1116,7 +1160,8 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
         const BrickKey key = *it++;
         if (!std::binary_search(s.shown.begin(), s.shown.end(), key)) s.dropMesh(key, s.resident.at(key));
     }
-    report.settled = std::all_of(order.begin(), order.begin() + std::ptrdiff_t(accepted), [&](uint32_t n) { return isResident[n] != 0; });
+    report.settled = besidesResident &&
+                     std::all_of(order.begin(), order.begin() + std::ptrdiff_t(accepted), [&](uint32_t n) { return isResident[n] != 0; });
     report.residentPerLevel.assign(std::size_t(s.levels) + 1, 0);
     for (const auto& [key, r] : s.resident) ++report.residentPerLevel[std::size_t(key.level)];
     report.residentBytes = s.residentBytes;
