@@ -1055,19 +1055,22 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     const ViewNeeds needs = viewNeeds(selected, s.levels);
     const std::vector<BrickKey>& needed = needs.bricks;
     const std::vector<uint32_t>& order = needs.order;
-    std::size_t accepted = 0;
     uint64_t cost = 0;
-    for (; accepted < order.size(); ++accepted) {
-        const BrickKey& key = needed[order[accepted]];
+    // Whether the budget still holds a brick (with its mesh where it is to be shown); marks it used.
+    const auto admit = [&](const BrickKey& key, bool meshed) {
         const auto it = s.resident.find(key);
-        const uint64_t bytes = s.budgetedBytes(key, it != s.resident.end() ? &it->second : nullptr);
+        const Impl::Resident* r = it != s.resident.end() ? &it->second : nullptr;
+        const uint64_t bytes = meshed ? s.budgetedBytes(key, r) : r ? r->bytes : s.estimateOf(key);
         if (cost + bytes > s.options.memoryBudgetBytes) {
             report.budgetLimited = true;
-            break;
+            return false;
         }
         cost += bytes;
         if (it != s.resident.end()) it->second.lastUsed = s.frameNumber;
-    }
+        return true;
+    };
+    std::size_t accepted = 0;
+    while (accepted < order.size() && admit(needed[order[accepted]], true)) ++accepted;
     // The bricks beside the selection whose points its meshes read (on the selected bricks' faces, a leaf
     // beyond) where a coarser brick shows their region: needed too, after all the view shows, so that
     // those meshes read the surface there, not the empty space of a brick not loaded (which capped a
@@ -1090,18 +1093,8 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
         s.besidesOf.clear();
         s.besides.clear();
     }
-    std::size_t besidesAccepted = 0;
-    for (; besidesAccepted < s.besides.size(); ++besidesAccepted) {
-        const BrickKey& key = s.besides[besidesAccepted];
-        const auto it = s.resident.find(key);
-        const uint64_t bytes = s.budgetedBytes(key, it != s.resident.end() ? &it->second : nullptr);
-        if (cost + bytes > s.options.memoryBudgetBytes) {
-            report.budgetLimited = true;
-            break;
-        }
-        cost += bytes;
-        if (it != s.resident.end()) it->second.lastUsed = s.frameNumber;
-    }
+    std::size_t besidesAccepted = 0; // read, never shown: no mesh to budget
+    while (besidesAccepted < s.besides.size() && admit(s.besides[besidesAccepted], false)) ++besidesAccepted;
     s.wanted.clear();
     for (std::size_t i = 0; i < accepted; ++i) s.wanted.insert(needed[order[i]]);
     s.wanted.insert(s.besides.begin(), s.besides.begin() + std::ptrdiff_t(besidesAccepted));

@@ -66,8 +66,9 @@ std::vector<SurfacePoint> crossingsIn(const Volume& volume, const std::array<dou
 /// The crossings of a volume binned by the cells of its lattice over a box, for the crossings near a point.
 class CrossingCells {
 public:
-    CrossingCells(std::vector<SurfacePoint> points, double voxel, const std::array<double, 3>& lo, const std::array<double, 3>& hi)
-        : points_(std::move(points)), voxel_(voxel)
+    /// `points` must outlive it.
+    CrossingCells(const std::vector<SurfacePoint>& points, double voxel, const std::array<double, 3>& lo, const std::array<double, 3>& hi)
+        : points_(points), voxel_(voxel)
     {
         for (int a = 0; a < 3; ++a) {
             first_[std::size_t(a)] = int64_t(std::floor(lo[std::size_t(a)] / voxel)) - 1;
@@ -120,7 +121,7 @@ private:
         return (c[0] * dims_[1] + c[1]) * dims_[2] + c[2];
     }
 
-    std::vector<SurfacePoint> points_;
+    const std::vector<SurfacePoint>& points_;
     double voxel_;
     std::array<int64_t, 3> first_{}, dims_{};
     std::vector<int32_t> head_, next_;
@@ -159,7 +160,7 @@ double levelDeviation(const Volume& coarse, const Volume& fine, const std::array
     // the fine one is still matched.
     const double hc = coarse.voxelSize(), hf = fine.voxelSize();
     const int fineReach = std::max(1, int(std::ceil(hc / hf)));
-    std::vector<SurfacePoint> coarsePoints = crossingsIn(coarse, lo, hi), finePoints = crossingsIn(fine, lo, hi);
+    const std::vector<SurfacePoint> coarsePoints = crossingsIn(coarse, lo, hi), finePoints = crossingsIn(fine, lo, hi);
     const CrossingCells coarseCells(coarsePoints, hc, lo, hi), fineCells(finePoints, hf, lo, hi);
     const double fineToCoarse = oneSided(finePoints, coarseCells, 1, unmatched, lo, hi, hc);
     const double coarseToFine = oneSided(coarsePoints, fineCells, fineReach, unmatched, lo, hi, hc);
