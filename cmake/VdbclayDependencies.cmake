@@ -28,3 +28,6 @@ find_package(glfw3 3.3 REQUIRED)
 pkg_check_modules(IMGUI REQUIRED IMPORTED_TARGET imgui)
 # The desktop tests press mouse buttons as the X server delivers them (XTEST, which Xvfb has).
 pkg_check_modules(XTST REQUIRED IMPORTED_TARGET xtst x11)
+# The VR front end: the OpenXR loader (libopenxr-dev); the tests also run Khronos' sample (hello_xr,
+# libopenxr-utils) and the core validation layer (openxr-layer-corevalidation).
+find_package(OpenXR REQUIRED)

@@ -53,6 +53,7 @@ packages=(
     clang-14 libclang-rt-14-dev
     libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslc libglm-dev libstb-dev
     libglfw3-dev libimgui-dev libxtst-dev xvfb xauth
+    libopenxr-dev libopenxr-utils openxr-layer-corevalidation
 )
 
 installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q 'install ok installed'; }
