@@ -258,6 +258,8 @@ struct EditOptions {
     bool discardRecovery = false;
     double autosaveSeconds = 5.0;
     bool json = false;
+    bool vr = false;            // in a headset through OpenXR
+    std::string hand = "right"; // VR: the hand that sculpts
 };
 CLI::App* addEditCommand(CLI::App& parent, EditOptions& options);
 int runEdit(const EditOptions& options);

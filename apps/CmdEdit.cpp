@@ -11,6 +11,7 @@
 #include "render/VulkanContext.h"
 #include "scene/SceneStore.h"
 #include "vdb_hermite/AtomicFile.h"
+#include "vr/VrEditor.h"
 
 #include <CLI/CLI.hpp>
 
@@ -30,7 +31,12 @@ CLI::App* addEditCommand(CLI::App& parent, EditOptions& o)
     cmd->add_option("--record", o.record, "Write every command with its frame and time (rewritten at each autosave)")->type_name("SESSION.json");
     cmd->add_option("--replay", o.replay, "Apply a recorded session")->type_name("SESSION.json");
     cmd->add_flag("--headless", o.headless, "No window: replay, then save (-o), draw (--screenshot) or export (--export-script)");
-    cmd->add_option("--frames", o.frames, "Replay only the session's first N frames")->type_name("N")->check(unsignedInteger());
+    cmd->add_option("--frames", o.frames, "Headless: replay only the session's first N frames; --vr: end the session after N frames")
+        ->type_name("N")->check(unsignedInteger());
+    cmd->add_flag("--vr", o.vr, "Sculpt in a headset through OpenXR (the active runtime, or XR_RUNTIME_JSON's): the dominant hand "
+                                "sculpts (trigger: pressure; thumbstick: size, modes; A/B: undo, redo), the other grabs the "
+                                "world (both: turn and scale; thumbstick: fly; X: frame the scene again)");
+    cmd->add_option("--hand", o.hand, "--vr: the hand that sculpts")->capture_default_str()->check(CLI::IsMember({"left", "right"}));
     cmd->add_option("--screenshot", o.screenshot, "Headless: draw the view after the replay into a PNG (needs a Vulkan device)")->type_name("OUT.png");
     cmd->add_option("--size", o.size, "The screenshot's size (default: the session's window size)")->type_name("WxH");
     cmd->add_option("-o,--output", o.output, "Headless: save the result here (.vdb or .vdbclay). A replay never writes a .vdb scene itself; a store takes the edits, as in any session")
@@ -69,14 +75,16 @@ void checkEditOutputs(const EditOptions& o)
 int runEdit(const EditOptions& o)
 {
     checkEditOutputs(o);
-    if (!o.headless && (!o.output.empty() || !o.screenshot.empty() || !o.exportScript.empty() || o.frames))
-        throw UsageError("-o, --screenshot, --export-script and --frames go with --headless");
+    if (o.vr && (o.headless || !o.replay.empty()))
+        throw UsageError("--vr runs a live session: replay its record with --replay SESSION.json --headless");
+    if (!o.headless && (!o.output.empty() || !o.screenshot.empty() || !o.exportScript.empty() || (o.frames && !o.vr)))
+        throw UsageError("-o, --screenshot and --export-script go with --headless, --frames with --headless or --vr");
     if (!o.size.empty() && o.screenshot.empty()) throw UsageError("--size goes with --screenshot");
     std::optional<std::pair<int, int>> size;
     if (!o.size.empty()) size = parsePictureSize(o.size, "--size");
     std::optional<SessionRecord> replay;
     if (!o.replay.empty()) replay = loadSessionRecord(o.replay);
-    if (!o.headless && !desktopAvailable()) {
+    if (!o.headless && !o.vr && !desktopAvailable()) {
         printError("no display to open the editor's window on (DISPLAY and WAYLAND_DISPLAY are unset): draw pictures with "
                    "'vdbclay render', or replay a session with 'vdbclay edit SCENE --replay SESSION.json --headless'");
         return kExitFailure;
@@ -104,6 +112,12 @@ int runEdit(const EditOptions& o)
                   << "' (kept: save to keep them for good" << (isStorePath(o.scene) ? "" : ", or run again with --discard-recovery to drop them")
                   << ")\n";
 
+    if (o.vr) {
+        vr::VrOptions vrOptions;
+        vrOptions.frames = o.frames;
+        vrOptions.dominantHand = o.hand == "left" ? 0 : 1;
+        return vr::runVrEditor(std::move(session), vrOptions);
+    }
     if (!o.headless) return runDesktopEditor(options, std::move(session), replay ? &*replay : nullptr);
 
     // Whatever way the run ends, a replay's edits leave the .vdb's working store with the session.

@@ -64,9 +64,11 @@ void SessionWorker::submit(const Command& command)
     wake_.notify_one();
 }
 
-FrameReport SessionWorker::frame(double time, const std::array<int, 2>& viewport)
+FrameReport SessionWorker::frame(double time, const std::array<int, 2>& viewport) { return frame(time, viewport, camera_); }
+
+FrameReport SessionWorker::frame(double time, const std::array<int, 2>& viewport, const render::Camera& view)
 {
-    const FrameReport report = session_.streamView(camera_, viewport);
+    const FrameReport report = session_.streamView(view, viewport);
     {
         std::lock_guard<std::mutex> lock(mutex_);
         Task task;

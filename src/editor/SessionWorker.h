@@ -63,6 +63,8 @@ public:
     /// The frame thread's frame: streams for the camera submitted last, then queues the session's side
     /// of the frame (its clock, autosave when due), ordered with the commands.
     FrameReport frame(double time, const std::array<int, 2>& viewport);
+    /// The same, streaming for `view` instead (a headset's eyes move every frame: they are not commands).
+    FrameReport frame(double time, const std::array<int, 2>& viewport, const render::Camera& view);
 
     /// Turns merging of waiting stroke points on or off from now on (a window starting a replay).
     void setMergeStrokePoints(bool merge);

@@ -2,6 +2,7 @@
 
 #include "vdb_hermite/PrintableText.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -13,6 +14,12 @@ constexpr struct {
     const char* name;
 } kViewModes[] = {{ViewMode::Shaded, "shaded"}, {ViewMode::Lod, "lod"}, {ViewMode::Toughness, "toughness"}, {ViewMode::Normals, "normals"}, {ViewMode::Clay, "clay"}};
 } // namespace
+
+double Camera::tanHalfFovY() const
+{
+    if (asymmetric()) return std::max(fovTangents[2], -fovTangents[3]);
+    return std::tan(0.5 * fovYDegrees * M_PI / 180.0);
+}
 
 const char* viewModeName(ViewMode mode)
 {

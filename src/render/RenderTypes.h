@@ -24,6 +24,12 @@ struct Camera {
     /// a view never cuts what lies far away, and the near plane may sit a hair from the eye
     /// (fitNearPlane) without losing depth precision.
     double nearPlane = 0.05;
+    /// A headset's eye: the tangents of its view's left, right, up and down half-angles (left and down
+    /// negative), which replace fovYDegrees and the viewport's aspect. All zero: a symmetric view.
+    std::array<double, 4> fovTangents{0.0, 0.0, 0.0, 0.0};
+    bool asymmetric() const { return fovTangents[1] > fovTangents[0] && fovTangents[2] > fovTangents[3]; }
+    /// tan of half the vertical field of view (the larger half for an eye's asymmetric view).
+    double tanHalfFovY() const;
 };
 
 /// The camera's up vector as the view uses it: `up` unless it is zero, not finite or along the view

@@ -58,11 +58,20 @@ glm::dmat4 viewProjectionMatrix(const Camera& c, double aspect)
     const glm::dvec3 eye(c.eye[0], c.eye[1], c.eye[2]), target(c.target[0], c.target[1], c.target[2]), up(u[0], u[1], u[2]);
     // Reversed depth with the far plane at infinity: depth = near / distance along the view, 1 at the near
     // plane and 0 far away, so float depth keeps its relative precision at every distance.
-    const double f = 1.0 / std::tan(0.5 * glm::radians(c.fovYDegrees));
     const double near = c.nearPlane > 0.0 && std::isfinite(c.nearPlane) ? c.nearPlane : 1e-3;
     glm::dmat4 proj(0.0);
-    proj[0][0] = f / aspect;
-    proj[1][1] = -f; // Vulkan's framebuffer Y points down
+    if (c.asymmetric()) {
+        // An eye's off-centre view: x / -z from tan(left) to tan(right) maps to -1 .. 1, y likewise (down).
+        const auto& t = c.fovTangents;
+        proj[0][0] = 2.0 / (t[1] - t[0]);
+        proj[2][0] = (t[1] + t[0]) / (t[1] - t[0]);
+        proj[1][1] = -2.0 / (t[2] - t[3]); // Vulkan's framebuffer Y points down
+        proj[2][1] = -(t[2] + t[3]) / (t[2] - t[3]);
+    } else {
+        const double f = 1.0 / std::tan(0.5 * glm::radians(c.fovYDegrees));
+        proj[0][0] = f / aspect;
+        proj[1][1] = -f; // Vulkan's framebuffer Y points down
+    }
     proj[2][3] = -1.0;
     proj[3][2] = near;
     return proj * glm::lookAt(eye, target, up);
@@ -499,7 +508,8 @@ struct Renderer::Impl {
             u.lightDir[i] = shading.lightDirection[std::size_t(i)];
         }
         // A pixel's size per unit of distance: textures pick their mipmap from it (see mesh.frag).
-        u.eye[3] = float(2.0 * std::tan(camera.fovYDegrees * M_PI / 360.0) / double(viewportHeight));
+        u.eye[3] = float((camera.asymmetric() ? camera.fovTangents[2] - camera.fovTangents[3] : 2.0 * camera.tanHalfFovY()) /
+                         double(viewportHeight));
         u.lightDir[3] = shading.ambientOcclusion ? 1.0f : 0.0f;
         u.mode[0] = uint32_t(shading.mode);
         u.mode[1] = brush ? (brush->preview ? 1u : 0u) | (brush->highlight ? 2u : 0u) : 0u;

@@ -95,21 +95,36 @@ VulkanContext::VulkanContext(const ContextOptions& options)
         instanceInfo.ppEnabledLayerNames = &kValidationLayer;
         instanceInfo.pNext = &messengerInfo; // also reports on instance creation and destruction
     }
-    const VkResult created = vkCreateInstance(&instanceInfo, nullptr, &instance_);
-    if (created == VK_ERROR_INCOMPATIBLE_DRIVER || created == VK_ERROR_INITIALIZATION_FAILED)
-        throw NoVulkanDevice(std::string("no Vulkan driver is installed (") + resultName(created) +
-                             "); on Debian install mesa-vulkan-drivers for the CPU renderer");
-    check(created, "vkCreateInstance");
-    if (validation_) {
-        auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
-            vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
-        if (create) check(create(instance_, &messengerInfo, nullptr, &messenger_), "vkCreateDebugUtilsMessengerEXT");
+    if (options.creation) {
+        instance_ = options.creation->instance(instanceInfo);
+    } else {
+        const VkResult created = vkCreateInstance(&instanceInfo, nullptr, &instance_);
+        if (created == VK_ERROR_INCOMPATIBLE_DRIVER || created == VK_ERROR_INITIALIZATION_FAILED)
+            throw NoVulkanDevice(std::string("no Vulkan driver is installed (") + resultName(created) +
+                                 "); on Debian install mesa-vulkan-drivers for the CPU renderer");
+        check(created, "vkCreateInstance");
     }
+    try {
+        if (validation_) {
+            auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+                vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
+            if (create) check(create(instance_, &messengerInfo, nullptr, &messenger_), "vkCreateDebugUtilsMessengerEXT");
+        }
+        choosePhysicalDevice(options.creation ? options.creation->physicalDevice(instance_) : VK_NULL_HANDLE);
+        createDevice(options);
+    } catch (...) {
+        release();
+        throw;
+    }
+}
 
+void VulkanContext::choosePhysicalDevice(VkPhysicalDevice given)
+{
     uint32_t count = 0;
     vkEnumeratePhysicalDevices(instance_, &count, nullptr);
     std::vector<VkPhysicalDevice> devices(count);
     vkEnumeratePhysicalDevices(instance_, &count, devices.data());
+    if (given) devices = {given}; // the one a headset is wired to
     // A discrete GPU first, then integrated, then anything else (lavapipe is a CPU device).
     int bestScore = -1;
     for (VkPhysicalDevice d : devices) {
@@ -133,16 +148,13 @@ VulkanContext::VulkanContext(const ContextOptions& options)
             break;
         }
     }
-    if (!physical_) {
-        if (messenger_) {
-            auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
-                vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
-            if (destroy) destroy(instance_, messenger_, nullptr);
-        }
-        vkDestroyInstance(instance_, nullptr);
+    if (!physical_)
         throw NoVulkanDevice("no Vulkan device with a graphics queue was found; on Debian install mesa-vulkan-drivers "
                              "for the CPU renderer");
-    }
+}
+
+void VulkanContext::createDevice(const ContextOptions& options)
+{
     vkGetPhysicalDeviceProperties(physical_, &properties_);
     vkGetPhysicalDeviceMemoryProperties(physical_, &memory_);
     VkPhysicalDeviceFeatures available{};
@@ -166,7 +178,8 @@ VulkanContext::VulkanContext(const ContextOptions& options)
     deviceInfo.pEnabledFeatures = &features;
     deviceInfo.enabledExtensionCount = uint32_t(deviceExtensions.size());
     deviceInfo.ppEnabledExtensionNames = deviceExtensions.data();
-    check(vkCreateDevice(physical_, &deviceInfo, nullptr, &device_), "vkCreateDevice");
+    if (options.creation) device_ = options.creation->device(physical_, deviceInfo);
+    else check(vkCreateDevice(physical_, &deviceInfo, nullptr, &device_), "vkCreateDevice");
     vkGetDeviceQueue(device_, queueFamily_, 0, &queue_);
 
     VkCommandPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
@@ -175,11 +188,13 @@ VulkanContext::VulkanContext(const ContextOptions& options)
     check(vkCreateCommandPool(device_, &poolInfo, nullptr, &pool_), "vkCreateCommandPool");
 }
 
-VulkanContext::~VulkanContext()
+VulkanContext::~VulkanContext() { release(); }
+
+void VulkanContext::release()
 {
     if (device_) {
         vkDeviceWaitIdle(device_);
-        vkDestroyCommandPool(device_, pool_, nullptr);
+        if (pool_) vkDestroyCommandPool(device_, pool_, nullptr);
         vkDestroyDevice(device_, nullptr);
     }
     if (messenger_) {
@@ -188,6 +203,9 @@ VulkanContext::~VulkanContext()
         if (destroy) destroy(instance_, messenger_, nullptr);
     }
     if (instance_) vkDestroyInstance(instance_, nullptr);
+    device_ = VK_NULL_HANDLE;
+    messenger_ = VK_NULL_HANDLE;
+    instance_ = VK_NULL_HANDLE;
 }
 
 uint32_t VulkanContext::memoryType(uint32_t typeBits, VkMemoryPropertyFlags required) const

@@ -7,8 +7,10 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace vdbclay::render {
 
@@ -31,6 +33,14 @@ struct ContextOptions {
     /// Instance extensions a window system needs (GLFW's), and whether to enable the swapchain.
     std::vector<const char*> instanceExtensions;
     bool swapchain = false;
+    /// Where a headset's runtime makes the instance and the device and names the physical device it is
+    /// wired to (XR_KHR_vulkan_enable2): each returns the handle or throws. Absent: made here.
+    struct Creation {
+        std::function<VkInstance(const VkInstanceCreateInfo&)> instance;
+        std::function<VkPhysicalDevice(VkInstance)> physicalDevice;
+        std::function<VkDevice(VkPhysicalDevice, const VkDeviceCreateInfo&)> device;
+    };
+    std::optional<Creation> creation;
 };
 
 class VulkanContext {
@@ -66,6 +76,10 @@ public:
     uint64_t validationMessages() const { return messages_.load(); }
 
 private:
+    /// Picks the device with a graphics queue (among all, or `given`); throws NoVulkanDevice when none.
+    void choosePhysicalDevice(VkPhysicalDevice given);
+    void createDevice(const ContextOptions& options);
+    void release();
     static VKAPI_ATTR VkBool32 VKAPI_CALL onMessage(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                     VkDebugUtilsMessageTypeFlagsEXT types,
                                                     const VkDebugUtilsMessengerCallbackDataEXT* data, void* self);

@@ -1,0 +1,46 @@
+// `vdbclay edit SCENE --vr`: the editing session in a headset through OpenXR. The frame loop follows
+// the runtime's predicted display times and never waits for an edit, a mesh or a load: the session's
+// commands go to its edit worker (SessionWorker), meshes are made on workers (StreamedSceneChunks), and
+// each frame only reads the controllers, turns them into commands and moves of the world (VrControls),
+// streams for the head, uploads within a budget and draws both eyes in one frame of the renderer.
+#pragma once
+
+#include "editor/EditingSession.h"
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vdbclay::vr {
+
+struct VrOptions {
+    std::optional<uint64_t> frames; // the session ends after this many frames (tests, CI, bug reports)
+    bool validation = false;        // the Vulkan validation layer (tests: zero messages)
+    int dominantHand = 1;           // 0 left, 1 right: the hand that sculpts
+};
+
+/// What a VR session did: its frames and how they kept time.
+struct VrReport {
+    uint64_t frames = 0;          // frames ended
+    uint64_t framesDrawn = 0;     // of those, frames whose eyes were drawn (shouldRender)
+    uint64_t missedFrames = 0;    // display refreshes the frames skipped (predicted display times more than one period apart)
+    std::vector<double> cpuMs;    // per drawn frame: from xrBeginFrame's return to xrEndFrame's, drawing's recording included
+    std::vector<std::string> states; // the session states, in order
+    uint64_t commands = 0;        // commands the controllers gave
+    uint64_t hapticPulses = 0;
+    uint64_t validationMessages = 0;
+    bool lost = false;            // the runtime lost the session (LOSS_PENDING)
+    std::string headset;          // what the runtime offered
+};
+
+/// Runs the VR editor on `session` until the headset's session ends (or `options.frames` frames).
+/// Throws NoXrRuntime (XrCheck.h) when no runtime answers, render::NoVulkanDevice, XrError.
+VrReport runVrSession(EditingSession& session, const VrOptions& options);
+
+/// `vdbclay edit --vr`: runVrSession with the one-line messages and exit codes of the command line (no
+/// runtime: one line, 1; a lost session: one line, 1, the edits autosaved).
+int runVrEditor(std::unique_ptr<EditingSession> session, const VrOptions& options);
+
+} // namespace vdbclay::vr
