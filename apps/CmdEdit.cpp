@@ -45,7 +45,8 @@ CLI::App* addEditCommand(CLI::App& parent, EditOptions& o)
         ->type_name("OUT.json");
     cmd->add_flag("--discard-recovery", o.discardRecovery, "A .vdb: drop edits autosaved after its last save instead of recovering them");
     cmd->add_option("--autosave", o.autosaveSeconds, "Seconds between autosaves while sculpting")->capture_default_str()->type_name("S")->check(positiveNumber());
-    cmd->add_flag("--json", o.json, "Headless: print {\"recovered_edits\", \"frames\", \"commands\", \"stamps\", \"undo_depth\", ...}");
+    cmd->add_flag("--json", o.json, "Headless: print {\"recovered_edits\", \"frames\", \"commands\", \"stamps\", \"undo_depth\", ...}; "
+                                    "--vr: {\"frames\", \"missed_frames\", \"frame_ms\", \"states\", ...}");
     cmd->footer(desktopShortcutsHelp(loadKeymap(defaultConfigFolder(), false, nullptr)));
     return cmd;
 }
@@ -116,6 +117,7 @@ int runEdit(const EditOptions& o)
         vr::VrOptions vrOptions;
         vrOptions.frames = o.frames;
         vrOptions.dominantHand = o.hand == "left" ? 0 : 1;
+        vrOptions.json = o.json;
         return vr::runVrEditor(std::move(session), vrOptions);
     }
     if (!o.headless) return runDesktopEditor(options, std::move(session), replay ? &*replay : nullptr);

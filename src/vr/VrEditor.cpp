@@ -213,6 +213,20 @@ VrReport runVrSession(EditingSession& session, const VrOptions& options)
     return report;
 }
 
+nlohmann::json vrReportJson(const VrReport& report)
+{
+    return {{"frames", report.frames},
+            {"frames_drawn", report.framesDrawn},
+            {"missed_frames", report.missedFrames},
+            {"frame_ms", {{"p50", percentile(report.cpuMs, 0.5)}, {"p99", percentile(report.cpuMs, 0.99)}}},
+            {"states", report.states},
+            {"commands", report.commands},
+            {"haptic_pulses", report.hapticPulses},
+            {"validation_messages", report.validationMessages},
+            {"lost", report.lost},
+            {"headset", report.headset}};
+}
+
 int runVrEditor(std::unique_ptr<EditingSession> session, const VrOptions& options)
 {
     VrReport report;
@@ -226,6 +240,7 @@ int runVrEditor(std::unique_ptr<EditingSession> session, const VrOptions& option
         return 1;
     }
     session->autosave();
+    if (options.json) std::cout << vrReportJson(report).dump() << std::endl;
     std::cerr << "vdbclay: vr: " << report.frames << " frames on " << report.headset << "; " << report.missedFrames
               << " display refreshes missed; CPU per drawn frame p50 " << percentile(report.cpuMs, 0.5) << " ms, p99 "
               << percentile(report.cpuMs, 0.99) << " ms\n";

@@ -7,6 +7,8 @@
 
 #include "editor/EditingSession.h"
 
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -19,6 +21,7 @@ struct VrOptions {
     std::optional<uint64_t> frames; // the session ends after this many frames (tests, CI, bug reports)
     bool validation = false;        // the Vulkan validation layer (tests: zero messages)
     int dominantHand = 1;           // 0 left, 1 right: the hand that sculpts
+    bool json = false;              // runVrEditor prints the report as one JSON object on stdout (vrReportJson)
 };
 
 /// What a VR session did: its frames and how they kept time.
@@ -34,6 +37,10 @@ struct VrReport {
     bool lost = false;            // the runtime lost the session (LOSS_PENDING)
     std::string headset;          // what the runtime offered
 };
+
+/// {"frames", "frames_drawn", "missed_frames", "frame_ms": {"p50", "p99"}, "states", "commands",
+/// "haptic_pulses", "validation_messages", "lost", "headset"}.
+nlohmann::json vrReportJson(const VrReport& report);
 
 /// Runs the VR editor on `session` until the headset's session ends (or `options.frames` frames).
 /// Throws NoXrRuntime (XrCheck.h) when no runtime answers, render::NoVulkanDevice, XrError.

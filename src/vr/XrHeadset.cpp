@@ -3,6 +3,8 @@
 #include "render/OffscreenTarget.h"
 
 #include <algorithm>
+#include <cstdlib>
+#include <filesystem>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -67,6 +69,32 @@ std::vector<VkImage> swapchainImages(XrSwapchain swapchain, XrInstance instance)
     std::vector<VkImage> out;
     for (const auto& i : images) out.push_back(i.image);
     return out;
+}
+
+/// Why no runtime can be loaded, or empty when the loader will find a manifest: the OpenXR loader's
+/// search on Linux (XR_RUNTIME_JSON, then active_runtime.json under XDG_CONFIG_HOME, XDG_CONFIG_DIRS and
+/// /etc). Checked first, so that a machine with no runtime gets one line, not the loader's log.
+std::string missingRuntime()
+{
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (const char* named = std::getenv("XR_RUNTIME_JSON"); named && *named)
+        return fs::is_regular_file(named, ec) ? std::string() : std::string("XR_RUNTIME_JSON names ") + named + ", which does not exist";
+    std::vector<fs::path> folders;
+    const char* home = std::getenv("HOME");
+    if (const char* config = std::getenv("XDG_CONFIG_HOME"); config && *config) folders.emplace_back(config);
+    else if (home && *home) folders.push_back(fs::path(home) / ".config");
+    const char* dirs = std::getenv("XDG_CONFIG_DIRS");
+    std::string list = dirs && *dirs ? dirs : "/etc/xdg";
+    for (std::size_t at = 0; at <= list.size();) {
+        const std::size_t colon = std::min(list.find(':', at), list.size());
+        if (colon > at) folders.emplace_back(list.substr(at, colon - at));
+        at = colon + 1;
+    }
+    folders.emplace_back("/etc");
+    for (const fs::path& folder : folders)
+        if (fs::is_regular_file(folder / "openxr/1/active_runtime.json", ec)) return {};
+    return "no openxr/1/active_runtime.json under ~/.config, /etc/xdg or /etc";
 }
 
 } // namespace
@@ -161,6 +189,9 @@ void XrHeadset::destroy()
 
 void XrHeadset::createInstance()
 {
+    if (const std::string missing = missingRuntime(); !missing.empty())
+        throw NoXrRuntime("no OpenXR runtime is installed or active (" + missing +
+                          "): install one (Monado, SteamVR) or point XR_RUNTIME_JSON at its manifest");
     uint32_t count = 0;
     XrResult r = xrEnumerateInstanceExtensionProperties(nullptr, 0, &count, nullptr);
     if (XR_FAILED(r))

@@ -26,12 +26,14 @@ inline std::string quote(const std::string& s)
     return q + "'";
 }
 
-/// Runs `vdbclay ARGS` with `dir` as the working directory, capturing stdout and stderr.
-inline CommandResult runCli(const TempDir& dir, const std::string& args)
+/// Runs `PROGRAM ARGS` (the vdbclay binary by default) with `dir` as the working directory and
+/// `environment` ("NAME=value ..." assignments, quoted as a shell reads them) set, capturing stdout and stderr.
+inline CommandResult runCli(const TempDir& dir, const std::string& args, const std::string& environment = "",
+                            const std::string& program = kCli)
 {
     const std::string outPath = dir.file(".stdout"), errPath = dir.file(".stderr");
-    const std::string command = "cd " + quote(dir.path().string()) + " && " + quote(kCli) + " " + args + " >" +
-                                quote(outPath) + " 2>" + quote(errPath);
+    const std::string command = "cd " + quote(dir.path().string()) + " && " + (environment.empty() ? "" : "env " + environment + " ") +
+                                quote(program) + " " + args + " >" + quote(outPath) + " 2>" + quote(errPath);
     const int status = std::system(command.c_str());
     CommandResult r;
     if (status != -1 && WIFEXITED(status)) r.exitCode = WEXITSTATUS(status);
