@@ -123,7 +123,7 @@ case "$action" in
             VK_DRIVER_FILES=/nonexistent/vdbclay-no-driver.json VK_ICD_FILENAMES=/nonexistent/vdbclay-no-driver.json \
             ASAN_OPTIONS=detect_leaks=1 VDBCLAY_SWEEP_STEP=1 VDBCLAY_KILL_TRIALS=12 LSAN_OPTIONS="suppressions=${repo}/tests/sanitizer/lsan.supp" \
                 UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=${repo}/tests/sanitizer/ubsan.supp" \
-                ctest --test-dir build-asan --output-on-failure -j"${jobs}" -E 'render|desktop'
+                ctest --test-dir build-asan --output-on-failure -j"${jobs}" -E 'render|desktop|xr:'
             step "test: fuzzers, ${FUZZ_SECONDS:-60} s each"
             bash scripts/run-fuzzers.sh build-asan "${FUZZ_SECONDS:-60}"
         fi
