@@ -2,7 +2,7 @@
 // the settings file and the file browser's listing.
 #include "desktop/DesktopEditor.h"
 #include "desktop/DesktopSettings.h"
-#include "desktop/FileBrowser.h"
+#include "panels/FileBrowser.h"
 #include "desktop/Keymap.h"
 #include "support/TestUtil.h"
 #include "vdb_hermite/PrintableText.h"

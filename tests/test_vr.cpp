@@ -4,7 +4,9 @@
 // driver, leaves them out).
 #include "support/CliRun.h"
 #include "support/TestUtil.h"
+#include "vr/VrComfort.h"
 #include "vr/VrControls.h"
+#include "vr/VrMenus.h"
 #include "vr/WorldPlacement.h"
 
 #include <catch2/catch.hpp>
@@ -171,6 +173,51 @@ TEST_CASE("vr controls: undo and redo on the brush hand's buttons, once per pres
     f.hands[1].primary = true;
     out = controls.update(f, brush, world);
     for (const Command& c : out.commands) CHECK(c.kind != Command::Kind::Undo);
+}
+
+TEST_CASE("vr menus: the menu stands above the off hand, and a ray meets it at the picture's pixel it points at", "[vr]")
+{
+    ControllerFrame f;
+    f.hands[0] = handAt(-0.1, 1.1, -0.35);
+    f.hands[1] = handAt(0.2, 1.0, -0.2);
+    MenuLayout layout = layoutMenus(f, 1, true, true);
+    REQUIRE(layout.menu);
+    CHECK(layout.menu->centre.y > f.hands[0].grip.position.y + 0.5 * MenuLayout::kMenuHeight);
+    CHECK(layout.hints.size() == 2);
+    CHECK(layout.hints[0].centre.x < f.hands[0].grip.position.x); // on each hand's outer side
+    CHECK(layout.hints[1].centre.x > f.hands[1].grip.position.x);
+    // A ray from the right hand to a point a quarter across and a third down the menu.
+    const auto& m = *layout.menu;
+    const glm::dvec3 target = m.centre + m.right * (-0.25 * m.width) + m.up * ((0.5 - 1.0 / 3.0) * m.height);
+    Pose ray;
+    ray.position = f.hands[1].grip.position;
+    const glm::dvec3 d = glm::normalize(target - ray.position);
+    ray.orientation = glm::dquat(glm::dvec3(0, 0, -1), d);
+    const auto hit = layout.pointAt(ray, 1024, 1024);
+    REQUIRE(hit);
+    CHECK(hit->x == Approx(0.25 * m.uv[2] * 1024).margin(1e-6));
+    CHECK(hit->y == Approx((1.0 / 3.0) * m.uv[3] * 1024).margin(1e-6));
+    // Pointing away misses; no menu, nothing to meet.
+    ray.orientation = glm::dquat(glm::dvec3(0, 0, -1), -d);
+    CHECK_FALSE(layout.pointAt(ray, 1024, 1024));
+    CHECK_FALSE(layoutMenus(f, 1, false, true).menu);
+    CHECK(layoutMenus(f, 1, false, false).hints.empty());
+}
+
+TEST_CASE("vr comfort: late frames lower the detail to its floor, frames in time bring it back, frames near the deadline hold it", "[vr]")
+{
+    VrComfort comfort;
+    const double period = 1000.0 / 90.0;
+    comfort.frameTook(7.0, period); // between half and 0.8 of the period: held
+    CHECK(comfort.detail() == 1.0);
+    comfort.frameTook(10.0, period);
+    CHECK(comfort.detail() == Approx(0.8));
+    for (int i = 0; i < 20; ++i) comfort.frameTook(30.0, period);
+    CHECK(comfort.detail() == VrComfort::kLeastDetail);
+    comfort.frameTook(7.0, period);
+    CHECK(comfort.detail() == VrComfort::kLeastDetail);
+    for (int i = 0; i < 200; ++i) comfort.frameTook(3.0, period);
+    CHECK(comfort.detail() == 1.0);
 }
 
 // --- sessions through the fake runtime -------------------------------------------------------------
@@ -522,4 +569,70 @@ TEST_CASE("xr: a runtime without depth, with sRGB formats only and one view driv
     const Ppm image = readPpm(dir.file("frame-00020-view-0.ppm"));
     CHECK(image.width == 200);
     CHECK(silhouette(image).pixels > 0.1 * image.width * image.height);
+}
+
+TEST_CASE("xr: the menu stands where the off hand holds it, and a choice made by pointing and pulling the trigger changes the next stroke", "[vr]")
+{
+    // The left hand holds the menu up (Y at frame 5); the right hand stays low and away.
+    const glm::dvec3 offHand(-0.1, 1.1, -0.35);
+    json left = json::array({handKey(0, offHand.x, offHand.y, offHand.z), {{"frame", 5}, {"buttons", {{"y", true}}}}, {{"frame", 7}, {"buttons", {{"y", false}}}}});
+    ControllerFrame held;
+    held.hands[0] = handAt(offHand.x, offHand.y, offHand.z);
+    const MenuLayout layout = layoutMenus(held, 1, true, true);
+    REQUIRE(layout.menu);
+    const MenuLayout::Panel& menu = *layout.menu;
+
+    TempDir dir;
+    makeBall(dir);
+    makeBall(dir, "original.vdb");
+    const json first = vrReport(runVr(dir, {{"capture", {3, 20}}, {"left", left}, {"right", json::array({handKey(0, 0.3, 0.6, -0.1)})}}, "ball.vdb --frames 21"));
+    checkNoXrFindings(dir);
+    // The menu is drawn where the hand holds it: the left eye's pixel at its centre turns to the menu's
+    // dark panel once it is shown.
+    {
+        const glm::dvec3 eye(-0.032, 1.6, 0.0); // the fake's head and ipd
+        const glm::dvec3 p = menu.centre - eye;
+        const double f = 128.0 / std::tan(0.8);
+        const int px = int(128.0 + f * p.x / -p.z), py = int(128.0 - f * p.y / -p.z);
+        const Ppm before = readPpm(dir.file("frame-00003-view-0.ppm")), after = readPpm(dir.file("frame-00020-view-0.ppm"));
+        INFO("menu centre at pixel " << px << ", " << py);
+        REQUIRE(px >= 0);
+        REQUIRE(px < 256);
+        REQUIRE(py >= 0);
+        REQUIRE(py < 256);
+        const uint8_t* b = before.at(px, py);
+        const uint8_t* a = after.at(px, py);
+        CHECK(int(a[0]) + a[1] + a[2] < int(b[0]) + b[1] + b[2] - 30);
+    }
+    REQUIRE(first.at("menu_widgets").contains("mirror x"));
+    const std::array<float, 4> rect = first.at("menu_widgets").at("mirror x");
+
+    // The same menu; the right hand points at "mirror x" and pulls the trigger, then goes to the ball
+    // and adds a stroke: mirrored now.
+    const double u = (0.5 * (rect[0] + rect[2]) / 1024.0 - menu.uv[0]) / (menu.uv[2] - menu.uv[0]);
+    const double v = (0.5 * (rect[1] + rect[3]) / 1024.0 - menu.uv[1]) / (menu.uv[3] - menu.uv[1]);
+    const glm::dvec3 target = menu.centre + menu.right * ((u - 0.5) * menu.width) + menu.up * ((0.5 - v) * menu.height);
+    const glm::dvec3 from(0.15, 1.0, -0.2);
+    const glm::dquat aim = glm::dquat(glm::dvec3(0, 0, -1), glm::normalize(target - from));
+    auto pose = [](uint64_t frame, const glm::dvec3& p, const glm::dquat& q, double trigger) {
+        return json{{"frame", frame}, {"position", {p.x, p.y, p.z}}, {"orientation", {q.x, q.y, q.z, q.w}}, {"trigger", trigger}};
+    };
+    const glm::dquat ahead(1, 0, 0, 0);
+    json right = json::array({pose(0, from, aim, 0.0), pose(25, from, aim, 0.0), pose(26, from, aim, 1.0), pose(29, from, aim, 1.0),
+                              pose(30, from, aim, 0.0), pose(40, glm::dvec3(0.1, 1.25, -0.5), ahead, 0.0),
+                              pose(45, glm::dvec3(0.1, 1.25, -0.5), ahead, 1.0), pose(60, glm::dvec3(0.2, 1.3, -0.5), ahead, 1.0),
+                              pose(64, glm::dvec3(0.2, 1.3, -0.5), ahead, 0.0)});
+    TempDir second;
+    makeBall(second);
+    makeBall(second, "original.vdb");
+    vrReport(runVr(second, {{"left", left}, {"right", right}}, "ball.vdb --frames 75 --record session.json"));
+    checkNoXrFindings(second);
+    REQUIRE(runCli(second, "edit original.vdb --replay session.json --headless --export-script ops.json").exitCode == 0);
+    const json ops = json::parse(readText(second.file("ops.json"))).at("ops");
+    REQUIRE(ops.size() > 0);
+    for (const json& op : ops) {
+        CHECK(op.at("mode") == "add");
+        REQUIRE(op.contains("symmetry"));
+        CHECK(op.at("symmetry").at("mirror") == json({"x"}));
+    }
 }

@@ -124,7 +124,7 @@ struct DesktopEditor::Impl {
     render::StreamedSceneChunks chunks; // meshes made on workers
     VkDescriptorPool imguiPool = VK_NULL_HANDLE;
     bool imguiReady = false;
-    DesktopPanels panels;
+    SessionPanels panels;
     FrameFigures figures;  // what the overlay shows: the last whole frame
     FrameFigures measured; // the parts of the frame under way, shown once its interval is known
     render::FrameStats lastStats;

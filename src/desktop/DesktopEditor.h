@@ -5,7 +5,7 @@
 // (DesktopSettings).
 #pragma once
 
-#include "desktop/DesktopPanels.h"
+#include "panels/SessionPanels.h"
 #include "desktop/Keymap.h"
 #include "editor/EditingSession.h"
 #include "render/RenderTypes.h"
@@ -74,7 +74,7 @@ public:
     /// reopen the scene with SessionOptions::discardRecovery).
     bool discardRecoveryRequested() const;
 
-    /// Where a tracked widget was drawn last frame (DesktopPanels::widgetRects), if it was.
+    /// Where a tracked widget was drawn last frame (SessionPanels::widgetRects), if it was.
     std::optional<std::array<float, 4>> widgetRect(const std::string& label) const;
 
     GLFWwindow* window() const;

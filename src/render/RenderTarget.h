@@ -13,6 +13,9 @@ public:
     virtual int height() const = 0;
     virtual VkRenderPass renderPass() const = 0;
     virtual VkFramebuffer framebuffer() const = 0;
+    /// Recorded before the target's render pass (outside any pass): what its overlay reads, drawn first
+    /// (the picture of a headset's menus).
+    virtual void recordBeforePass(VkCommandBuffer) {}
     /// Recorded inside the render pass after the scene's views: what the target draws over them (menus).
     virtual void recordOverlay(VkCommandBuffer) {}
     /// Recorded after the render pass (a readback of the pixels).

@@ -582,6 +582,7 @@ struct Renderer::Impl {
             begin.renderArea = {{0, 0}, {uint32_t(target->width()), uint32_t(target->height())}};
             begin.clearValueCount = 2;
             begin.pClearValues = clears;
+            target->recordBeforePass(cmd);
             vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
             for (std::size_t vi = 0; vi < views.size(); ++vi) {
                 const RenderView& v = views[vi];
@@ -791,6 +792,8 @@ void Renderer::removeChunk(ChunkId id)
     impl_->unqueueChunk(id);
     if (impl_->chunks.count(id)) impl_->removals.insert(id);
 }
+
+void Renderer::setUploadBytesPerFrame(uint64_t bytes) { impl_->options.uploadBytesPerFrame = bytes; }
 
 std::size_t Renderer::uploadsWaiting() const { return impl_->pending.size(); }
 

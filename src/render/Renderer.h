@@ -92,6 +92,9 @@ public:
     /// wait for their upload (uploadBytesPerFrame), removals wait with them (a few frames at most): what
     /// replaces a removed chunk is usually among them, and the view keeps no hole meanwhile.
     void removeChunk(ChunkId id);
+    /// Changes RendererOptions::uploadBytesPerFrame from the next frame on (a headset's frame that runs
+    /// late uploads less).
+    void setUploadBytesPerFrame(uint64_t bytes);
     /// Chunks queued and not yet uploaded.
     std::size_t uploadsWaiting() const;
     bool hasChunk(ChunkId id) const;

@@ -69,7 +69,8 @@ VrControls::Output VrControls::update(const ControllerFrame& frame, const BrushS
     // The brush's size and mode: the dominant thumbstick.
     BrushSettings shown = brush;
     const double stickY = hand.thumbstick.y, stickX = hand.thumbstick.x;
-    if (std::fabs(stickY) > kStickDeadZone && std::fabs(stickY) >= std::fabs(stickX)) {
+    const bool menuHasStick = frame.pointerOnMenu; // it scrolls the menu then
+    if (!menuHasStick && std::fabs(stickY) > kStickDeadZone && std::fabs(stickY) >= std::fabs(stickX)) {
         const double from = resizing_.value_or(brush.radius);
         resizing_ = std::clamp(from * std::exp2(stickY * frame.seconds), 0.5, 4096.0); // doubles a second at full tilt
     } else if (resizing_) {
@@ -81,7 +82,7 @@ VrControls::Output VrControls::update(const ControllerFrame& frame, const BrushS
         out.commands.push_back(set);
         resizing_.reset();
     }
-    if (!modeFlick_ && std::fabs(stickX) > kStickFlick && std::fabs(stickX) > std::fabs(stickY)) {
+    if (!menuHasStick && !modeFlick_ && std::fabs(stickX) > kStickFlick && std::fabs(stickX) > std::fabs(stickY)) {
         modeFlick_ = true;
         const auto& modes = vrBrushModes();
         auto at = std::find(modes.begin(), modes.end(), shown.mode);
@@ -100,7 +101,7 @@ VrControls::Output VrControls::update(const ControllerFrame& frame, const BrushS
     // The brush: at the dominant hand's fingertips, in scene units.
     if (hand.tracked) out.brush = out.world.toScene(hand.grip.position + hand.grip.forward() * kBrushReachMetres);
     const double pressure = hand.trigger;
-    if (!stroking_ && out.brush && hand.trigger >= kStrokeStart && !resizing_) {
+    if (!stroking_ && out.brush && hand.trigger >= kStrokeStart && !resizing_ && !frame.pointerOnMenu) {
         out.commands.push_back(strokeCommand(Command::Kind::StrokeBegin, *out.brush, pressure));
         stroking_ = true;
         lastPoint_ = out.brush;
@@ -115,7 +116,7 @@ VrControls::Output VrControls::update(const ControllerFrame& frame, const BrushS
     }
     out.strokeActive = stroking_;
 
-    // Buttons: undo and redo on the brush hand, framing on the other.
+    // Buttons: undo and redo on the brush hand; framing and the menu on the other; hints on either's menu button.
     if (!stroking_) {
         if (pressed(hand.primary, handBefore.primary)) {
             Command c;
@@ -129,6 +130,8 @@ VrControls::Output VrControls::update(const ControllerFrame& frame, const BrushS
         }
     }
     out.frameAgain = pressed(off.primary, offBefore.primary);
+    out.toggleMenu = pressed(off.secondary, offBefore.secondary);
+    out.toggleHints = pressed(off.menu, offBefore.menu) || pressed(hand.menu, handBefore.menu);
     previous_ = frame.hands;
     return out;
 }

@@ -1,7 +1,7 @@
 // What the controllers mean, as editing-session commands (the headset's only way to change the scene)
 // and as moves of the world: the dominant hand is the brush (its trigger strokes with pressure, its
 // thumbstick sizes the brush and cycles modes, its buttons undo and redo), the other hand grabs and
-// flies the world and frames the scene again, both hands grab to turn and scale it. Device-free: XrControllers fills a
+// flies the world, frames the scene again and shows the menu, both hands grab to turn and scale it. Device-free: XrControllers fills a
 // ControllerFrame from OpenXR; tests fill it by hand.
 #pragma once
 
@@ -32,6 +32,7 @@ struct ControllerFrame {
     std::array<HandInput, 2> hands; // left, right
     double seconds = 0.0;           // since the previous frame
     bool focused = true;            // the session has input focus (else no input reaches it)
+    bool pointerOnMenu = false;     // the dominant hand points at the menu: its trigger and thumbstick are the menu's
 };
 
 /// How far in front of the grip the brush's centre sits (metres): between the fingertips, as seed 004's
@@ -51,6 +52,8 @@ public:
         double brushRadius = 0.0;        // scene units, as it would be applied now (a resize under way included)
         bool touchedSurface = false;     // set by the caller's surface test; see brushTouch
         bool frameAgain = false;         // the off hand's primary button: frame the scene again
+        bool toggleMenu = false;         // the off hand's secondary button
+        bool toggleHints = false;        // a menu button
         bool strokeActive = false;
     };
     /// One frame of input: `brush` is the session's brush as the frame sees it, `world` the transform now.

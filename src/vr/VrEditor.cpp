@@ -6,7 +6,9 @@
 #include "render/Renderer.h"
 #include "render/SceneChunks.h"
 #include "render/ScenePicture.h"
+#include "vr/VrComfort.h"
 #include "vr/VrControls.h"
+#include "vr/VrMenus.h"
 #include "vr/XrControllers.h"
 #include "vr/XrHeadset.h"
 
@@ -83,6 +85,18 @@ double percentile(std::vector<double> v, double p)
 
 } // namespace
 
+namespace {
+
+void extendBox(std::array<double, 3>& lo, std::array<double, 3>& hi, const glm::dvec3& p, double margin)
+{
+    for (int a = 0; a < 3; ++a) {
+        lo[std::size_t(a)] = std::min(lo[std::size_t(a)], p[a] - margin);
+        hi[std::size_t(a)] = std::max(hi[std::size_t(a)], p[a] + margin);
+    }
+}
+
+} // namespace
+
 VrReport runVrSession(EditingSession& session, const VrOptions& options)
 {
     VrReport report;
@@ -95,6 +109,7 @@ VrReport runVrSession(EditingSession& session, const VrOptions& options)
     rendererOptions.uploadBytesPerFrame = render::kInteractiveUploadBytesPerFrame;
     render::Renderer renderer(headset.vulkan(), rendererOptions);
     XrControllers controllers(headset.instance(), headset.session());
+    VrMenus menus(headset.vulkan(), headset.renderPass());
     const render::MaterialLook look =
         render::materialLook(session.scene().voxelSize(), std::filesystem::path(session.scenePath()).parent_path().string());
     MaterialTable drawnMaterials;
@@ -103,7 +118,15 @@ VrReport runVrSession(EditingSession& session, const VrOptions& options)
         render::StreamedSceneChunks chunks(session.scene(), kMeshThreads);
         SessionWorker worker(session);
         VrControls controls(options.dominantHand);
+        VrComfort comfort;
         WorldTransform world;
+        std::vector<render::RenderView> eyes;
+        headset.setEyeRecorders([&](VkCommandBuffer cmd, uint32_t view) { if (view == 0) menus.recordPicture(cmd); },
+                                [&](VkCommandBuffer cmd, uint32_t view) {
+                                    const render::RenderView& eye = eyes.at(view);
+                                    menus.recordQuads(cmd, eye.camera, world, eye.target->width(), eye.target->height());
+                                });
+        FrameFigures figures;
         bool framed = false;
         bool touching = false;
         XrTime lastDisplayTime = 0;
@@ -118,13 +141,15 @@ VrReport runVrSession(EditingSession& session, const VrOptions& options)
             const XrHeadset::Frame frame = headset.beginFrame();
             const Clock::time_point begun = Clock::now();
             const double seconds = std::min(0.1, std::chrono::duration<double>(begun - lastFrame).count());
+            figures.intervalMs = std::chrono::duration<double, std::milli>(begun - lastFrame).count();
+            figures.averageIntervalMs = figures.averageIntervalMs > 0.0 ? 0.9 * figures.averageIntervalMs + 0.1 * figures.intervalMs : figures.intervalMs;
             lastFrame = begun;
             if (lastDisplayTime && frame.period > 0 && frame.displayTime - lastDisplayTime > frame.period + frame.period / 2)
                 report.missedFrames += uint64_t((frame.displayTime - lastDisplayTime + frame.period / 2) / frame.period) - 1;
             lastDisplayTime = frame.displayTime;
 
             const std::vector<XrView> views = frame.shouldRender ? headset.locateViews(frame.displayTime) : std::vector<XrView>{};
-            if (!framed && !views.empty()) {
+            if (!views.empty() && !framed) {
                 Pose head = toPose(views.front().pose);
                 head.position = 0.5 * (toPose(views.front().pose).position + toPose(views.back().pose).position);
                 const auto [lo, hi] = session.sceneBox();
@@ -132,15 +157,22 @@ VrReport runVrSession(EditingSession& session, const VrOptions& options)
                 controls.setScaleLimits(world.scale / kScaleRange, world.scale * kScaleRange);
                 framed = true;
             }
-            const ControllerFrame input = controllers.read(headset.stage(), frame.displayTime, headset.focused(), seconds);
+            // Input: the menus first (where the pointer is decides what the trigger does), then the hands.
+            ControllerFrame input = controllers.read(headset.stage(), frame.displayTime, headset.focused(), seconds);
+            figures.missedFrames = report.missedFrames;
+            figures.detail = comfort.detail();
+            figures.pendingEdits = worker.pending();
+            std::vector<Command> commands = menus.update(input, options.dominantHand, worker, figures, seconds);
             const VrControls::Output out = controls.update(input, worker.brush(), world);
             world = out.world;
-            for (const Command& c : out.commands) worker.submit(c);
-            report.commands += out.commands.size();
+            commands.insert(commands.end(), out.commands.begin(), out.commands.end());
+            for (const Command& c : commands) worker.submit(c);
+            report.commands += commands.size();
+            if (out.toggleMenu) menus.toggleMenu();
+            if (out.toggleHints) menus.toggleHints();
             if (out.frameAgain && !views.empty()) {
-                Pose head = toPose(views.front().pose);
                 const auto [lo, hi] = session.sceneBox();
-                world = frameScene(lo, hi, head);
+                world = frameScene(lo, hi, toPose(views.front().pose));
             }
             // A pulse when the brush reaches the surface (from the resident data, never a load).
             bool touches = false;
@@ -158,32 +190,43 @@ VrReport runVrSession(EditingSession& session, const VrOptions& options)
             if (views.empty()) {
                 headset.endFrame(frame, {}, 0.0, false);
             } else {
-                std::array<int, 2> viewport{0, 0};
                 std::vector<render::RenderTarget*> targets = headset.acquireEyes();
-                const render::Camera head = headCamera(views, world, &viewport, targets.front()->height());
-                const double time = std::chrono::duration<double>(begun - started).count();
-                worker.frame(time, viewport, head);
+                // The loaders stream for the head at the frame's detail: fewer pixels, a coarser cut.
+                std::array<int, 2> viewport{0, 0};
+                const int streamedHeight = std::max(16, int(std::lround(targets.front()->height() * comfort.detail())));
+                const render::Camera head = headCamera(views, world, &viewport, streamedHeight);
+                figures.stream = worker.frame(std::chrono::duration<double>(begun - started).count(), viewport, head);
                 for (const std::string& failure : worker.takeFailures()) std::cerr << "vdbclay: " << failure << "\n";
-                chunks.sync(session.scene(), renderer);
+                figures.meshesWaiting = chunks.sync(session.scene(), renderer).waiting;
                 for (const std::string& failure : chunks.takeMeshFailures()) std::cerr << "vdbclay: " << failure << "\n";
+                figures.bricksShown = session.scene().shownBricks().size();
                 MaterialTable materials = session.scene().materials();
                 if (!(materials == drawnMaterials) || renderer.picturesReady()) {
                     for (const std::string& w : renderer.setMaterials(materials, look, render::Renderer::PictureLoading::Background))
                         std::cerr << "vdbclay: warning: " << w << "\n";
                     drawnMaterials = std::move(materials);
                 }
+                render::ShadingOptions shading = renderer.shading();
+                if (shading.mode != menus.panels().look || shading.wireframe != menus.panels().wireframe) {
+                    shading.mode = menus.panels().look;
+                    shading.wireframe = menus.panels().wireframe;
+                    renderer.setShading(shading);
+                }
                 BrushSettings shown = worker.brush();
                 shown.radius = out.brushRadius;
                 renderer.setBrush(out.brush ? std::optional<render::BrushOverlay>(brushOverlay(shown, arr(*out.brush))) : std::nullopt);
 
-                // Each eye's near plane in front of what it may draw: the bricks shown and the brush.
+                // One near plane for both eyes (the depth both submit means the same), in front of all
+                // they may draw: the bricks shown, the brush and the menus.
                 auto [lo, hi] = session.shownBox();
-                if (out.brush)
-                    for (int a = 0; a < 3; ++a) {
-                        lo[std::size_t(a)] = std::min(lo[std::size_t(a)], (*out.brush)[a] - 2.0 * out.brushRadius);
-                        hi[std::size_t(a)] = std::max(hi[std::size_t(a)], (*out.brush)[a] + 2.0 * out.brushRadius);
-                    }
-                std::vector<render::RenderView> eyes;
+                if (out.brush) extendBox(lo, hi, *out.brush, 2.0 * out.brushRadius);
+                const MenuLayout& layout = menus.layout();
+                auto panelCorners = [&](const MenuLayout::Panel& p) {
+                    for (const glm::dvec3& c : p.corners()) extendBox(lo, hi, world.toScene(c), 0.0);
+                };
+                if (layout.menu) panelCorners(*layout.menu);
+                for (const auto& h : layout.hints) panelCorners(h);
+                eyes.clear();
                 double nearMetres = 1e30;
                 for (std::size_t i = 0; i < views.size(); ++i) {
                     render::RenderView v;
@@ -193,18 +236,23 @@ VrReport runVrSession(EditingSession& session, const VrOptions& options)
                     v.target = targets[i];
                     eyes.push_back(v);
                 }
-                // One near plane for both eyes: the depth both submit means the same.
                 for (auto& v : eyes) v.camera.nearPlane = nearMetres / world.scale;
-                renderer.render(eyes);
+                renderer.setUploadBytesPerFrame(uint64_t(double(render::kInteractiveUploadBytesPerFrame) * comfort.detail()));
+                figures.draw = renderer.render(eyes);
+                figures.uploadsWaiting = figures.draw.chunksWaitingUpload;
                 headset.releaseEyes();
                 headset.endFrame(frame, views, nearMetres, true);
-                report.cpuMs.push_back(std::chrono::duration<double, std::milli>(Clock::now() - begun).count());
+                const double cpuMs = std::chrono::duration<double, std::milli>(Clock::now() - begun).count();
+                report.cpuMs.push_back(cpuMs);
+                comfort.frameTook(cpuMs, double(frame.period) * 1e-6);
                 ++report.framesDrawn;
             }
             ++report.frames;
             if (options.frames && report.frames == *options.frames) headset.requestExit();
         }
         report.lost = headset.lost();
+        report.menuWidgets = menus.panels().widgetRects;
+        headset.setEyeRecorders({}, {});
         // The worker finishes every command the controllers gave (nothing sculpted is dropped), then
         // the mesh workers stop.
     }
@@ -224,7 +272,8 @@ nlohmann::json vrReportJson(const VrReport& report)
             {"haptic_pulses", report.hapticPulses},
             {"validation_messages", report.validationMessages},
             {"lost", report.lost},
-            {"headset", report.headset}};
+            {"headset", report.headset},
+            {"menu_widgets", report.menuWidgets}};
 }
 
 int runVrEditor(std::unique_ptr<EditingSession> session, const VrOptions& options)

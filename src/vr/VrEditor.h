@@ -9,7 +9,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -36,10 +38,13 @@ struct VrReport {
     uint64_t validationMessages = 0;
     bool lost = false;            // the runtime lost the session (LOSS_PENDING)
     std::string headset;          // what the runtime offered
+    /// Where the menu's tracked widgets were drawn last (SessionPanels::widgetRects), in the menus'
+    /// picture's pixels; empty when the menu was hidden.
+    std::map<std::string, std::array<float, 4>> menuWidgets;
 };
 
 /// {"frames", "frames_drawn", "missed_frames", "frame_ms": {"p50", "p99"}, "states", "commands",
-/// "haptic_pulses", "validation_messages", "lost", "headset"}.
+/// "haptic_pulses", "validation_messages", "lost", "headset", "menu_widgets": {label: [x0, y0, x1, y1]}}.
 nlohmann::json vrReportJson(const VrReport& report);
 
 /// Runs the VR editor on `session` until the headset's session ends (or `options.frames` frames).

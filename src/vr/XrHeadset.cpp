@@ -113,6 +113,17 @@ struct XrHeadset::Eye : render::RenderTarget {
     std::map<std::pair<uint32_t, uint32_t>, VkFramebuffer> framebuffers; // (colour, depth) image indices
     uint32_t colourIndex = 0, depthIndex = 0;
     bool acquired = false;
+    uint32_t view = 0;
+    std::function<void(VkCommandBuffer, uint32_t)> beforePass, overlay;
+
+    void recordBeforePass(VkCommandBuffer cmd) override
+    {
+        if (beforePass) beforePass(cmd, view);
+    }
+    void recordOverlay(VkCommandBuffer cmd) override
+    {
+        if (overlay) overlay(cmd, view);
+    }
 
     int width() const override { return w; }
     int height() const override { return h; }
@@ -347,6 +358,7 @@ void XrHeadset::createSwapchains()
     const VkDevice device = vulkan_->device();
     for (const XrViewConfigurationView& v : views) {
         auto eye = std::make_unique<Eye>();
+        eye->view = uint32_t(eyes_.size());
         eye->device = device;
         eye->pass = renderPass_;
         eye->w = int(std::min(v.recommendedImageRectWidth, v.maxImageRectWidth));
@@ -394,6 +406,14 @@ void XrHeadset::createSwapchains()
         e->makeFramebuffers();
     }
     if (eyes_.empty()) throw XrError("the OpenXR runtime's view configuration has no views");
+}
+
+void XrHeadset::setEyeRecorders(std::function<void(VkCommandBuffer, uint32_t)> beforePass, std::function<void(VkCommandBuffer, uint32_t)> overlay)
+{
+    for (auto& eye : eyes_) {
+        eye->beforePass = beforePass;
+        eye->overlay = overlay;
+    }
 }
 
 std::string XrHeadset::describe() const

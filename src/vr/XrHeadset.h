@@ -9,6 +9,7 @@
 #include "render/VulkanContext.h"
 #include "vr/XrCheck.h"
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -36,6 +37,10 @@ public:
     VkFormat colourFormat() const { return viewFormat_; }
     uint32_t viewCount() const { return uint32_t(eyes_.size()); }
     bool submitsDepth() const { return depthSubmitted_; }
+    /// The eyes' render pass (what pipelines drawing into them are made for).
+    VkRenderPass renderPass() const { return renderPass_; }
+    /// What each eye records before its pass and over the scene inside it (the menus), by view index.
+    void setEyeRecorders(std::function<void(VkCommandBuffer, uint32_t)> beforePass, std::function<void(VkCommandBuffer, uint32_t)> overlay);
     std::string describe() const; // runtime, system, view configuration, eye size, formats
 
     // --- session states ---

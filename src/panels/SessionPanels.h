@@ -1,10 +1,10 @@
-// The desktop editor's Dear ImGui panels: brush (mode, shape, size, strength, falloff, pressure, material,
+// The editor's Dear ImGui panels, which the desktop window and the headset's menu quad both draw: brush (mode, shape, size, strength, falloff, pressure, material,
 // symmetry), custom brush editor, materials, tools, file actions (through a file browser), the view's
 // look, stats and help. They read the session and return commands; they never change the scene
 // themselves.
 #pragma once
 
-#include "desktop/FileBrowser.h"
+#include "panels/FileBrowser.h"
 #include "editor/SessionWorker.h"
 #include "render/RenderTypes.h"
 
@@ -12,6 +12,7 @@
 
 #include <array>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,10 @@ struct FrameFigures {
     uint64_t pendingEdits = 0; // commands queued for the edit worker or under way
     uint64_t meshesWaiting = 0; // shown bricks whose new mesh the mesh worker has not finished
     uint64_t uploadsWaiting = 0; // meshes finished and left by the frame's upload budget for later frames
+    /// A headset's: display refreshes its frames missed, and the share of full detail the frame keeps to
+    /// hold the rate (1: all of it). A window's: none.
+    std::optional<uint64_t> missedFrames;
+    double detail = 1.0;
 };
 
 struct CustomBrushPart {
@@ -45,7 +50,7 @@ struct CustomBrushPart {
     bool remove = false;
 };
 
-class DesktopPanels {
+class SessionPanels {
 public:
     /// Builds this frame's panels (between ImGui::NewFrame and ImGui::Render) and returns the commands
     /// they issued, in order. File actions that write other files run here and report in `status`.
@@ -56,6 +61,10 @@ public:
     /// Tests click them through ImGui.
     std::map<std::string, std::array<float, 4>> widgetRects;
 
+    /// Where the panels' windows go in the display (x, y from the top left); absent, all of it (a headset
+    /// draws other pictures beside them).
+    std::optional<std::array<float, 2>> canvas;
+    float panelWidth = 340.0f; // the main panel's width at first
     bool showHelp = false;
     bool showStats = true;
     render::ViewMode look = render::ViewMode::Shaded; // the view panel's choice (the window applies it)
@@ -69,6 +78,7 @@ public:
     bool discardRecoveryRequested = false;
 
 private:
+    std::array<float, 2> canvasArea() const;
     void track(const std::string& label);
     void brushPanel(SessionWorker& session, std::vector<Command>& out);
     void customBrushPanel(SessionWorker& session, std::vector<Command>& out);

@@ -1,4 +1,4 @@
-#include "desktop/DesktopPanels.h"
+#include "panels/SessionPanels.h"
 
 #include "editor/SceneFileActions.h"
 #include "sculpt/FieldBrushes.h"
@@ -130,16 +130,22 @@ nlohmann::json symmetryJson(const SymmetryUi& ui)
 
 } // namespace
 
-std::vector<Command> DesktopPanels::draw(SessionWorker& session, const FrameFigures& figures)
+std::array<float, 2> SessionPanels::canvasArea() const
+{
+    return canvas.value_or(std::array<float, 2>{ImGui::GetIO().DisplaySize.x, ImGui::GetIO().DisplaySize.y});
+}
+
+std::vector<Command> SessionPanels::draw(SessionWorker& session, const FrameFigures& figures)
 {
     std::vector<Command> out;
     widgetRects.clear();
-    const ImGuiIO& io = ImGui::GetIO();
+    const auto [areaX, areaY] = canvasArea();
+    const ImVec2 area(areaX, areaY);
     // The panel takes the window's height at first and may be resized; what does not fit scrolls, and the
     // last action's outcome stays in sight below the scrolling part.
     ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(340, std::max(200.0f, io.DisplaySize.y - 20.0f)), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSizeConstraints(ImVec2(240, 120), ImVec2(std::max(240.0f, io.DisplaySize.x - 20.0f), std::max(120.0f, io.DisplaySize.y - 20.0f)));
+    ImGui::SetNextWindowSize(ImVec2(panelWidth, std::max(200.0f, area.y - 20.0f)), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSizeConstraints(ImVec2(240, 120), ImVec2(std::max(240.0f, area.x - 20.0f), std::max(120.0f, area.y - 20.0f)));
     if (ImGui::Begin("VDBClay")) {
         const float footer = status.empty() ? 0.0f : ImGui::GetTextLineHeightWithSpacing() * 3.0f;
         if (ImGui::BeginChild("panels", ImVec2(0, -footer))) {
@@ -164,7 +170,7 @@ std::vector<Command> DesktopPanels::draw(SessionWorker& session, const FrameFigu
     recoveryOffer(session);
     if (showHelp) {
         ImGui::SetNextWindowPos(ImVec2(360, 10), ImGuiCond_FirstUseEver);
-        ImGui::SetNextWindowSizeConstraints(ImVec2(200, 100), ImVec2(std::max(200.0f, io.DisplaySize.x - 20.0f), std::max(100.0f, io.DisplaySize.y - 20.0f)));
+        ImGui::SetNextWindowSizeConstraints(ImVec2(200, 100), ImVec2(std::max(200.0f, area.x - 20.0f), std::max(100.0f, area.y - 20.0f)));
         if (ImGui::Begin("Help", &showHelp)) ImGui::TextUnformatted(helpText.c_str());
         ImGui::End();
     }
@@ -172,7 +178,7 @@ std::vector<Command> DesktopPanels::draw(SessionWorker& session, const FrameFigu
     return out;
 }
 
-void DesktopPanels::recoveryOffer(const SessionWorker& session)
+void SessionPanels::recoveryOffer(const SessionWorker& session)
 {
     if (recoveryAnswered_ || session.recoveredEdits() == 0) return;
     const char* title = "Recovered edits";
@@ -204,13 +210,13 @@ void DesktopPanels::recoveryOffer(const SessionWorker& session)
     ImGui::EndPopup();
 }
 
-void DesktopPanels::track(const std::string& label)
+void SessionPanels::track(const std::string& label)
 {
     const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
     widgetRects[label] = {lo.x, lo.y, hi.x, hi.y};
 }
 
-void DesktopPanels::brushPanel(SessionWorker& session, std::vector<Command>& out)
+void SessionPanels::brushPanel(SessionWorker& session, std::vector<Command>& out)
 {
     BrushSettings b = session.brush();
     bool changed = false;
@@ -331,7 +337,7 @@ void DesktopPanels::brushPanel(SessionWorker& session, std::vector<Command>& out
     if (changed) out.push_back(brushCommand(b));
 }
 
-void DesktopPanels::customBrushPanel(SessionWorker& session, std::vector<Command>& out)
+void SessionPanels::customBrushPanel(SessionWorker& session, std::vector<Command>& out)
 {
     ImGui::SliderFloat("Blend", &customSmoothness_, 0.0f, 1.0f);
     for (std::size_t i = 0; i < parts_.size(); ++i) {
@@ -394,7 +400,7 @@ void DesktopPanels::customBrushPanel(SessionWorker& session, std::vector<Command
     }
 }
 
-void DesktopPanels::materialsPanel(SessionWorker& session, std::vector<Command>& out)
+void SessionPanels::materialsPanel(SessionWorker& session, std::vector<Command>& out)
 {
     const MaterialTable materials = session.scene().materials();
     for (const std::string& n : materials.names()) {
@@ -425,7 +431,7 @@ void DesktopPanels::materialsPanel(SessionWorker& session, std::vector<Command>&
     }
 }
 
-void DesktopPanels::toolsPanel(SessionWorker& session, std::vector<Command>& out)
+void SessionPanels::toolsPanel(SessionWorker& session, std::vector<Command>& out)
 {
     ImGui::InputFloat3("Box min", toolMin_);
     ImGui::InputFloat3("Box max", toolMax_);
@@ -446,7 +452,7 @@ void DesktopPanels::toolsPanel(SessionWorker& session, std::vector<Command>& out
     }
 }
 
-void DesktopPanels::filePanel(SessionWorker& session, std::vector<Command>& out)
+void SessionPanels::filePanel(SessionWorker& session, std::vector<Command>& out)
 {
     const bool save = ImGui::Button("Save (Ctrl+S)");
     track("Save (Ctrl+S)");
@@ -467,7 +473,7 @@ void DesktopPanels::filePanel(SessionWorker& session, std::vector<Command>& out)
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("A mesh (.obj, .ply, .stl) or an OpenVDB level set (.vdb)");
 }
 
-void DesktopPanels::fileChosen(SessionWorker& session, const std::string& path, std::vector<Command>& out)
+void SessionPanels::fileChosen(SessionWorker& session, const std::string& path, std::vector<Command>& out)
 {
     const std::string title = browser_.title();
     try {
@@ -495,7 +501,7 @@ void DesktopPanels::fileChosen(SessionWorker& session, const std::string& path, 
     }
 }
 
-void DesktopPanels::viewPanel()
+void SessionPanels::viewPanel()
 {
     int look = 0;
     while (look < IM_ARRAYSIZE(kLookModes) - 1 && kLookModes[look] != this->look) ++look;
@@ -503,17 +509,20 @@ void DesktopPanels::viewPanel()
     ImGui::Checkbox("Wireframe", &wireframe);
 }
 
-void DesktopPanels::statsPanel(const SessionWorker& session, const FrameFigures& f)
+void SessionPanels::statsPanel(const SessionWorker& session, const FrameFigures& f)
 {
-    const ImGuiIO& io = ImGui::GetIO();
-    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - 10, 10), ImGuiCond_FirstUseEver, ImVec2(1.0f, 0.0f)); // top right, whatever its width
+    const auto [areaX, areaY] = canvasArea();
+    const ImVec2 area(areaX, areaY);
+    ImGui::SetNextWindowPos(ImVec2(area.x - 10, 10), ImGuiCond_FirstUseEver, ImVec2(1.0f, 0.0f)); // top right, whatever its width
     // Never wider than half the window: long lines wrap instead of running off its edge.
-    ImGui::SetNextWindowSizeConstraints(ImVec2(220, 0), ImVec2(std::max(220.0f, io.DisplaySize.x * 0.5f), std::max(100.0f, io.DisplaySize.y - 20.0f)));
+    ImGui::SetNextWindowSizeConstraints(ImVec2(220, 0), ImVec2(std::max(220.0f, area.x * 0.5f), std::max(100.0f, area.y - 20.0f)));
     ImGui::SetNextWindowBgAlpha(0.6f);
     if (ImGui::Begin("Stats", &showStats, ImGuiWindowFlags_AlwaysAutoResize)) {
-        ImGui::PushTextWrapPos(std::max(220.0f, io.DisplaySize.x * 0.5f) - 16.0f);
+        ImGui::PushTextWrapPos(std::max(220.0f, area.x * 0.5f) - 16.0f);
         const double fps = f.averageIntervalMs > 0.0 ? 1000.0 / f.averageIntervalMs : 0.0;
         ImGui::TextWrapped("frame %s ms (%s fps over the last second)", figure(f.intervalMs, "%.1f").c_str(), figure(fps, "%.1f").c_str());
+        if (f.missedFrames)
+            ImGui::TextWrapped("missed frames %llu (display refreshes skipped), detail %.0f%%", (unsigned long long)*f.missedFrames, 100.0 * f.detail);
         ImGui::TextWrapped("input %s, sculpt %s, stream %s, mesh %s, draw %s, present %s ms", figure(f.inputMs, "%.1f").c_str(),
                            figure(f.sculptMs, "%.1f").c_str(), figure(f.streamMs, "%.1f").c_str(), figure(f.meshMs, "%.1f").c_str(),
                            figure(f.drawMs, "%.1f").c_str(), figure(f.presentMs, "%.1f").c_str());

@@ -1,4 +1,4 @@
-#include "desktop/FileBrowser.h"
+#include "panels/FileBrowser.h"
 
 #include <imgui.h>
 #include <imgui_stdlib.h>
