@@ -8,7 +8,7 @@
 
 namespace vdbclay::bench {
 
-std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream", "import", "tool", "render", "editor", "inputs"}; }
+std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream", "import", "tool", "render", "editor", "inputs", "vr"}; }
 
 int runBench(const std::string& which, bool json, bool quick, double memoryBudgetMb, const std::vector<int>& extents)
 {
@@ -24,7 +24,8 @@ int runBench(const std::string& which, bool json, bool quick, double memoryBudge
     if (which == "render") return benchRender(json, quick, memoryBudgetMb, extents);
     if (which == "editor") return benchEditor(json, quick, memoryBudgetMb);
     if (which == "inputs") return benchInputs(json, quick);
-    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool, render, editor or inputs)");
+    if (which == "vr") return benchVr(json, quick, memoryBudgetMb);
+    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool, render, editor, inputs or vr)");
 }
 
 } // namespace vdbclay::bench

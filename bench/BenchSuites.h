@@ -16,5 +16,6 @@ int benchTool(bool json, bool quick);
 int benchRender(bool json, bool quick, double memoryBudgetMb, const std::vector<int>& extents);
 int benchEditor(bool json, bool quick, double memoryBudgetMb);
 int benchInputs(bool json, bool quick);
+int benchVr(bool json, bool quick, double memoryBudgetMb);
 
 } // namespace vdbclay::bench

@@ -413,6 +413,14 @@ std::optional<SurfaceHit> EditingSession::pick(const std::array<double, 3>& orig
     return hit;
 }
 
+bool EditingSession::tryPick(const std::array<double, 3>& origin, const std::array<double, 3>& direction, double maxDistance,
+                             std::optional<SurfaceHit>* hit) const
+{
+    return scene_->tryVisitResidentLevels([&](const std::vector<const Volume*>& levels, const StreamingScene::FinestResidentAt& finestResidentAt) {
+        *hit = castRayAcrossLevels(levels, origin, direction, maxDistance, finestResidentAt);
+    });
+}
+
 nlohmann::json EditingSession::appliedScript() const { return {{"materials", materialsDefined_}, {"ops", history_.opsInEffect()}}; }
 
 std::size_t applyRecordedFrame(EditingSession& session, const SessionRecord& record, std::size_t next, uint64_t frame, double* time)

@@ -79,6 +79,11 @@ public:
     std::optional<SurfaceHit> pick(const std::array<double, 3>& origin, const std::array<double, 3>& direction,
                                    double maxDistance = 1e30) const;
 
+    /// The same, unless a load or an edit holds the data now: then false at once (a frame asks again next
+    /// frame instead of waiting).
+    bool tryPick(const std::array<double, 3>& origin, const std::array<double, 3>& direction, double maxDistance,
+                 std::optional<SurfaceHit>* hit) const;
+
     const BrushSettings& brush() const { return brush_; }
     const render::Camera& camera() const { return camera_; }
     /// The scene's bounds in world units (the far side of the last voxel included; a box of 64 voxels

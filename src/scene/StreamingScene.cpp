@@ -1319,11 +1319,11 @@ uint64_t StreamingScene::edits() const
     return impl_->edits;
 }
 
-void StreamingScene::visitResidentLevels(const std::function<void(const std::vector<const Volume*>&, const FinestResidentAt&)>& visit) const
+namespace {
+
+template <typename Impl, typename Visit>
+void visitLevelsLocked(const Impl& s, const Visit& visit)
 {
-    const Impl& s = *impl_;
-    std::shared_lock<std::shared_mutex> trees(s.trees);
-    std::lock_guard<std::mutex> lock(s.mutex);
     std::vector<const Volume*> levels;
     for (const Volume& v : s.levelVolumes) levels.push_back(&v);
     const double h = s.scene.voxelSize();
@@ -1332,6 +1332,27 @@ void StreamingScene::visitResidentLevels(const std::function<void(const std::vec
         for (std::size_t a = 0; a < 3; ++a) key.brick[a] = int32_t(std::floor(world[a] / (h * kBrickEdge)));
         return s.resident.count(key) > 0;
     });
+}
+
+} // namespace
+
+void StreamingScene::visitResidentLevels(const std::function<void(const std::vector<const Volume*>&, const FinestResidentAt&)>& visit) const
+{
+    const Impl& s = *impl_;
+    std::shared_lock<std::shared_mutex> trees(s.trees);
+    std::lock_guard<std::mutex> lock(s.mutex);
+    visitLevelsLocked(s, visit);
+}
+
+bool StreamingScene::tryVisitResidentLevels(const std::function<void(const std::vector<const Volume*>&, const FinestResidentAt&)>& visit) const
+{
+    const Impl& s = *impl_;
+    std::shared_lock<std::shared_mutex> trees(s.trees, std::try_to_lock);
+    if (!trees.owns_lock()) return false;
+    std::unique_lock<std::mutex> lock(s.mutex, std::try_to_lock);
+    if (!lock.owns_lock()) return false;
+    visitLevelsLocked(s, visit);
+    return true;
 }
 
 std::optional<std::string> StreamingScene::meta(const std::string& key) const

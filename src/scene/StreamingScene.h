@@ -106,6 +106,9 @@ public:
     /// it is, they may lag its edits until the next autosave).
     using FinestResidentAt = std::function<bool(const std::array<double, 3>& world)>;
     void visitResidentLevels(const std::function<void(const std::vector<const Volume*>&, const FinestResidentAt&)>& visit) const;
+    /// The same unless a load or an edit holds the data now: then false at once, `visit` not called (a
+    /// frame thread's question that can wait for the next frame).
+    bool tryVisitResidentLevels(const std::function<void(const std::vector<const Volume*>&, const FinestResidentAt&)>& visit) const;
     /// A value the store keeps beside the bricks (the editor's save marks), and writing one at once, in a
     /// transaction of its own.
     std::optional<std::string> meta(const std::string& key) const;

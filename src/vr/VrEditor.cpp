@@ -127,6 +127,22 @@ VrReport runVrSession(EditingSession& session, const VrOptions& options)
                                     menus.recordQuads(cmd, eye.camera, world, eye.target->width(), eye.target->height());
                                 });
         FrameFigures figures;
+        // Stroke points given and not yet drawn: the frame they were given in, their place in the order
+        // submitted (applied once the worker did that many), where they were made.
+        struct Waiting {
+            uint64_t frame, command;
+            std::array<double, 3> at;
+        };
+        std::vector<Waiting> waiting;
+        uint64_t submitted = 0;
+        const double voxel = session.scene().voxelSize();
+        const auto drawnAsItIs = [&](const std::array<double, 3>& at) {
+            if (session.scene().shownLevelAt(at).value_or(0) > 0) return false;
+            BrickKey key;
+            for (std::size_t a = 0; a < 3; ++a) key.brick[a] = int32_t(std::floor(at[a] / (voxel * kBrickEdge)));
+            const std::optional<uint64_t> drawn = chunks.versionOf(key);
+            return !drawn || *drawn == session.scene().brickVersion(key);
+        };
         bool framed = false;
         bool touching = false;
         XrTime lastDisplayTime = 0;
@@ -149,6 +165,7 @@ VrReport runVrSession(EditingSession& session, const VrOptions& options)
             lastDisplayTime = frame.displayTime;
 
             const std::vector<XrView> views = frame.shouldRender ? headset.locateViews(frame.displayTime) : std::vector<XrView>{};
+            const Clock::time_point located = Clock::now();
             if (!views.empty() && !framed) {
                 Pose head = toPose(views.front().pose);
                 head.position = 0.5 * (toPose(views.front().pose).position + toPose(views.back().pose).position);
@@ -166,7 +183,12 @@ VrReport runVrSession(EditingSession& session, const VrOptions& options)
             const VrControls::Output out = controls.update(input, worker.brush(), world);
             world = out.world;
             commands.insert(commands.end(), out.commands.begin(), out.commands.end());
-            for (const Command& c : commands) worker.submit(c);
+            for (const Command& c : commands) {
+                worker.submit(c);
+                ++submitted;
+                if ((c.kind == Command::Kind::StrokeBegin || c.kind == Command::Kind::StrokeMove) && c.point)
+                    waiting.push_back({report.frames, submitted, *c.point});
+            }
             report.commands += commands.size();
             if (out.toggleMenu) menus.toggleMenu();
             if (out.toggleHints) menus.toggleHints();
@@ -174,12 +196,17 @@ VrReport runVrSession(EditingSession& session, const VrOptions& options)
                 const auto [lo, hi] = session.sceneBox();
                 world = frameScene(lo, hi, toPose(views.front().pose));
             }
-            // A pulse when the brush reaches the surface (from the resident data, never a load).
-            bool touches = false;
+            // A pulse when the brush reaches the surface: from the resident data, and only when no load or
+            // edit holds it (else the last frame's answer stands).
+            bool touches = touching;
             if (out.brush && input.focused) {
                 const glm::dvec3 dir = world.directionToScene(input.hands[std::size_t(options.dominantHand)].aim.forward());
-                for (double sign : {1.0, -1.0})
-                    touches = touches || session.pick(arr(*out.brush), arr(sign * dir), out.brushRadius).has_value();
+                std::optional<SurfaceHit> ahead, behind;
+                if (session.tryPick(arr(*out.brush), arr(dir), out.brushRadius, &ahead) &&
+                    session.tryPick(arr(*out.brush), arr(-dir), out.brushRadius, &behind))
+                    touches = ahead.has_value() || behind.has_value();
+            } else {
+                touches = false;
             }
             if (touches && !touching) {
                 controllers.pulse(options.dominantHand);
@@ -199,6 +226,15 @@ VrReport runVrSession(EditingSession& session, const VrOptions& options)
                 for (const std::string& failure : worker.takeFailures()) std::cerr << "vdbclay: " << failure << "\n";
                 figures.meshesWaiting = chunks.sync(session.scene(), renderer).waiting;
                 for (const std::string& failure : chunks.takeMeshFailures()) std::cerr << "vdbclay: " << failure << "\n";
+                const uint64_t applied = worker.snapshot().commandsApplied;
+                for (auto it = waiting.begin(); it != waiting.end();) {
+                    if (applied >= it->command && drawnAsItIs(it->at)) {
+                        report.editToVisibleFrames.push_back(double(report.frames - it->frame + 1));
+                        it = waiting.erase(it);
+                    } else {
+                        ++it;
+                    }
+                }
                 figures.bricksShown = session.scene().shownBricks().size();
                 MaterialTable materials = session.scene().materials();
                 if (!(materials == drawnMaterials) || renderer.picturesReady()) {
@@ -238,12 +274,19 @@ VrReport runVrSession(EditingSession& session, const VrOptions& options)
                 }
                 for (auto& v : eyes) v.camera.nearPlane = nearMetres / world.scale;
                 renderer.setUploadBytesPerFrame(uint64_t(double(render::kInteractiveUploadBytesPerFrame) * comfort.detail()));
+                const double workMs = std::chrono::duration<double, std::milli>(Clock::now() - begun).count();
                 figures.draw = renderer.render(eyes);
+                // The wait for the device (the frame two back) is not the frame thread's work.
+                const double recordMs = std::max(0.0, figures.draw.cpuMs - figures.draw.submitWaitMs);
                 figures.uploadsWaiting = figures.draw.chunksWaitingUpload;
                 headset.releaseEyes();
                 headset.endFrame(frame, views, nearMetres, true);
-                const double cpuMs = std::chrono::duration<double, std::milli>(Clock::now() - begun).count();
+                const Clock::time_point ended = Clock::now();
+                const double cpuMs = workMs + recordMs;
                 report.cpuMs.push_back(cpuMs);
+                report.wallMs.push_back(std::chrono::duration<double, std::milli>(ended - begun).count());
+                report.poseToSubmitMs.push_back(std::chrono::duration<double, std::milli>(ended - located).count());
+                report.missedSoFar.push_back(report.missedFrames);
                 comfort.frameTook(cpuMs, double(frame.period) * 1e-6);
                 ++report.framesDrawn;
             }
@@ -267,6 +310,12 @@ nlohmann::json vrReportJson(const VrReport& report)
             {"frames_drawn", report.framesDrawn},
             {"missed_frames", report.missedFrames},
             {"frame_ms", {{"p50", percentile(report.cpuMs, 0.5)}, {"p99", percentile(report.cpuMs, 0.99)}}},
+            {"frame_wall_ms", {{"p50", percentile(report.wallMs, 0.5)}, {"p99", percentile(report.wallMs, 0.99)}}},
+            {"pose_to_submit_ms", {{"p50", percentile(report.poseToSubmitMs, 0.5)}, {"p99", percentile(report.poseToSubmitMs, 0.99)}}},
+            {"edit_to_visible_frames",
+             {{"p50", percentile(report.editToVisibleFrames, 0.5)},
+              {"p99", percentile(report.editToVisibleFrames, 0.99)},
+              {"max", report.editToVisibleFrames.empty() ? 0.0 : *std::max_element(report.editToVisibleFrames.begin(), report.editToVisibleFrames.end())}}},
             {"states", report.states},
             {"commands", report.commands},
             {"haptic_pulses", report.hapticPulses},
@@ -291,7 +340,7 @@ int runVrEditor(std::unique_ptr<EditingSession> session, const VrOptions& option
     session->autosave();
     if (options.json) std::cout << vrReportJson(report).dump() << std::endl;
     std::cerr << "vdbclay: vr: " << report.frames << " frames on " << report.headset << "; " << report.missedFrames
-              << " display refreshes missed; CPU per drawn frame p50 " << percentile(report.cpuMs, 0.5) << " ms, p99 "
+              << " display refreshes missed; frame thread's work p50 " << percentile(report.cpuMs, 0.5) << " ms, p99 "
               << percentile(report.cpuMs, 0.99) << " ms\n";
     if (report.lost) {
         std::cerr << "vdbclay: error: the headset's session was lost (the runtime ended it); every edit is autosaved: open the scene again\n";

@@ -31,7 +31,12 @@ struct VrReport {
     uint64_t frames = 0;          // frames ended
     uint64_t framesDrawn = 0;     // of those, frames whose eyes were drawn (shouldRender)
     uint64_t missedFrames = 0;    // display refreshes the frames skipped (predicted display times more than one period apart)
-    std::vector<double> cpuMs;    // per drawn frame: from xrBeginFrame's return to xrEndFrame's, drawing's recording included
+    std::vector<uint64_t> missedSoFar; // per drawn frame: missedFrames up to it (a benchmark counts a stretch's)
+    std::vector<double> wallMs;   // per drawn frame: from xrBeginFrame's return to xrEndFrame's (waits for the device included)
+    std::vector<double> cpuMs;    // per drawn frame: the frame thread's work (input, streaming, taking meshes, recording; the
+                                  // device's drawing and the runtime's waits apart, as bench editor counts)
+    std::vector<double> poseToSubmitMs; // per drawn frame: from locating the eyes to xrEndFrame's return
+    std::vector<double> editToVisibleFrames; // per stroke point: frames until the view showed it at level 0 with its new mesh (1: the frame it was given)
     std::vector<std::string> states; // the session states, in order
     uint64_t commands = 0;        // commands the controllers gave
     uint64_t hapticPulses = 0;
@@ -43,8 +48,10 @@ struct VrReport {
     std::map<std::string, std::array<float, 4>> menuWidgets;
 };
 
-/// {"frames", "frames_drawn", "missed_frames", "frame_ms": {"p50", "p99"}, "states", "commands",
-/// "haptic_pulses", "validation_messages", "lost", "headset", "menu_widgets": {label: [x0, y0, x1, y1]}}.
+/// {"frames", "frames_drawn", "missed_frames", "frame_ms": {"p50", "p99"} (the frame thread's work),
+/// "frame_wall_ms": {"p50", "p99"}, "pose_to_submit_ms": {"p50", "p99"}, "edit_to_visible_frames": {"p50",
+/// "p99", "max"}, "states", "commands", "haptic_pulses", "validation_messages", "lost", "headset",
+/// "menu_widgets": {label: [x0, y0, x1, y1]}}.
 nlohmann::json vrReportJson(const VrReport& report);
 
 /// Runs the VR editor on `session` until the headset's session ends (or `options.frames` frames).
