@@ -83,10 +83,6 @@ double percentile(std::vector<double> v, double p)
     return v[std::min(v.size() - 1, std::size_t(p * double(v.size() - 1) + 0.5))];
 }
 
-} // namespace
-
-namespace {
-
 void extendBox(std::array<double, 3>& lo, std::array<double, 3>& hi, const glm::dvec3& p, double margin)
 {
     for (int a = 0; a < 3; ++a) {
@@ -95,212 +91,271 @@ void extendBox(std::array<double, 3>& lo, std::array<double, 3>& hi, const glm::
     }
 }
 
+/// One VR session: the headset, the renderer, the controllers and the menus, the session's workers, and
+/// what the frames keep between them (where the world stands, the edits not yet seen, the figures).
+class VrFrameLoop {
+public:
+    VrFrameLoop(EditingSession& session, const VrOptions& options, VrReport& report)
+        : session_(session), options_(options), report_(report), headset_(XrHeadsetOptions{options.validation}),
+          renderer_(headset_.vulkan(), rendererOptions(headset_)), controllers_(headset_.instance(), headset_.session()),
+          menus_(headset_.vulkan(), headset_.renderPass()),
+          look_(render::materialLook(session.scene().voxelSize(), std::filesystem::path(session.scenePath()).parent_path().string())),
+          chunks_(session.scene(), kMeshThreads), worker_(session), controls_(options.dominantHand)
+    {
+        report_.headset = headset_.describe();
+        headset_.setEyeRecorders(
+            [this](VkCommandBuffer cmd, uint32_t view) {
+                if (view == 0) menus_.recordPicture(cmd);
+            },
+            [this](VkCommandBuffer cmd, uint32_t view) {
+                const render::RenderView& eye = eyes_.at(view);
+                menus_.recordQuads(cmd, eye.camera, world_, eye.target->width(), eye.target->height());
+            });
+    }
+    ~VrFrameLoop() { headset_.setEyeRecorders({}, {}); }
+
+    /// Frames until the runtime ends the session (or options.frames are done); the edit worker then
+    /// finishes every command the controllers gave.
+    void run()
+    {
+        while (headset_.pollEvents()) {
+            if (!headset_.running()) {
+                std::this_thread::sleep_for(std::chrono::milliseconds(5)); // IDLE, or STOPPING handed on: wait for the runtime
+                continue;
+            }
+            frame();
+            ++report_.frames;
+            if (options_.frames && report_.frames == *options_.frames) headset_.requestExit();
+        }
+        report_.lost = headset_.lost();
+        report_.menuWidgets = menus_.panels().widgetRects;
+        worker_.waitIdle();
+        for (XrSessionState s : headset_.states()) report_.states.push_back(sessionStateName(s));
+        report_.validationMessages = headset_.vulkan().validationMessages();
+    }
+
+private:
+    static render::RendererOptions rendererOptions(const XrHeadset& headset)
+    {
+        render::RendererOptions o;
+        o.colourFormat = headset.colourFormat();
+        o.uploadBytesPerFrame = render::kInteractiveUploadBytesPerFrame;
+        return o;
+    }
+
+    void frame()
+    {
+        const XrHeadset::Frame frame = headset_.beginFrame();
+        const Clock::time_point begun = Clock::now();
+        const double seconds = std::min(0.1, std::chrono::duration<double>(begun - lastFrame_).count());
+        figures_.intervalMs = std::chrono::duration<double, std::milli>(begun - lastFrame_).count();
+        figures_.averageIntervalMs = figures_.averageIntervalMs > 0.0 ? 0.9 * figures_.averageIntervalMs + 0.1 * figures_.intervalMs : figures_.intervalMs;
+        lastFrame_ = begun;
+        if (lastDisplayTime_ && frame.period > 0 && frame.displayTime - lastDisplayTime_ > frame.period + frame.period / 2)
+            report_.missedFrames += uint64_t((frame.displayTime - lastDisplayTime_ + frame.period / 2) / frame.period) - 1;
+        lastDisplayTime_ = frame.displayTime;
+
+        const std::vector<XrView> views = frame.shouldRender ? headset_.locateViews(frame.displayTime) : std::vector<XrView>{};
+        const Clock::time_point located = Clock::now();
+        if (!views.empty() && !framed_) {
+            Pose head = toPose(views.front().pose);
+            head.position = 0.5 * (toPose(views.front().pose).position + toPose(views.back().pose).position);
+            frameScene(head);
+            controls_.setScaleLimits(world_.scale / kScaleRange, world_.scale * kScaleRange);
+            framed_ = true;
+        }
+        const VrControls::Output out = input(frame, views, seconds);
+        if (views.empty()) {
+            headset_.endFrame(frame, {}, 0.0, false);
+            return;
+        }
+        std::vector<render::RenderTarget*> targets = headset_.acquireEyes();
+        // The loaders stream for the head at the frame's detail: fewer pixels, a coarser cut.
+        std::array<int, 2> viewport{0, 0};
+        const int streamedHeight = std::max(16, int(std::lround(targets.front()->height() * comfort_.detail())));
+        const render::Camera head = headCamera(views, world_, &viewport, streamedHeight);
+        figures_.stream = worker_.frame(std::chrono::duration<double>(begun - started_).count(), viewport, head);
+        for (const std::string& failure : worker_.takeFailures()) std::cerr << "vdbclay: " << failure << "\n";
+        figures_.meshesWaiting = chunks_.sync(session_.scene(), renderer_).waiting;
+        for (const std::string& failure : chunks_.takeMeshFailures()) std::cerr << "vdbclay: " << failure << "\n";
+        noteEditsSeen();
+        prepareDrawing(out);
+        const double nearMetres = placeEyes(views, targets, out);
+        renderer_.setUploadBytesPerFrame(uint64_t(double(render::kInteractiveUploadBytesPerFrame) * comfort_.detail()));
+        const double workMs = std::chrono::duration<double, std::milli>(Clock::now() - begun).count();
+        figures_.draw = renderer_.render(eyes_);
+        // The wait for the device (the frame two back) is not the frame thread's work.
+        const double recordMs = std::max(0.0, figures_.draw.cpuMs - figures_.draw.submitWaitMs);
+        figures_.uploadsWaiting = figures_.draw.chunksWaitingUpload;
+        headset_.releaseEyes();
+        headset_.endFrame(frame, views, nearMetres, true);
+        const Clock::time_point ended = Clock::now();
+        report_.cpuMs.push_back(workMs + recordMs);
+        report_.wallMs.push_back(std::chrono::duration<double, std::milli>(ended - begun).count());
+        report_.poseToSubmitMs.push_back(std::chrono::duration<double, std::milli>(ended - located).count());
+        report_.missedSoFar.push_back(report_.missedFrames);
+        comfort_.frameTook(workMs + recordMs, double(frame.period) * 1e-6);
+        ++report_.framesDrawn;
+    }
+
+    void frameScene(const Pose& head)
+    {
+        const auto [lo, hi] = session_.sceneBox();
+        world_ = vr::frameScene(lo, hi, head);
+    }
+
+    /// The controllers: the menus first (where the pointer is decides what the trigger does), then the
+    /// hands; their commands to the worker, the world moved, the touch pulse.
+    VrControls::Output input(const XrHeadset::Frame& frame, const std::vector<XrView>& views, double seconds)
+    {
+        ControllerFrame hands = controllers_.read(headset_.stage(), frame.displayTime, headset_.focused(), seconds);
+        figures_.missedFrames = report_.missedFrames;
+        figures_.detail = comfort_.detail();
+        figures_.pendingEdits = worker_.pending();
+        std::vector<Command> commands = menus_.update(hands, options_.dominantHand, worker_, figures_, seconds);
+        const VrControls::Output out = controls_.update(hands, worker_.brush(), world_);
+        world_ = out.world;
+        commands.insert(commands.end(), out.commands.begin(), out.commands.end());
+        for (const Command& c : commands) {
+            worker_.submit(c);
+            ++submitted_;
+            if ((c.kind == Command::Kind::StrokeBegin || c.kind == Command::Kind::StrokeMove) && c.point)
+                unseen_.push_back({report_.frames, submitted_, *c.point});
+        }
+        report_.commands += commands.size();
+        if (out.toggleMenu) menus_.toggleMenu();
+        if (out.toggleHints) menus_.toggleHints();
+        if (out.frameAgain && !views.empty()) frameScene(toPose(views.front().pose));
+        pulseOnTouch(out, hands);
+        return out;
+    }
+
+    /// A pulse when the brush reaches the surface: from the resident data, and only when no load or edit
+    /// holds it (else the last frame's answer stands).
+    void pulseOnTouch(const VrControls::Output& out, const ControllerFrame& hands)
+    {
+        bool touches = false;
+        if (out.brush && hands.focused) {
+            touches = touching_;
+            const glm::dvec3 dir = world_.directionToScene(hands.hands[std::size_t(options_.dominantHand)].aim.forward());
+            std::optional<SurfaceHit> ahead, behind;
+            if (session_.tryPick(arr(*out.brush), arr(dir), out.brushRadius, &ahead) &&
+                session_.tryPick(arr(*out.brush), arr(-dir), out.brushRadius, &behind))
+                touches = ahead.has_value() || behind.has_value();
+        }
+        if (touches && !touching_) {
+            controllers_.pulse(options_.dominantHand);
+            ++report_.hapticPulses;
+        }
+        touching_ = touches;
+    }
+
+    /// Stroke points the worker applied and the view now shows at level 0 with their bricks' new meshes.
+    void noteEditsSeen()
+    {
+        const uint64_t applied = worker_.snapshot().commandsApplied;
+        const double voxel = session_.scene().voxelSize();
+        const auto drawnAsItIs = [&](const std::array<double, 3>& at) {
+            if (session_.scene().shownLevelAt(at).value_or(0) > 0) return false;
+            BrickKey key;
+            for (std::size_t a = 0; a < 3; ++a) key.brick[a] = int32_t(std::floor(at[a] / (voxel * kBrickEdge)));
+            const std::optional<uint64_t> drawn = chunks_.versionOf(key);
+            return !drawn || *drawn == session_.scene().brickVersion(key);
+        };
+        for (auto it = unseen_.begin(); it != unseen_.end();) {
+            if (applied >= it->command && drawnAsItIs(it->at)) {
+                report_.editToVisibleFrames.push_back(double(report_.frames - it->frame + 1));
+                it = unseen_.erase(it);
+            } else {
+                ++it;
+            }
+        }
+    }
+
+    /// Materials, the look the menu chose and the brush's overlay, for the renderer.
+    void prepareDrawing(const VrControls::Output& out)
+    {
+        figures_.bricksShown = session_.scene().shownBricks().size();
+        MaterialTable materials = session_.scene().materials();
+        if (!(materials == drawnMaterials_) || renderer_.picturesReady()) {
+            for (const std::string& w : renderer_.setMaterials(materials, look_, render::Renderer::PictureLoading::Background))
+                std::cerr << "vdbclay: warning: " << w << "\n";
+            drawnMaterials_ = std::move(materials);
+        }
+        render::ShadingOptions shading = renderer_.shading();
+        if (shading.mode != menus_.panels().look || shading.wireframe != menus_.panels().wireframe) {
+            shading.mode = menus_.panels().look;
+            shading.wireframe = menus_.panels().wireframe;
+            renderer_.setShading(shading);
+        }
+        BrushSettings shown = worker_.brush();
+        shown.radius = out.brushRadius;
+        renderer_.setBrush(out.brush ? std::optional<render::BrushOverlay>(brushOverlay(shown, arr(*out.brush))) : std::nullopt);
+    }
+
+    /// The eyes' views, with one near plane for both (the depth both submit means the same) in front of
+    /// all they may draw: the bricks shown, the brush and the menus. Returns it in metres.
+    double placeEyes(const std::vector<XrView>& views, const std::vector<render::RenderTarget*>& targets, const VrControls::Output& out)
+    {
+        auto [lo, hi] = session_.shownBox();
+        if (out.brush) extendBox(lo, hi, *out.brush, 2.0 * out.brushRadius);
+        const MenuLayout& layout = menus_.layout();
+        auto panelCorners = [&](const MenuLayout::Panel& p) {
+            for (const glm::dvec3& c : p.corners()) extendBox(lo, hi, world_.toScene(c), 0.0);
+        };
+        if (layout.menu) panelCorners(*layout.menu);
+        for (const auto& h : layout.hints) panelCorners(h);
+        eyes_.clear();
+        double nearMetres = 1e30;
+        for (std::size_t i = 0; i < views.size(); ++i) {
+            render::RenderView v;
+            v.camera = eyeCamera(views[i], world_);
+            render::fitNearPlane(v.camera, lo, hi);
+            nearMetres = std::min(nearMetres, v.camera.nearPlane * world_.scale);
+            v.target = targets[i];
+            eyes_.push_back(v);
+        }
+        for (auto& v : eyes_) v.camera.nearPlane = nearMetres / world_.scale;
+        return nearMetres;
+    }
+
+    EditingSession& session_;
+    const VrOptions& options_;
+    VrReport& report_;
+    // Declared in the order they start: the workers last, so that they stop first.
+    XrHeadset headset_;
+    render::Renderer renderer_;
+    XrControllers controllers_;
+    VrMenus menus_;
+    const render::MaterialLook look_;
+    MaterialTable drawnMaterials_;
+    render::StreamedSceneChunks chunks_;
+    SessionWorker worker_;
+    VrControls controls_;
+    VrComfort comfort_;
+    WorldTransform world_;
+    std::vector<render::RenderView> eyes_;
+    FrameFigures figures_;
+    /// Stroke points given and not yet seen: the frame they were given in, their place in the order
+    /// submitted (applied once the worker did that many), where they were made.
+    struct Unseen {
+        uint64_t frame, command;
+        std::array<double, 3> at;
+    };
+    std::vector<Unseen> unseen_;
+    uint64_t submitted_ = 0;
+    bool framed_ = false, touching_ = false;
+    XrTime lastDisplayTime_ = 0;
+    const Clock::time_point started_ = Clock::now();
+    Clock::time_point lastFrame_ = started_;
+};
+
 } // namespace
 
 VrReport runVrSession(EditingSession& session, const VrOptions& options)
 {
     VrReport report;
-    XrHeadsetOptions headsetOptions;
-    headsetOptions.validation = options.validation;
-    XrHeadset headset(headsetOptions);
-    report.headset = headset.describe();
-    render::RendererOptions rendererOptions;
-    rendererOptions.colourFormat = headset.colourFormat();
-    rendererOptions.uploadBytesPerFrame = render::kInteractiveUploadBytesPerFrame;
-    render::Renderer renderer(headset.vulkan(), rendererOptions);
-    XrControllers controllers(headset.instance(), headset.session());
-    VrMenus menus(headset.vulkan(), headset.renderPass());
-    const render::MaterialLook look =
-        render::materialLook(session.scene().voxelSize(), std::filesystem::path(session.scenePath()).parent_path().string());
-    MaterialTable drawnMaterials;
-    {
-        // Meshes and edits on workers; declared after what they use, so they stop first.
-        render::StreamedSceneChunks chunks(session.scene(), kMeshThreads);
-        SessionWorker worker(session);
-        VrControls controls(options.dominantHand);
-        VrComfort comfort;
-        WorldTransform world;
-        std::vector<render::RenderView> eyes;
-        headset.setEyeRecorders([&](VkCommandBuffer cmd, uint32_t view) { if (view == 0) menus.recordPicture(cmd); },
-                                [&](VkCommandBuffer cmd, uint32_t view) {
-                                    const render::RenderView& eye = eyes.at(view);
-                                    menus.recordQuads(cmd, eye.camera, world, eye.target->width(), eye.target->height());
-                                });
-        FrameFigures figures;
-        // Stroke points given and not yet drawn: the frame they were given in, their place in the order
-        // submitted (applied once the worker did that many), where they were made.
-        struct Waiting {
-            uint64_t frame, command;
-            std::array<double, 3> at;
-        };
-        std::vector<Waiting> waiting;
-        uint64_t submitted = 0;
-        const double voxel = session.scene().voxelSize();
-        const auto drawnAsItIs = [&](const std::array<double, 3>& at) {
-            if (session.scene().shownLevelAt(at).value_or(0) > 0) return false;
-            BrickKey key;
-            for (std::size_t a = 0; a < 3; ++a) key.brick[a] = int32_t(std::floor(at[a] / (voxel * kBrickEdge)));
-            const std::optional<uint64_t> drawn = chunks.versionOf(key);
-            return !drawn || *drawn == session.scene().brickVersion(key);
-        };
-        bool framed = false;
-        bool touching = false;
-        XrTime lastDisplayTime = 0;
-        const Clock::time_point started = Clock::now();
-        Clock::time_point lastFrame = started;
-
-        while (headset.pollEvents()) {
-            if (!headset.running()) {
-                std::this_thread::sleep_for(std::chrono::milliseconds(5)); // IDLE, or STOPPING handed on: wait for the runtime
-                continue;
-            }
-            const XrHeadset::Frame frame = headset.beginFrame();
-            const Clock::time_point begun = Clock::now();
-            const double seconds = std::min(0.1, std::chrono::duration<double>(begun - lastFrame).count());
-            figures.intervalMs = std::chrono::duration<double, std::milli>(begun - lastFrame).count();
-            figures.averageIntervalMs = figures.averageIntervalMs > 0.0 ? 0.9 * figures.averageIntervalMs + 0.1 * figures.intervalMs : figures.intervalMs;
-            lastFrame = begun;
-            if (lastDisplayTime && frame.period > 0 && frame.displayTime - lastDisplayTime > frame.period + frame.period / 2)
-                report.missedFrames += uint64_t((frame.displayTime - lastDisplayTime + frame.period / 2) / frame.period) - 1;
-            lastDisplayTime = frame.displayTime;
-
-            const std::vector<XrView> views = frame.shouldRender ? headset.locateViews(frame.displayTime) : std::vector<XrView>{};
-            const Clock::time_point located = Clock::now();
-            if (!views.empty() && !framed) {
-                Pose head = toPose(views.front().pose);
-                head.position = 0.5 * (toPose(views.front().pose).position + toPose(views.back().pose).position);
-                const auto [lo, hi] = session.sceneBox();
-                world = frameScene(lo, hi, head);
-                controls.setScaleLimits(world.scale / kScaleRange, world.scale * kScaleRange);
-                framed = true;
-            }
-            // Input: the menus first (where the pointer is decides what the trigger does), then the hands.
-            ControllerFrame input = controllers.read(headset.stage(), frame.displayTime, headset.focused(), seconds);
-            figures.missedFrames = report.missedFrames;
-            figures.detail = comfort.detail();
-            figures.pendingEdits = worker.pending();
-            std::vector<Command> commands = menus.update(input, options.dominantHand, worker, figures, seconds);
-            const VrControls::Output out = controls.update(input, worker.brush(), world);
-            world = out.world;
-            commands.insert(commands.end(), out.commands.begin(), out.commands.end());
-            for (const Command& c : commands) {
-                worker.submit(c);
-                ++submitted;
-                if ((c.kind == Command::Kind::StrokeBegin || c.kind == Command::Kind::StrokeMove) && c.point)
-                    waiting.push_back({report.frames, submitted, *c.point});
-            }
-            report.commands += commands.size();
-            if (out.toggleMenu) menus.toggleMenu();
-            if (out.toggleHints) menus.toggleHints();
-            if (out.frameAgain && !views.empty()) {
-                const auto [lo, hi] = session.sceneBox();
-                world = frameScene(lo, hi, toPose(views.front().pose));
-            }
-            // A pulse when the brush reaches the surface: from the resident data, and only when no load or
-            // edit holds it (else the last frame's answer stands).
-            bool touches = touching;
-            if (out.brush && input.focused) {
-                const glm::dvec3 dir = world.directionToScene(input.hands[std::size_t(options.dominantHand)].aim.forward());
-                std::optional<SurfaceHit> ahead, behind;
-                if (session.tryPick(arr(*out.brush), arr(dir), out.brushRadius, &ahead) &&
-                    session.tryPick(arr(*out.brush), arr(-dir), out.brushRadius, &behind))
-                    touches = ahead.has_value() || behind.has_value();
-            } else {
-                touches = false;
-            }
-            if (touches && !touching) {
-                controllers.pulse(options.dominantHand);
-                ++report.hapticPulses;
-            }
-            touching = touches;
-
-            if (views.empty()) {
-                headset.endFrame(frame, {}, 0.0, false);
-            } else {
-                std::vector<render::RenderTarget*> targets = headset.acquireEyes();
-                // The loaders stream for the head at the frame's detail: fewer pixels, a coarser cut.
-                std::array<int, 2> viewport{0, 0};
-                const int streamedHeight = std::max(16, int(std::lround(targets.front()->height() * comfort.detail())));
-                const render::Camera head = headCamera(views, world, &viewport, streamedHeight);
-                figures.stream = worker.frame(std::chrono::duration<double>(begun - started).count(), viewport, head);
-                for (const std::string& failure : worker.takeFailures()) std::cerr << "vdbclay: " << failure << "\n";
-                figures.meshesWaiting = chunks.sync(session.scene(), renderer).waiting;
-                for (const std::string& failure : chunks.takeMeshFailures()) std::cerr << "vdbclay: " << failure << "\n";
-                const uint64_t applied = worker.snapshot().commandsApplied;
-                for (auto it = waiting.begin(); it != waiting.end();) {
-                    if (applied >= it->command && drawnAsItIs(it->at)) {
-                        report.editToVisibleFrames.push_back(double(report.frames - it->frame + 1));
-                        it = waiting.erase(it);
-                    } else {
-                        ++it;
-                    }
-                }
-                figures.bricksShown = session.scene().shownBricks().size();
-                MaterialTable materials = session.scene().materials();
-                if (!(materials == drawnMaterials) || renderer.picturesReady()) {
-                    for (const std::string& w : renderer.setMaterials(materials, look, render::Renderer::PictureLoading::Background))
-                        std::cerr << "vdbclay: warning: " << w << "\n";
-                    drawnMaterials = std::move(materials);
-                }
-                render::ShadingOptions shading = renderer.shading();
-                if (shading.mode != menus.panels().look || shading.wireframe != menus.panels().wireframe) {
-                    shading.mode = menus.panels().look;
-                    shading.wireframe = menus.panels().wireframe;
-                    renderer.setShading(shading);
-                }
-                BrushSettings shown = worker.brush();
-                shown.radius = out.brushRadius;
-                renderer.setBrush(out.brush ? std::optional<render::BrushOverlay>(brushOverlay(shown, arr(*out.brush))) : std::nullopt);
-
-                // One near plane for both eyes (the depth both submit means the same), in front of all
-                // they may draw: the bricks shown, the brush and the menus.
-                auto [lo, hi] = session.shownBox();
-                if (out.brush) extendBox(lo, hi, *out.brush, 2.0 * out.brushRadius);
-                const MenuLayout& layout = menus.layout();
-                auto panelCorners = [&](const MenuLayout::Panel& p) {
-                    for (const glm::dvec3& c : p.corners()) extendBox(lo, hi, world.toScene(c), 0.0);
-                };
-                if (layout.menu) panelCorners(*layout.menu);
-                for (const auto& h : layout.hints) panelCorners(h);
-                eyes.clear();
-                double nearMetres = 1e30;
-                for (std::size_t i = 0; i < views.size(); ++i) {
-                    render::RenderView v;
-                    v.camera = eyeCamera(views[i], world);
-                    render::fitNearPlane(v.camera, lo, hi);
-                    nearMetres = std::min(nearMetres, v.camera.nearPlane * world.scale);
-                    v.target = targets[i];
-                    eyes.push_back(v);
-                }
-                for (auto& v : eyes) v.camera.nearPlane = nearMetres / world.scale;
-                renderer.setUploadBytesPerFrame(uint64_t(double(render::kInteractiveUploadBytesPerFrame) * comfort.detail()));
-                const double workMs = std::chrono::duration<double, std::milli>(Clock::now() - begun).count();
-                figures.draw = renderer.render(eyes);
-                // The wait for the device (the frame two back) is not the frame thread's work.
-                const double recordMs = std::max(0.0, figures.draw.cpuMs - figures.draw.submitWaitMs);
-                figures.uploadsWaiting = figures.draw.chunksWaitingUpload;
-                headset.releaseEyes();
-                headset.endFrame(frame, views, nearMetres, true);
-                const Clock::time_point ended = Clock::now();
-                const double cpuMs = workMs + recordMs;
-                report.cpuMs.push_back(cpuMs);
-                report.wallMs.push_back(std::chrono::duration<double, std::milli>(ended - begun).count());
-                report.poseToSubmitMs.push_back(std::chrono::duration<double, std::milli>(ended - located).count());
-                report.missedSoFar.push_back(report.missedFrames);
-                comfort.frameTook(cpuMs, double(frame.period) * 1e-6);
-                ++report.framesDrawn;
-            }
-            ++report.frames;
-            if (options.frames && report.frames == *options.frames) headset.requestExit();
-        }
-        report.lost = headset.lost();
-        report.menuWidgets = menus.panels().widgetRects;
-        headset.setEyeRecorders({}, {});
-        // The worker finishes every command the controllers gave (nothing sculpted is dropped), then
-        // the mesh workers stop.
-    }
-    for (XrSessionState s : headset.states()) report.states.push_back(sessionStateName(s));
-    report.validationMessages = headset.vulkan().validationMessages();
+    VrFrameLoop(session, options, report).run();
     return report;
 }
 
