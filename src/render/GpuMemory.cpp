@@ -114,4 +114,26 @@ void createDeviceImage(const VulkanContext& context, const VkImageCreateInfo& in
     check(vkBindImageMemory(context.device(), image, memory, 0), "vkBindImageMemory");
 }
 
+void createImage2D(const VulkanContext& context, int w, int h, VkFormat format, VkImageUsageFlags usage, VkImageAspectFlags aspect,
+                   VkImage& image, VkDeviceMemory& memory, VkImageView& view)
+{
+    VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+    info.imageType = VK_IMAGE_TYPE_2D;
+    info.format = format;
+    info.extent = {uint32_t(w), uint32_t(h), 1};
+    info.mipLevels = 1;
+    info.arrayLayers = 1;
+    info.samples = VK_SAMPLE_COUNT_1_BIT;
+    info.tiling = VK_IMAGE_TILING_OPTIMAL;
+    info.usage = usage;
+    info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    createDeviceImage(context, info, image, memory);
+    VkImageViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+    viewInfo.image = image;
+    viewInfo.viewType = VK_IMAGE_VIEW_TYPE_2D;
+    viewInfo.format = format;
+    viewInfo.subresourceRange = {aspect, 0, 1, 0, 1};
+    check(vkCreateImageView(context.device(), &viewInfo, nullptr, &view), "vkCreateImageView");
+}
+
 } // namespace vdbclay::render

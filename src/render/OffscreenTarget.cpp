@@ -59,31 +59,6 @@ VkRenderPass createRenderPass(VkDevice device, VkFormat colourFormat, VkImageLay
     return pass;
 }
 
-namespace {
-
-void createImage(const VulkanContext& context, int w, int h, VkFormat format, VkImageUsageFlags usage,
-                 VkImageAspectFlags aspect, VkImage& image, VkDeviceMemory& memory, VkImageView& view)
-{
-    VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
-    info.imageType = VK_IMAGE_TYPE_2D;
-    info.format = format;
-    info.extent = {uint32_t(w), uint32_t(h), 1};
-    info.mipLevels = 1;
-    info.arrayLayers = 1;
-    info.samples = VK_SAMPLE_COUNT_1_BIT;
-    info.tiling = VK_IMAGE_TILING_OPTIMAL;
-    info.usage = usage;
-    info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-    createDeviceImage(context, info, image, memory);
-    VkImageViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-    viewInfo.image = image;
-    viewInfo.viewType = VK_IMAGE_VIEW_TYPE_2D;
-    viewInfo.format = format;
-    viewInfo.subresourceRange = {aspect, 0, 1, 0, 1};
-    check(vkCreateImageView(context.device(), &viewInfo, nullptr, &view), "vkCreateImageView");
-}
-
-} // namespace
 
 OffscreenTarget::OffscreenTarget(const VulkanContext& context, int width, int height)
     : context_(context), width_(width), height_(height)
@@ -93,10 +68,10 @@ OffscreenTarget::OffscreenTarget(const VulkanContext& context, int width, int he
         throw std::invalid_argument("image size " + std::to_string(width) + "x" + std::to_string(height) +
                                     " is outside 1 .. " + std::to_string(limit) + " (the device's limit)");
     try {
-        createImage(context, width, height, kColourFormat,
+        createImage2D(context, width, height, kColourFormat,
                     VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
                     colour_, colourMemory_, colourView_);
-        createImage(context, width, height, kDepthFormat,
+        createImage2D(context, width, height, kDepthFormat,
                     VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                     VK_IMAGE_ASPECT_DEPTH_BIT, depth_, depthMemory_, depthView_);
         renderPass_ = createRenderPass(context.device(), kColourFormat, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);

@@ -1,6 +1,8 @@
 #include "render/PanelQuads.h"
 
+#include "render/GpuMemory.h"
 #include "render/OffscreenTarget.h"
+#include "render/Pipelines.h"
 
 #include <stdexcept>
 
@@ -15,16 +17,6 @@ const uint32_t kPanelFrag[] =
 #include "shaders/panel.frag.inc"
     ;
 
-VkShaderModule module(VkDevice device, const uint32_t* code, std::size_t bytes)
-{
-    VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-    info.codeSize = bytes;
-    info.pCode = code;
-    VkShaderModule m = VK_NULL_HANDLE;
-    check(vkCreateShaderModule(device, &info, nullptr, &m), "vkCreateShaderModule");
-    return m;
-}
-
 struct PushQuad {
     float corners[4][4];
     float uvRect[4];
@@ -38,34 +30,10 @@ PanelQuads::PanelQuads(const VulkanContext& context, int width, int height, VkRe
     if (width <= 0 || height <= 0) throw std::invalid_argument("a panel picture needs a positive size");
     const VkDevice device = context.device();
     try {
-        auto image = [&](VkFormat format, VkImageUsageFlags usage, VkImageAspectFlags aspect, VkImage* img, VkDeviceMemory* mem, VkImageView* view) {
-            VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
-            info.imageType = VK_IMAGE_TYPE_2D;
-            info.format = format;
-            info.extent = {uint32_t(width), uint32_t(height), 1};
-            info.mipLevels = 1;
-            info.arrayLayers = 1;
-            info.samples = VK_SAMPLE_COUNT_1_BIT;
-            info.tiling = VK_IMAGE_TILING_OPTIMAL;
-            info.usage = usage;
-            check(vkCreateImage(device, &info, nullptr, img), "vkCreateImage");
-            VkMemoryRequirements req;
-            vkGetImageMemoryRequirements(device, *img, &req);
-            VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-            alloc.allocationSize = req.size;
-            alloc.memoryTypeIndex = context.memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-            check(vkAllocateMemory(device, &alloc, nullptr, mem), "vkAllocateMemory");
-            check(vkBindImageMemory(device, *img, *mem, 0), "vkBindImageMemory");
-            VkImageViewCreateInfo v{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-            v.image = *img;
-            v.viewType = VK_IMAGE_VIEW_TYPE_2D;
-            v.format = format;
-            v.subresourceRange = {aspect, 0, 1, 0, 1};
-            check(vkCreateImageView(device, &v, nullptr, view), "vkCreateImageView");
-        };
-        image(kColourFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_COLOR_BIT, &colour_, &colourMemory_,
-              &colourView_);
-        image(kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT, &depth_, &depthMemory_, &depthView_);
+        createImage2D(context, width, height, kColourFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
+                      colour_, colourMemory_, colourView_);
+        createImage2D(context, width, height, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT, depth_,
+                      depthMemory_, depthView_);
         picturePass_ = createRenderPass(device, kColourFormat, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
         VkImageView attachments[2] = {colourView_, depthView_};
         VkFramebufferCreateInfo fb{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
@@ -114,7 +82,7 @@ PanelQuads::PanelQuads(const VulkanContext& context, int width, int height, VkRe
         pl.pPushConstantRanges = &push;
         check(vkCreatePipelineLayout(device, &pl, nullptr, &layout_), "vkCreatePipelineLayout");
 
-        VkShaderModule vert = module(device, kPanelVert, sizeof(kPanelVert)), frag = module(device, kPanelFrag, sizeof(kPanelFrag));
+        VkShaderModule vert = shaderModule(device, kPanelVert, sizeof(kPanelVert)), frag = shaderModule(device, kPanelFrag, sizeof(kPanelFrag));
         VkPipelineShaderStageCreateInfo stages[2]{{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO}, {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO}};
         stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
         stages[0].module = vert;

@@ -21,15 +21,6 @@ const uint32_t kBrushFrag[] =
 #include "shaders/brush.frag.inc"
     ;
 
-VkShaderModule shaderModule(VkDevice device, const uint32_t* code, std::size_t bytes)
-{
-    VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-    info.codeSize = bytes;
-    info.pCode = code;
-    VkShaderModule module = VK_NULL_HANDLE;
-    check(vkCreateShaderModule(device, &info, nullptr, &module), "vkCreateShaderModule");
-    return module;
-}
 
 struct PipelineShape {
     VkShaderModule vert, frag;
@@ -118,6 +109,16 @@ VkPipeline createPipeline(VkDevice device, VkRenderPass pass, VkPipelineLayout l
 }
 
 } // namespace
+
+VkShaderModule shaderModule(VkDevice device, const uint32_t* code, std::size_t bytes)
+{
+    VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    info.codeSize = bytes;
+    info.pCode = code;
+    VkShaderModule module = VK_NULL_HANDLE;
+    check(vkCreateShaderModule(device, &info, nullptr, &module), "vkCreateShaderModule");
+    return module;
+}
 
 Pipelines::Pipelines(const VulkanContext& context, VkRenderPass renderPass) : context_(context)
 {

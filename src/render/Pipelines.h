@@ -4,6 +4,8 @@
 
 #include "render/VulkanContext.h"
 
+#include <cstddef>
+
 namespace vdbclay::render {
 
 /// A vertex as the GPU reads it: position, normal, material (16 bits) | level (8) | occlusion (8).
@@ -13,6 +15,9 @@ struct GpuVertex {
     uint32_t packed;
     uint32_t blend; // MaterialBlend | 1 << 31, or 0: no blend
 };
+
+/// A shader module of SPIR-V words (embedded at build time). Throws VulkanError.
+VkShaderModule shaderModule(VkDevice device, const uint32_t* code, std::size_t bytes);
 
 class Pipelines {
 public:

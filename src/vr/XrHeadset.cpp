@@ -1,5 +1,6 @@
 #include "vr/XrHeadset.h"
 
+#include "render/GpuMemory.h"
 #include "render/OffscreenTarget.h"
 
 #include <algorithm>
@@ -384,24 +385,10 @@ void XrHeadset::createSwapchains()
             for (VkImage image : swapchainImages(e->depth, instance_))
                 e->depthViews.push_back(createView(device, image, render::kDepthFormat, VK_IMAGE_ASPECT_DEPTH_BIT));
         } else {
-            VkImageCreateInfo image{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
-            image.imageType = VK_IMAGE_TYPE_2D;
-            image.format = render::kDepthFormat;
-            image.extent = {uint32_t(e->w), uint32_t(e->h), 1};
-            image.mipLevels = 1;
-            image.arrayLayers = 1;
-            image.samples = VK_SAMPLE_COUNT_1_BIT;
-            image.tiling = VK_IMAGE_TILING_OPTIMAL;
-            image.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
-            render::check(vkCreateImage(device, &image, nullptr, &e->ownDepth), "vkCreateImage");
-            VkMemoryRequirements req;
-            vkGetImageMemoryRequirements(device, e->ownDepth, &req);
-            VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-            alloc.allocationSize = req.size;
-            alloc.memoryTypeIndex = vulkan_->memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-            render::check(vkAllocateMemory(device, &alloc, nullptr, &e->ownDepthMemory), "vkAllocateMemory");
-            render::check(vkBindImageMemory(device, e->ownDepth, e->ownDepthMemory, 0), "vkBindImageMemory");
-            e->depthViews.push_back(createView(device, e->ownDepth, render::kDepthFormat, VK_IMAGE_ASPECT_DEPTH_BIT));
+            VkImageView view = VK_NULL_HANDLE;
+            render::createImage2D(*vulkan_, e->w, e->h, render::kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT,
+                                  e->ownDepth, e->ownDepthMemory, view);
+            e->depthViews.push_back(view);
         }
         e->makeFramebuffers();
     }
