@@ -118,8 +118,9 @@ case "$action" in
             # The renderer's tests run on lavapipe in step 1 with the validation layer; under ASan, Mesa's
             # CPU rasterizer is slow and leaks from its unloaded JIT code, so they are left out and the
             # Vulkan driver is hidden (commands that draw then take their no-device path). The desktop editor's
-            # tests draw too, and there is no display here: they are left out as well.
-            step "test: the suite under AddressSanitizer and UBSan (all but the renderer's tests, no Vulkan driver)"
+            # tests draw too, and there is no display here; the VR (xr:) sessions draw through the fake
+            # runtime: they are left out as well.
+            step "test: the suite under AddressSanitizer and UBSan (all but the tests that draw, no Vulkan driver)"
             VK_DRIVER_FILES=/nonexistent/vdbclay-no-driver.json VK_ICD_FILENAMES=/nonexistent/vdbclay-no-driver.json \
             ASAN_OPTIONS=detect_leaks=1 VDBCLAY_SWEEP_STEP=1 VDBCLAY_KILL_TRIALS=12 LSAN_OPTIONS="suppressions=${repo}/tests/sanitizer/lsan.supp" \
                 UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=${repo}/tests/sanitizer/ubsan.supp" \

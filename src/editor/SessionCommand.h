@@ -41,7 +41,7 @@ struct Command {
     /// Strokes: where the brush went. A front end gives the pointer's `ray` and the session places the
     /// brush on the surface as the stroke began; the record then holds both, with the surface's outward
     /// `normal` there (what sinks an add stamp so that it raises the surface by strength x radius).
-    /// A point alone (older sessions, tests) is taken as it is.
+    /// A point alone (a headset's brush at the hand, older sessions, tests) is taken as it is.
     std::optional<std::array<double, 3>> point;
     std::optional<Ray> ray;
     std::optional<std::array<double, 3>> normal;
