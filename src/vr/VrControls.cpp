@@ -35,12 +35,6 @@ VrControls::Output VrControls::update(const ControllerFrame& frame, const BrushS
 {
     Output out;
     out.world = world;
-    const HandInput& hand = frame.hands[std::size_t(dominant_)];
-    const HandInput& off = frame.hands[std::size_t(1 - dominant_)];
-    const HandInput& handBefore = previous_[std::size_t(dominant_)];
-    const HandInput& offBefore = previous_[std::size_t(1 - dominant_)];
-    auto pressed = [](bool now, bool before) { return now && !before; };
-
     if (!frame.focused) {
         // No input reaches an unfocused session: a stroke under way ends where it was, grabs let go.
         if (stroking_) {
@@ -55,31 +49,47 @@ VrControls::Output VrControls::update(const ControllerFrame& frame, const BrushS
         out.brushRadius = brush.radius;
         return out;
     }
+    moveWorld(frame, out); // first, so that the brush is placed in the scene as it stands this frame
+    adjustBrush(frame, brush, out);
+    stroke(frame, out);
+    pressButtons(frame, out);
+    previous_ = frame.hands;
+    return out;
+}
 
-    // The world: grabs first, so the brush is placed in the scene as it stands this frame.
+void VrControls::moveWorld(const ControllerFrame& frame, Output& out)
+{
+    const HandInput& hand = frame.hands[std::size_t(dominant_)];
+    const HandInput& off = frame.hands[std::size_t(1 - dominant_)];
     auto holding = [&](const HandInput& h) { return h.tracked && h.squeeze >= kGrabHold ? std::optional<glm::dvec3>(h.grip.position) : std::nullopt; };
     const std::optional<glm::dvec3> offHold = holding(off);
     // The dominant hand joins a grab the off hand holds (two hands turn and scale), never grabs alone:
     // its squeeze is free while it sculpts.
     const std::optional<glm::dvec3> dominantHold = offHold ? holding(hand) : std::nullopt;
-    out.world = dominant_ == 1 ? grab_.update(offHold, dominantHold, world) : grab_.update(dominantHold, offHold, world);
+    out.world = dominant_ == 1 ? grab_.update(offHold, dominantHold, out.world) : grab_.update(dominantHold, offHold, out.world);
     if (!grab_.active() && off.tracked && std::fabs(off.thumbstick.y) > kStickDeadZone)
         out.world = fly(out.world, off.aim.forward(), kFlyMetresPerSecond * off.thumbstick.y, frame.seconds);
+}
 
-    // The brush's size and mode: the dominant thumbstick.
+void VrControls::adjustBrush(const ControllerFrame& frame, const BrushSettings& brush, Output& out)
+{
+    const HandInput& hand = frame.hands[std::size_t(dominant_)];
     BrushSettings shown = brush;
     const double stickY = hand.thumbstick.y, stickX = hand.thumbstick.x;
     const bool menuHasStick = frame.pointerOnMenu; // it scrolls the menu then
+    auto setBrush = [&] {
+        Command set;
+        set.kind = Command::Kind::SetBrush;
+        set.brush = shown;
+        out.commands.push_back(set);
+    };
     if (!menuHasStick && std::fabs(stickY) > kStickDeadZone && std::fabs(stickY) >= std::fabs(stickX)) {
         const double from = resizing_.value_or(brush.radius);
         resizing_ = std::clamp(from * std::exp2(stickY * frame.seconds), 0.5, 4096.0); // doubles a second at full tilt
     } else if (resizing_) {
         // Released: the new size becomes the brush (one command, not one per frame).
         shown.radius = *resizing_;
-        Command set;
-        set.kind = Command::Kind::SetBrush;
-        set.brush = shown;
-        out.commands.push_back(set);
+        setBrush();
         resizing_.reset();
     }
     if (!menuHasStick && !modeFlick_ && std::fabs(stickX) > kStickFlick && std::fabs(stickX) > std::fabs(stickY)) {
@@ -89,20 +99,20 @@ VrControls::Output VrControls::update(const ControllerFrame& frame, const BrushS
         std::ptrdiff_t i = at == modes.end() ? 0 : at - modes.begin();
         i = (i + (stickX > 0 ? 1 : std::ptrdiff_t(modes.size()) - 1)) % std::ptrdiff_t(modes.size());
         shown.mode = modes[std::size_t(i)];
-        Command set;
-        set.kind = Command::Kind::SetBrush;
-        set.brush = shown;
-        out.commands.push_back(set);
+        setBrush();
     } else if (std::fabs(stickX) < kStickDeadZone) {
         modeFlick_ = false;
     }
     out.brushRadius = resizing_.value_or(shown.radius);
+}
 
+void VrControls::stroke(const ControllerFrame& frame, Output& out)
+{
+    const HandInput& hand = frame.hands[std::size_t(dominant_)];
     // The brush: at the dominant hand's fingertips, in scene units.
     if (hand.tracked) out.brush = out.world.toScene(hand.grip.position + hand.grip.forward() * kBrushReachMetres);
-    const double pressure = hand.trigger;
     if (!stroking_ && out.brush && hand.trigger >= kStrokeStart && !resizing_ && !frame.pointerOnMenu) {
-        out.commands.push_back(strokeCommand(Command::Kind::StrokeBegin, *out.brush, pressure));
+        out.commands.push_back(strokeCommand(Command::Kind::StrokeBegin, *out.brush, hand.trigger));
         stroking_ = true;
         lastPoint_ = out.brush;
     } else if (stroking_ && (hand.trigger < kStrokeEnd || !out.brush)) {
@@ -111,29 +121,31 @@ VrControls::Output VrControls::update(const ControllerFrame& frame, const BrushS
         out.commands.push_back(end);
         stroking_ = false;
     } else if (stroking_ && out.brush && *out.brush != *lastPoint_) {
-        out.commands.push_back(strokeCommand(Command::Kind::StrokeMove, *out.brush, pressure));
+        out.commands.push_back(strokeCommand(Command::Kind::StrokeMove, *out.brush, hand.trigger));
         lastPoint_ = out.brush;
     }
     out.strokeActive = stroking_;
+}
 
-    // Buttons: undo and redo on the brush hand; framing and the menu on the other; hints on either's menu button.
-    if (!stroking_) {
-        if (pressed(hand.primary, handBefore.primary)) {
-            Command c;
-            c.kind = Command::Kind::Undo;
-            out.commands.push_back(c);
-        }
-        if (pressed(hand.secondary, handBefore.secondary)) {
-            Command c;
-            c.kind = Command::Kind::Redo;
-            out.commands.push_back(c);
-        }
-    }
+void VrControls::pressButtons(const ControllerFrame& frame, Output& out)
+{
+    const HandInput& hand = frame.hands[std::size_t(dominant_)];
+    const HandInput& off = frame.hands[std::size_t(1 - dominant_)];
+    const HandInput& handBefore = previous_[std::size_t(dominant_)];
+    const HandInput& offBefore = previous_[std::size_t(1 - dominant_)];
+    auto pressed = [](bool now, bool before) { return now && !before; };
+    // Undo and redo on the brush hand (never mid-stroke); framing and the menu on the other; hints on
+    // either's menu button.
+    auto command = [&](Command::Kind kind) {
+        Command c;
+        c.kind = kind;
+        out.commands.push_back(c);
+    };
+    if (!stroking_ && pressed(hand.primary, handBefore.primary)) command(Command::Kind::Undo);
+    if (!stroking_ && pressed(hand.secondary, handBefore.secondary)) command(Command::Kind::Redo);
     out.frameAgain = pressed(off.primary, offBefore.primary);
     out.toggleMenu = pressed(off.secondary, offBefore.secondary);
     out.toggleHints = pressed(off.menu, offBefore.menu) || pressed(hand.menu, handBefore.menu);
-    previous_ = frame.hands;
-    return out;
 }
 
 } // namespace vdbclay::vr

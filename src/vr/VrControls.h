@@ -63,6 +63,11 @@ public:
     int dominantHand() const { return dominant_; }
 
 private:
+    void moveWorld(const ControllerFrame& frame, Output& out);
+    void adjustBrush(const ControllerFrame& frame, const BrushSettings& brush, Output& out);
+    void stroke(const ControllerFrame& frame, Output& out);
+    void pressButtons(const ControllerFrame& frame, Output& out);
+
     int dominant_;
     bool stroking_ = false;
     std::optional<glm::dvec3> lastPoint_;
