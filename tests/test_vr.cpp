@@ -420,6 +420,7 @@ TEST_CASE("xr: a groove carved with the trigger equals the same stroke applied b
     const json report = vrReport(runVr(dir, grooveScript(1.0), "ball.vdb --frames 80 --record session.json"));
     checkNoXrFindings(dir);
     CHECK(report.at("commands").get<int>() > 10);
+    CHECK(report.at("haptic_pulses").get<int>() >= 1); // the brush reached the ball
     exportScene(dir, "ball.vdb", "carved.vdb");
     const json carved = diffScenes(dir, "original.vdb", "carved.vdb");
     CHECK(carved.at("identical") == false);
@@ -645,5 +646,30 @@ TEST_CASE("xr: the menu stands where the off hand holds it, and a choice made by
         CHECK(op.at("mode") == "add");
         REQUIRE(op.contains("symmetry"));
         CHECK(op.at("symmetry").at("mirror") == json({"x"}));
+    }
+}
+
+TEST_CASE("xr: the suggested bindings drive the brush on every controller profile", "[vr]")
+{
+    // Each profile as the fake emulates it: the trigger strokes; where there is a thumbstick (a trackpad
+    // on the Vive), its flick turns add into remove.
+    struct Profile {
+        const char* path;
+        bool stick;
+    };
+    for (const Profile& profile : {Profile{"/interaction_profiles/oculus/touch_controller", true}, Profile{"/interaction_profiles/valve/index_controller", true},
+                                   Profile{"/interaction_profiles/htc/vive_controller", true}, Profile{"/interaction_profiles/khr/simple_controller", false}}) {
+        INFO(profile.path);
+        TempDir dir;
+        makeBall(dir);
+        makeBall(dir, "original.vdb");
+        json script = grooveScript(1.0);
+        script["profile"] = profile.path;
+        vrReport(runVr(dir, script, "ball.vdb --frames 80 --record session.json"));
+        checkNoXrFindings(dir);
+        REQUIRE(runCli(dir, "edit original.vdb --replay session.json --headless --export-script ops.json").exitCode == 0);
+        const json ops = json::parse(readText(dir.file("ops.json"))).at("ops");
+        REQUIRE(ops.size() > 0);
+        CHECK(ops.front().at("mode") == (profile.stick ? "remove" : "add"));
     }
 }

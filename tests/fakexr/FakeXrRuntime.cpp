@@ -310,9 +310,11 @@ bool readInput(const Session* s, const std::string& input, float* x, float* y)
     else if (rest == "trigger/click" || rest == "select/click") *x = h.trigger > 0.5f ? 1.0f : 0.0f;
     else if (rest == "squeeze/value" || rest == "squeeze") *x = h.squeeze;
     else if (rest == "squeeze/click") *x = h.squeeze > 0.5f ? 1.0f : 0.0f;
-    else if (rest == "thumbstick") *x = h.thumbstick.x, *y = h.thumbstick.y;
-    else if (rest == "thumbstick/x") *x = h.thumbstick.x;
-    else if (rest == "thumbstick/y") *x = h.thumbstick.y;
+    // A Vive's trackpad is the script's thumbstick.
+    else if (rest == "thumbstick" || rest == "trackpad") *x = h.thumbstick.x, *y = h.thumbstick.y;
+    else if (rest == "thumbstick/x" || rest == "trackpad/x") *x = h.thumbstick.x;
+    else if (rest == "thumbstick/y" || rest == "trackpad/y") *x = h.thumbstick.y;
+    else if (rest == "trackpad/click" || rest == "trackpad/touch") *x = button("thumbstick");
     else if (rest.size() > 6 && rest.substr(rest.size() - 6) == "/click") *x = button(rest.substr(0, rest.size() - 6));
     else if (rest.size() > 6 && rest.substr(rest.size() - 6) == "/touch") *x = button(rest.substr(0, rest.size() - 6));
     else return false;
