@@ -294,7 +294,7 @@ private:
     }
 
     /// The eyes' views, with one near plane for both (the depth both submit means the same) in front of
-    /// all they may draw: the bricks shown, the brush and the menus. Returns it in metres.
+    /// all they may draw: the bricks shown, the brush, the menus and the pointer. Returns it in metres.
     double placeEyes(const std::vector<XrView>& views, const std::vector<render::RenderTarget*>& targets, const VrControls::Output& out)
     {
         auto [lo, hi] = session_.shownBox();
@@ -305,6 +305,8 @@ private:
         };
         if (layout.menu) panelCorners(*layout.menu);
         for (const auto& h : layout.hints) panelCorners(h);
+        if (layout.pointer)
+            for (const glm::dvec3& p : *layout.pointer) extendBox(lo, hi, world_.toScene(p), 0.0);
         eyes_.clear();
         double nearMetres = 1e30;
         for (std::size_t i = 0; i < views.size(); ++i) {

@@ -18,6 +18,9 @@ namespace {
 constexpr int kPictureSize = 1024;
 constexpr int kMenuPixelsWide = 512, kMenuPixelsHigh = 768;
 constexpr int kHintPixelsWide = 512, kHintPixelsHigh = 256;
+// A white square in the picture's free lower right corner: what the pointer's ray is drawn with.
+constexpr float kWhiteFrom = 1016.0f, kWhiteTo = 1024.0f;
+constexpr double kRayWidthMetres = 0.003;
 
 void checkImgui(VkResult r)
 {
@@ -41,7 +44,7 @@ std::array<glm::dvec3, 4> MenuLayout::Panel::corners() const
     return {centre - r - u, centre + r - u, centre + r + u, centre - r + u};
 }
 
-std::optional<glm::dvec2> MenuLayout::pointAt(const Pose& ray, int pictureWidth, int pictureHeight) const
+std::optional<glm::dvec3> MenuLayout::meet(const Pose& ray) const
 {
     if (!menu) return std::nullopt;
     const glm::dvec3 normal = glm::cross(menu->right, menu->up);
@@ -50,9 +53,18 @@ std::optional<glm::dvec2> MenuLayout::pointAt(const Pose& ray, int pictureWidth,
     if (std::fabs(facing) < 1e-6) return std::nullopt;
     const double t = glm::dot(menu->centre - ray.position, normal) / facing;
     if (t <= 0.0) return std::nullopt;
-    const glm::dvec3 hit = ray.position + t * dir - menu->centre;
-    const double u = glm::dot(hit, menu->right) / menu->width + 0.5, v = 0.5 - glm::dot(hit, menu->up) / menu->height;
-    if (u < 0.0 || u > 1.0 || v < 0.0 || v > 1.0) return std::nullopt;
+    const glm::dvec3 hit = ray.position + t * dir;
+    const glm::dvec3 local = hit - menu->centre;
+    if (std::fabs(glm::dot(local, menu->right)) > 0.5 * menu->width || std::fabs(glm::dot(local, menu->up)) > 0.5 * menu->height) return std::nullopt;
+    return hit;
+}
+
+std::optional<glm::dvec2> MenuLayout::pointAt(const Pose& ray, int pictureWidth, int pictureHeight) const
+{
+    const std::optional<glm::dvec3> hit = meet(ray);
+    if (!hit) return std::nullopt;
+    const glm::dvec3 local = *hit - menu->centre;
+    const double u = glm::dot(local, menu->right) / menu->width + 0.5, v = 0.5 - glm::dot(local, menu->up) / menu->height;
     const double x = (menu->uv[0] + u * (menu->uv[2] - menu->uv[0])) * pictureWidth;
     const double y = (menu->uv[1] + v * (menu->uv[3] - menu->uv[1])) * pictureHeight;
     return glm::dvec2(x, y);
@@ -150,6 +162,8 @@ std::vector<Command> VrMenus::update(ControllerFrame& frame, int dominantHand, S
     std::optional<glm::dvec2> pointer;
     if (frame.focused && hand.tracked) pointer = layout_.pointAt(hand.aim, kPictureSize, kPictureSize);
     frame.pointerOnMenu = pointer.has_value();
+    if (layout_.menu && frame.focused && hand.tracked)
+        layout_.pointer = std::array<glm::dvec3, 2>{hand.aim.position, layout_.meet(hand.aim).value_or(hand.aim.position + 0.5 * hand.aim.forward())};
     io.DeltaTime = float(std::max(seconds, 1e-4));
     io.MousePos = pointer ? ImVec2(float(pointer->x), float(pointer->y)) : ImVec2(-FLT_MAX, -FLT_MAX);
     io.MouseDown[0] = pointer && hand.trigger > 0.5;
@@ -175,6 +189,7 @@ std::vector<Command> VrMenus::update(ControllerFrame& frame, int dominantHand, S
             ImGui::End();
         }
     }
+    ImGui::GetForegroundDrawList()->AddRectFilled(ImVec2(kWhiteFrom, kWhiteFrom), ImVec2(kWhiteTo, kWhiteTo), IM_COL32_WHITE);
     ImGui::Render();
     drawn_ = true;
     return out;
@@ -213,6 +228,23 @@ void VrMenus::recordQuads(VkCommandBuffer cmd, const render::Camera& eye, const 
     };
     if (layout_.menu) add(*layout_.menu);
     for (const auto& h : layout_.hints) add(h);
+    if (layout_.pointer) {
+        // The ray as a thin strip turned toward the eye.
+        const auto& [from, to] = *layout_.pointer;
+        const glm::dvec3 eyeAt = world.toStage(glm::dvec3(eye.eye[0], eye.eye[1], eye.eye[2]));
+        const glm::dvec3 across = glm::cross(to - from, eyeAt - from);
+        if (glm::length(across) > 1e-12) {
+            MenuLayout::Panel strip;
+            strip.centre = 0.5 * (from + to);
+            strip.right = glm::normalize(to - from);
+            strip.up = glm::normalize(across);
+            strip.width = glm::length(to - from);
+            strip.height = kRayWidthMetres;
+            const float a = (kWhiteFrom + 2.0f) / kPictureSize, b = (kWhiteTo - 2.0f) / kPictureSize;
+            strip.uv = {a, a, b, b};
+            add(strip);
+        }
+    }
     quads_->recordQuads(cmd, quads, width, height);
 }
 

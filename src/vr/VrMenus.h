@@ -29,8 +29,13 @@ struct MenuLayout {
     };
     std::optional<Panel> menu;
     std::vector<Panel> hints;
+    /// The pointer's ray while the menu is shown: from the pointing hand to where it meets the menu (or
+    /// half a metre ahead).
+    std::optional<std::array<glm::dvec3, 2>> pointer;
     /// Where a ray meets the menu, in its picture's pixels (x right, y down); none when it misses.
     std::optional<glm::dvec2> pointAt(const Pose& ray, int pictureWidth, int pictureHeight) const;
+    /// Where a ray meets the menu's plane within it (stage metres); none when it misses.
+    std::optional<glm::dvec3> meet(const Pose& ray) const;
 };
 
 /// The menu above the off hand's grip, facing back along it; the hints beside each tracked hand.
