@@ -1,0 +1,23 @@
+// Points spread uniformly by area over a mesh's surface (seeded, so a descriptor is the same every run),
+// with the colour of the triangle each lies on: what the shape descriptors are built from.
+#pragma once
+
+#include "voxelize/TriangleMesh.h"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace vdbclay::query {
+
+struct SurfaceSamples {
+    std::vector<std::array<double, 3>> points;
+    std::vector<std::array<float, 3>> colours; // RGB 0..1, per point
+    double area = 0.0;                           // of the mesh
+};
+
+/// `count` points uniform by area (a triangle by its area, then a point uniform in it). Throws
+/// std::invalid_argument for a mesh without area.
+SurfaceSamples sampleSurface(const TriangleSoup& mesh, std::size_t count, uint64_t seed);
+
+} // namespace vdbclay::query

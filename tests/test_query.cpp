@@ -1,0 +1,154 @@
+// Retrieval: surface sampling, the D2 shape distribution, histogram distances and the labeled synthetic
+// set (src/query).
+#include "query/HistogramDistance.h"
+#include "query/ShapeDistribution.h"
+#include "query/SurfaceSamples.h"
+#include "query/SyntheticModels.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <map>
+
+using namespace vdbclay;
+using namespace vdbclay::query;
+
+TEST_CASE("query distances: chi-square and Jensen-Shannon are 0 for equal histograms, 1 for disjoint ones, symmetric", "[query]")
+{
+    const Histogram a{0.5, 0.5, 0.0, 0.0}, b{0.0, 0.0, 0.25, 0.75}, c{0.25, 0.25, 0.25, 0.25};
+    CHECK(chiSquareDistance(a, a) == 0.0);
+    CHECK(jensenShannonDistance(a, a) == 0.0);
+    CHECK(chiSquareDistance(a, b) == Approx(1.0));
+    CHECK(jensenShannonDistance(a, b) == Approx(1.0));
+    CHECK(chiSquareDistance(a, c) == Approx(chiSquareDistance(c, a)));
+    CHECK(jensenShannonDistance(a, c) == Approx(jensenShannonDistance(c, a)));
+    // a vs the uniform c: 1/2 (2 x 0.25^2/0.75 + 2 x 0.25^2/0.25) = 1/3
+    CHECK(chiSquareDistance(a, c) == Approx(1.0 / 3.0));
+    CHECK_THROWS_AS(chiSquareDistance(a, Histogram{1.0}), std::invalid_argument);
+}
+
+TEST_CASE("query distances: smoothing keeps the mass, spreads a spike as a Gaussian and makes near shifts cheap", "[query]")
+{
+    Histogram spike(21, 0.0);
+    spike[10] = 1.0;
+    const Histogram s = smoothHistogram(spike, 1.0);
+    double total = 0.0;
+    for (double v : s) total += v;
+    CHECK(total == Approx(1.0));
+    CHECK(s[10] / s[11] == Approx(std::exp(0.5)).epsilon(1e-9));
+    CHECK(s[9] == Approx(s[11]));
+    // At an edge the mass reflects back inside.
+    Histogram edge(8, 0.0);
+    edge[0] = 1.0;
+    double edgeTotal = 0.0;
+    for (double v : smoothHistogram(edge, 1.0)) edgeTotal += v;
+    CHECK(edgeTotal == Approx(1.0));
+    // A spike moved by one bin: far apart raw, close once smoothed.
+    Histogram moved(21, 0.0);
+    moved[11] = 1.0;
+    CHECK(chiSquareDistance(spike, moved) == Approx(1.0));
+    CHECK(chiSquareDistance(smoothHistogram(spike), smoothHistogram(moved)) < 0.25); // about 0.2 at one bin of sigma
+}
+
+TEST_CASE("query sampling: points fall on the surface, spread by area, with their triangle's colour", "[query]")
+{
+    // Two triangles in the plane z = 0 with areas 1 and 3, of two colours.
+    TriangleSoup soup;
+    soup.positions = {{0, 0, 0}, {2, 0, 0}, {0, 1, 0}, {10, 0, 0}, {13, 0, 0}, {10, 2, 0}};
+    soup.triangles = {{0, 1, 2}, {3, 4, 5}};
+    soup.materials = {{"red", {1, 0, 0, 1}}, {"blue", {0, 0, 1, 1}}};
+    soup.triangleMaterials = {0, 1};
+    const std::size_t n = 40000;
+    const SurfaceSamples s = sampleSurface(soup, n, 7);
+    CHECK(s.area == Approx(4.0));
+    std::size_t onSmall = 0, offSurface = 0, wrongColour = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto& p = s.points[i];
+        const bool small = p[0] < 5.0;
+        onSmall += small;
+        // Inside its triangle: x / 2 + y <= 1 on the first, (x - 10) / 3 + y / 2 <= 1 on the second.
+        const bool inside = p[2] == 0.0 && p[1] >= 0.0 &&
+                            (small ? p[0] >= 0.0 && p[0] / 2.0 + p[1] <= 1.0 + 1e-12 : p[0] >= 10.0 && (p[0] - 10.0) / 3.0 + p[1] / 2.0 <= 1.0 + 1e-12);
+        offSurface += !inside;
+        wrongColour += small ? s.colours[i][0] != 1.0f : s.colours[i][2] != 1.0f;
+    }
+    CHECK(offSurface == 0);
+    CHECK(wrongColour == 0);
+    // A quarter of the area: binomial standard deviation sqrt(n/4 * 3/4) ~ 87, so 5 of them is 433.
+    CHECK(std::fabs(double(onSmall) - double(n) / 4.0) < 433.0);
+    // The same seed, the same points.
+    CHECK(sampleSurface(soup, 100, 7).points == sampleSurface(soup, 100, 7).points);
+    TriangleSoup flat;
+    flat.positions = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+    flat.triangles = {{0, 1, 2}};
+    CHECK_THROWS_AS(sampleSurface(flat, 10, 1), std::invalid_argument);
+}
+
+TEST_CASE("query D2: a sphere's distribution matches the analytic one (p(d) = d / 2R^2 on [0, 2R])", "[query]")
+{
+    SyntheticShape sphere;
+    sphere.family = "ellipsoid";
+    sphere.tessellation = 64;
+    // Proportions that make the ellipsoid's radii equal: 1.0 a, 0.7 b, 0.5 c.
+    sphere.proportions = {1.0, 1.0 / 0.7, 1.0 / 0.5};
+    D2Options options;
+    options.points = 8192;
+    options.pairs = 1u << 20;
+    const Histogram h = d2Descriptor(buildShape(sphere), options);
+    // Distances are in units of the mean, 4R/3: d = x (4R/3), so p(x) dx = (x (4/3)^2 / 2) dx on [0, 1.5].
+    const double binWidth = options.range / options.bins;
+    double l1 = 0.0;
+    for (int i = 0; i < options.bins; ++i) {
+        const double x0 = i * binWidth, x1 = x0 + binWidth;
+        const double cdf = [](double x) { return std::min(x, 1.5) * std::min(x, 1.5) * (16.0 / 9.0) / 4.0; }(x1) -
+                           [](double x) { return std::min(x, 1.5) * std::min(x, 1.5) * (16.0 / 9.0) / 4.0; }(x0);
+        l1 += std::fabs(h[std::size_t(i)] - cdf);
+    }
+    INFO("L1 distance to the analytic distribution " << l1);
+    CHECK(l1 < 0.04);
+}
+
+TEST_CASE("query D2: a model moved, turned, scaled and tessellated anew stays nearest itself", "[query]")
+{
+    const std::vector<LabeledModel> set = syntheticSet(4, 11);
+    std::mt19937_64 random(5);
+    for (std::size_t i = 0; i < set.size(); i += 3) {
+        INFO(set[i].name);
+        SyntheticShape other = set[i].shape;
+        const SyntheticShape fresh = randomShape(other.family, random);
+        other.rotation = fresh.rotation;
+        other.scale = fresh.scale;
+        other.position = fresh.position;
+        other.tessellation = other.tessellation + 13;
+        const Histogram a = smoothHistogram(d2Descriptor(buildShape(set[i].shape))), b = smoothHistogram(d2Descriptor(buildShape(other)));
+        const double self = jensenShannonDistance(a, b);
+        CHECK(self < 0.01);
+        for (const LabeledModel& m : set) {
+            if (m.label == set[i].label) continue;
+            CHECK(jensenShannonDistance(a, smoothHistogram(d2Descriptor(buildShape(m.shape)))) > self);
+        }
+    }
+}
+
+TEST_CASE("query D2: on the synthetic set the nearest neighbour is of the same family far above chance", "[query]")
+{
+    const std::vector<LabeledModel> set = syntheticSet(6, 3);
+    std::vector<Histogram> d;
+    for (const LabeledModel& m : set) d.push_back(smoothHistogram(d2Descriptor(buildShape(m.shape))));
+    for (const auto metric : {&chiSquareDistance, &jensenShannonDistance}) {
+        int right = 0;
+        for (std::size_t i = 0; i < set.size(); ++i) {
+            std::size_t best = i;
+            double bestDistance = 1e300;
+            for (std::size_t j = 0; j < set.size(); ++j) {
+                if (j == i) continue;
+                const double dist = metric(d[i], d[j]);
+                if (dist < bestDistance) bestDistance = dist, best = j;
+            }
+            right += set[best].label == set[i].label;
+        }
+        const double precision = double(right) / double(set.size());
+        INFO("nearest-neighbour precision " << precision << " (chance " << 1.0 / double(syntheticFamilies().size()) << ")");
+        CHECK(precision >= 0.6);
+    }
+}
