@@ -244,6 +244,34 @@ struct DiffOptions {
 CLI::App* addDiffCommand(CLI::App& parent, DiffOptions& options);
 int runDiff(const DiffOptions& options);
 
+struct IndexOptions {
+    std::string library;
+    std::vector<std::string> inputs; // add: files and folders
+    bool recursive = false;
+    std::string name;                // remove
+    bool json = false;
+};
+struct IndexCommands {
+    CLI::App* add = nullptr;
+    CLI::App* info = nullptr;
+    CLI::App* remove = nullptr;
+};
+IndexCommands addIndexCommand(CLI::App& parent, IndexOptions& options);
+int runIndexAdd(const IndexOptions& options);
+int runIndexInfo(const IndexOptions& options);
+int runIndexRemove(const IndexOptions& options);
+
+struct QueryOptions {
+    std::string library;
+    std::string input;
+    std::size_t k = 10;
+    std::string descriptor = "d2";
+    std::string metric = "chi2";
+    bool json = false;
+};
+CLI::App* addQueryCommand(CLI::App& parent, QueryOptions& options);
+int runQuery(const QueryOptions& options);
+
 struct EditOptions {
     std::string scene;
     double memoryBudgetMB = 1024.0;

@@ -23,7 +23,7 @@ namespace {
 using namespace vdbclay::cli;
 
 constexpr const char* kCommandList =
-    "new, sculpt, edit, mesh, render, info, import, export, export-levelset, lod, synth, diff, tool, demo, bench or selftest";
+    "new, sculpt, edit, mesh, render, info, import, export, export-levelset, lod, synth, diff, tool, index, query, demo, bench or selftest";
 
 int run(int argc, char** argv)
 {
@@ -48,6 +48,8 @@ int run(int argc, char** argv)
     ToolMakeOptions toolOptions;
     RenderOptions renderOptions;
     EditOptions editOptions;
+    IndexOptions indexOptions;
+    QueryOptions queryOptions;
 
     CLI::App* newCmd = addNewCommand(app, newOptions);
     CLI::App* sculptCmd = addSculptCommand(app, sculptOptions);
@@ -65,6 +67,8 @@ int run(int argc, char** argv)
     CLI::App* synthCmd = addSynthCommand(app, synthOptions);
     CLI::App* diffCmd = addDiffCommand(app, diffOptions);
     const ToolCommands toolCmds = addToolCommand(app, toolOptions);
+    const IndexCommands indexCmds = addIndexCommand(app, indexOptions);
+    CLI::App* queryCmd = addQueryCommand(app, queryOptions);
     for (CLI::App* cmd : {newCmd, sculptCmd, editCmd, meshCmd, renderCmd, demoCmd, benchCmd, importCmd, exportCmd, lodCmds.build, lodCmds.inspect, synthCmd, toolCmds.make}) addThreadsOption(*cmd, threads);
     // Set after the subcommands exist: CLI11 copies the parent's footer into subcommands created later.
     app.footer("Run 'vdbclay COMMAND --help' for the options of one command.\n"
@@ -127,6 +131,10 @@ int run(int argc, char** argv)
     if (*synthCmd) return runSynth(synthOptions);
     if (*diffCmd) return runDiff(diffOptions);
     if (*toolCmds.make) return runToolMake(toolOptions);
+    if (*indexCmds.add) return runIndexAdd(indexOptions);
+    if (*indexCmds.info) return runIndexInfo(indexOptions);
+    if (*indexCmds.remove) return runIndexRemove(indexOptions);
+    if (*queryCmd) return runQuery(queryOptions);
     printError("no command given (see 'vdbclay --help')");
     return kExitUsage;
 }

@@ -31,3 +31,5 @@ pkg_check_modules(XTST REQUIRED IMPORTED_TARGET xtst x11)
 # The VR front end: the OpenXR loader (libopenxr-dev); the tests also run Khronos' sample (hello_xr,
 # libopenxr-utils) and the core validation layer (openxr-layer-corevalidation).
 find_package(OpenXR REQUIRED)
+# Retrieval: FLANN's nearest-neighbour indexes (libflann-dev; its save and load use LZ4).
+find_package(flann CONFIG REQUIRED)

@@ -54,6 +54,7 @@ packages=(
     libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslc libglm-dev libstb-dev
     libglfw3-dev libimgui-dev libxtst-dev xvfb xauth
     libopenxr-dev libopenxr-utils openxr-layer-corevalidation
+    libflann-dev liblz4-dev
 )
 
 installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q 'install ok installed'; }

@@ -152,3 +152,114 @@ TEST_CASE("query D2: on the synthetic set the nearest neighbour is of the same f
         CHECK(precision >= 0.6);
     }
 }
+
+// --- the library and its commands ---------------------------------------------------------------
+
+#include "query/ModelLibrary.h"
+#include "support/CliRun.h"
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sqlite3.h>
+
+using namespace vdbclay::test;
+
+namespace {
+
+/// The synthetic set written as coloured PLY files, one folder per family.
+void writeSet(const TempDir& dir, const std::vector<LabeledModel>& set)
+{
+    for (const LabeledModel& m : set) {
+        std::filesystem::create_directories(dir.path() / "models" / m.label);
+        writeColouredPly(buildShape(m.shape), (dir.path() / "models" / m.label / (m.name + ".ply")).string());
+    }
+}
+
+} // namespace
+
+TEST_CASE("query library: index add, info, query and remove; a moved and re-tessellated model finds itself first, after reopening too", "[query]")
+{
+    TempDir dir;
+    const std::vector<LabeledModel> set = syntheticSet(3, 21);
+    writeSet(dir, set);
+    const nlohmann::json added = parseJsonOutput(runCli(dir, "index add lib.vdblib models --recursive --json"));
+    CHECK(added.at("added") == set.size());
+    CHECK(added.at("skipped").empty());
+    const nlohmann::json info = parseJsonOutput(runCli(dir, "index info lib.vdblib --json"));
+    REQUIRE(info.at("models").size() == set.size());
+    CHECK(info.at("models")[0].at("class") == set[0].label);
+    CHECK(info.at("models")[0].at("name") == set[0].label + "/" + set[0].name);
+    // The colour read back is the model's (rounded to 8 bits).
+    for (int k = 0; k < 3; ++k) CHECK(info.at("models")[0].at("colour")[std::size_t(k)].get<double>() == Approx(set[0].shape.colour[std::size_t(k)]).margin(0.01));
+
+    // A torus of the set moved, turned, scaled and tessellated anew.
+    const LabeledModel& target = set[3 * 4 + 1];
+    REQUIRE(target.label == "torus");
+    SyntheticShape moved = target.shape;
+    moved.rotation = {0.5, 0.5, 0.5, 0.5};
+    moved.scale *= 3.0;
+    moved.position = {-40, 7, 12};
+    moved.tessellation += 9;
+    writeColouredPly(buildShape(moved), dir.file("probe.ply"));
+    for (const char* metric : {"chi2", "jsd"}) {
+        const nlohmann::json result = parseJsonOutput(runCli(dir, std::string("query lib.vdblib probe.ply -k 5 --json --metric ") + metric));
+        REQUIRE(result.at("results").size() == 5);
+        CHECK(result.at("results")[0].at("name") == "torus/" + target.name);
+        CHECK(result.at("results")[0].at("distance").get<double>() < 0.01);
+        for (std::size_t i = 1; i < 5; ++i)
+            CHECK(result.at("results")[i].at("distance").get<double>() >= result.at("results")[i - 1].at("distance").get<double>());
+    }
+    // FLANN's index is kept beside the library and used again: the same answer.
+    CHECK(std::filesystem::exists(dir.file("lib.vdblib.d2.flann")));
+    const std::string first = runCli(dir, "query lib.vdblib probe.ply -k 3 --json").out;
+    CHECK(runCli(dir, "query lib.vdblib probe.ply -k 3 --json").out == first);
+    // Removed, it is found no more; the index follows.
+    REQUIRE(runCli(dir, "index remove lib.vdblib torus/" + target.name).exitCode == 0);
+    const nlohmann::json after = parseJsonOutput(runCli(dir, "query lib.vdblib probe.ply -k 3 --json"));
+    CHECK(after.at("results")[0].at("name") != "torus/" + target.name);
+    CHECK(after.at("results")[0].at("class") == "torus");
+    checkCleanFailure(runCli(dir, "index remove lib.vdblib torus/" + target.name));
+    // Added again under the same name: refused in one line, the rest added.
+    const CommandResult again = runCli(dir, "index add lib.vdblib models --recursive");
+    CHECK(again.exitCode == 0);
+    CHECK(again.err.find("in the library already") != std::string::npos);
+    CHECK(parseJsonOutput(runCli(dir, "index info lib.vdblib --json")).at("models").size() == set.size());
+}
+
+TEST_CASE("query library: foreign, damaged and newer libraries, unreadable models and empty folders get one clear line", "[query]")
+{
+    TempDir dir;
+    std::ofstream(dir.file("text.vdblib")) << "not a database at all\n";
+    CommandResult r = runCli(dir, "index info text.vdblib");
+    checkCleanFailure(r);
+    CHECK(r.err.find("not a VDBClay model library") != std::string::npos);
+    checkCleanFailure(runCli(dir, "index info missing.vdblib"));
+    // A library from a newer VDBClay.
+    const std::vector<LabeledModel> set = syntheticSet(1, 4);
+    writeSet(dir, set);
+    REQUIRE(runCli(dir, "index add new.vdblib models --recursive").exitCode == 0);
+    {
+        sqlite3* db = nullptr;
+        REQUIRE(sqlite3_open(dir.file("new.vdblib").c_str(), &db) == SQLITE_OK);
+        CHECK(sqlite3_exec(db, "UPDATE library SET value = '99' WHERE key = 'version'", nullptr, nullptr, nullptr) == SQLITE_OK);
+        sqlite3_close(db);
+    }
+    r = runCli(dir, "query new.vdblib models/box/box-0.ply");
+    checkCleanFailure(r);
+    CHECK(r.err.find("newer") != std::string::npos);
+    // A damaged model is skipped in one line; the others are added.
+    std::filesystem::create_directories(dir.path() / "mixed");
+    std::filesystem::copy_file(dir.path() / "models/cone/cone-0.ply", dir.path() / "mixed/cone.ply");
+    std::ofstream(dir.file("mixed/broken.ply")) << "ply\nformat ascii 1.0\nelement vertex 99\nend_header\n1 2\n";
+    r = runCli(dir, "index add mixed.vdblib mixed --json");
+    const nlohmann::json added = parseJsonOutput(r);
+    CHECK(added.at("added") == 1);
+    REQUIRE(added.at("skipped").size() == 1);
+    CHECK(added.at("skipped")[0].at("path").get<std::string>().find("broken.ply") != std::string::npos);
+    // An empty folder.
+    std::filesystem::create_directories(dir.path() / "empty");
+    r = runCli(dir, "index add e.vdblib empty");
+    checkCleanFailure(r);
+    CHECK(r.err.find("no mesh files") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir.file("e.vdblib")));
+}

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <stdexcept>
 
 namespace vdbclay::query {
@@ -160,6 +161,33 @@ std::vector<LabeledModel> syntheticSet(int perFamily, uint64_t seed)
     for (const std::string& family : syntheticFamilies())
         for (int i = 0; i < perFamily; ++i) out.push_back({family, family + "-" + std::to_string(i), randomShape(family, random)});
     return out;
+}
+
+void writeColouredPly(const TriangleSoup& mesh, const std::string& path)
+{
+    std::ofstream out(path);
+    if (!out) throw std::runtime_error("cannot write " + path);
+    // A vertex takes the colour of the first triangle that names it.
+    std::vector<std::array<int, 3>> colours(mesh.positions.size(), {204, 204, 204});
+    std::vector<bool> coloured(mesh.positions.size(), false);
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        if (t >= mesh.triangleMaterials.size() || mesh.triangleMaterials[t] >= mesh.materials.size()) continue;
+        const auto& c = mesh.materials[mesh.triangleMaterials[t]].color;
+        for (uint32_t v : mesh.triangles[t])
+            if (!coloured[v]) {
+                colours[v] = {int(std::lround(c[0] * 255)), int(std::lround(c[1] * 255)), int(std::lround(c[2] * 255))};
+                coloured[v] = true;
+            }
+    }
+    out << "ply\nformat ascii 1.0\nelement vertex " << mesh.positions.size()
+        << "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+        << "element face " << mesh.triangles.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
+    out.precision(9);
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+        out << mesh.positions[v][0] << ' ' << mesh.positions[v][1] << ' ' << mesh.positions[v][2] << ' ' << colours[v][0] << ' ' << colours[v][1] << ' '
+            << colours[v][2] << '\n';
+    for (const auto& t : mesh.triangles) out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+    if (!out) throw std::runtime_error("cannot write " + path);
 }
 
 } // namespace vdbclay::query

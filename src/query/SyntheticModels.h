@@ -38,4 +38,8 @@ struct LabeledModel {
 /// `perFamily` random shapes of every family, seeded.
 std::vector<LabeledModel> syntheticSet(int perFamily, uint64_t seed);
 
+/// Writes a mesh as an ASCII PLY with per-vertex colours (what `import` and `index add` read back as
+/// colour materials). Throws std::runtime_error when the file cannot be written.
+void writeColouredPly(const TriangleSoup& mesh, const std::string& path);
+
 } // namespace vdbclay::query

@@ -1,0 +1,200 @@
+// vdbclay index / query: a library of models searched by shape (src/query). `index add` reads meshes
+// (Assimp, in a bounded child process each), describes them in parallel and adds each in a transaction
+// of its own; `query` ranks the library's models by their distance to a mesh's descriptor.
+#include "Cli.h"
+
+#include "query/ModelLibrary.h"
+#include "voxelize/TriangleMesh.h"
+
+#include <CLI/CLI.hpp>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <iostream>
+
+namespace vdbclay::cli {
+
+namespace fs = std::filesystem;
+
+IndexCommands addIndexCommand(CLI::App& parent, IndexOptions& o)
+{
+    CLI::App* index = parent.add_subcommand("index", "A library of 3D models to search by shape (see 'vdbclay query')");
+    index->require_subcommand(1);
+    IndexCommands c;
+    c.add = index->add_subcommand("add", "Add meshes (obj ply stl off gltf glb fbx dae) to a library, made when it does not exist");
+    c.add->add_option("library", o.library, "The library (an SQLite file; its search indexes are kept beside it)")->required()->type_name("LIBRARY");
+    c.add->add_option("inputs", o.inputs, "Mesh files and folders of them")->required()->type_name("DIR_OR_FILES...");
+    c.add->add_flag("--recursive", o.recursive, "Read the folders' subfolders too (a model's class is the folder it is in)");
+    c.add->add_flag("--json", o.json, "Print {\"added\", \"skipped\": [{\"path\", \"error\"}], \"models\"}");
+    c.info = index->add_subcommand("info", "The models of a library");
+    c.info->add_option("library", o.library, "The library")->required()->type_name("LIBRARY");
+    c.info->add_flag("--json", o.json, "Print {\"models\": [{\"name\", \"class\", \"path\", \"triangles\", \"colour\"}], \"descriptors\"}");
+    c.remove = index->add_subcommand("remove", "Remove a model from a library");
+    c.remove->add_option("library", o.library, "The library")->required()->type_name("LIBRARY");
+    c.remove->add_option("name", o.name, "The model's name (as 'index info' lists it)")->required()->type_name("NAME");
+    return c;
+}
+
+CLI::App* addQueryCommand(CLI::App& parent, QueryOptions& o)
+{
+    CLI::App* cmd = parent.add_subcommand("query", "The models of a library most like a mesh in shape");
+    cmd->add_option("library", o.library, "The library ('vdbclay index add' makes one)")->required()->type_name("LIBRARY");
+    cmd->add_option("input", o.input, "A mesh file")->required()->type_name("INPUT");
+    cmd->add_option("-k", o.k, "How many models to list")->capture_default_str()->check(CLI::Range(std::size_t(1), std::size_t(100000)));
+    cmd->add_option("--descriptor", o.descriptor, "The shape descriptor (d2: Osada's distribution of distances)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"d2"}));
+    cmd->add_option("--metric", o.metric, "chi2 (chi-square) or jsd (Jensen-Shannon), on smoothed histograms")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"chi2", "jsd"}));
+    cmd->add_flag("--json", o.json, "Print {\"results\": [{\"rank\", \"name\", \"class\", \"path\", \"distance\"}], \"descriptor\", \"metric\"}");
+    return cmd;
+}
+
+namespace {
+
+struct Found {
+    std::string path, name, label;
+};
+
+/// The mesh files the inputs name: files as given, folders' meshes (their subfolders' with --recursive),
+/// sorted, each with a name (its path under the folder, without extension) and a class (its folder).
+std::vector<Found> findMeshes(const IndexOptions& o)
+{
+    std::vector<Found> out;
+    for (const std::string& input : o.inputs) {
+        std::error_code ec;
+        if (fs::is_directory(input, ec)) {
+            std::vector<fs::path> files;
+            const auto visit = [&](const fs::directory_entry& e) {
+                if (e.is_regular_file(ec) && isMeshPath(e.path().string())) files.push_back(e.path());
+            };
+            if (o.recursive)
+                for (const auto& e : fs::recursive_directory_iterator(input, ec)) visit(e);
+            else
+                for (const auto& e : fs::directory_iterator(input, ec)) visit(e);
+            std::sort(files.begin(), files.end());
+            for (const fs::path& f : files) {
+                const fs::path relative = fs::relative(f, input, ec);
+                const std::string name = (relative.parent_path() / relative.stem()).generic_string();
+                const std::string label = relative.has_parent_path() ? relative.parent_path().filename().string() : std::string();
+                out.push_back({f.string(), name, label});
+            }
+        } else if (fs::is_regular_file(input, ec)) {
+            out.push_back({input, fs::path(input).stem().string(), ""});
+        } else {
+            throw UsageError("'" + input + "' does not exist");
+        }
+    }
+    return out;
+}
+
+} // namespace
+
+int runIndexAdd(const IndexOptions& o)
+{
+    const std::vector<Found> found = findMeshes(o);
+    if (found.empty()) {
+        printError("no mesh files (obj ply stl off gltf glb fbx dae) in " + std::string(o.inputs.size() == 1 ? "'" + o.inputs.front() + "'" : "the inputs") +
+                   (o.recursive ? "" : " (folders inside are read with --recursive)"));
+        return kExitFailure;
+    }
+    query::ModelLibrary library(o.library, true);
+    const auto progress = terminalProgress("index add", !o.json);
+    nlohmann::json skipped = nlohmann::json::array();
+    uint64_t added = 0;
+    // Meshes are read one after the other (each in a bounded child process), described in parallel a
+    // batch at a time, and added one transaction each.
+    const std::size_t batch = 8;
+    for (std::size_t from = 0; from < found.size(); from += batch) {
+        const std::size_t to = std::min(found.size(), from + batch);
+        std::vector<TriangleSoup> meshes(to - from);
+        std::vector<std::string> errors(to - from);
+        for (std::size_t i = from; i < to; ++i) {
+            if (library.contains(found[i].name)) {
+                errors[i - from] = "a model named '" + found[i].name + "' is in the library already";
+                continue;
+            }
+            try {
+                meshes[i - from] = loadTriangleMesh(found[i].path);
+            } catch (const std::exception& e) {
+                errors[i - from] = e.what();
+            }
+        }
+        std::vector<query::Histogram> descriptors(to - from);
+        tbb::parallel_for(std::size_t(0), to - from, [&](std::size_t i) {
+            if (!errors[i].empty()) return;
+            try {
+                descriptors[i] = query::describeModel(meshes[i], query::Descriptor::D2);
+            } catch (const std::exception& e) {
+                errors[i] = e.what();
+            }
+        });
+        for (std::size_t i = from; i < to; ++i) {
+            if (errors[i - from].empty()) {
+                library.add(found[i].name, found[i].path, found[i].label, meshes[i - from], descriptors[i - from]);
+                ++added;
+            } else {
+                if (!o.json) std::cerr << "vdbclay: skipped " << found[i].path << ": " << errors[i - from] << "\n";
+                skipped.push_back({{"path", found[i].path}, {"error", errors[i - from]}});
+            }
+            progress(i + 1, found.size());
+        }
+    }
+    const std::size_t total = library.models().size();
+    if (o.json) printJson({{"added", added}, {"skipped", skipped}, {"models", total}});
+    else std::cout << "added " << added << " of " << found.size() << " models to " << o.library << " (" << total << " in all)\n";
+    return added > 0 || skipped.empty() ? kExitOk : kExitFailure;
+}
+
+int runIndexInfo(const IndexOptions& o)
+{
+    const query::ModelLibrary library(o.library, false);
+    const std::vector<query::ModelRecord> models = library.models();
+    if (o.json) {
+        nlohmann::json list = nlohmann::json::array();
+        for (const auto& m : models)
+            list.push_back({{"name", m.name}, {"class", m.label}, {"path", m.path}, {"triangles", m.triangles}, {"colour", m.colour}});
+        printJson({{"library", o.library}, {"models", list}, {"descriptors", {"d2"}}});
+        return kExitOk;
+    }
+    std::cout << o.library << ": " << models.size() << (models.size() == 1 ? " model" : " models") << " (descriptors: d2)\n";
+    for (const auto& m : models)
+        std::cout << "  " << m.name << (m.label.empty() ? "" : "  [" + m.label + "]") << "  " << m.triangles << " triangles  " << m.path << "\n";
+    return kExitOk;
+}
+
+int runIndexRemove(const IndexOptions& o)
+{
+    query::ModelLibrary library(o.library, false);
+    if (!library.remove(o.name)) {
+        printError("no model named '" + o.name + "' in " + o.library + " (see 'vdbclay index info " + o.library + "')");
+        return kExitFailure;
+    }
+    std::cout << "removed " << o.name << " from " << o.library << "\n";
+    return kExitOk;
+}
+
+int runQuery(const QueryOptions& o)
+{
+    const query::ModelLibrary library(o.library, false);
+    const TriangleSoup mesh = loadTriangleMesh(o.input);
+    const query::Metric metric = o.metric == "jsd" ? query::Metric::JensenShannon : query::Metric::ChiSquare;
+    const std::vector<query::QueryHit> hits = library.query(query::describeModel(mesh, query::Descriptor::D2), o.k, metric);
+    if (o.json) {
+        nlohmann::json results = nlohmann::json::array();
+        for (std::size_t i = 0; i < hits.size(); ++i)
+            results.push_back({{"rank", i + 1}, {"name", hits[i].model.name}, {"class", hits[i].model.label}, {"path", hits[i].model.path},
+                               {"distance", hits[i].distance}});
+        printJson({{"input", o.input}, {"descriptor", o.descriptor}, {"metric", o.metric}, {"results", results}});
+        return kExitOk;
+    }
+    for (std::size_t i = 0; i < hits.size(); ++i)
+        std::cout << (i + 1) << ". " << hits[i].model.name << (hits[i].model.label.empty() ? "" : "  [" + hits[i].model.label + "]") << "  "
+                  << hits[i].distance << "\n";
+    if (hits.empty()) std::cout << "the library is empty\n";
+    return kExitOk;
+}
+
+} // namespace vdbclay::cli
