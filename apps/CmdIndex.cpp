@@ -26,7 +26,7 @@ IndexCommands addIndexCommand(CLI::App& parent, IndexOptions& o)
     c.add->add_option("library", o.library, "The library (an SQLite file; its search indexes are kept beside it)")->required()->type_name("LIBRARY");
     c.add->add_option("inputs", o.inputs, "Mesh files and folders of them")->required()->type_name("DIR_OR_FILES...");
     c.add->add_flag("--recursive", o.recursive, "Read the folders' subfolders too (a model's class is the folder it is in)");
-    c.add->add_flag("--json", o.json, "Print {\"added\", \"skipped\": [{\"path\", \"error\"}], \"models\"}");
+    c.add->add_flag("--json", o.json, "Print {\"added\", \"already_there\", \"skipped\": [{\"path\", \"error\"}], \"models\"}");
     c.info = index->add_subcommand("info", "The models of a library");
     c.info->add_option("library", o.library, "The library")->required()->type_name("LIBRARY");
     c.info->add_flag("--json", o.json, "Print {\"models\": [{\"name\", \"class\", \"path\", \"triangles\", \"colour\"}], \"descriptors\"}");
@@ -103,7 +103,7 @@ int runIndexAdd(const IndexOptions& o)
     query::ModelLibrary library(o.library, true);
     const auto progress = terminalProgress("index add", !o.json);
     nlohmann::json skipped = nlohmann::json::array();
-    uint64_t added = 0;
+    uint64_t added = 0, present = 0;
     // Meshes are read one after the other (each in a bounded child process), described in parallel a
     // batch at a time, and added one transaction each.
     const std::size_t batch = 8;
@@ -111,9 +111,12 @@ int runIndexAdd(const IndexOptions& o)
         const std::size_t to = std::min(found.size(), from + batch);
         std::vector<TriangleSoup> meshes(to - from);
         std::vector<std::string> errors(to - from);
+        std::vector<bool> there(to - from, false);
         for (std::size_t i = from; i < to; ++i) {
-            if (library.contains(found[i].name)) {
-                errors[i - from] = "a model named '" + found[i].name + "' is in the library already";
+            // A model of that name is there already (an add run again, or one that was stopped): kept.
+            there[i - from] = library.contains(found[i].name);
+            if (there[i - from]) {
+                ++present;
                 continue;
             }
             try {
@@ -124,7 +127,7 @@ int runIndexAdd(const IndexOptions& o)
         }
         std::vector<query::Histogram> descriptors(to - from);
         tbb::parallel_for(std::size_t(0), to - from, [&](std::size_t i) {
-            if (!errors[i].empty()) return;
+            if (!errors[i].empty() || there[i]) return;
             try {
                 descriptors[i] = query::describeModel(meshes[i], query::Descriptor::D2);
             } catch (const std::exception& e) {
@@ -132,7 +135,9 @@ int runIndexAdd(const IndexOptions& o)
             }
         });
         for (std::size_t i = from; i < to; ++i) {
-            if (errors[i - from].empty()) {
+            if (there[i - from]) {
+                // kept as it is
+            } else if (errors[i - from].empty()) {
                 library.add(found[i].name, found[i].path, found[i].label, meshes[i - from], descriptors[i - from]);
                 ++added;
             } else {
@@ -143,9 +148,11 @@ int runIndexAdd(const IndexOptions& o)
         }
     }
     const std::size_t total = library.models().size();
-    if (o.json) printJson({{"added", added}, {"skipped", skipped}, {"models", total}});
-    else std::cout << "added " << added << " of " << found.size() << " models to " << o.library << " (" << total << " in all)\n";
-    return added > 0 || skipped.empty() ? kExitOk : kExitFailure;
+    if (o.json) printJson({{"added", added}, {"already_there", present}, {"skipped", skipped}, {"models", total}});
+    else
+        std::cout << "added " << added << " of " << found.size() << " models to " << o.library << (present ? " (" + std::to_string(present) + " there already)" : "")
+                  << ", " << total << " in all" << (skipped.empty() ? "" : "; " + std::to_string(skipped.size()) + " could not be read") << "\n";
+    return added + present > 0 || skipped.empty() ? kExitOk : kExitFailure;
 }
 
 int runIndexInfo(const IndexOptions& o)

@@ -219,10 +219,10 @@ TEST_CASE("query library: index add, info, query and remove; a moved and re-tess
     CHECK(after.at("results")[0].at("name") != "torus/" + target.name);
     CHECK(after.at("results")[0].at("class") == "torus");
     checkCleanFailure(runCli(dir, "index remove lib.vdblib torus/" + target.name));
-    // Added again under the same name: refused in one line, the rest added.
-    const CommandResult again = runCli(dir, "index add lib.vdblib models --recursive");
-    CHECK(again.exitCode == 0);
-    CHECK(again.err.find("in the library already") != std::string::npos);
+    // The folder added again: the removed model comes back, the others are there already.
+    const nlohmann::json again = parseJsonOutput(runCli(dir, "index add lib.vdblib models --recursive --json"));
+    CHECK(again.at("added") == 1);
+    CHECK(again.at("already_there") == set.size() - 1);
     CHECK(parseJsonOutput(runCli(dir, "index info lib.vdblib --json")).at("models").size() == set.size());
 }
 
@@ -262,4 +262,57 @@ TEST_CASE("query library: foreign, damaged and newer libraries, unreadable model
     checkCleanFailure(r);
     CHECK(r.err.find("no mesh files") != std::string::npos);
     CHECK_FALSE(std::filesystem::exists(dir.file("e.vdblib")));
+}
+
+#include <csignal>
+#include <fcntl.h>
+#include <random>
+#include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
+
+TEST_CASE("query library: an index add killed at any moment leaves a library with whole models that opens and answers", "[query][kill]")
+{
+    if (std::string(kCli).empty()) return; // no CLI in this build
+    TempDir dir;
+    const std::vector<LabeledModel> set = syntheticSet(4, 9);
+    writeSet(dir, set);
+    const auto run = [&](const std::string& library, std::optional<std::chrono::microseconds> killAfter) {
+        const pid_t child = ::fork();
+        if (child == 0) {
+            const int devnull = ::open("/dev/null", O_WRONLY);
+            ::dup2(devnull, 1), ::dup2(devnull, 2);
+            ::execl(kCli, kCli, "index", "add", library.c_str(), dir.file("models").c_str(), "--recursive", static_cast<char*>(nullptr));
+            ::_exit(127);
+        }
+        if (killAfter) {
+            std::this_thread::sleep_for(*killAfter);
+            ::kill(child, SIGKILL);
+        }
+        int status = 0;
+        ::waitpid(child, &status, 0);
+        return status;
+    };
+    const auto start = std::chrono::steady_clock::now();
+    REQUIRE(WEXITSTATUS(run(dir.file("whole.vdblib"), std::nullopt)) == 0);
+    const auto runTime = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - start);
+    std::mt19937 rng(3);
+    for (int trial = 0; trial < 6; ++trial) {
+        const std::string library = dir.file("killed-" + std::to_string(trial) + ".vdblib");
+        run(library, std::chrono::microseconds(rng() % std::max<int64_t>(1, runTime.count())));
+        if (!std::filesystem::exists(library)) continue; // killed before it made the file
+        INFO("trial " << trial);
+        const query::ModelLibrary opened(library, false);
+        const std::vector<query::ModelRecord> models = opened.models();
+        CHECK(models.size() <= set.size());
+        // Every model there is whole: its descriptor answers a query for itself.
+        for (const query::ModelRecord& m : models) {
+            const std::vector<query::QueryHit> hits = opened.query(query::describeModel(loadTriangleMesh(m.path), query::Descriptor::D2), 1);
+            REQUIRE(hits.size() == 1);
+            CHECK(hits[0].distance < 1e-6);
+        }
+        // And the add carries on where it stopped.
+        REQUIRE(WEXITSTATUS(run(library, std::nullopt)) == 0);
+        CHECK(query::ModelLibrary(library, false).models().size() == set.size());
+    }
 }
