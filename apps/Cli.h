@@ -298,6 +298,7 @@ struct BenchCommandOptions {
     bool quick = false;
     double memoryBudgetMb = 0.0; // stream, render and editor; 0: the benchmark's default
     std::vector<int> extents;    // render only; empty: the benchmark's default
+    std::string dir;             // retrieval: one folder per class of models; empty: the synthetic set
 };
 CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& options);
 int runBenchCommand(const BenchCommandOptions& options);

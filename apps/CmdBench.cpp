@@ -13,6 +13,9 @@ CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& o)
     std::string names;
     for (const auto& n : bench::benchNames()) names += (names.empty() ? "" : ", ") + n;
     cmd->add_option("name", o.which, "Which benchmark: " + names)->required()->type_name("NAME");
+    cmd->add_option("dir", o.dir, "retrieval: a folder of models, one subfolder per class (default: the synthetic labeled set)")
+        ->type_name("DIR")
+        ->check(CLI::ExistingDirectory);
     cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of a table");
     cmd->add_flag("--quick", o.quick, "Small sizes (seconds, for CI); the default runs the full sizes");
     cmd->add_option("--memory-budget", o.memoryBudgetMb, "stream, render, editor and vr: the memory budget (stream: 192, or 2 with --quick; render, editor and vr: 384)")
@@ -43,6 +46,8 @@ CLI::App* addBenchCommand(CLI::App& parent, BenchCommandOptions& o)
                 "inputs  large and hostile inputs: sessions of 400,000 objects vs nlohmann's plain parse, a stroke of\n"
                 "        100,000 points vs 600 and vs OpenVDB sphere stamps, a tangled 2,000-point stroke, an 8192^2\n"
                 "        material picture to its mipmaps vs a full-size filter per level\n"
+                "retrieval  [DIR] models of labeled classes (default: the synthetic set), each querying the others:\n"
+                "        nearest neighbour, first and second tier, DCG, mAP, query time; descriptor time; k=10 over 100k\n"
                 "vr      the editor session's strokes in a headset (the test build's fake OpenXR runtime at 90 Hz, two\n"
                 "        512^2 eyes) on a terrain of extent 1024 (512 with --quick): CPU frame p50/p99, display refreshes\n"
                 "        missed, edit-to-visible frames, pose-to-submit latency\n"
@@ -54,11 +59,12 @@ int runBenchCommand(const BenchCommandOptions& o)
 {
     bool known = false;
     for (const auto& n : bench::benchNames()) known = known || n == o.which;
-    if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool, render, editor, inputs or vr)");
+    if (!known) throw UsageError("unknown benchmark '" + o.which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool, render, editor, inputs, vr or retrieval)");
     if (o.memoryBudgetMb > 0.0 && o.which != "stream" && o.which != "render" && o.which != "editor" && o.which != "vr")
         throw UsageError("--memory-budget is for 'bench stream', 'bench render', 'bench editor' and 'bench vr'");
     if (!o.extents.empty() && o.which != "render") throw UsageError("--extent is for 'bench render'");
-    return bench::runBench(o.which, o.json, o.quick, o.memoryBudgetMb, o.extents);
+    if (!o.dir.empty() && o.which != "retrieval") throw UsageError("a folder goes with 'bench retrieval' only");
+    return bench::runBench(o.which, o.json, o.quick, o.memoryBudgetMb, o.extents, o.dir);
 }
 
 } // namespace vdbclay::cli

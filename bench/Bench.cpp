@@ -8,9 +8,9 @@
 
 namespace vdbclay::bench {
 
-std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream", "import", "tool", "render", "editor", "inputs", "vr"}; }
+std::vector<std::string> benchNames() { return {"csg", "memory", "io", "mesh", "wavelet", "stream", "import", "tool", "render", "editor", "inputs", "vr", "retrieval"}; }
 
-int runBench(const std::string& which, bool json, bool quick, double memoryBudgetMb, const std::vector<int>& extents)
+int runBench(const std::string& which, bool json, bool quick, double memoryBudgetMb, const std::vector<int>& extents, const std::string& dir)
 {
     openvdb::initialize(); // the FloatGrid baselines need the standard grid types registered
     if (which == "csg") return benchCsg(json, quick);
@@ -25,7 +25,8 @@ int runBench(const std::string& which, bool json, bool quick, double memoryBudge
     if (which == "editor") return benchEditor(json, quick, memoryBudgetMb);
     if (which == "inputs") return benchInputs(json, quick);
     if (which == "vr") return benchVr(json, quick, memoryBudgetMb);
-    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool, render, editor, inputs or vr)");
+    if (which == "retrieval") return benchRetrieval(json, quick, dir);
+    throw std::invalid_argument("unknown benchmark '" + which + "' (expected csg, memory, io, mesh, wavelet, stream, import, tool, render, editor, inputs, vr or retrieval)");
 }
 
 } // namespace vdbclay::bench

@@ -14,6 +14,7 @@ std::vector<std::string> benchNames();
 /// code (0). Throws std::invalid_argument for an unknown name and std::runtime_error on failures.
 /// `memoryBudgetMb`: the budget of `stream` (0: its default, 192 MB, or 6 MB with `quick`).
 /// `extents`: the terrains of `render` (empty: its defaults).
-int runBench(const std::string& which, bool json, bool quick, double memoryBudgetMb = 0.0, const std::vector<int>& extents = {});
+int runBench(const std::string& which, bool json, bool quick, double memoryBudgetMb = 0.0, const std::vector<int>& extents = {},
+             const std::string& dir = {});
 
 } // namespace vdbclay::bench

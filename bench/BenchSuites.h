@@ -1,6 +1,7 @@
 // The individual benchmarks (one translation unit each); see Bench.h.
 #pragma once
 
+#include <string>
 #include <vector>
 
 namespace vdbclay::bench {
@@ -17,5 +18,6 @@ int benchRender(bool json, bool quick, double memoryBudgetMb, const std::vector<
 int benchEditor(bool json, bool quick, double memoryBudgetMb);
 int benchInputs(bool json, bool quick);
 int benchVr(bool json, bool quick, double memoryBudgetMb);
+int benchRetrieval(bool json, bool quick, const std::string& dir);
 
 } // namespace vdbclay::bench

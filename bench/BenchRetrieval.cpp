@@ -1,0 +1,194 @@
+// bench retrieval: shape retrieval measured as the Princeton Shape Benchmark measures it. DIR holds one
+// folder per class of models (absent: the synthetic labeled set of src/query, six parametric families).
+// Every model queries the others (leave one out) through the library (FLANN's shortlist ranked exactly);
+// per descriptor and metric: nearest neighbour, first tier, second tier, DCG, mean average precision,
+// mean query time; the library's build time and the descriptor's time per 100k triangles; then a k=10
+// query over 100k indexed descriptors (FLANN's k-means tree on clustered data, as real libraries are).
+#include "BenchSuites.h"
+#include "BenchUtil.h"
+
+#include "query/DescriptorIndex.h"
+#include "query/HistogramDistance.h"
+#include "query/ModelLibrary.h"
+#include "query/SyntheticModels.h"
+#include "voxelize/TriangleMesh.h"
+
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <random>
+
+namespace vdbclay::bench {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Model {
+    std::string label, name, path;
+    TriangleSoup mesh;
+};
+
+std::vector<Model> readClasses(const std::string& dir)
+{
+    std::vector<Model> out;
+    std::vector<fs::path> classes;
+    for (const auto& e : fs::directory_iterator(dir))
+        if (e.is_directory()) classes.push_back(e.path());
+    std::sort(classes.begin(), classes.end());
+    for (const fs::path& c : classes) {
+        std::vector<fs::path> files;
+        for (const auto& e : fs::directory_iterator(c))
+            if (e.is_regular_file() && isMeshPath(e.path().string())) files.push_back(e.path());
+        std::sort(files.begin(), files.end());
+        for (const fs::path& f : files) {
+            try {
+                out.push_back({c.filename().string(), c.filename().string() + "/" + f.stem().string(), f.string(), loadTriangleMesh(f.string())});
+            } catch (const std::exception& e) {
+                std::cerr << "bench retrieval: skipped " << f.string() << ": " << e.what() << "\n";
+            }
+        }
+    }
+    return out;
+}
+
+struct Measures {
+    double nn = 0, firstTier = 0, secondTier = 0, dcg = 0, map = 0, queryMs = 0;
+};
+
+/// The PSB measures of one ranking (the query left out) for a query of class `label` of `classSize` models.
+void score(const std::vector<std::string>& ranked, const std::string& label, std::size_t classSize, Measures& m)
+{
+    const std::size_t relevant = classSize - 1;
+    if (relevant == 0 || ranked.empty()) return;
+    m.nn += ranked.front() == label;
+    std::size_t found = 0, inFirst = 0, inSecond = 0;
+    double dcg = 0.0, ideal = 0.0, precisionSum = 0.0;
+    for (std::size_t i = 0; i < ranked.size(); ++i) {
+        const bool hit = ranked[i] == label;
+        const double gain = i == 0 ? 1.0 : 1.0 / std::log2(double(i + 1));
+        if (hit) {
+            ++found;
+            dcg += gain;
+            precisionSum += double(found) / double(i + 1);
+            if (i < relevant) ++inFirst;
+            if (i < 2 * relevant) ++inSecond;
+        }
+        if (i < relevant) ideal += gain;
+    }
+    m.firstTier += double(inFirst) / double(relevant);
+    m.secondTier += double(inSecond) / double(relevant);
+    m.dcg += dcg / ideal;
+    m.map += precisionSum / double(relevant);
+}
+
+} // namespace
+
+int benchRetrieval(bool json, bool quick, const std::string& dir)
+{
+    const ScratchDir scratch("retrieval");
+    std::vector<Model> models;
+    if (dir.empty()) {
+        for (const query::LabeledModel& m : query::syntheticSet(quick ? 6 : 20, 42))
+            models.push_back({m.label, m.label + "/" + m.name, "", query::buildShape(m.shape)});
+    } else {
+        models = readClasses(dir);
+    }
+    if (models.size() < 2) {
+        std::cerr << "vdbclay: error: bench retrieval needs two models or more in class folders under " << dir << "\n";
+        return 1;
+    }
+    std::map<std::string, std::size_t> classSize;
+    for (const Model& m : models) ++classSize[m.label];
+
+    std::vector<query::Histogram> descriptors;
+    for (const Model& m : models) descriptors.push_back(query::describeModel(m.mesh, query::Descriptor::D2));
+    // The descriptor's time on a mesh of 100k triangles (an ellipsoid of 2 x 158 x 158 quads), median of 5.
+    query::SyntheticShape fine;
+    fine.family = "ellipsoid";
+    fine.tessellation = 158;
+    const TriangleSoup hundredK = query::buildShape(fine);
+    std::vector<double> describeRuns;
+    for (int r = 0; r < 5; ++r) describeRuns.push_back(timeMs([&] { query::describeModel(hundredK, query::Descriptor::D2); }));
+    const double describeMs = median(describeRuns) * 1e5 / double(hundredK.triangles.size());
+    const std::string libraryPath = (scratch.path() / "bench.vdblib").string();
+    query::ModelLibrary library(libraryPath, true);
+    const double buildMs = timeMs([&] {
+        for (std::size_t i = 0; i < models.size(); ++i) library.add(models[i].name, models[i].path, models[i].label, models[i].mesh, descriptors[i]);
+        library.query(descriptors.front(), 1); // builds and saves FLANN's index
+    });
+
+    nlohmann::json out = jsonPreamble("retrieval", quick);
+    Table table{{"descriptor", "metric", "NN", "first tier", "second tier", "DCG", "mAP", "query ms"}, {}};
+    nlohmann::json d2;
+    for (const query::Metric metric : {query::Metric::ChiSquare, query::Metric::JensenShannon}) {
+        Measures m;
+        for (std::size_t i = 0; i < models.size(); ++i) {
+            std::vector<query::QueryHit> hits;
+            m.queryMs += timeMs([&] { hits = library.query(descriptors[i], models.size(), metric); });
+            std::vector<std::string> ranked;
+            for (const query::QueryHit& h : hits)
+                if (h.model.name != models[i].name) ranked.push_back(h.model.label);
+            score(ranked, models[i].label, classSize[models[i].label], m);
+        }
+        const double n = double(models.size());
+        d2[query::metricName(metric)] = {{"nn", m.nn / n}, {"first_tier", m.firstTier / n}, {"second_tier", m.secondTier / n}, {"dcg", m.dcg / n},
+                                          {"map", m.map / n}, {"query_ms", m.queryMs / n}};
+        table.rows.push_back({"d2", query::metricName(metric), fixed(m.nn / n, 3), fixed(m.firstTier / n, 3), fixed(m.secondTier / n, 3),
+                              fixed(m.dcg / n, 3), fixed(m.map / n, 3), fixed(m.queryMs / n, 3)});
+    }
+    out["d2"] = d2;
+
+    // A large library: descriptors mixed from the measured ones (pairs of one class, with noise), so the
+    // vectors cluster as real libraries' do; FLANN's k-means tree, k = 10, the shortlist ranked exactly.
+    const std::size_t large = quick ? 10000 : 100000;
+    std::mt19937_64 random(7);
+    std::uniform_int_distribution<std::size_t> pick(0, descriptors.size() - 1);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::vector<std::vector<float>> vectors;
+    std::vector<query::Histogram> histograms;
+    for (std::size_t i = 0; i < large; ++i) {
+        const query::Histogram& a = descriptors[pick(random)];
+        query::Histogram h(a.size());
+        double sum = 0.0;
+        for (std::size_t b = 0; b < a.size(); ++b) sum += h[b] = a[b] * (0.8 + 0.4 * unit(random));
+        for (double& v : h) v /= sum;
+        vectors.emplace_back(h.begin(), h.end());
+        histograms.push_back(std::move(h));
+    }
+    std::unique_ptr<query::DescriptorIndex> index;
+    const double largeBuildMs = timeMs([&] { index = std::make_unique<query::DescriptorIndex>(vectors); });
+    std::vector<double> largeQueryMs;
+    for (int q = 0; q < 200; ++q) {
+        const query::Histogram& probe = descriptors[std::size_t(q) % descriptors.size()];
+        largeQueryMs.push_back(timeMs([&] {
+            const std::vector<float> f(probe.begin(), probe.end());
+            std::vector<std::pair<double, std::size_t>> ranked;
+            for (std::size_t i : index->nearest(f, 64)) ranked.push_back({query::chiSquareDistance(probe, histograms[i]), i});
+            std::partial_sort(ranked.begin(), ranked.begin() + std::min<std::ptrdiff_t>(10, std::ptrdiff_t(ranked.size())), ranked.end());
+        }));
+    }
+
+    out["models"] = models.size();
+    out["classes"] = classSize.size();
+    out["library_build_ms"] = buildMs;
+    out["descriptor_ms_per_100k_triangles"] = {{"d2", describeMs}};
+    out["large_library"] = {{"models", large}, {"build_ms", largeBuildMs}, {"query_ms_median", median(largeQueryMs)},
+                            {"query_ms_p99", percentile(largeQueryMs, 0.99)}};
+    if (json) {
+        std::cout << out.dump(2) << std::endl;
+        return 0;
+    }
+    printPreamble(std::cout, "retrieval", quick);
+    std::cout << models.size() << " models in " << classSize.size() << " classes (" << (dir.empty() ? std::string("the synthetic set") : dir)
+              << "), each querying the others\n\n";
+    table.print(std::cout);
+    std::cout << "\nlibrary built in " << fixed(buildMs, 1) << " ms; d2 descriptor of a 100k-triangle mesh " << fixed(describeMs, 1)
+              << " ms (goal: all descriptors < 500)\n";
+    std::cout << "k=10 over " << large << " indexed descriptors: median " << fixed(median(largeQueryMs), 3) << " ms, p99 "
+              << fixed(percentile(largeQueryMs, 0.99), 3) << " ms (goal < 2 at 100k; index built in " << fixed(largeBuildMs / 1000.0, 1) << " s)\n";
+    return 0;
+}
+
+} // namespace vdbclay::bench
