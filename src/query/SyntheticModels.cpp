@@ -62,7 +62,8 @@ void addRevolved(TriangleSoup& soup, int n, int rings, const Profile& profile, c
         return offset(Vec{r * std::cos(phi), y, r * std::sin(phi)}, at);
     });
     for (double t : {0.0, 1.0}) {
-        const auto [r, y] = profile(t);
+        const std::pair<double, double> edge = profile(t); // (lambdas may not capture structured bindings in C++17)
+        const double r = edge.first, y = edge.second;
         if (r <= 0.0) continue;
         addGrid(soup, n, 2, [&](double s, double u) {
             const double phi = 2 * M_PI * s;
