@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <iostream>
 #include <thread>
+#include <tuple>
 
 namespace vdbclay::vr {
 
@@ -297,7 +298,9 @@ private:
     /// all they may draw: the bricks shown, the brush, the menus and the pointer. Returns it in metres.
     double placeEyes(const std::vector<XrView>& views, const std::vector<render::RenderTarget*>& targets, const VrControls::Output& out)
     {
-        auto [lo, hi] = session_.shownBox();
+        // (Not a structured binding: the lambda below captures the box, which C++17 does not allow of bindings.)
+        std::array<double, 3> lo, hi;
+        std::tie(lo, hi) = session_.shownBox();
         if (out.brush) extendBox(lo, hi, *out.brush, 2.0 * out.brushRadius);
         const MenuLayout& layout = menus_.layout();
         auto panelCorners = [&](const MenuLayout::Panel& p) {
