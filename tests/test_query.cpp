@@ -177,7 +177,7 @@ void writeSet(const TempDir& dir, const std::vector<LabeledModel>& set)
 
 } // namespace
 
-TEST_CASE("query library: index add, info, query and remove; a moved and re-tessellated model finds itself first, after reopening too", "[query]")
+TEST_CASE("query library: index add, info, query and remove, and a moved and re-tessellated model finds itself first, after reopening too", "[query]")
 {
     TempDir dir;
     const std::vector<LabeledModel> set = syntheticSet(3, 21);
