@@ -186,6 +186,11 @@ int runIndexRemove(const IndexOptions& o)
 int runQuery(const QueryOptions& o)
 {
     const query::ModelLibrary library(o.library, false);
+    if (!isMeshPath(o.input)) {
+        printError("'" + o.input + "' is not a mesh file (obj ply stl off gltf glb fbx dae): for a scene, write its mesh first with 'vdbclay mesh " +
+                   o.input + " OUT.ply'");
+        return kExitFailure;
+    }
     const TriangleSoup mesh = loadTriangleMesh(o.input);
     const query::Metric metric = o.metric == "jsd" ? query::Metric::JensenShannon : query::Metric::ChiSquare;
     const std::vector<query::QueryHit> hits = library.query(query::describeModel(mesh, query::Descriptor::D2), o.k, metric);

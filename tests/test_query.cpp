@@ -256,6 +256,10 @@ TEST_CASE("query library: foreign, damaged and newer libraries, unreadable model
     CHECK(added.at("added") == 1);
     REQUIRE(added.at("skipped").size() == 1);
     CHECK(added.at("skipped")[0].at("path").get<std::string>().find("broken.ply") != std::string::npos);
+    // A scene is not a mesh: the command says how to make one.
+    r = runCli(dir, "query mixed.vdblib scene.vdb");
+    checkCleanFailure(r);
+    CHECK(r.err.find("vdbclay mesh") != std::string::npos);
     // An empty folder.
     std::filesystem::create_directories(dir.path() / "empty");
     r = runCli(dir, "index add e.vdblib empty");
