@@ -267,6 +267,7 @@ struct QueryOptions {
     std::size_t k = 10;
     std::string descriptor = "d2";
     std::string metric = "chi2";
+    int lod = 0; // a scene's level of detail to mesh
     bool json = false;
 };
 CLI::App* addQueryCommand(CLI::App& parent, QueryOptions& options);

@@ -3,8 +3,14 @@
 // of its own; `query` ranks the library's models by their distance to a mesh's descriptor.
 #include "Cli.h"
 
+#include "mesher/LodMesh.h"
+#include "mesher/Mesher.h"
 #include "query/ModelLibrary.h"
+#include "query/SceneModels.h"
+#include "scene/SceneStore.h"
+#include "vdb_hermite/VolumeIO.h"
 #include "voxelize/TriangleMesh.h"
+#include "wavelet/LodPyramid.h"
 
 #include <CLI/CLI.hpp>
 #include <tbb/parallel_for.h>
@@ -40,7 +46,11 @@ CLI::App* addQueryCommand(CLI::App& parent, QueryOptions& o)
 {
     CLI::App* cmd = parent.add_subcommand("query", "The models of a library most like a mesh in shape");
     cmd->add_option("library", o.library, "The library ('vdbclay index add' makes one)")->required()->type_name("LIBRARY");
-    cmd->add_option("input", o.input, "A mesh file")->required()->type_name("INPUT");
+    cmd->add_option("input", o.input, "A mesh file, or a scene (.vdb or store), meshed with its materials' colours")->required()->type_name("INPUT");
+    cmd->add_option("--lod", o.lod, "A scene: mesh its level of detail K (a store's built level; a .vdb's is built on the fly)")
+        ->capture_default_str()
+        ->check(CLI::Range(0, 12))
+        ->type_name("K");
     cmd->add_option("-k", o.k, "How many models to list")->capture_default_str()->check(CLI::Range(std::size_t(1), std::size_t(100000)));
     cmd->add_option("--descriptor", o.descriptor, "The shape descriptor (d2: Osada's distribution of distances)")
         ->capture_default_str()
@@ -53,6 +63,32 @@ CLI::App* addQueryCommand(CLI::App& parent, QueryOptions& o)
 }
 
 namespace {
+
+/// A scene (.vdb or store) as a model: its level `lod` meshed, coloured by its materials.
+TriangleSoup sceneModel(const std::string& path, int lod)
+{
+    Mesh mesh;
+    MaterialTable materials;
+    if (isStorePath(path)) {
+        const SceneStore scene = SceneStore::open(path, StoreAccess::ReadOnly);
+        if (lod > scene.lodLevels())
+            throw UsageError("'" + path + "' has " + std::to_string(scene.lodLevels()) + " coarse levels; run 'vdbclay lod build " + path + "'");
+        mesh = meshVolume(scene.loadLevel(lod));
+        materials = scene.materials();
+    } else {
+        const Volume volume = loadScene(path);
+        if (lod == 0) {
+            mesh = meshVolume(volume);
+        } else {
+            wavelet::LodPyramid pyramid(std::max(lod, wavelet::LodPyramid::levelsFor(volume)));
+            pyramid.build(volume);
+            mesh = meshLevel(volume, pyramid, lod, MeshOptions{});
+        }
+        materials = volume.materials();
+    }
+    if (mesh.triangles.empty()) throw std::runtime_error("'" + path + "' has no surface to search with");
+    return query::soupOfMesh(mesh, materials);
+}
 
 struct Found {
     std::string path, name, label;
@@ -186,12 +222,8 @@ int runIndexRemove(const IndexOptions& o)
 int runQuery(const QueryOptions& o)
 {
     const query::ModelLibrary library(o.library, false);
-    if (!isMeshPath(o.input)) {
-        printError("'" + o.input + "' is not a mesh file (obj ply stl off gltf glb fbx dae): for a scene, write its mesh first with 'vdbclay mesh " +
-                   o.input + " OUT.ply'");
-        return kExitFailure;
-    }
-    const TriangleSoup mesh = loadTriangleMesh(o.input);
+    if (o.lod > 0 && isMeshPath(o.input)) throw UsageError("--lod goes with a scene (.vdb or store), not a mesh file");
+    const TriangleSoup mesh = isMeshPath(o.input) ? loadTriangleMesh(o.input) : sceneModel(o.input, o.lod);
     const query::Metric metric = o.metric == "jsd" ? query::Metric::JensenShannon : query::Metric::ChiSquare;
     const std::vector<query::QueryHit> hits = library.query(query::describeModel(mesh, query::Descriptor::D2), o.k, metric);
     if (o.json) {

@@ -256,10 +256,9 @@ TEST_CASE("query library: foreign, damaged and newer libraries, unreadable model
     CHECK(added.at("added") == 1);
     REQUIRE(added.at("skipped").size() == 1);
     CHECK(added.at("skipped")[0].at("path").get<std::string>().find("broken.ply") != std::string::npos);
-    // A scene is not a mesh: the command says how to make one.
-    r = runCli(dir, "query mixed.vdblib scene.vdb");
-    checkCleanFailure(r);
-    CHECK(r.err.find("vdbclay mesh") != std::string::npos);
+    // A scene that is not there; --lod with a mesh.
+    checkCleanFailure(runCli(dir, "query mixed.vdblib scene.vdb"));
+    CHECK(runCli(dir, "query mixed.vdblib mixed/cone.ply --lod 1").exitCode == 2);
     // An empty folder.
     std::filesystem::create_directories(dir.path() / "empty");
     r = runCli(dir, "index add e.vdblib empty");
@@ -319,4 +318,31 @@ TEST_CASE("query library: an index add killed at any moment leaves a library wit
         REQUIRE(WEXITSTATUS(run(library, std::nullopt)) == 0);
         CHECK(query::ModelLibrary(library, false).models().size() == set.size());
     }
+}
+
+TEST_CASE("query library: a sculpted scene (.vdb, and a store at a level of detail) queries the library like a mesh", "[query]")
+{
+    TempDir dir;
+    // A library of the synthetic set and a round ball; a ball sculpted as a scene finds the round one first.
+    writeSet(dir, syntheticSet(3, 8));
+    SyntheticShape round;
+    round.family = "ellipsoid";
+    round.proportions = {1.0, 1.0 / 0.7, 1.0 / 0.5}; // equal radii
+    round.tessellation = 40;
+    writeColouredPly(buildShape(round), dir.file("models/round.ply"));
+    REQUIRE(runCli(dir, "index add lib.vdblib models --recursive").exitCode == 0);
+    REQUIRE(runCli(dir, "new ball.vdb --shape sphere --size 24").exitCode == 0);
+    for (const char* lod : {"0", "1"}) {
+        INFO("level " << lod);
+        const nlohmann::json result = parseJsonOutput(runCli(dir, std::string("query lib.vdblib ball.vdb -k 3 --json --lod ") + lod));
+        REQUIRE(result.at("results").size() == 3);
+        CHECK(result.at("results")[0].at("name") == "round");
+        CHECK(result.at("results")[0].at("distance").get<double>() < 0.01);
+    }
+    // A store: the same ball, at its level 1.
+    REQUIRE(runCli(dir, "import ball.vdb -o ball.vdbclay").exitCode == 0);
+    REQUIRE(runCli(dir, "lod build ball.vdbclay").exitCode == 0);
+    const nlohmann::json fromStore = parseJsonOutput(runCli(dir, "query lib.vdblib ball.vdbclay -k 1 --lod 1 --json"));
+    CHECK(fromStore.at("results")[0].at("name") == "round");
+    checkCleanFailure(runCli(dir, "query lib.vdblib ball.vdbclay --lod 9"));
 }

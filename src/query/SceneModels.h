@@ -1,0 +1,14 @@
+// A scene as a model to describe: a volume (a .vdb, a store's level) meshed, its triangles taking their
+// materials' colours, so the descriptors read a sculpture as they read an imported mesh.
+#pragma once
+
+#include "mesher/Mesh.h"
+#include "voxelize/TriangleMesh.h"
+
+namespace vdbclay::query {
+
+/// The mesh as a triangle soup: each triangle's material named and coloured as `materials` says (a
+/// material the table lacks: grey).
+TriangleSoup soupOfMesh(const Mesh& mesh, const MaterialTable& materials);
+
+} // namespace vdbclay::query
