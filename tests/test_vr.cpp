@@ -673,3 +673,37 @@ TEST_CASE("xr: the suggested bindings drive the brush on every controller profil
         CHECK(ops.front().at("mode") == (profile.stick ? "remove" : "add"));
     }
 }
+
+TEST_CASE("xr: the controller hints stand beside the hands until the menu button turns them off", "[vr]")
+{
+    // The left hand low in front, its menu button pressed at frame 20: the hint beside it (on its outer,
+    // left side) is drawn at frame 15 and gone at frame 35.
+    const glm::dvec3 hand(-0.05, 1.35, -0.3);
+    const json left = json::array({handKey(0, hand.x, hand.y, hand.z), {{"frame", 20}, {"buttons", {{"menu", true}}}}, {{"frame", 22}, {"buttons", {{"menu", false}}}}});
+    TempDir dir;
+    makeBall(dir);
+    vrReport(runVr(dir, {{"capture", {15, 35}}, {"left", left}, {"right", json::array({handKey(0, 0.3, 0.4, 0.3)})}}, "ball.vdb --frames 40"));
+    checkNoXrFindings(dir);
+    ControllerFrame f;
+    f.hands[0] = handAt(hand.x, hand.y, hand.z);
+    const MenuLayout layout = layoutMenus(f, 1, false, true);
+    REQUIRE(layout.hints.size() == 1);
+    const glm::dvec3 p = layout.hints[0].centre - glm::dvec3(-0.032, 1.6, 0.0); // from the left eye
+    const double fx = 128.0 / std::tan(0.8);
+    const int px = int(128.0 + fx * p.x / -p.z), py = int(128.0 - fx * p.y / -p.z);
+    REQUIRE(px >= 7);
+    REQUIRE(px < 249);
+    REQUIRE(py >= 7);
+    REQUIRE(py < 249);
+    const Ppm shown = readPpm(dir.file("frame-00015-view-0.ppm")), hidden = readPpm(dir.file("frame-00035-view-0.ppm"));
+    int changed = 0, total = 0;
+    for (int y = py - 3; y <= py + 3; ++y)
+        for (int x = px - 7; x <= px + 7; ++x) {
+            const uint8_t* a = shown.at(x, y);
+            const uint8_t* b = hidden.at(x, y);
+            changed += std::abs(int(a[0]) - b[0]) + std::abs(int(a[1]) - b[1]) + std::abs(int(a[2]) - b[2]) > 24 ? 1 : 0;
+            ++total;
+        }
+    INFO("hint centre at pixel " << px << ", " << py << ": " << changed << " of " << total << " pixels changed");
+    CHECK(changed > total / 2);
+}
