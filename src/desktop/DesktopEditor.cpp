@@ -646,7 +646,12 @@ struct DesktopEditor::Impl {
         ImGui::Render();
         if (!panels.openRequested.empty() || panels.discardRecoveryRequested) return false;
         // The brush follows the pointer every frame, whatever the worker has still to do.
-        if (drag == Drag::None || drag == Drag::Stroke) hover = pickAt(cursorX, cursorY);
+        if (drag == Drag::None || drag == Drag::Stroke) {
+            // Never waits: while a load or an edit holds the data, the last frame's hover stands.
+            const Ray ray = rayAt(cursorX, cursorY);
+            std::optional<SurfaceHit> hit;
+            if (session.tryPick(ray.origin, ray.direction, 1e30, &hit)) hover = hit;
+        }
         const auto inputDone = Clock::now();
 
         const FrameReport stream = worker.frame(now(), windowSize());

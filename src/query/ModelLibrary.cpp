@@ -167,9 +167,7 @@ ModelRecord ModelLibrary::add(const std::string& name, const std::string& source
     r.path = sourcePath;
     r.label = label;
     r.triangles = mesh.triangles.size();
-    const SurfaceSamples samples = sampleSurface(mesh, 2048, 1);
-    for (const auto& c : samples.colours)
-        for (int k = 0; k < 3; ++k) r.colour[std::size_t(k)] += c[std::size_t(k)] / float(samples.colours.size());
+    r.colour = meanColour(mesh);
     const std::vector<float> vector = toFloats(d2);
     impl_->exec("BEGIN IMMEDIATE");
     try {

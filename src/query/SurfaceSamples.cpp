@@ -18,6 +18,33 @@ double triangleArea(const std::array<double, 3>& a, const std::array<double, 3>&
 
 } // namespace
 
+namespace {
+
+std::array<float, 3> triangleColour(const TriangleSoup& mesh, std::size_t t)
+{
+    if (t < mesh.triangleMaterials.size() && mesh.triangleMaterials[t] < mesh.materials.size()) {
+        const auto& m = mesh.materials[mesh.triangleMaterials[t]].color;
+        return {m[0], m[1], m[2]};
+    }
+    return {0.8f, 0.8f, 0.8f};
+}
+
+} // namespace
+
+std::array<float, 3> meanColour(const TriangleSoup& mesh)
+{
+    double sum[3] = {0, 0, 0}, total = 0.0;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const auto& tri = mesh.triangles[t];
+        const double a = triangleArea(mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]]);
+        const std::array<float, 3> c = triangleColour(mesh, t);
+        for (int k = 0; k < 3; ++k) sum[k] += a * c[std::size_t(k)];
+        total += a;
+    }
+    if (!(total > 0.0)) return {0.8f, 0.8f, 0.8f};
+    return {float(sum[0] / total), float(sum[1] / total), float(sum[2] / total)};
+}
+
 SurfaceSamples sampleSurface(const TriangleSoup& mesh, std::size_t count, uint64_t seed)
 {
     std::vector<double> cumulative;
@@ -45,12 +72,7 @@ SurfaceSamples sampleSurface(const TriangleSoup& mesh, std::size_t count, uint64
         std::array<double, 3> p;
         for (int k = 0; k < 3; ++k) p[std::size_t(k)] = (1 - r1) * a[std::size_t(k)] + r1 * (1 - r2) * b[std::size_t(k)] + r1 * r2 * c[std::size_t(k)];
         out.points.push_back(p);
-        std::array<float, 3> colour{0.8f, 0.8f, 0.8f};
-        if (t < mesh.triangleMaterials.size() && mesh.triangleMaterials[t] < mesh.materials.size()) {
-            const auto& m = mesh.materials[mesh.triangleMaterials[t]].color;
-            colour = {m[0], m[1], m[2]};
-        }
-        out.colours.push_back(colour);
+        out.colours.push_back(triangleColour(mesh, t));
     }
     return out;
 }

@@ -20,4 +20,7 @@ struct SurfaceSamples {
 /// std::invalid_argument for a mesh without area.
 SurfaceSamples sampleSurface(const TriangleSoup& mesh, std::size_t count, uint64_t seed);
 
+/// The surface's colour averaged by area (what a library lists for a model); grey without materials.
+std::array<float, 3> meanColour(const TriangleSoup& mesh);
+
 } // namespace vdbclay::query

@@ -114,6 +114,18 @@ void createDeviceImage(const VulkanContext& context, const VkImageCreateInfo& in
     check(vkBindImageMemory(context.device(), image, memory, 0), "vkBindImageMemory");
 }
 
+VkImageView createImageView(VkDevice device, VkImage image, VkFormat format, VkImageAspectFlags aspect)
+{
+    VkImageViewCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+    info.image = image;
+    info.viewType = VK_IMAGE_VIEW_TYPE_2D;
+    info.format = format;
+    info.subresourceRange = {aspect, 0, 1, 0, 1};
+    VkImageView view = VK_NULL_HANDLE;
+    check(vkCreateImageView(device, &info, nullptr, &view), "vkCreateImageView");
+    return view;
+}
+
 void createImage2D(const VulkanContext& context, int w, int h, VkFormat format, VkImageUsageFlags usage, VkImageAspectFlags aspect,
                    VkImage& image, VkDeviceMemory& memory, VkImageView& view)
 {
@@ -128,12 +140,7 @@ void createImage2D(const VulkanContext& context, int w, int h, VkFormat format, 
     info.usage = usage;
     info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
     createDeviceImage(context, info, image, memory);
-    VkImageViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-    viewInfo.image = image;
-    viewInfo.viewType = VK_IMAGE_VIEW_TYPE_2D;
-    viewInfo.format = format;
-    viewInfo.subresourceRange = {aspect, 0, 1, 0, 1};
-    check(vkCreateImageView(context.device(), &viewInfo, nullptr, &view), "vkCreateImageView");
+    view = createImageView(context.device(), image, format, aspect);
 }
 
 } // namespace vdbclay::render

@@ -52,6 +52,8 @@ private:
 
 /// Creates the image `info` describes in device-local memory of its own, bound to it.
 void createDeviceImage(const VulkanContext& context, const VkImageCreateInfo& info, VkImage& image, VkDeviceMemory& memory);
+/// A 2D view of one level and layer of `image`.
+VkImageView createImageView(VkDevice device, VkImage image, VkFormat format, VkImageAspectFlags aspect);
 /// A 2D image of `w` x `h` (one level, one layer, optimal tiling) in device-local memory, and a view of it.
 void createImage2D(const VulkanContext& context, int w, int h, VkFormat format, VkImageUsageFlags usage, VkImageAspectFlags aspect,
                    VkImage& image, VkDeviceMemory& memory, VkImageView& view);

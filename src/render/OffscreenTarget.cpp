@@ -60,6 +60,21 @@ VkRenderPass createRenderPass(VkDevice device, VkFormat colourFormat, VkImageLay
 }
 
 
+VkFramebuffer createFramebuffer(VkDevice device, VkRenderPass pass, VkImageView colour, VkImageView depth, uint32_t width, uint32_t height)
+{
+    VkImageView attachments[2] = {colour, depth};
+    VkFramebufferCreateInfo info{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+    info.renderPass = pass;
+    info.attachmentCount = 2;
+    info.pAttachments = attachments;
+    info.width = width;
+    info.height = height;
+    info.layers = 1;
+    VkFramebuffer framebuffer = VK_NULL_HANDLE;
+    check(vkCreateFramebuffer(device, &info, nullptr, &framebuffer), "vkCreateFramebuffer");
+    return framebuffer;
+}
+
 OffscreenTarget::OffscreenTarget(const VulkanContext& context, int width, int height)
     : context_(context), width_(width), height_(height)
 {
@@ -75,15 +90,7 @@ OffscreenTarget::OffscreenTarget(const VulkanContext& context, int width, int he
                     VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                     VK_IMAGE_ASPECT_DEPTH_BIT, depth_, depthMemory_, depthView_);
         renderPass_ = createRenderPass(context.device(), kColourFormat, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
-        VkImageView views[2] = {colourView_, depthView_};
-        VkFramebufferCreateInfo fb{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-        fb.renderPass = renderPass_;
-        fb.attachmentCount = 2;
-        fb.pAttachments = views;
-        fb.width = uint32_t(width);
-        fb.height = uint32_t(height);
-        fb.layers = 1;
-        check(vkCreateFramebuffer(context.device(), &fb, nullptr, &framebuffer_), "vkCreateFramebuffer");
+        framebuffer_ = createFramebuffer(context.device(), renderPass_, colourView_, depthView_, uint32_t(width), uint32_t(height));
         const VkDeviceSize pixels = VkDeviceSize(width) * VkDeviceSize(height);
         colourReadback_ = std::make_unique<HostBuffer>(context, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
         depthReadback_ = std::make_unique<HostBuffer>(context, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);

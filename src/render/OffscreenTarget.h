@@ -26,6 +26,9 @@ struct Image {
 /// and depth. Cleared on load.
 VkRenderPass createRenderPass(VkDevice device, VkFormat colourFormat, VkImageLayout finalLayout);
 
+/// A framebuffer of createRenderPass's shape over a colour and a depth view of `width` x `height`.
+VkFramebuffer createFramebuffer(VkDevice device, VkRenderPass pass, VkImageView colour, VkImageView depth, uint32_t width, uint32_t height);
+
 /// The depth of a pixel nothing was drawn on (the renderer's depth is reversed: 0 is infinitely far).
 constexpr float kNothingDrawn = 0.0f;
 

@@ -35,15 +35,7 @@ PanelQuads::PanelQuads(const VulkanContext& context, int width, int height, VkRe
         createImage2D(context, width, height, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT, depth_,
                       depthMemory_, depthView_);
         picturePass_ = createRenderPass(device, kColourFormat, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
-        VkImageView attachments[2] = {colourView_, depthView_};
-        VkFramebufferCreateInfo fb{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-        fb.renderPass = picturePass_;
-        fb.attachmentCount = 2;
-        fb.pAttachments = attachments;
-        fb.width = uint32_t(width);
-        fb.height = uint32_t(height);
-        fb.layers = 1;
-        check(vkCreateFramebuffer(device, &fb, nullptr, &framebuffer_), "vkCreateFramebuffer");
+        framebuffer_ = createFramebuffer(device, picturePass_, colourView_, depthView_, uint32_t(width), uint32_t(height));
 
         VkSamplerCreateInfo sampler{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
         sampler.magFilter = sampler.minFilter = VK_FILTER_LINEAR;
@@ -82,60 +74,22 @@ PanelQuads::PanelQuads(const VulkanContext& context, int width, int height, VkRe
         pl.pPushConstantRanges = &push;
         check(vkCreatePipelineLayout(device, &pl, nullptr, &layout_), "vkCreatePipelineLayout");
 
-        VkShaderModule vert = shaderModule(device, kPanelVert, sizeof(kPanelVert)), frag = shaderModule(device, kPanelFrag, sizeof(kPanelFrag));
-        VkPipelineShaderStageCreateInfo stages[2]{{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO}, {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO}};
-        stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
-        stages[0].module = vert;
-        stages[0].pName = "main";
-        stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
-        stages[1].module = frag;
-        stages[1].pName = "main";
-        VkPipelineVertexInputStateCreateInfo input{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
-        VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
-        assembly.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
-        VkPipelineViewportStateCreateInfo viewport{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
-        viewport.viewportCount = 1;
-        viewport.scissorCount = 1;
-        VkPipelineRasterizationStateCreateInfo raster{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
-        raster.polygonMode = VK_POLYGON_MODE_FILL;
-        raster.cullMode = VK_CULL_MODE_NONE; // seen from behind, a panel still reads (mirrored)
-        raster.lineWidth = 1.0f;
-        VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
-        multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
-        VkPipelineDepthStencilStateCreateInfo depth{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
-        VkPipelineColorBlendAttachmentState blend{};
-        blend.blendEnable = VK_TRUE; // premultiplied alpha
-        blend.srcColorBlendFactor = VK_BLEND_FACTOR_ONE;
-        blend.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
-        blend.colorBlendOp = VK_BLEND_OP_ADD;
-        blend.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
-        blend.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
-        blend.alphaBlendOp = VK_BLEND_OP_ADD;
-        blend.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
-        VkPipelineColorBlendStateCreateInfo blending{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-        blending.attachmentCount = 1;
-        blending.pAttachments = &blend;
-        VkDynamicState dynamics[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
-        VkPipelineDynamicStateCreateInfo dynamic{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
-        dynamic.dynamicStateCount = 2;
-        dynamic.pDynamicStates = dynamics;
-        VkGraphicsPipelineCreateInfo info{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
-        info.stageCount = 2;
-        info.pStages = stages;
-        info.pVertexInputState = &input;
-        info.pInputAssemblyState = &assembly;
-        info.pViewportState = &viewport;
-        info.pRasterizationState = &raster;
-        info.pMultisampleState = &multisample;
-        info.pDepthStencilState = &depth;
-        info.pColorBlendState = &blending;
-        info.pDynamicState = &dynamic;
-        info.layout = layout_;
-        info.renderPass = targetPass;
-        const VkResult r = vkCreateGraphicsPipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline_);
-        vkDestroyShaderModule(device, vert, nullptr);
-        vkDestroyShaderModule(device, frag, nullptr);
-        check(r, "vkCreateGraphicsPipelines (panels)");
+        PipelineShape shape;
+        shape.vert = shaderModule(device, kPanelVert, sizeof(kPanelVert));
+        shape.frag = shaderModule(device, kPanelFrag, sizeof(kPanelFrag));
+        shape.meshInput = false;
+        shape.depthTest = false; // menus stay in sight over the scene
+        shape.depthWrite = false;
+        shape.blend = PipelineShape::Blend::Premultiplied; // as Dear ImGui leaves a cleared, transparent picture
+        try {
+            pipeline_ = createPipeline(device, targetPass, layout_, shape);
+        } catch (...) {
+            vkDestroyShaderModule(device, shape.vert, nullptr);
+            vkDestroyShaderModule(device, shape.frag, nullptr);
+            throw;
+        }
+        vkDestroyShaderModule(device, shape.vert, nullptr);
+        vkDestroyShaderModule(device, shape.frag, nullptr);
     } catch (...) {
         release();
         throw;

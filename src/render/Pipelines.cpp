@@ -22,13 +22,8 @@ const uint32_t kBrushFrag[] =
     ;
 
 
-struct PipelineShape {
-    VkShaderModule vert, frag;
-    bool meshInput = true;
-    VkPolygonMode polygonMode = VK_POLYGON_MODE_FILL;
-    bool depthWrite = true;
-    bool blend = false;
-};
+
+} // namespace
 
 VkPipeline createPipeline(VkDevice device, VkRenderPass pass, VkPipelineLayout layout, const PipelineShape& shape)
 {
@@ -67,19 +62,20 @@ VkPipeline createPipeline(VkDevice device, VkRenderPass pass, VkPipelineLayout l
     VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
     multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
     VkPipelineDepthStencilStateCreateInfo depth{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
-    depth.depthTestEnable = VK_TRUE;
+    depth.depthTestEnable = shape.depthTest ? VK_TRUE : VK_FALSE;
     depth.depthWriteEnable = shape.depthWrite ? VK_TRUE : VK_FALSE;
     depth.depthCompareOp = VK_COMPARE_OP_GREATER_OR_EQUAL; // reversed depth (Renderer: nearer is larger)
     VkPipelineColorBlendAttachmentState attachment{};
     attachment.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT |
                                 VK_COLOR_COMPONENT_A_BIT;
-    if (shape.blend) {
+    if (shape.blend != PipelineShape::Blend::None) {
+        const bool premultiplied = shape.blend == PipelineShape::Blend::Premultiplied;
         attachment.blendEnable = VK_TRUE;
-        attachment.srcColorBlendFactor = VK_BLEND_FACTOR_SRC_ALPHA;
+        attachment.srcColorBlendFactor = premultiplied ? VK_BLEND_FACTOR_ONE : VK_BLEND_FACTOR_SRC_ALPHA;
         attachment.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
         attachment.colorBlendOp = VK_BLEND_OP_ADD;
-        attachment.srcAlphaBlendFactor = VK_BLEND_FACTOR_ZERO;
-        attachment.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+        attachment.srcAlphaBlendFactor = premultiplied ? VK_BLEND_FACTOR_ONE : VK_BLEND_FACTOR_ZERO;
+        attachment.dstAlphaBlendFactor = premultiplied ? VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA : VK_BLEND_FACTOR_ONE;
         attachment.alphaBlendOp = VK_BLEND_OP_ADD;
     }
     VkPipelineColorBlendStateCreateInfo blend{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
@@ -107,8 +103,6 @@ VkPipeline createPipeline(VkDevice device, VkRenderPass pass, VkPipelineLayout l
     check(vkCreateGraphicsPipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline), "vkCreateGraphicsPipelines");
     return pipeline;
 }
-
-} // namespace
 
 VkShaderModule shaderModule(VkDevice device, const uint32_t* code, std::size_t bytes)
 {
@@ -154,11 +148,23 @@ Pipelines::Pipelines(const VulkanContext& context, VkRenderPass renderPass) : co
     VkShaderModule brushVert = shaderModule(device, kBrushVert, sizeof(kBrushVert));
     VkShaderModule brushFrag = shaderModule(device, kBrushFrag, sizeof(kBrushFrag));
     try {
-        surface_ = createPipeline(device, renderPass, layout_, {meshVert, meshFrag});
-        if (context.supportsWireframe())
-            wireframe_ = createPipeline(device, renderPass, layout_,
-                                        {meshVert, meshFrag, true, VK_POLYGON_MODE_LINE, false, false});
-        brush_ = createPipeline(device, renderPass, layout_, {brushVert, brushFrag, false, VK_POLYGON_MODE_FILL, false, true});
+        PipelineShape surface;
+        surface.vert = meshVert;
+        surface.frag = meshFrag;
+        surface_ = createPipeline(device, renderPass, layout_, surface);
+        if (context.supportsWireframe()) {
+            PipelineShape wireframe = surface;
+            wireframe.polygonMode = VK_POLYGON_MODE_LINE;
+            wireframe.depthWrite = false;
+            wireframe_ = createPipeline(device, renderPass, layout_, wireframe);
+        }
+        PipelineShape brush;
+        brush.vert = brushVert;
+        brush.frag = brushFrag;
+        brush.meshInput = false;
+        brush.depthWrite = false;
+        brush.blend = PipelineShape::Blend::Alpha;
+        brush_ = createPipeline(device, renderPass, layout_, brush);
     } catch (...) {
         for (VkShaderModule m : {meshVert, meshFrag, brushVert, brushFrag}) vkDestroyShaderModule(device, m, nullptr);
         release();

@@ -16,6 +16,20 @@ struct GpuVertex {
     uint32_t blend; // MaterialBlend | 1 << 31, or 0: no blend
 };
 
+/// What a graphics pipeline draws with: triangles (or their edges), one colour attachment and reversed
+/// depth, viewport and scissor set at draw time.
+struct PipelineShape {
+    VkShaderModule vert = VK_NULL_HANDLE, frag = VK_NULL_HANDLE;
+    bool meshInput = true; // GpuVertex per vertex (culled back faces); false: the vertex shader makes its positions
+    VkPolygonMode polygonMode = VK_POLYGON_MODE_FILL;
+    bool depthTest = true;
+    bool depthWrite = true;
+    enum class Blend { None, Alpha, Premultiplied };
+    Blend blend = Blend::None;
+};
+/// Throws VulkanError.
+VkPipeline createPipeline(VkDevice device, VkRenderPass pass, VkPipelineLayout layout, const PipelineShape& shape);
+
 /// A shader module of SPIR-V words (embedded at build time). Throws VulkanError.
 VkShaderModule shaderModule(VkDevice device, const uint32_t* code, std::size_t bytes);
 

@@ -83,39 +83,14 @@ void SwapchainTarget::create(int width, int height)
     std::vector<VkImage> images(count);
     check(vkGetSwapchainImagesKHR(context_.device(), swapchain_, &count, images.data()), "vkGetSwapchainImagesKHR");
 
-    VkImageCreateInfo depth{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
-    depth.imageType = VK_IMAGE_TYPE_2D;
-    depth.format = kDepthFormat;
-    depth.extent = {extent.width, extent.height, 1};
-    depth.mipLevels = 1;
-    depth.arrayLayers = 1;
-    depth.samples = VK_SAMPLE_COUNT_1_BIT;
-    depth.tiling = VK_IMAGE_TILING_OPTIMAL;
-    depth.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
-    createDeviceImage(context_, depth, depth_, depthMemory_);
-    VkImageViewCreateInfo view{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-    view.viewType = VK_IMAGE_VIEW_TYPE_2D;
-    view.image = depth_;
-    view.format = kDepthFormat;
-    view.subresourceRange = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
-    check(vkCreateImageView(context_.device(), &view, nullptr, &depthView_), "vkCreateImageView");
+    createImage2D(context_, int(extent.width), int(extent.height), kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                  VK_IMAGE_ASPECT_DEPTH_BIT, depth_, depthMemory_, depthView_);
 
     for (VkImage image : images) {
         auto target = std::make_unique<Image>();
         target->owner = this;
-        view.image = image;
-        view.format = format_;
-        view.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-        check(vkCreateImageView(context_.device(), &view, nullptr, &target->view), "vkCreateImageView");
-        VkImageView attachments[2] = {target->view, depthView_};
-        VkFramebufferCreateInfo fb{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-        fb.renderPass = renderPass_;
-        fb.attachmentCount = 2;
-        fb.pAttachments = attachments;
-        fb.width = extent.width;
-        fb.height = extent.height;
-        fb.layers = 1;
-        check(vkCreateFramebuffer(context_.device(), &fb, nullptr, &target->framebufferHandle), "vkCreateFramebuffer");
+        target->view = createImageView(context_.device(), image, format_, VK_IMAGE_ASPECT_COLOR_BIT);
+        target->framebufferHandle = createFramebuffer(context_.device(), renderPass_, target->view, depthView_, extent.width, extent.height);
         VkSemaphoreCreateInfo semaphore{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
         check(vkCreateSemaphore(context_.device(), &semaphore, nullptr, &target->finished), "vkCreateSemaphore");
         images_.push_back(std::move(target));

@@ -30,20 +30,12 @@ constexpr int kMeshThreads = 1;
 /// The near plane's distance from an eye when nothing is closer (metres).
 constexpr double kNearMetres = 0.02;
 
-Pose toPose(const XrPosef& p)
-{
-    Pose out;
-    out.orientation = glm::dquat(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
-    out.position = glm::dvec3(p.position.x, p.position.y, p.position.z);
-    return out;
-}
-
 std::array<double, 3> arr(const glm::dvec3& v) { return {v.x, v.y, v.z}; }
 
 /// An eye's camera in scene units: its pose carried into the scene, its own (asymmetric) field of view.
 render::Camera eyeCamera(const XrView& view, const WorldTransform& world)
 {
-    const Pose pose = toPose(view.pose);
+    const Pose pose = poseOf(view.pose);
     render::Camera c;
     const glm::dvec3 eye = world.toScene(pose.position);
     c.eye = arr(eye);
@@ -63,7 +55,7 @@ render::Camera headCamera(const std::vector<XrView>& views, const WorldTransform
     glm::dvec3 middle(0.0);
     double tanX = 0.0, tanY = 0.0;
     for (const XrView& v : views) {
-        middle += toPose(v.pose).position / double(views.size());
+        middle += poseOf(v.pose).position / double(views.size());
         tanX = std::max({tanX, -std::tan(double(v.fov.angleLeft)), std::tan(double(v.fov.angleRight))});
         tanY = std::max({tanY, -std::tan(double(v.fov.angleDown)), std::tan(double(v.fov.angleUp))});
     }
@@ -159,8 +151,8 @@ private:
         const std::vector<XrView> views = frame.shouldRender ? headset_.locateViews(frame.displayTime) : std::vector<XrView>{};
         const Clock::time_point located = Clock::now();
         if (!views.empty() && !framed_) {
-            Pose head = toPose(views.front().pose);
-            head.position = 0.5 * (toPose(views.front().pose).position + toPose(views.back().pose).position);
+            Pose head = poseOf(views.front().pose);
+            head.position = 0.5 * (poseOf(views.front().pose).position + poseOf(views.back().pose).position);
             frameScene(head);
             controls_.setScaleLimits(world_.scale / kScaleRange, world_.scale * kScaleRange);
             framed_ = true;
@@ -226,7 +218,7 @@ private:
         report_.commands += commands.size();
         if (out.toggleMenu) menus_.toggleMenu();
         if (out.toggleHints) menus_.toggleHints();
-        if (out.frameAgain && !views.empty()) frameScene(toPose(views.front().pose));
+        if (out.frameAgain && !views.empty()) frameScene(poseOf(views.front().pose));
         pulseOnTouch(out, hands);
         return out;
     }

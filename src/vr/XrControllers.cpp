@@ -15,15 +15,15 @@ XrPath path(XrInstance instance, const std::string& text)
     return p;
 }
 
-Pose toPose(const XrPosef& p)
+} // namespace
+
+Pose poseOf(const XrPosef& p)
 {
     Pose out;
     out.orientation = glm::dquat(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
     out.position = glm::dvec3(p.position.x, p.position.y, p.position.z);
     return out;
 }
-
-} // namespace
 
 XrControllers::XrControllers(XrInstance instance, XrSession session) : instance_(instance), session_(session)
 {
@@ -174,8 +174,8 @@ ControllerFrame XrControllers::read(XrSpace space, XrTime time, bool focused, do
         check(xrLocateSpace(aimSpaces_[std::size_t(h)], space, time, &aim), "xrLocateSpace", instance_);
         if ((grip.locationFlags & needed) != needed) continue;
         hand.tracked = true;
-        hand.grip = toPose(grip.pose);
-        hand.aim = (aim.locationFlags & needed) == needed ? toPose(aim.pose) : hand.grip;
+        hand.grip = poseOf(grip.pose);
+        hand.aim = (aim.locationFlags & needed) == needed ? poseOf(aim.pose) : hand.grip;
     }
     return frame;
 }

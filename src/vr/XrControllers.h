@@ -11,6 +11,9 @@
 
 namespace vdbclay::vr {
 
+/// An OpenXR pose as the front end's.
+Pose poseOf(const XrPosef& pose);
+
 class XrControllers {
 public:
     /// Creates the actions, suggests the bindings and attaches them to the session.

@@ -48,18 +48,6 @@ VkFormat unormOf(int64_t f)
     return f == VK_FORMAT_B8G8R8A8_SRGB || f == VK_FORMAT_B8G8R8A8_UNORM ? VK_FORMAT_B8G8R8A8_UNORM : VK_FORMAT_R8G8B8A8_UNORM;
 }
 
-VkImageView createView(VkDevice device, VkImage image, VkFormat format, VkImageAspectFlags aspect)
-{
-    VkImageViewCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-    info.image = image;
-    info.viewType = VK_IMAGE_VIEW_TYPE_2D;
-    info.format = format;
-    info.subresourceRange = {aspect, 0, 1, 0, 1};
-    VkImageView view = VK_NULL_HANDLE;
-    render::check(vkCreateImageView(device, &info, nullptr, &view), "vkCreateImageView");
-    return view;
-}
-
 std::vector<VkImage> swapchainImages(XrSwapchain swapchain, XrInstance instance)
 {
     uint32_t count = 0;
@@ -138,17 +126,7 @@ struct XrHeadset::Eye : render::RenderTarget {
     {
         for (uint32_t c = 0; c < colourViews.size(); ++c)
             for (uint32_t d = 0; d < depthViews.size(); ++d) {
-                VkImageView attachments[2] = {colourViews[c], depthViews[d]};
-                VkFramebufferCreateInfo info{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-                info.renderPass = pass;
-                info.attachmentCount = 2;
-                info.pAttachments = attachments;
-                info.width = uint32_t(w);
-                info.height = uint32_t(h);
-                info.layers = 1;
-                VkFramebuffer fb = VK_NULL_HANDLE;
-                render::check(vkCreateFramebuffer(device, &info, nullptr, &fb), "vkCreateFramebuffer");
-                framebuffers[{c, d}] = fb;
+                framebuffers[{c, d}] = render::createFramebuffer(device, pass, colourViews[c], depthViews[d], uint32_t(w), uint32_t(h));
             }
     }
     void release()
@@ -377,13 +355,13 @@ void XrHeadset::createSwapchains()
         Eye* e = eye.get();
         eyes_.push_back(std::move(eye));
         check(xrCreateSwapchain(session_, &info, &e->colour), "xrCreateSwapchain", instance_);
-        for (VkImage image : swapchainImages(e->colour, instance_)) e->colourViews.push_back(createView(device, image, viewFormat_, VK_IMAGE_ASPECT_COLOR_BIT));
+        for (VkImage image : swapchainImages(e->colour, instance_)) e->colourViews.push_back(render::createImageView(device, image, viewFormat_, VK_IMAGE_ASPECT_COLOR_BIT));
         if (depthSubmitted_) {
             info.usageFlags = XR_SWAPCHAIN_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
             info.format = render::kDepthFormat;
             check(xrCreateSwapchain(session_, &info, &e->depth), "xrCreateSwapchain (depth)", instance_);
             for (VkImage image : swapchainImages(e->depth, instance_))
-                e->depthViews.push_back(createView(device, image, render::kDepthFormat, VK_IMAGE_ASPECT_DEPTH_BIT));
+                e->depthViews.push_back(render::createImageView(device, image, render::kDepthFormat, VK_IMAGE_ASPECT_DEPTH_BIT));
         } else {
             VkImageView view = VK_NULL_HANDLE;
             render::createImage2D(*vulkan_, e->w, e->h, render::kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT,
