@@ -248,6 +248,7 @@ struct IndexOptions {
     std::string library;
     std::vector<std::string> inputs; // add: files and folders
     bool recursive = false;
+    bool noRender = false;           // add: no light field or thumbnails (no renderer needed)
     std::string name;                // remove
     bool json = false;
 };
@@ -265,9 +266,10 @@ struct QueryOptions {
     std::string library;
     std::string input;
     std::size_t k = 10;
-    std::string descriptor = "d2";
+    std::string descriptor = "combined";
     std::string metric = "chi2";
     int lod = 0; // a scene's level of detail to mesh
+    std::string thumbnails; // folder for the results' thumbnails
     bool json = false;
 };
 CLI::App* addQueryCommand(CLI::App& parent, QueryOptions& options);

@@ -1,12 +1,16 @@
 // vdbclay index / query: a library of models searched by shape (src/query). `index add` reads meshes
-// (Assimp, in a bounded child process each), describes them in parallel and adds each in a transaction
-// of its own; `query` ranks the library's models by their distance to a mesh's descriptor.
+// (Assimp, in a bounded child process each), draws their silhouettes and thumbnails (the renderer),
+// computes the other descriptors in parallel and adds each model in a transaction of its own; `query`
+// ranks the library's models by their distance to a mesh's or a scene's descriptors.
 #include "Cli.h"
 
 #include "mesher/LodMesh.h"
 #include "mesher/Mesher.h"
 #include "query/ModelLibrary.h"
 #include "query/SceneModels.h"
+#include "render/ImageFile.h"
+#include "render/ModelViews.h"
+#include "render/VulkanContext.h"
 #include "scene/SceneStore.h"
 #include "vdb_hermite/VolumeIO.h"
 #include "voxelize/TriangleMesh.h"
@@ -32,6 +36,8 @@ IndexCommands addIndexCommand(CLI::App& parent, IndexOptions& o)
     c.add->add_option("library", o.library, "The library (an SQLite file; its search indexes are kept beside it)")->required()->type_name("LIBRARY");
     c.add->add_option("inputs", o.inputs, "Mesh files and folders of them")->required()->type_name("DIR_OR_FILES...");
     c.add->add_flag("--recursive", o.recursive, "Read the folders' subfolders too (a model's class is the folder it is in)");
+    c.add->add_flag("--no-render", o.noRender,
+                    "Make neither light fields nor thumbnails (no Vulkan device needed; such models are searched by clusterd2 and d2)");
     c.add->add_flag("--json", o.json, "Print {\"added\", \"already_there\", \"skipped\": [{\"path\", \"error\"}], \"models\"}");
     c.info = index->add_subcommand("info", "The models of a library");
     c.info->add_option("library", o.library, "The library")->required()->type_name("LIBRARY");
@@ -52,13 +58,17 @@ CLI::App* addQueryCommand(CLI::App& parent, QueryOptions& o)
         ->check(CLI::Range(0, 12))
         ->type_name("K");
     cmd->add_option("-k", o.k, "How many models to list")->capture_default_str()->check(CLI::Range(std::size_t(1), std::size_t(100000)));
-    cmd->add_option("--descriptor", o.descriptor, "The shape descriptor (d2: Osada's distribution of distances)")
+    cmd->add_option("--descriptor", o.descriptor,
+                    "clusterd2 (salient points and colour edges, clustered), d2 (all distances), lightfield (silhouettes from a "
+                    "dodecahedron) or combined (all three)")
         ->capture_default_str()
-        ->check(CLI::IsMember({"d2"}));
+        ->check(CLI::IsMember({"clusterd2", "d2", "lightfield", "combined"}));
     cmd->add_option("--metric", o.metric, "chi2 (chi-square) or jsd (Jensen-Shannon), on smoothed histograms")
         ->capture_default_str()
         ->check(CLI::IsMember({"chi2", "jsd"}));
-    cmd->add_flag("--json", o.json, "Print {\"results\": [{\"rank\", \"name\", \"class\", \"path\", \"distance\"}], \"descriptor\", \"metric\"}");
+    cmd->add_option("--thumbnails", o.thumbnails, "Write each result's thumbnail to DIR as RANK-NAME.png")->type_name("DIR");
+    cmd->add_flag("--json", o.json,
+                  "Print {\"results\": [{\"rank\", \"name\", \"class\", \"path\", \"distance\", \"thumbnail\"}], \"descriptor\", \"metric\"}");
     return cmd;
 }
 
@@ -128,6 +138,29 @@ std::vector<Found> findMeshes(const IndexOptions& o)
 
 } // namespace
 
+namespace {
+
+/// The renderer for light fields and thumbnails; none (with a line saying so) without a Vulkan device.
+struct Views {
+    std::unique_ptr<render::VulkanContext> context;
+    std::unique_ptr<render::ModelViews> views;
+};
+
+Views openViews(bool quiet)
+{
+    Views v;
+    try {
+        v.context = std::make_unique<render::VulkanContext>();
+        v.views = std::make_unique<render::ModelViews>(*v.context);
+    } catch (const std::exception& e) {
+        if (!quiet) std::cerr << "vdbclay: no light fields or thumbnails (" << e.what() << ")\n";
+        v = Views{};
+    }
+    return v;
+}
+
+} // namespace
+
 int runIndexAdd(const IndexOptions& o)
 {
     const std::vector<Found> found = findMeshes(o);
@@ -137,15 +170,17 @@ int runIndexAdd(const IndexOptions& o)
         return kExitFailure;
     }
     query::ModelLibrary library(o.library, true);
+    Views views = o.noRender ? Views{} : openViews(o.json);
     const auto progress = terminalProgress("index add", !o.json);
     nlohmann::json skipped = nlohmann::json::array();
     uint64_t added = 0, present = 0;
-    // Meshes are read one after the other (each in a bounded child process), described in parallel a
-    // batch at a time, and added one transaction each.
+    // A batch of meshes is read one after the other (each in a bounded child process), drawn (the
+    // renderer is one thread's), described on the CPU in parallel, and added one transaction each.
     const std::size_t batch = 8;
     for (std::size_t from = 0; from < found.size(); from += batch) {
         const std::size_t to = std::min(found.size(), from + batch);
         std::vector<TriangleSoup> meshes(to - from);
+        std::vector<query::ModelDescription> descriptions(to - from);
         std::vector<std::string> errors(to - from);
         std::vector<bool> there(to - from, false);
         for (std::size_t i = from; i < to; ++i) {
@@ -157,15 +192,15 @@ int runIndexAdd(const IndexOptions& o)
             }
             try {
                 meshes[i - from] = loadTriangleMesh(found[i].path);
+                if (views.views) query::describeViews(*views.views, meshes[i - from], descriptions[i - from]);
             } catch (const std::exception& e) {
                 errors[i - from] = e.what();
             }
         }
-        std::vector<query::Histogram> descriptors(to - from);
         tbb::parallel_for(std::size_t(0), to - from, [&](std::size_t i) {
             if (!errors[i].empty() || there[i]) return;
             try {
-                descriptors[i] = query::describeModel(meshes[i], query::Descriptor::D2);
+                query::describeShape(meshes[i], descriptions[i]);
             } catch (const std::exception& e) {
                 errors[i] = e.what();
             }
@@ -174,7 +209,7 @@ int runIndexAdd(const IndexOptions& o)
             if (there[i - from]) {
                 // kept as it is
             } else if (errors[i - from].empty()) {
-                library.add(found[i].name, found[i].path, found[i].label, meshes[i - from], descriptors[i - from]);
+                library.add(found[i].name, found[i].path, found[i].label, meshes[i - from], descriptions[i - from]);
                 ++added;
             } else {
                 if (!o.json) std::cerr << "vdbclay: skipped " << found[i].path << ": " << errors[i - from] << "\n";
@@ -184,7 +219,7 @@ int runIndexAdd(const IndexOptions& o)
         }
     }
     const std::size_t total = library.models().size();
-    if (o.json) printJson({{"added", added}, {"already_there", present}, {"skipped", skipped}, {"models", total}});
+    if (o.json) printJson({{"added", added}, {"already_there", present}, {"skipped", skipped}, {"models", total}, {"light_fields", views.views != nullptr}});
     else
         std::cout << "added " << added << " of " << found.size() << " models to " << o.library << (present ? " (" + std::to_string(present) + " there already)" : "")
                   << ", " << total << " in all" << (skipped.empty() ? "" : "; " + std::to_string(skipped.size()) + " could not be read") << "\n";
@@ -199,10 +234,15 @@ int runIndexInfo(const IndexOptions& o)
         nlohmann::json list = nlohmann::json::array();
         for (const auto& m : models)
             list.push_back({{"name", m.name}, {"class", m.label}, {"path", m.path}, {"triangles", m.triangles}, {"colour", m.colour}});
-        printJson({{"library", o.library}, {"models", list}, {"descriptors", {"d2"}}});
+        nlohmann::json descriptors = nlohmann::json::object();
+        for (const query::Descriptor d : query::kStoredDescriptors) descriptors[query::descriptorName(d)] = library.count(d);
+        printJson({{"library", o.library}, {"models", list}, {"descriptors", descriptors}});
         return kExitOk;
     }
-    std::cout << o.library << ": " << models.size() << (models.size() == 1 ? " model" : " models") << " (descriptors: d2)\n";
+    std::string counts;
+    for (const query::Descriptor d : query::kStoredDescriptors)
+        counts += std::string(counts.empty() ? "" : ", ") + query::descriptorName(d) + " " + std::to_string(library.count(d));
+    std::cout << o.library << ": " << models.size() << (models.size() == 1 ? " model" : " models") << " (descriptors: " << counts << ")\n";
     for (const auto& m : models)
         std::cout << "  " << m.name << (m.label.empty() ? "" : "  [" + m.label + "]") << "  " << m.triangles << " triangles  " << m.path << "\n";
     return kExitOk;
@@ -223,20 +263,49 @@ int runQuery(const QueryOptions& o)
 {
     const query::ModelLibrary library(o.library, false);
     if (o.lod > 0 && isMeshPath(o.input)) throw UsageError("--lod goes with a scene (.vdb or store), not a mesh file");
-    const TriangleSoup mesh = isMeshPath(o.input) ? loadTriangleMesh(o.input) : sceneModel(o.input, o.lod);
+    const query::Descriptor descriptor = *query::parseDescriptor(o.descriptor);
     const query::Metric metric = o.metric == "jsd" ? query::Metric::JensenShannon : query::Metric::ChiSquare;
-    const std::vector<query::QueryHit> hits = library.query(query::describeModel(mesh, query::Descriptor::D2), o.k, metric);
+    const TriangleSoup mesh = isMeshPath(o.input) ? loadTriangleMesh(o.input) : sceneModel(o.input, o.lod);
+    query::ModelDescription description;
+    query::describeShape(mesh, description);
+    // The light field needs the renderer: drawn when the ranking uses it and the library holds any.
+    if ((descriptor == query::Descriptor::LightField || descriptor == query::Descriptor::Combined) && library.count(query::Descriptor::LightField) > 0) {
+        Views views = openViews(o.json || descriptor == query::Descriptor::LightField);
+        if (views.views) description.lightField = query::lightFieldDescriptor(*views.views, mesh);
+        else if (descriptor == query::Descriptor::LightField) {
+            printError("the light field needs a Vulkan device, and none is usable here (use --descriptor clusterd2 or d2)");
+            return kExitFailure;
+        }
+    }
+    const std::vector<query::QueryHit> hits = library.query(description, o.k, descriptor, metric);
+    std::vector<std::string> thumbnails(hits.size());
+    if (!o.thumbnails.empty()) {
+        std::error_code ec;
+        fs::create_directories(o.thumbnails, ec);
+        if (ec) throw std::runtime_error("cannot make the folder '" + o.thumbnails + "': " + ec.message());
+        for (std::size_t i = 0; i < hits.size(); ++i) {
+            const std::string png = library.thumbnail(hits[i].model.id);
+            if (png.empty()) continue; // added without a renderer
+            std::string name = hits[i].model.name;
+            std::replace(name.begin(), name.end(), '/', '-');
+            thumbnails[i] = (fs::path(o.thumbnails) / (std::to_string(i + 1) + "-" + name + ".png")).string();
+            render::writePng(render::decodeImage(png), thumbnails[i]);
+        }
+    }
     if (o.json) {
         nlohmann::json results = nlohmann::json::array();
-        for (std::size_t i = 0; i < hits.size(); ++i)
-            results.push_back({{"rank", i + 1}, {"name", hits[i].model.name}, {"class", hits[i].model.label}, {"path", hits[i].model.path},
-                               {"distance", hits[i].distance}});
+        for (std::size_t i = 0; i < hits.size(); ++i) {
+            nlohmann::json r = {{"rank", i + 1}, {"name", hits[i].model.name}, {"class", hits[i].model.label}, {"path", hits[i].model.path},
+                                {"distance", hits[i].distance}};
+            if (!thumbnails[i].empty()) r["thumbnail"] = thumbnails[i];
+            results.push_back(r);
+        }
         printJson({{"input", o.input}, {"descriptor", o.descriptor}, {"metric", o.metric}, {"results", results}});
         return kExitOk;
     }
     for (std::size_t i = 0; i < hits.size(); ++i)
         std::cout << (i + 1) << ". " << hits[i].model.name << (hits[i].model.label.empty() ? "" : "  [" + hits[i].model.label + "]") << "  "
-                  << hits[i].distance << "\n";
+                  << hits[i].distance << (thumbnails[i].empty() ? "" : "  " + thumbnails[i]) << "\n";
     if (hits.empty()) std::cout << "the library is empty\n";
     return kExitOk;
 }

@@ -156,6 +156,7 @@ TEST_CASE("query D2: on the synthetic set the nearest neighbour is of the same f
 // --- the library and its commands ---------------------------------------------------------------
 
 #include "query/ModelLibrary.h"
+#include "render/ImageFile.h"
 #include "support/CliRun.h"
 
 #include <fstream>
@@ -201,14 +202,38 @@ TEST_CASE("query library: index add, info, query and remove, and a moved and re-
     moved.position = {-40, 7, 12};
     moved.tessellation += 9;
     writeColouredPly(buildShape(moved), dir.file("probe.ply"));
-    for (const char* metric : {"chi2", "jsd"}) {
-        const nlohmann::json result = parseJsonOutput(runCli(dir, std::string("query lib.vdblib probe.ply -k 5 --json --metric ") + metric));
-        REQUIRE(result.at("results").size() == 5);
-        CHECK(result.at("results")[0].at("name") == "torus/" + target.name);
-        CHECK(result.at("results")[0].at("distance").get<double>() < 0.01);
-        for (std::size_t i = 1; i < 5; ++i)
-            CHECK(result.at("results")[i].at("distance").get<double>() >= result.at("results")[i - 1].at("distance").get<double>());
+    for (const std::string descriptor : {"clusterd2", "d2", "lightfield", "combined"})
+        for (const std::string metric : {"chi2", "jsd"}) {
+            INFO(descriptor << " " << metric);
+            const nlohmann::json result =
+                parseJsonOutput(runCli(dir, "query lib.vdblib probe.ply -k 5 --json --descriptor " + descriptor + " --metric " + metric));
+            REQUIRE(result.at("results").size() == 5);
+            CHECK(result.at("descriptor") == descriptor);
+            CHECK(result.at("results")[0].at("name") == "torus/" + target.name);
+            if (descriptor == "d2") CHECK(result.at("results")[0].at("distance").get<double>() < 0.01);
+            if (descriptor == "clusterd2") CHECK(result.at("results")[0].at("distance").get<double>() < 0.05);
+            for (std::size_t i = 1; i < 5; ++i)
+                CHECK(result.at("results")[i].at("distance").get<double>() >= result.at("results")[i - 1].at("distance").get<double>());
+        }
+    // Every model holds every descriptor, and a thumbnail the query writes out.
+    for (const char* kind : {"clusterd2", "d2", "lightfield"}) CHECK(info.at("descriptors").at(kind) == set.size());
+    const nlohmann::json shown = parseJsonOutput(runCli(dir, "query lib.vdblib probe.ply -k 3 --json --thumbnails thumbs"));
+    REQUIRE(shown.at("results").size() == 3);
+    for (const auto& r : shown.at("results")) {
+        const render::Image thumb = render::readImage(dir.file(r.at("thumbnail").get<std::string>()));
+        CHECK(thumb.width == 128);
+        CHECK(thumb.height == 128);
+        // The model covers a good part of the picture, in colours other than the background's (a corner).
+        std::size_t model = 0;
+        const uint8_t* corner = thumb.pixel(0, 0);
+        for (int y = 0; y < thumb.height; ++y)
+            for (int x = 0; x < thumb.width; ++x) {
+                const uint8_t* p = thumb.pixel(x, y);
+                model += std::abs(int(p[0]) - int(corner[0])) + std::abs(int(p[1]) - int(corner[1])) + std::abs(int(p[2]) - int(corner[2])) > 30;
+            }
+        CHECK(model > std::size_t(thumb.width * thumb.height / 10));
     }
+    CHECK(std::filesystem::path(shown.at("results")[0].at("thumbnail").get<std::string>()).filename().string().rfind("1-torus-", 0) == 0);
     // FLANN's index is kept beside the library and used again: the same answer.
     CHECK(std::filesystem::exists(dir.file("lib.vdblib.d2.flann")));
     const std::string first = runCli(dir, "query lib.vdblib probe.ply -k 3 --json").out;
@@ -280,12 +305,14 @@ TEST_CASE("query library: an index add killed at any moment leaves a library wit
     TempDir dir;
     const std::vector<LabeledModel> set = syntheticSet(4, 9);
     writeSet(dir, set);
-    const auto run = [&](const std::string& library, std::optional<std::chrono::microseconds> killAfter) {
+    // The add runs without the renderer (--no-render): what is killed is the database's writing.
+    const auto run = [&](const std::string& library, std::optional<std::chrono::microseconds> killAfter, const std::string& output) {
         const pid_t child = ::fork();
         if (child == 0) {
-            const int devnull = ::open("/dev/null", O_WRONLY);
-            ::dup2(devnull, 1), ::dup2(devnull, 2);
-            ::execl(kCli, kCli, "index", "add", library.c_str(), dir.file("models").c_str(), "--recursive", static_cast<char*>(nullptr));
+            const int out = ::open(output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+            ::dup2(out, 1), ::dup2(out, 2);
+            ::execl(kCli, kCli, "index", "add", library.c_str(), dir.file("models").c_str(), "--recursive", "--no-render", "--json",
+                    static_cast<char*>(nullptr));
             ::_exit(127);
         }
         if (killAfter) {
@@ -296,26 +323,39 @@ TEST_CASE("query library: an index add killed at any moment leaves a library wit
         ::waitpid(child, &status, 0);
         return status;
     };
+    const auto printed = [&](const std::string& output) {
+        std::ifstream in(output);
+        return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    };
+    const std::string log = dir.file("add.log");
     const auto start = std::chrono::steady_clock::now();
-    REQUIRE(WEXITSTATUS(run(dir.file("whole.vdblib"), std::nullopt)) == 0);
+    REQUIRE(WEXITSTATUS(run(dir.file("whole.vdblib"), std::nullopt, log)) == 0);
     const auto runTime = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - start);
+    {
+        INFO(printed(log));
+        CHECK(query::ModelLibrary(dir.file("whole.vdblib"), false).models().size() == set.size());
+    }
     std::mt19937 rng(3);
     for (int trial = 0; trial < 6; ++trial) {
         const std::string library = dir.file("killed-" + std::to_string(trial) + ".vdblib");
-        run(library, std::chrono::microseconds(rng() % std::max<int64_t>(1, runTime.count())));
+        run(library, std::chrono::microseconds(rng() % std::max<int64_t>(1, runTime.count())), log);
         if (!std::filesystem::exists(library)) continue; // killed before it made the file
         INFO("trial " << trial);
         const query::ModelLibrary opened(library, false);
         const std::vector<query::ModelRecord> models = opened.models();
         CHECK(models.size() <= set.size());
-        // Every model there is whole: its descriptor answers a query for itself.
+        // Every model there is whole: its descriptors answer a query for itself.
         for (const query::ModelRecord& m : models) {
-            const std::vector<query::QueryHit> hits = opened.query(query::describeModel(loadTriangleMesh(m.path), query::Descriptor::D2), 1);
-            REQUIRE(hits.size() == 1);
-            CHECK(hits[0].distance < 1e-6);
+            const query::ModelDescription d = query::describeModel(loadTriangleMesh(m.path), nullptr);
+            for (const query::Descriptor kind : {query::Descriptor::D2, query::Descriptor::ClusterD2}) {
+                const std::vector<query::QueryHit> hits = opened.query(d, 1, kind);
+                REQUIRE(hits.size() == 1);
+                CHECK(hits[0].distance < 1e-6);
+            }
         }
         // And the add carries on where it stopped.
-        REQUIRE(WEXITSTATUS(run(library, std::nullopt)) == 0);
+        REQUIRE(WEXITSTATUS(run(library, std::nullopt, log)) == 0);
+        INFO(printed(log));
         CHECK(query::ModelLibrary(library, false).models().size() == set.size());
     }
 }
@@ -334,7 +374,7 @@ TEST_CASE("query library: a sculpted scene (.vdb, and a store at a level of deta
     REQUIRE(runCli(dir, "new ball.vdb --shape sphere --size 24").exitCode == 0);
     for (const char* lod : {"0", "1"}) {
         INFO("level " << lod);
-        const nlohmann::json result = parseJsonOutput(runCli(dir, std::string("query lib.vdblib ball.vdb -k 3 --json --lod ") + lod));
+        const nlohmann::json result = parseJsonOutput(runCli(dir, std::string("query lib.vdblib ball.vdb -k 3 --json --descriptor d2 --lod ") + lod));
         REQUIRE(result.at("results").size() == 3);
         CHECK(result.at("results")[0].at("name") == "round");
         CHECK(result.at("results")[0].at("distance").get<double>() < 0.01);
@@ -346,3 +386,4 @@ TEST_CASE("query library: a sculpted scene (.vdb, and a store at a level of deta
     CHECK(fromStore.at("results")[0].at("name") == "round");
     checkCleanFailure(runCli(dir, "query lib.vdblib ball.vdbclay --lod 9"));
 }
+

@@ -362,6 +362,42 @@ TEST_CASE("random triangle soups voxelize into valid volumes whose meshes are cl
     }
 }
 
+TEST_CASE("a mesh file is read by the vdbclay-read-mesh program beside the executable, as a fork of this process reads it", "[voxelize]")
+{
+    TempDir dir;
+    std::ofstream(dir.file("quad.obj")) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0.5\nf 1 2 3 4\n";
+    std::ofstream(dir.file("broken.ply")) << "ply\nformat ascii 1.0\nelement vertex 99\nend_header\n1 2\n";
+    const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+    REQUIRE(std::filesystem::exists(std::filesystem::path(self).parent_path() / kMeshReaderProgram));
+    const TriangleSoup byProgram = loadTriangleMesh(dir.file("quad.obj"));
+    // The same file read in a fork (the reader named by the environment is not there to run).
+    ::setenv("VDBCLAY_MESH_READER", dir.file("no-such-reader").c_str(), 1);
+    const TriangleSoup byFork = loadTriangleMesh(dir.file("quad.obj"));
+    std::string forkError;
+    try {
+        loadTriangleMesh(dir.file("broken.ply"));
+    } catch (const MeshImportError& e) {
+        forkError = e.what();
+    }
+    ::unsetenv("VDBCLAY_MESH_READER");
+    CHECK(byProgram.triangles.size() == 2);
+    CHECK(byProgram.positions == byFork.positions);
+    CHECK(byProgram.triangles == byFork.triangles);
+    CHECK(byProgram.triangleMaterials == byFork.triangleMaterials);
+    // A damaged file: one line either way.
+    try {
+        loadTriangleMesh(dir.file("broken.ply"));
+        FAIL("a damaged file was read");
+    } catch (const MeshImportError& e) {
+        CHECK(std::string(e.what()).find('\n') == std::string::npos);
+        CHECK_FALSE(forkError.empty());
+    }
+    // Run by hand without its arguments, the program says what it is for and exits 2.
+    const CommandResult r = runCli(dir, "", "", (std::filesystem::path(self).parent_path() / kMeshReaderProgram).string());
+    CHECK(r.exitCode == 2);
+    CHECK(r.err.find("usage") != std::string::npos);
+}
+
 TEST_CASE("a mesh read in a child process comes back whole, its crash, hang or refusal is one line", "[voxelize]")
 {
     TriangleSoup sent;

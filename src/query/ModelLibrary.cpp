@@ -1,8 +1,12 @@
 #include "query/ModelLibrary.h"
 
+#include "query/ClusterD2Color.h"
 #include "query/DescriptorIndex.h"
 #include "query/HistogramDistance.h"
+#include "query/SceneModels.h"
 #include "query/SurfaceSamples.h"
+#include "render/ImageFile.h"
+#include "render/ModelViews.h"
 
 #include <sqlite3.h>
 
@@ -11,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <mutex>
 
 namespace vdbclay::query {
@@ -56,21 +61,73 @@ std::vector<float> toFloats(const Histogram& h) { return std::vector<float>(h.be
 
 } // namespace
 
-const char* descriptorName(Descriptor) { return "d2"; }
+const char* descriptorName(Descriptor d)
+{
+    switch (d) {
+    case Descriptor::ClusterD2: return "clusterd2";
+    case Descriptor::D2: return "d2";
+    case Descriptor::LightField: return "lightfield";
+    case Descriptor::Combined: return "combined";
+    }
+    return "?";
+}
+
+std::optional<Descriptor> parseDescriptor(const std::string& name)
+{
+    for (const Descriptor d : {Descriptor::ClusterD2, Descriptor::D2, Descriptor::LightField, Descriptor::Combined})
+        if (name == descriptorName(d)) return d;
+    return std::nullopt;
+}
+
 const char* metricName(Metric m) { return m == Metric::ChiSquare ? "chi2" : "jsd"; }
 
-Histogram describeModel(const TriangleSoup& mesh, Descriptor)
+void describeShape(const TriangleSoup& mesh, ModelDescription& description)
 {
-    return smoothHistogram(d2Descriptor(mesh));
+    description.d2 = smoothHistogram(d2Descriptor(mesh));
+    description.clusterD2 = smoothHistogram(clusterD2ColorDescriptor(mesh));
 }
+
+void describeViews(render::ModelViews& views, const TriangleSoup& mesh, ModelDescription& description, int thumbnailSize)
+{
+    description.lightField = lightFieldDescriptor(views, mesh);
+    MaterialTable materials;
+    render::ThumbnailOptions options;
+    options.size = thumbnailSize;
+    description.thumbnailPng = render::encodePng(views.thumbnail(meshOfSoup(mesh, materials), materials, options));
+}
+
+ModelDescription describeModel(const TriangleSoup& mesh, render::ModelViews* views)
+{
+    ModelDescription d;
+    describeShape(mesh, d);
+    if (views) describeViews(*views, mesh, d);
+    return d;
+}
+
+namespace {
+
+/// One stored descriptor's search structure: built on first use from the stored vectors (or loaded from
+/// its file). For the light field it indexes the summaries; the whole vectors stay in the database.
+struct SearchIndex {
+    std::unique_ptr<DescriptorIndex> index;
+    std::vector<ModelRecord> indexed;
+    std::vector<std::vector<float>> vectors; // what the index holds, per indexed model
+    double typicalDistance = 1.0;            // the mean distance between the library's models (Combined)
+    bool typicalKnown = false;
+};
+
+double histogramDistance(const std::vector<float>& a, const std::vector<float>& b, Metric metric)
+{
+    const Histogram ha(a.begin(), a.end()), hb(b.begin(), b.end());
+    return metric == Metric::ChiSquare ? chiSquareDistance(ha, hb) : jensenShannonDistance(ha, hb);
+}
+
+} // namespace
 
 struct ModelLibrary::Impl {
     sqlite3* db = nullptr;
-    // The search structure, built on first use from the stored vectors (or loaded from its file).
     mutable std::mutex indexMutex;
-    mutable std::unique_ptr<DescriptorIndex> index;
-    mutable std::vector<ModelRecord> indexed;
-    mutable std::vector<Histogram> vectors;
+    mutable std::map<Descriptor, SearchIndex> indexes;
 
     void exec(const char* sql) const
     {
@@ -80,6 +137,17 @@ struct ModelLibrary::Impl {
             sqlite3_free(message);
             throw LibraryError("the library's database failed: " + text);
         }
+    }
+
+    /// The stored vector of one model's descriptor; empty when it has none.
+    std::vector<float> vector(int64_t model, Descriptor d) const
+    {
+        Statement s(db, "SELECT vector FROM descriptors WHERE model = ?1 AND kind = ?2");
+        s.integer(1, model);
+        s.text(2, descriptorName(d));
+        if (!s.step()) return {};
+        const auto* data = static_cast<const float*>(sqlite3_column_blob(s.get(), 0));
+        return std::vector<float>(data, data + sqlite3_column_bytes(s.get(), 0) / int(sizeof(float)));
     }
 };
 
@@ -122,6 +190,7 @@ ModelLibrary::ModelLibrary(const std::string& path, bool create) : path_(path), 
                         "label TEXT NOT NULL, triangles INTEGER NOT NULL, r REAL, g REAL, b REAL)");
             impl_->exec("CREATE TABLE descriptors(model INTEGER NOT NULL REFERENCES models(id) ON DELETE CASCADE, kind TEXT NOT NULL, "
                         "vector BLOB NOT NULL, PRIMARY KEY(model, kind))");
+            impl_->exec("CREATE TABLE thumbnails(model INTEGER PRIMARY KEY REFERENCES models(id) ON DELETE CASCADE, png BLOB NOT NULL)");
             Statement put(impl_->db, "INSERT INTO library(key, value) VALUES ('format', ?1), ('version', ?2)");
             put.text(1, kFormatName);
             put.text(2, std::to_string(kFormatVersion));
@@ -135,6 +204,9 @@ ModelLibrary::ModelLibrary(const std::string& path, bool create) : path_(path), 
             if (std::atoi(version.c_str()) > kFormatVersion)
                 throw LibraryError("'" + path + "' was written by a newer VDBClay (library version " + version + "; this one reads " +
                                    std::to_string(kFormatVersion) + ")");
+            Statement tables(impl_->db, "SELECT count(*) FROM sqlite_master WHERE type='table' AND name IN ('models', 'descriptors', 'thumbnails')");
+            tables.step();
+            if (sqlite3_column_int64(tables.get(), 0) != 3) throw LibraryError("the library '" + path + "' is damaged: tables are missing");
         }
         impl_->exec("PRAGMA foreign_keys=ON");
     } catch (...) {
@@ -159,16 +231,16 @@ bool ModelLibrary::contains(const std::string& name) const
 }
 
 ModelRecord ModelLibrary::add(const std::string& name, const std::string& sourcePath, const std::string& label, const TriangleSoup& mesh,
-                              const Histogram& d2)
+                              const ModelDescription& description)
 {
     if (contains(name)) throw LibraryError("a model named '" + name + "' is in the library already");
+    if (description.d2.empty() || description.clusterD2.empty()) throw LibraryError("the model '" + name + "' was not described");
     ModelRecord r;
     r.name = name;
     r.path = sourcePath;
     r.label = label;
     r.triangles = mesh.triangles.size();
     r.colour = meanColour(mesh);
-    const std::vector<float> vector = toFloats(d2);
     impl_->exec("BEGIN IMMEDIATE");
     try {
         Statement put(impl_->db, "INSERT INTO models(name, path, label, triangles, r, g, b) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
@@ -179,18 +251,30 @@ ModelRecord ModelLibrary::add(const std::string& name, const std::string& source
         for (int k = 0; k < 3; ++k) sqlite3_bind_double(put.get(), 5 + k, r.colour[std::size_t(k)]);
         put.step();
         r.id = sqlite3_last_insert_rowid(impl_->db);
-        Statement d(impl_->db, "INSERT INTO descriptors(model, kind, vector) VALUES (?1, ?2, ?3)");
-        d.integer(1, r.id);
-        d.text(2, descriptorName(Descriptor::D2));
-        d.blob(3, vector.data(), vector.size() * sizeof(float));
-        d.step();
+        const auto store = [&](Descriptor kind, const std::vector<float>& vector) {
+            if (vector.empty()) return;
+            Statement d(impl_->db, "INSERT INTO descriptors(model, kind, vector) VALUES (?1, ?2, ?3)");
+            d.integer(1, r.id);
+            d.text(2, descriptorName(kind));
+            d.blob(3, vector.data(), vector.size() * sizeof(float));
+            d.step();
+        };
+        store(Descriptor::D2, toFloats(description.d2));
+        store(Descriptor::ClusterD2, toFloats(description.clusterD2));
+        store(Descriptor::LightField, description.lightField);
+        if (!description.thumbnailPng.empty()) {
+            Statement t(impl_->db, "INSERT INTO thumbnails(model, png) VALUES (?1, ?2)");
+            t.integer(1, r.id);
+            t.blob(2, description.thumbnailPng.data(), description.thumbnailPng.size());
+            t.step();
+        }
         impl_->exec("COMMIT");
     } catch (...) {
         sqlite3_exec(impl_->db, "ROLLBACK", nullptr, nullptr, nullptr);
         throw;
     }
     std::lock_guard<std::mutex> lock(impl_->indexMutex);
-    impl_->index.reset();
+    impl_->indexes.clear();
     return r;
 }
 
@@ -202,7 +286,7 @@ bool ModelLibrary::remove(const std::string& name)
     const bool removed = sqlite3_changes(impl_->db) > 0;
     if (removed) {
         std::lock_guard<std::mutex> lock(impl_->indexMutex);
-        impl_->index.reset();
+        impl_->indexes.clear();
     }
     return removed;
 }
@@ -224,54 +308,152 @@ std::vector<ModelRecord> ModelLibrary::models() const
     return out;
 }
 
-std::vector<QueryHit> ModelLibrary::query(const Histogram& query, std::size_t k, Metric metric) const
+std::size_t ModelLibrary::count(Descriptor d) const
+{
+    Statement s(impl_->db, "SELECT count(*) FROM descriptors WHERE kind = ?1");
+    s.text(1, descriptorName(d));
+    s.step();
+    return std::size_t(sqlite3_column_int64(s.get(), 0));
+}
+
+std::string ModelLibrary::thumbnail(int64_t model) const
+{
+    Statement s(impl_->db, "SELECT png FROM thumbnails WHERE model = ?1");
+    s.integer(1, model);
+    if (!s.step()) return {};
+    const auto* data = static_cast<const char*>(sqlite3_column_blob(s.get(), 0));
+    return std::string(data, data + sqlite3_column_bytes(s.get(), 0));
+}
+
+namespace {
+
+/// The part of a description a stored descriptor's index compares.
+std::vector<float> indexedPart(const ModelDescription& d, Descriptor kind)
+{
+    switch (kind) {
+    case Descriptor::D2: return toFloats(d.d2);
+    case Descriptor::ClusterD2: return toFloats(d.clusterD2);
+    case Descriptor::LightField: return d.lightField.empty() ? std::vector<float>() : lightFieldSummary(d.lightField);
+    case Descriptor::Combined: break;
+    }
+    return {};
+}
+
+} // namespace
+
+std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::size_t k, Descriptor descriptor, Metric metric) const
 {
     std::lock_guard<std::mutex> lock(impl_->indexMutex);
-    if (!impl_->index) {
-        // The stored vectors, in the records' order; the saved index when it was made for exactly these.
-        impl_->indexed = models();
-        impl_->vectors.clear();
-        std::vector<std::vector<float>> rows;
-        Statement s(impl_->db, "SELECT vector FROM descriptors JOIN models ON models.id = descriptors.model WHERE kind = ?1 ORDER BY models.id");
-        s.text(1, descriptorName(Descriptor::D2));
+    // The index of a stored descriptor, built (or loaded) on first use.
+    const auto searchIndex = [&](Descriptor kind) -> SearchIndex& {
+        SearchIndex& si = impl_->indexes[kind];
+        if (si.index) return si;
+        si.indexed.clear();
+        si.vectors.clear();
+        Statement s(impl_->db, "SELECT models.id, name, path, label, triangles, r, g, b, vector FROM descriptors JOIN models ON models.id = "
+                               "descriptors.model WHERE kind = ?1 ORDER BY models.id");
+        s.text(1, descriptorName(kind));
         while (s.step()) {
-            const auto* data = static_cast<const float*>(sqlite3_column_blob(s.get(), 0));
-            const int bytes = sqlite3_column_bytes(s.get(), 0);
-            std::vector<float> v(data, data + bytes / int(sizeof(float)));
-            impl_->vectors.emplace_back(v.begin(), v.end());
-            rows.push_back(std::move(v));
+            ModelRecord r;
+            r.id = sqlite3_column_int64(s.get(), 0);
+            r.name = s.column(1);
+            r.path = s.column(2);
+            r.label = s.column(3);
+            r.triangles = uint64_t(sqlite3_column_int64(s.get(), 4));
+            for (int c = 0; c < 3; ++c) r.colour[std::size_t(c)] = float(sqlite3_column_double(s.get(), 5 + c));
+            const auto* data = static_cast<const float*>(sqlite3_column_blob(s.get(), 8));
+            std::vector<float> v(data, data + sqlite3_column_bytes(s.get(), 8) / int(sizeof(float)));
+            if (kind == Descriptor::LightField) {
+                if (v.size() != kLightFieldLength) throw LibraryError("the library '" + path_ + "' is damaged: a light field of the wrong length");
+                v = lightFieldSummary(v);
+            }
+            si.indexed.push_back(r);
+            si.vectors.push_back(std::move(v));
         }
-        if (rows.size() != impl_->indexed.size()) throw LibraryError("the library '" + path_ + "' is damaged: models without descriptors");
-        std::string stamp = std::to_string(rows.size());
-        for (const ModelRecord& r : impl_->indexed) stamp += "," + std::to_string(r.id);
-        const std::string file = indexPath(Descriptor::D2), stampFile = file + ".models";
+        std::string stamp = std::to_string(si.vectors.size());
+        for (const ModelRecord& r : si.indexed) stamp += "," + std::to_string(r.id);
+        const std::string file = indexPath(kind), stampFile = file + ".models";
         std::string saved;
         {
             std::ifstream in(stampFile);
             std::getline(in, saved);
         }
         try {
-            if (saved == stamp && std::filesystem::exists(file)) impl_->index = std::make_unique<DescriptorIndex>(rows, file);
+            if (saved == stamp && std::filesystem::exists(file)) si.index = std::make_unique<DescriptorIndex>(si.vectors, file);
         } catch (const std::exception&) {
-            impl_->index.reset(); // damaged or stale: built again below
+            si.index.reset(); // damaged or stale: built again below
         }
-        if (!impl_->index) {
-            impl_->index = std::make_unique<DescriptorIndex>(rows);
+        if (!si.index) {
+            try {
+                si.index = std::make_unique<DescriptorIndex>(si.vectors);
+            } catch (const std::invalid_argument&) {
+                throw LibraryError("the library '" + path_ + "' is damaged: " + descriptorName(kind) + " vectors of different lengths");
+            }
             try {
                 // Saved beside the library (a cache: failing to write it costs only the next rebuild).
                 const std::string temporary = file + ".tmp";
-                impl_->index->save(temporary);
+                si.index->save(temporary);
                 std::filesystem::rename(temporary, file);
                 std::ofstream(stampFile) << stamp << "\n";
             } catch (const std::exception&) {
             }
         }
-    }
-    const std::size_t shortlist = std::min(impl_->indexed.size(), std::max<std::size_t>(4 * k, 64));
+        return si;
+    };
+    // The exact distance of the query to the i-th model of a descriptor's index.
+    const auto exact = [&](Descriptor kind, const SearchIndex& si, std::size_t i) {
+        if (kind != Descriptor::LightField) return histogramDistance(indexedPart(query, kind), si.vectors[i], metric);
+        return lightFieldDistance(query.lightField, impl_->vector(si.indexed[i].id, Descriptor::LightField));
+    };
+    const auto shortlistOf = [&](Descriptor kind, const SearchIndex& si) {
+        const std::size_t shortlist = std::min(si.indexed.size(), std::max<std::size_t>(4 * k, 64));
+        return si.index->size() ? si.index->nearest(indexedPart(query, kind), shortlist) : std::vector<std::size_t>();
+    };
     std::vector<QueryHit> hits;
-    for (std::size_t i : impl_->index->nearest(toFloats(query), shortlist)) {
-        const Histogram& h = impl_->vectors[i];
-        hits.push_back({impl_->indexed[i], metric == Metric::ChiSquare ? chiSquareDistance(query, h) : jensenShannonDistance(query, h)});
+    if (descriptor != Descriptor::Combined) {
+        if (indexedPart(query, descriptor).empty())
+            throw LibraryError(std::string("the query has no ") + descriptorName(descriptor) + " descriptor (it needs a renderer)");
+        SearchIndex& si = searchIndex(descriptor);
+        for (std::size_t i : shortlistOf(descriptor, si)) hits.push_back({si.indexed[i], exact(descriptor, si, i)});
+    } else {
+        // Each stored descriptor's shortlist; every candidate ranked by the mean of its distances, each
+        // over that descriptor's typical distance between the library's models (so none outweighs).
+        std::vector<Descriptor> kinds;
+        for (Descriptor kind : kStoredDescriptors)
+            if (!indexedPart(query, kind).empty() && count(kind) > 0) kinds.push_back(kind);
+        std::map<int64_t, std::pair<ModelRecord, std::vector<double>>> candidates;
+        for (Descriptor kind : kinds) {
+            SearchIndex& si = searchIndex(kind);
+            if (!si.typicalKnown && si.indexed.size() > 1) {
+                si.typicalKnown = true;
+                // Pairs a fixed stride apart: the same figure for the same library.
+                double sum = 0.0;
+                const std::size_t pairs = std::min<std::size_t>(64, si.indexed.size() - 1);
+                for (std::size_t p = 0; p < pairs; ++p) {
+                    const std::size_t a = p * si.indexed.size() / pairs, b = (a + si.indexed.size() / 2 + 1) % si.indexed.size();
+                    sum += kind == Descriptor::LightField
+                               ? lightFieldDistance(impl_->vector(si.indexed[a].id, kind), impl_->vector(si.indexed[b].id, kind))
+                               : histogramDistance(si.vectors[a], si.vectors[b], metric);
+                }
+                si.typicalDistance = sum > 0.0 ? sum / double(pairs) : 1.0;
+            }
+            for (std::size_t i : shortlistOf(kind, si)) candidates.emplace(si.indexed[i].id, std::make_pair(si.indexed[i], std::vector<double>()));
+        }
+        for (Descriptor kind : kinds) {
+            SearchIndex& si = searchIndex(kind);
+            std::map<int64_t, std::size_t> position;
+            for (std::size_t i = 0; i < si.indexed.size(); ++i) position[si.indexed[i].id] = i;
+            for (auto& [id, candidate] : candidates) {
+                const auto at = position.find(id);
+                if (at != position.end()) candidate.second.push_back(exact(kind, si, at->second) / si.typicalDistance);
+            }
+        }
+        for (auto& [id, candidate] : candidates) {
+            if (candidate.second.empty()) continue;
+            double sum = 0.0;
+            for (double d : candidate.second) sum += d;
+            hits.push_back({candidate.first, sum / double(candidate.second.size())});
+        }
     }
     std::sort(hits.begin(), hits.end(), [](const QueryHit& a, const QueryHit& b) { return a.distance < b.distance || (a.distance == b.distance && a.model.id < b.model.id); });
     if (hits.size() > k) hits.resize(k);

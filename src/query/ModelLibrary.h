@@ -1,10 +1,11 @@
 // A library of 3D models to search by shape: an SQLite database of model records (name, source path,
-// class, triangle count, mean colour) with their descriptor vectors, so reopening never recomputes, and
-// beside it FLANN's index per descriptor (LIBRARY.d2.flann), rebuilt from the stored vectors when it is
-// missing or no longer matches the records. Each model is added in a transaction of its own: a killed
-// `index add` leaves the library as it was or with whole models added.
+// class, triangle count, mean colour, thumbnail) with their descriptor vectors, so reopening never
+// recomputes, and beside it FLANN's index per descriptor (LIBRARY.d2.flann, ...), rebuilt from the stored
+// vectors when it is missing or no longer matches the records. Each model is added in a transaction of
+// its own: a killed `index add` leaves the library as it was or with whole models added.
 #pragma once
 
+#include "query/LightField.h"
 #include "query/ShapeDistribution.h"
 
 #include <array>
@@ -14,6 +15,10 @@
 #include <string>
 #include <vector>
 
+namespace vdbclay::render {
+class ModelViews;
+}
+
 namespace vdbclay::query {
 
 /// A file that is not a library, a damaged one, or one written by a newer VDBClay; what() is one line.
@@ -22,14 +27,32 @@ public:
     using std::runtime_error::runtime_error;
 };
 
-/// The descriptors a library holds (more come with the light field and ClusterD2+Color).
-enum class Descriptor { D2 };
+/// How models are compared: one descriptor's distance, or all of them combined (not stored: ranked
+/// from the others).
+enum class Descriptor { ClusterD2, D2, LightField, Combined };
 const char* descriptorName(Descriptor d);
+/// "clusterd2", "d2", "lightfield" or "combined"; nullopt for anything else.
+std::optional<Descriptor> parseDescriptor(const std::string& name);
+/// The descriptors a library stores.
+constexpr std::array<Descriptor, 3> kStoredDescriptors{Descriptor::ClusterD2, Descriptor::D2, Descriptor::LightField};
+/// How histograms (D2, ClusterD2) are compared; the light field is always L1.
 enum class Metric { ChiSquare, JensenShannon };
 const char* metricName(Metric m);
 
-/// A model's descriptor as the library stores and compares it (smoothed, summing to 1).
-Histogram describeModel(const TriangleSoup& mesh, Descriptor descriptor);
+/// A model as the library stores and compares it.
+struct ModelDescription {
+    Histogram d2, clusterD2;     // smoothed, summing to 1
+    std::vector<float> lightField; // empty when it was not drawn (no renderer)
+    std::string thumbnailPng;    // empty when none was drawn
+};
+
+/// The descriptors computed on the CPU (D2, ClusterD2+Color): safe on any thread.
+void describeShape(const TriangleSoup& mesh, ModelDescription& description);
+/// What the renderer draws (the light field, a thumbnail of `thumbnailSize` pixels): on the thread that
+/// owns `views`.
+void describeViews(render::ModelViews& views, const TriangleSoup& mesh, ModelDescription& description, int thumbnailSize = 128);
+/// Both; the drawn parts only with `views`.
+ModelDescription describeModel(const TriangleSoup& mesh, render::ModelViews* views);
 
 struct ModelRecord {
     int64_t id = 0;
@@ -53,19 +76,26 @@ public:
     ModelLibrary(const ModelLibrary&) = delete;
     ModelLibrary& operator=(const ModelLibrary&) = delete;
 
-    /// Adds a model with its descriptor (describeModel). Throws LibraryError when the name is taken.
+    /// Adds a model with its descriptors (describeModel). Throws LibraryError when the name is taken or
+    /// the description lacks D2 or ClusterD2.
     ModelRecord add(const std::string& name, const std::string& sourcePath, const std::string& label, const TriangleSoup& mesh,
-                    const Histogram& d2);
+                    const ModelDescription& description);
     /// Removes the model of that name; false when there is none.
     bool remove(const std::string& name);
     bool contains(const std::string& name) const;
     std::vector<ModelRecord> models() const;
+    /// How many models hold the descriptor.
+    std::size_t count(Descriptor descriptor) const;
+    /// The model's thumbnail (PNG bytes); empty when it has none.
+    std::string thumbnail(int64_t model) const;
 
-    /// The `k` models nearest `query` (a descriptor as describeModel makes it): FLANN's shortlist ranked
-    /// exactly with `metric`, nearest first.
-    std::vector<QueryHit> query(const Histogram& query, std::size_t k, Metric metric = Metric::ChiSquare) const;
+    /// The `k` models nearest `query` (a description as describeModel makes it): FLANN's shortlist ranked
+    /// exactly, nearest first. Combined ranks by the mean of each stored descriptor's distance over its
+    /// typical distance in this library. Throws LibraryError when the query lacks the descriptor.
+    std::vector<QueryHit> query(const ModelDescription& query, std::size_t k, Descriptor descriptor = Descriptor::ClusterD2,
+                                Metric metric = Metric::ChiSquare) const;
     const std::string& path() const { return path_; }
-    /// The FLANN index file of a descriptor.
+    /// The FLANN index file of a stored descriptor.
     std::string indexPath(Descriptor descriptor) const;
 
 private:

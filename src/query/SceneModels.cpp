@@ -1,6 +1,9 @@
 #include "query/SceneModels.h"
 
+#include <algorithm>
+#include <cmath>
 #include <map>
+#include <string>
 
 namespace vdbclay::query {
 
@@ -30,6 +33,43 @@ TriangleSoup soupOfMesh(const Mesh& mesh, const MaterialTable& materials)
         soup.triangleMaterials.push_back(it->second);
     }
     return soup;
+}
+
+Mesh meshOfSoup(const TriangleSoup& soup, MaterialTable& materials)
+{
+    std::vector<MaterialId> ids;
+    for (std::size_t i = 0; i < soup.materials.size(); ++i) {
+        Material m;
+        m.name = "model-" + std::to_string(i);
+        m.color = soup.materials[i].color;
+        for (float& c : m.color) c = std::isfinite(c) ? std::clamp(c, 0.0f, 1.0f) : 0.8f;
+        try {
+            ids.push_back(materials.define(m));
+        } catch (const std::invalid_argument&) {
+            ids.push_back(1); // the table is full: the default material
+        }
+    }
+    Mesh mesh;
+    mesh.positions.reserve(soup.triangles.size() * 3);
+    for (std::size_t t = 0; t < soup.triangles.size(); ++t) {
+        const auto& tri = soup.triangles[t];
+        const auto &a = soup.positions[tri[0]], &b = soup.positions[tri[1]], &c = soup.positions[tri[2]];
+        const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+        const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (double& x : n) x = length > 0.0 ? x / length : 0.0;
+        const uint32_t soupMaterial = t < soup.triangleMaterials.size() ? soup.triangleMaterials[t] : uint32_t(ids.size());
+        const MaterialId material = soupMaterial < ids.size() ? ids[soupMaterial] : MaterialId(1);
+        const uint32_t first = uint32_t(mesh.positions.size());
+        for (const auto* p : {&a, &b, &c}) {
+            mesh.positions.push_back({float((*p)[0]), float((*p)[1]), float((*p)[2])});
+            mesh.normals.push_back({float(n[0]), float(n[1]), float(n[2])});
+            mesh.materials.push_back(material);
+        }
+        mesh.triangles.push_back({first, first + 1, first + 2});
+        mesh.triangleMaterials.push_back(material);
+    }
+    return mesh;
 }
 
 } // namespace vdbclay::query

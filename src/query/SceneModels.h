@@ -11,4 +11,8 @@ namespace vdbclay::query {
 /// material the table lacks: grey).
 TriangleSoup soupOfMesh(const Mesh& mesh, const MaterialTable& materials);
 
+/// A model as the renderer draws it (thumbnails, silhouettes): each triangle with its own three corners
+/// and its face's normal, its material defined in `materials` with the soup material's colour.
+Mesh meshOfSoup(const TriangleSoup& soup, MaterialTable& materials);
+
 } // namespace vdbclay::query

@@ -59,6 +59,8 @@ SurfaceSamples sampleSurface(const TriangleSoup& mesh, std::size_t count, uint64
     out.area = total;
     out.points.reserve(count);
     out.colours.reserve(count);
+    out.triangles.reserve(count);
+    out.barycentric.reserve(count);
     std::mt19937_64 random(seed);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     for (std::size_t i = 0; i < count; ++i) {
@@ -73,6 +75,8 @@ SurfaceSamples sampleSurface(const TriangleSoup& mesh, std::size_t count, uint64
         for (int k = 0; k < 3; ++k) p[std::size_t(k)] = (1 - r1) * a[std::size_t(k)] + r1 * (1 - r2) * b[std::size_t(k)] + r1 * r2 * c[std::size_t(k)];
         out.points.push_back(p);
         out.colours.push_back(triangleColour(mesh, t));
+        out.triangles.push_back(uint32_t(t));
+        out.barycentric.push_back({1 - r1, r1 * (1 - r2), r1 * r2});
     }
     return out;
 }

@@ -13,6 +13,8 @@ namespace vdbclay::query {
 struct SurfaceSamples {
     std::vector<std::array<double, 3>> points;
     std::vector<std::array<float, 3>> colours; // RGB 0..1, per point
+    std::vector<uint32_t> triangles;                  // the triangle each point lies on
+    std::vector<std::array<double, 3>> barycentric; // its weights of that triangle's corners
     double area = 0.0;                           // of the mesh
 };
 

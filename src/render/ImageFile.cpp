@@ -27,13 +27,24 @@ void appendBytes(void* context, void* data, int size)
 }
 } // namespace
 
-void writePng(const Image& image, const std::string& path)
+std::string encodePng(const Image& image)
 {
     if (image.width <= 0 || image.height <= 0 || image.rgba.size() != std::size_t(image.width) * std::size_t(image.height) * 4)
-        throw std::runtime_error("cannot write " + path + ": the picture is empty or malformed");
+        throw std::runtime_error("cannot encode an empty or malformed picture");
     std::string bytes;
     if (!stbi_write_png_to_func(&appendBytes, &bytes, image.width, image.height, 4, image.rgba.data(), image.width * 4))
-        throw std::runtime_error("cannot encode the PNG for " + path);
+        throw std::runtime_error("cannot encode the picture as PNG");
+    return bytes;
+}
+
+void writePng(const Image& image, const std::string& path)
+{
+    std::string bytes;
+    try {
+        bytes = encodePng(image);
+    } catch (const std::runtime_error& e) {
+        throw std::runtime_error("cannot write " + path + ": " + e.what());
+    }
     writeFileAtomically(path, [&](std::ostream& out) { out.write(bytes.data(), std::streamsize(bytes.size())); });
 }
 
@@ -80,13 +91,9 @@ void padPngPalette(std::string& png)
     }
 }
 
-DecodedPicture decodePicture(const std::string& path)
+namespace {
+DecodedPicture decodeBytes(std::string bytes, const std::string& path)
 {
-    // A FIFO would block forever and a device would never end: only regular files are read.
-    if (const auto why = unreadableAsFile(path, kMaxPictureFileBytes)) throw std::runtime_error("cannot read the picture: " + *why);
-    std::ifstream in(path, std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad() || bytes.empty()) throw std::runtime_error("cannot read the picture " + path);
     padPngPalette(bytes);
     const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
     const int length = int(std::min<std::size_t>(bytes.size(), std::size_t(INT32_MAX)));
@@ -103,14 +110,32 @@ DecodedPicture decodePicture(const std::string& path)
     return picture;
 }
 
-Image readImage(const std::string& path)
+Image imageOf(const DecodedPicture& picture)
 {
-    const DecodedPicture picture = decodePicture(path);
     Image image;
     image.width = picture.width;
     image.height = picture.height;
     image.rgba.assign(picture.rgba.get(), picture.rgba.get() + std::size_t(picture.width) * std::size_t(picture.height) * 4);
     return image;
+}
+} // namespace
+
+DecodedPicture decodePicture(const std::string& path)
+{
+    // A FIFO would block forever and a device would never end: only regular files are read.
+    if (const auto why = unreadableAsFile(path, kMaxPictureFileBytes)) throw std::runtime_error("cannot read the picture: " + *why);
+    std::ifstream in(path, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad() || bytes.empty()) throw std::runtime_error("cannot read the picture " + path);
+    return decodeBytes(std::move(bytes), path);
+}
+
+Image readImage(const std::string& path) { return imageOf(decodePicture(path)); }
+
+Image decodeImage(const std::string& bytes)
+{
+    if (bytes.empty()) throw std::runtime_error("cannot read the picture: no bytes");
+    return imageOf(decodeBytes(bytes, "in memory"));
 }
 
 } // namespace vdbclay::render

@@ -12,6 +12,11 @@ namespace vdbclay::render {
 /// Writes `image` as an 8-bit RGBA PNG to `path` atomically (a temporary beside it, renamed over it).
 /// Throws std::runtime_error naming the path when it cannot.
 void writePng(const Image& image, const std::string& path);
+/// `image` as PNG bytes (thumbnails kept in a database). Throws std::runtime_error for an empty picture.
+std::string encodePng(const Image& image);
+/// A picture from bytes in memory (a PNG encodePng made, or any picture stb reads); throws
+/// std::runtime_error when they are not one or it is larger than kMaxPictureSide a side.
+Image decodeImage(const std::string& bytes);
 constexpr int kMaxPictureSide = 16384;
 /// A picture as stb decoded it (RGBA, rows from the top), held where stb put it: a 16384^2 picture is
 /// a gigabyte, not to be copied.

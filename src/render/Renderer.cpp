@@ -45,7 +45,9 @@ struct ViewUniforms {
 };
 static_assert(sizeof(ViewUniforms) == 336, "ViewUniforms must match common.glsl");
 
-constexpr int kMaxViews = 8;
+// Views one frame draws at most: stereo eyes and the desktop's panels need few; the light field's 100
+// silhouettes are drawn as one frame of tiles.
+constexpr int kMaxViews = 128;
 /// Frames recorded while the device still runs earlier ones: the CPU prepares frame N + 1 while frame N
 /// draws, and waits only for frame N - 1.
 constexpr int kFramesInFlight = 2;

@@ -11,6 +11,14 @@ namespace vdbclay::render {
 
 Image renderThumbnail(VulkanContext& context, const Mesh& mesh, const MaterialTable& materials, const ThumbnailOptions& options)
 {
+    RendererOptions rendererOptions;
+    rendererOptions.stagingBytes = std::max<uint64_t>(rendererOptions.stagingBytes, mesh.positions.size() * 28 + mesh.triangles.size() * 12 + 64);
+    Renderer renderer(context, rendererOptions);
+    return renderThumbnail(renderer, mesh, materials, options);
+}
+
+Image renderThumbnail(Renderer& renderer, const Mesh& mesh, const MaterialTable& materials, const ThumbnailOptions& options)
+{
     if (mesh.triangles.empty()) throw std::invalid_argument("cannot make a thumbnail of an empty mesh");
     if (options.size < 1 || options.size > 4096)
         throw std::invalid_argument("thumbnail size " + std::to_string(options.size) + " is outside 1 .. 4096");
@@ -22,15 +30,12 @@ Image renderThumbnail(VulkanContext& context, const Mesh& mesh, const MaterialTa
             lo[a] = std::min(lo[a], double(p[a]));
             hi[a] = std::max(hi[a], double(p[a]));
         }
-    RendererOptions rendererOptions;
-    rendererOptions.stagingBytes = std::max<uint64_t>(rendererOptions.stagingBytes, mesh.positions.size() * 28 + mesh.triangles.size() * 12 + 64);
-    Renderer renderer(context, rendererOptions);
     renderer.setMaterials(materials);
     ShadingOptions shading;
     shading.mode = options.mode;
     renderer.setShading(shading);
     renderer.setChunk(0, mesh);
-    OffscreenTarget target(context, options.size, options.size);
+    OffscreenTarget target(renderer.context(), options.size, options.size);
     RenderView view;
     view.camera = framingCamera(mesh.positions, lo, hi, 1.0);
     view.target = &target;

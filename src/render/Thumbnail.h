@@ -8,6 +8,7 @@
 
 namespace vdbclay::render {
 
+class Renderer;
 class VulkanContext;
 
 struct ThumbnailOptions {
@@ -20,5 +21,7 @@ struct ThumbnailOptions {
 /// size outside 1 .. 4096.
 Image renderThumbnail(VulkanContext& context, const Mesh& mesh, const MaterialTable& materials,
                       const ThumbnailOptions& options = {});
+/// The same with a renderer kept for many thumbnails (its chunks and shading are replaced).
+Image renderThumbnail(Renderer& renderer, const Mesh& mesh, const MaterialTable& materials, const ThumbnailOptions& options = {});
 
 } // namespace vdbclay::render

@@ -6,6 +6,7 @@
 #include "voxelize/AssimpMeshReader.h"
 
 #include <fcntl.h>
+#include <spawn.h>
 #include <poll.h>
 #include <signal.h>
 #include <sys/resource.h>
@@ -17,9 +18,11 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <new>
+#include <optional>
 #include <type_traits>
 
 namespace vdbclay {
@@ -213,54 +216,36 @@ TriangleSoup loadTriangleMesh(const std::string& path)
     return loadTriangleMesh(path, meshReadLimits(path));
 }
 
-TriangleSoup loadTriangleMesh(const std::string& path, const MeshReadLimits& limits)
+namespace {
+
+/// The reader's side (a child process): caps its memory, reads, and answers on `fd`.
+void answerOnPipe(int fd, const std::string& path, const std::function<TriangleSoup()>& read, uint64_t memoryBytes)
 {
-    std::error_code ec;
-    if (const auto why = unreachableFile(path)) throw MeshImportError(*why);
-    if (!std::filesystem::is_regular_file(path, ec)) throw MeshImportError("'" + path + "' is not a regular file");
-    // Assimp runs in a child process: a crash or an endless loop on a damaged file (Debian's 5.2 has
-    // both, on truncated PLY files) costs the child, and the user gets one line instead of losing the
-    // session.
-    return readInChildProcess(path, [&] { return readMeshWithAssimp(path); }, limits);
+    PipeWriter out(fd);
+    capAddressSpace(memoryBytes);
+    try {
+        const TriangleSoup soup = read();
+        sendSoup(out, soup);
+    } catch (const std::bad_alloc&) {
+        out.value(Answer::Refused);
+        out.text("reading '" + printableText(path, 200) + "' needed more than the " + mebibytes(memoryBytes) +
+                 " it may take: the counts in the file are damaged, or the mesh is too large to import");
+    } catch (const std::exception& e) {
+        out.value(Answer::Refused);
+        out.text(printableText(e.what(), 400)); // short: the parent reads it whole before reaping
+    }
 }
 
-TriangleSoup readInChildProcess(const std::string& path, const std::function<TriangleSoup()>& read, const MeshReadLimits& limits)
+/// The parent's side: the child's answer on `fd` within the time limit, the child reaped either way.
+TriangleSoup receiveFromChild(pid_t child, int fd, const std::string& path, const MeshReadLimits& limits)
 {
-    int fds[2];
-    if (::pipe2(fds, O_CLOEXEC) != 0) throw MeshImportError("cannot read '" + path + "': " + std::strerror(errno));
-    const pid_t child = ::fork();
-    if (child < 0) {
-        ::close(fds[0]), ::close(fds[1]);
-        throw MeshImportError("cannot read '" + path + "': " + std::strerror(errno));
-    }
-    if (child == 0) {
-        ::close(fds[0]);
-        // A crash is the child's own: the parent's handlers (a test framework's, a crash reporter's)
-        // must not run here as if the parent had crashed.
-        for (const int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGPIPE}) ::signal(sig, SIG_DFL);
-        PipeWriter out(fds[1]);
-        capAddressSpace(limits.memoryBytes);
-        try {
-            const TriangleSoup soup = read();
-            sendSoup(out, soup);
-        } catch (const std::bad_alloc&) {
-            out.value(Answer::Refused);
-            out.text("reading '" + printableText(path, 200) + "' needed more than the " + mebibytes(limits.memoryBytes) +
-                     " it may take: the counts in the file are damaged, or the mesh is too large to import");
-        } catch (const std::exception& e) {
-            out.value(Answer::Refused);
-            out.text(printableText(e.what(), 400)); // short: the parent reads it whole before reaping
-        }
-        ::_exit(0); // no atexit handlers or static destructors: they belong to the parent
-    }
-    ::close(fds[1]);
-    PipeReader in(fds[0], Clock::now() + limits.time);
+    PipeReader in(fd, Clock::now() + limits.time);
     auto reap = [&](bool kill) {
         if (kill) ::kill(child, SIGKILL);
         int status = 0;
         while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
         }
-        ::close(fds[0]);
+        ::close(fd);
         return status;
     };
     try {
@@ -284,6 +269,89 @@ TriangleSoup readInChildProcess(const std::string& path, const std::function<Tri
                               (WIFSIGNALED(status) ? "signal " + std::to_string(WTERMSIG(status)) : "exit " + std::to_string(WEXITSTATUS(status))) +
                               "): the file is damaged or in a form its reader cannot read");
     }
+}
+
+/// The reader program: VDBCLAY_MESH_READER, else vdbclay-read-mesh beside this executable; none when
+/// neither is there to run.
+std::optional<std::string> meshReaderProgram()
+{
+    if (const char* given = std::getenv("VDBCLAY_MESH_READER"); given && *given) return ::access(given, X_OK) == 0 ? std::optional<std::string>(given) : std::nullopt;
+    std::error_code ec;
+    const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+    if (ec) return std::nullopt;
+    const std::string beside = (self.parent_path() / kMeshReaderProgram).string();
+    return ::access(beside.c_str(), X_OK) == 0 ? std::optional<std::string>(beside) : std::nullopt;
+}
+
+/// Runs the reader program on `path` (posix_spawn: no copy of this process, its threads or their locks).
+TriangleSoup readWithProgram(const std::string& program, const std::string& path, const MeshReadLimits& limits)
+{
+    int fds[2];
+    if (::pipe2(fds, O_CLOEXEC) != 0) throw MeshImportError("cannot read '" + path + "': " + std::strerror(errno));
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, fds[1], 1); // the answer goes to the reader's stdout
+    posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+    const std::string memory = std::to_string(limits.memoryBytes);
+    std::vector<char*> argv{const_cast<char*>(program.c_str()), const_cast<char*>(path.c_str()), const_cast<char*>(memory.c_str()), nullptr};
+    pid_t child = 0;
+    const int spawned = ::posix_spawn(&child, program.c_str(), &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    ::close(fds[1]);
+    if (spawned != 0) {
+        ::close(fds[0]);
+        throw MeshImportError("cannot read '" + path + "': cannot run " + program + ": " + std::strerror(spawned));
+    }
+    return receiveFromChild(child, fds[0], path, limits);
+}
+
+} // namespace
+
+TriangleSoup loadTriangleMesh(const std::string& path, const MeshReadLimits& limits)
+{
+    std::error_code ec;
+    if (const auto why = unreachableFile(path)) throw MeshImportError(*why);
+    if (!std::filesystem::is_regular_file(path, ec)) throw MeshImportError("'" + path + "' is not a regular file");
+    // Assimp runs in a child process: a crash or an endless loop on a damaged file (Debian's 5.2 has
+    // both, on truncated PLY files) costs the child, and the user gets one line instead of losing the
+    // session. The child is a program of its own where it is installed: a fork of a process whose
+    // threads (TBB's, the renderer's) may hold a lock at that moment can leave the copy waiting forever.
+    if (const auto program = meshReaderProgram()) return readWithProgram(*program, path, limits);
+    return readInChildProcess(path, [&] { return readMeshWithAssimp(path); }, limits);
+}
+
+TriangleSoup readInChildProcess(const std::string& path, const std::function<TriangleSoup()>& read, const MeshReadLimits& limits)
+{
+    int fds[2];
+    if (::pipe2(fds, O_CLOEXEC) != 0) throw MeshImportError("cannot read '" + path + "': " + std::strerror(errno));
+    const pid_t child = ::fork();
+    if (child < 0) {
+        ::close(fds[0]), ::close(fds[1]);
+        throw MeshImportError("cannot read '" + path + "': " + std::strerror(errno));
+    }
+    if (child == 0) {
+        ::close(fds[0]);
+        // A crash is the child's own: the parent's handlers (a test framework's, a crash reporter's)
+        // must not run here as if the parent had crashed.
+        for (const int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGPIPE}) ::signal(sig, SIG_DFL);
+        answerOnPipe(fds[1], path, read, limits.memoryBytes);
+        ::_exit(0); // no atexit handlers or static destructors: they belong to the parent
+    }
+    ::close(fds[1]);
+    return receiveFromChild(child, fds[0], path, limits);
+}
+
+int meshReaderMain(int argc, char** argv)
+{
+    if (argc != 3) {
+        std::fprintf(stderr, "%s: reads a mesh file for vdbclay and answers on stdout (usage: %s PATH MEMORY_BYTES)\n", argv[0], argv[0]);
+        return 2;
+    }
+    const std::string path = argv[1];
+    const uint64_t memoryBytes = std::strtoull(argv[2], nullptr, 10);
+    ::signal(SIGPIPE, SIG_DFL);
+    answerOnPipe(1, path, [&] { return readMeshWithAssimp(path); }, memoryBytes);
+    return 0;
 }
 
 } // namespace vdbclay

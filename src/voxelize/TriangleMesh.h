@@ -64,6 +64,12 @@ MeshReadLimits meshReadLimits(const std::string& path);
 TriangleSoup loadTriangleMesh(const std::string& path, const MeshReadLimits& limits);
 TriangleSoup loadTriangleMesh(const std::string& path); // with meshReadLimits(path)
 
+/// The program loadTriangleMesh runs to read a file (installed beside vdbclay; VDBCLAY_MESH_READER names
+/// another). Without it the reading runs in a fork of this process.
+constexpr const char* kMeshReaderProgram = "vdbclay-read-mesh";
+/// That program's main: `PROGRAM PATH MEMORY_BYTES` reads PATH and answers on stdout.
+int meshReaderMain(int argc, char** argv);
+
 /// loadTriangleMesh's isolation, open to tests: runs `read` in a child process and returns the soup it
 /// made, sent back through a pipe. A MeshImportError it throws comes back as one printable line; a
 /// crash, an early exit, running out of its memory or no answer within the time limit (the child is

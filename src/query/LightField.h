@@ -1,0 +1,55 @@
+// The light-field descriptor (Chen, Tian, Shen and Ouhyoung 2003): a model is seen in silhouette from
+// the 20 vertices of a dodecahedron (10 views: opposite vertices see mirrored silhouettes), each view
+// described by 35 Zernike moments (the region) and 10 Fourier coefficients of its outline (the
+// contour), all magnitudes, so a view's turn or mirroring in the image plane does not matter. Ten such
+// light fields, each with the dodecahedron turned another way, sample the rotations; two models'
+// distance is the least over the 60 rotations of the dodecahedron onto itself and over the pairs of
+// light fields, of the sum of the L1 distances of matched views. Silhouettes are drawn by the renderer.
+#pragma once
+
+#include "voxelize/TriangleMesh.h"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace vdbclay::render {
+class ModelViews;
+}
+
+namespace vdbclay::query {
+
+constexpr int kLightFields = 10;
+constexpr int kViewsPerLightField = 10;
+constexpr int kZernikeMoments = 35;
+constexpr int kFourierCoefficients = 10;
+constexpr int kViewFeatures = kZernikeMoments + kFourierCoefficients;
+/// The vector's layout: kViewFeatures of the mean over all views (what FLANN's shortlist compares),
+/// then each light field's views' features.
+constexpr std::size_t kLightFieldLength = std::size_t(kViewFeatures) * (1 + kLightFields * kViewsPerLightField);
+/// Silhouettes are drawn this many pixels square.
+constexpr int kSilhouetteSize = 128;
+
+/// The view directions: light field f's view v at f * kViewsPerLightField + v.
+const std::vector<std::array<double, 3>>& lightFieldDirections();
+
+/// One view's features from its silhouette (size x size, rows top to bottom, non-zero inside), the
+/// unit disk inscribed in the square.
+std::array<float, kViewFeatures> silhouetteFeatures(const std::vector<uint8_t>& mask, int size);
+
+/// The descriptor from the silhouettes of every direction of lightFieldDirections(), in its order.
+std::vector<float> lightFieldFromSilhouettes(const std::vector<std::vector<uint8_t>>& masks, int size);
+
+/// Draws the silhouettes of `mesh` (centred on its surface's centroid, the sphere through its farthest
+/// vertex filling the view) and describes them. Throws std::invalid_argument for a mesh without area.
+std::vector<float> lightFieldDescriptor(render::ModelViews& views, const TriangleSoup& mesh);
+
+/// The light-field distance of two descriptors (L1, least over rotations and light-field pairs).
+double lightFieldDistance(const std::vector<float>& a, const std::vector<float>& b);
+/// The part FLANN indexes: the mean view.
+std::vector<float> lightFieldSummary(const std::vector<float>& descriptor);
+
+/// The 60 rotations of the dodecahedron onto itself, as permutations of the 10 view axes.
+const std::vector<std::array<uint8_t, kViewsPerLightField>>& dodecahedronRotations();
+
+} // namespace vdbclay::query

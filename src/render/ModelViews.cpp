@@ -1,0 +1,85 @@
+#include "render/ModelViews.h"
+
+#include "render/Renderer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace vdbclay::render {
+
+namespace {
+
+/// Tiles of one frame at most: the renderer's view limit, and a target no larger than 4096 square.
+std::size_t tilesPerFrame(int size) { return std::min<std::size_t>(100, std::size_t(4096 / size) * std::size_t(4096 / size)); }
+
+} // namespace
+
+ModelViews::ModelViews(VulkanContext& context) : context_(context), renderer_(std::make_unique<Renderer>(context)) {}
+
+ModelViews::~ModelViews() = default;
+
+std::vector<Mask> ModelViews::silhouettes(const Mesh& mesh, const std::array<double, 3>& centre, double radius,
+                                          const std::vector<std::array<double, 3>>& directions, int size)
+{
+    if (mesh.triangles.empty()) throw std::invalid_argument("cannot draw the silhouettes of an empty mesh");
+    if (!(radius > 0.0) || !std::isfinite(radius)) throw std::invalid_argument("silhouettes need a positive radius");
+    if (size < 8 || size > 1024) throw std::invalid_argument("silhouette size " + std::to_string(size) + " is outside 8 .. 1024");
+    // Both sides of each triangle: a model file's triangles may face either way.
+    Mesh twoSided = mesh;
+    twoSided.triangles.reserve(2 * mesh.triangles.size());
+    for (const auto& t : mesh.triangles) twoSided.triangles.push_back({t[0], t[2], t[1]});
+    twoSided.triangleMaterials.resize(mesh.triangles.size(), kEmptyMaterial);
+    const std::vector<MaterialId> materials = twoSided.triangleMaterials;
+    twoSided.triangleMaterials.insert(twoSided.triangleMaterials.end(), materials.begin(), materials.end());
+    renderer_->setChunk(0, twoSided);
+    ShadingOptions shading;
+    renderer_->setShading(shading);
+
+    // A parallel projection, nearly: an eye a hundred radii away whose view just holds the sphere.
+    const double distance = 100.0 * radius;
+    std::vector<Mask> masks;
+    masks.reserve(directions.size());
+    const std::size_t perFrame = tilesPerFrame(size);
+    for (std::size_t first = 0; first < directions.size(); first += perFrame) {
+        const std::size_t count = std::min(perFrame, directions.size() - first);
+        const int columns = int(std::ceil(std::sqrt(double(count))));
+        const int rows = int((count + std::size_t(columns) - 1) / std::size_t(columns));
+        OffscreenTarget target(context_, columns * size, rows * size);
+        std::vector<RenderView> views(count);
+        for (std::size_t i = 0; i < count; ++i) {
+            const auto& d = directions[first + i];
+            const double n = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            if (!(n > 0.0)) throw std::invalid_argument("a silhouette's direction is zero");
+            Camera& camera = views[i].camera;
+            camera.target = centre;
+            for (int a = 0; a < 3; ++a) camera.eye[std::size_t(a)] = centre[std::size_t(a)] - d[std::size_t(a)] / n * distance;
+            camera.fovYDegrees = 2.0 * std::atan(radius / std::sqrt(distance * distance - radius * radius)) * 180.0 / M_PI;
+            camera.nearPlane = distance - 1.01 * radius;
+            views[i].target = &target;
+            views[i].viewport = {int(i % std::size_t(columns)) * size, int(i / std::size_t(columns)) * size, size, size};
+        }
+        renderer_->render(views);
+        const std::vector<float> depth = target.depth();
+        const std::size_t width = std::size_t(columns) * std::size_t(size);
+        for (std::size_t i = 0; i < count; ++i) {
+            Mask mask(std::size_t(size) * std::size_t(size));
+            const std::size_t x0 = i % std::size_t(columns) * std::size_t(size), y0 = i / std::size_t(columns) * std::size_t(size);
+            for (std::size_t y = 0; y < std::size_t(size); ++y)
+                for (std::size_t x = 0; x < std::size_t(size); ++x)
+                    mask[y * std::size_t(size) + x] = depth[(y0 + y) * width + x0 + x] != kNothingDrawn ? 1 : 0;
+            masks.push_back(std::move(mask));
+        }
+    }
+    renderer_->removeChunk(0);
+    return masks;
+}
+
+Image ModelViews::thumbnail(const Mesh& mesh, const MaterialTable& materials, const ThumbnailOptions& options)
+{
+    Image image = renderThumbnail(*renderer_, mesh, materials, options);
+    renderer_->removeChunk(0);
+    return image;
+}
+
+} // namespace vdbclay::render

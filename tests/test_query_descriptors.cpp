@@ -1,0 +1,316 @@
+// Retrieval's descriptors beyond D2: curvature on meshes, ISODATA, ClusterD2+Color and the light field
+// (src/query). Tests whose names say "render" draw silhouettes with the Vulkan renderer.
+#include "query/ClusterD2Color.h"
+#include "query/HistogramDistance.h"
+#include "query/Isodata.h"
+#include "query/LightField.h"
+#include "query/MeshCurvature.h"
+#include "query/SyntheticModels.h"
+#include "render/ModelViews.h"
+#include "render/VulkanContext.h"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <set>
+
+using namespace vdbclay;
+using namespace vdbclay::query;
+
+namespace {
+
+SyntheticShape roundBall(int tessellation)
+{
+    SyntheticShape s;
+    s.family = "ellipsoid";
+    s.proportions = {1.0, 1.0 / 0.7, 1.0 / 0.5}; // the family's radii 1, 0.7, 0.5 times these: a unit sphere
+    s.tessellation = tessellation;
+    return s;
+}
+
+/// The shape seen anew: another pose, scale and tessellation.
+SyntheticShape movedCopy(SyntheticShape s, std::mt19937_64& random)
+{
+    const SyntheticShape fresh = randomShape(s.family, random);
+    s.rotation = fresh.rotation;
+    s.scale = fresh.scale * 2.5;
+    s.position = fresh.position;
+    s.tessellation += 11;
+    return s;
+}
+
+std::array<double, 3> rotateByQuaternion(const std::array<double, 4>& q, const std::array<double, 3>& v)
+{
+    const double x = q[0], y = q[1], z = q[2], w = q[3];
+    const std::array<double, 3> t{2 * (y * v[2] - z * v[1]), 2 * (z * v[0] - x * v[2]), 2 * (x * v[1] - y * v[0])};
+    return {v[0] + w * t[0] + (y * t[2] - z * t[1]), v[1] + w * t[1] + (z * t[0] - x * t[2]), v[2] + w * t[2] + (x * t[1] - y * t[0])};
+}
+
+/// An ellipsoid painted red where its model-frame coordinate `axis` passes `threshold`, then posed.
+TriangleSoup paintedEllipsoid(int axis, double threshold, int tessellation, const std::array<double, 4>& rotation, double scale)
+{
+    SyntheticShape s;
+    s.family = "ellipsoid";
+    s.proportions = {1.2, 1.0, 1.0};
+    s.tessellation = tessellation;
+    s.colour = {0.9f, 0.9f, 0.9f};
+    TriangleSoup soup = buildShape(s);
+    MeshMaterial red;
+    red.name = "red";
+    red.color = {0.8f, 0.1f, 0.1f, 1.0f};
+    soup.materials.push_back(red);
+    for (std::size_t t = 0; t < soup.triangles.size(); ++t) {
+        double c = 0.0;
+        for (uint32_t v : soup.triangles[t]) c += soup.positions[v][std::size_t(axis)] / 3.0;
+        if (c > threshold) soup.triangleMaterials[t] = 1;
+    }
+    for (auto& p : soup.positions) {
+        p = rotateByQuaternion(rotation, p);
+        for (double& c : p) c *= scale;
+    }
+    return soup;
+}
+
+} // namespace
+
+TEST_CASE("query curvature: a sphere's mean curvature is 1/R, |K| integrates to 4 pi on a sphere and about 8 pi on a torus, welding joins repeated corners", "[query]")
+{
+    const TriangleSoup sphere = buildShape(roundBall(32));
+    const WeldedMesh welded = weldMesh(sphere);
+    CHECK(absoluteGaussianCurvature(welded) == Approx(4.0 * M_PI).epsilon(1e-6)); // discrete Gauss-Bonnet, all defects positive
+    std::vector<double> h = meanCurvature(welded);
+    std::sort(h.begin(), h.end());
+    CHECK(h[h.size() / 2] == Approx(1.0).epsilon(0.03)); // unit radius
+    CHECK(h[h.size() / 10] > 0.8);
+    SyntheticShape torus;
+    torus.family = "torus";
+    torus.tessellation = 40;
+    CHECK(absoluteGaussianCurvature(weldMesh(buildShape(torus))) == Approx(8.0 * M_PI).epsilon(0.1));
+
+    // A cube of 12 triangles with three corners each: 8 vertices, each with 3 or more neighbours.
+    TriangleSoup cube;
+    const int faces[6][4] = {{0, 1, 3, 2}, {4, 6, 7, 5}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 5, 7, 3}};
+    const auto corner = [](int i) { return std::array<double, 3>{double(i & 1), double((i >> 1) & 1), double((i >> 2) & 1)}; };
+    for (const auto& f : faces)
+        for (const std::array<int, 3> tri : {std::array<int, 3>{f[0], f[1], f[2]}, std::array<int, 3>{f[0], f[2], f[3]}}) {
+            const uint32_t first = uint32_t(cube.positions.size());
+            for (int c : tri) cube.positions.push_back(corner(c));
+            cube.triangles.push_back({first, first + 1, first + 2});
+        }
+    const WeldedMesh box = weldMesh(cube);
+    CHECK(box.positions.size() == 8);
+    CHECK(std::none_of(box.boundary.begin(), box.boundary.end(), [](bool b) { return b; }));
+    CHECK(absoluteGaussianCurvature(box) == Approx(4.0 * M_PI));
+}
+
+TEST_CASE("query ISODATA: separated blobs become one cluster each, a handful of strays dissolve into them, the result is repeatable", "[query]")
+{
+    std::mt19937_64 random(4);
+    std::normal_distribution<double> noise(0.0, 0.3);
+    std::vector<std::array<double, 3>> points;
+    const std::array<std::array<double, 3>, 3> centres{{{0, 0, 0}, {10, 0, 0}, {0, 10, 5}}};
+    for (const auto& c : centres)
+        for (int i = 0; i < 100; ++i) points.push_back({c[0] + noise(random), c[1] + noise(random), c[2] + noise(random)});
+    points.push_back({5, 5, 5});
+    points.push_back({5.2, 5, 5});
+    IsodataOptions options;
+    options.minMembers = 5;
+    options.maxSpread = 1.0;
+    options.mergeDistance = 2.0;
+    const Clustering c = isodataClusters(points, options);
+    REQUIRE(c.centres.size() == 3);
+    for (int blob = 0; blob < 3; ++blob) {
+        const uint32_t id = c.cluster[std::size_t(blob * 100)];
+        for (int i = 0; i < 100; ++i) CHECK(c.cluster[std::size_t(blob * 100 + i)] == id);
+    }
+    CHECK(c.iterations >= options.minIterations);
+    CHECK(isodataClusters(points, options).cluster == c.cluster);
+    // One wide blob splits until its parts are narrow enough; close centres merge.
+    options.maxSpread = 0.1;
+    options.mergeDistance = 0.0;
+    CHECK(isodataClusters(points, options).centres.size() > 3);
+    options.maxSpread = 100.0;
+    options.mergeDistance = 100.0;
+    CHECK(isodataClusters(points, options).centres.size() == 1);
+    CHECK(isodataClusters({}, options).centres.empty());
+}
+
+TEST_CASE("query ClusterD2+Color: CIELAB of known colours and their colour codes", "[query]")
+{
+    const auto white = cieLab({1, 1, 1}), red = cieLab({1, 0, 0}), black = cieLab({0, 0, 0});
+    CHECK(white[0] == Approx(100.0).margin(0.01));
+    CHECK(white[1] == Approx(0.0).margin(0.01));
+    CHECK(white[2] == Approx(0.0).margin(0.01));
+    CHECK(red[0] == Approx(53.24).margin(0.05));
+    CHECK(red[1] == Approx(80.09).margin(0.05));
+    CHECK(red[2] == Approx(67.20).margin(0.05));
+    CHECK(black[0] == Approx(0.0).margin(1e-9));
+    // a* and b* bins: below -25, -25 to 25 (the greys), 25 to 75, above 75.
+    CHECK(colourCode({1, 1, 1}) == (5 * 4 + 1) * 4 + 1);
+    CHECK(colourCode({0.5f, 0.5f, 0.5f}) == (3 * 4 + 1) * 4 + 1);
+    CHECK(colourCode({0, 0, 0}) == (0 * 4 + 1) * 4 + 1);
+    CHECK(colourCode({1, 0, 0}) == (3 * 4 + 3) * 4 + 2);
+    CHECK(colourCode({0.9f, 0.9f, 0.9f}) == colourCode({0.95f, 0.95f, 0.95f}));
+    CHECK(colourCode({0.9f, 0.9f, 0.9f}) != colourCode({0.8f, 0.1f, 0.1f}));
+}
+
+TEST_CASE("query ClusterD2+Color: a model moved, turned, scaled and re-tessellated stays nearest itself; the descriptor is repeatable", "[query]")
+{
+    const std::vector<LabeledModel> set = syntheticSet(3, 17);
+    std::vector<Histogram> described;
+    for (const LabeledModel& m : set) described.push_back(smoothHistogram(clusterD2ColorDescriptor(buildShape(m.shape))));
+    std::mt19937_64 random(9);
+    for (std::size_t i = 0; i < set.size(); i += 2) {
+        INFO(set[i].name);
+        ClusterD2Details details;
+        const Histogram moved = smoothHistogram(clusterD2ColorDescriptor(buildShape(movedCopy(set[i].shape, random)), {}, &details));
+        CHECK(details.samples >= 6144);
+        CHECK(details.clusters >= 1);
+        const double self = chiSquareDistance(moved, described[i]);
+        CHECK(self < 0.05);
+        for (std::size_t j = 0; j < set.size(); ++j)
+            if (set[j].label != set[i].label) CHECK(chiSquareDistance(moved, described[j]) > self);
+    }
+    CHECK(clusterD2ColorDescriptor(buildShape(set[0].shape)) == clusterD2ColorDescriptor(buildShape(set[0].shape)));
+    TriangleSoup flat = buildShape(set[0].shape);
+    for (auto& p : flat.positions) p = {0, 0, 0};
+    CHECK_THROWS_AS(clusterD2ColorDescriptor(flat), std::invalid_argument);
+}
+
+TEST_CASE("query ClusterD2+Color: the same shape painted another way ranks below the exact colour match", "[query]")
+{
+    const std::array<double, 4> identity{0, 0, 0, 1}, turned{0.5, 0.5, 0.5, 0.5};
+    ClusterD2Details details;
+    const Histogram band = smoothHistogram(clusterD2ColorDescriptor(paintedEllipsoid(0, 0.6, 24, identity, 1.0), {}, &details));
+    CHECK(details.colourSamples > 0);
+    const Histogram other = smoothHistogram(clusterD2ColorDescriptor(paintedEllipsoid(1, 0.2, 24, identity, 1.0)));
+    const Histogram plain = smoothHistogram(clusterD2ColorDescriptor(paintedEllipsoid(0, 99.0, 24, identity, 1.0), {}, &details));
+    CHECK(details.colourSamples == 0);
+    // The band's model seen anew: turned, scaled, tessellated otherwise.
+    const Histogram probe = smoothHistogram(clusterD2ColorDescriptor(paintedEllipsoid(0, 0.6, 31, turned, 3.0)));
+    const double self = chiSquareDistance(probe, band);
+    INFO("to itself " << self << ", to the other pattern " << chiSquareDistance(probe, other) << ", to the plain one " << chiSquareDistance(probe, plain));
+    CHECK(self < chiSquareDistance(probe, other));
+    CHECK(self < chiSquareDistance(probe, plain));
+}
+
+TEST_CASE("query descriptors: on the synthetic set ClusterD2+Color's nearest neighbour is of the same family far above chance", "[query]")
+{
+    const std::vector<LabeledModel> set = syntheticSet(6, 3);
+    std::vector<Histogram> d;
+    for (const LabeledModel& m : set) d.push_back(smoothHistogram(clusterD2ColorDescriptor(buildShape(m.shape))));
+    int right = 0;
+    for (std::size_t i = 0; i < set.size(); ++i) {
+        std::size_t best = i == 0 ? 1 : 0;
+        for (std::size_t j = 0; j < set.size(); ++j)
+            if (j != i && chiSquareDistance(d[i], d[j]) < chiSquareDistance(d[i], d[best])) best = j;
+        right += set[best].label == set[i].label;
+    }
+    const double precision = double(right) / double(set.size()), chance = 1.0 / double(syntheticFamilies().size());
+    INFO("nearest-neighbour precision " << precision << " (chance " << chance << ")");
+    CHECK(precision >= 2.0 * chance);
+}
+
+TEST_CASE("query light field: a view's features ignore its turn and mirroring in the image; a disk's moments and outline coefficients vanish", "[query]")
+{
+    const int n = kSilhouetteSize;
+    std::vector<uint8_t> blob(std::size_t(n * n), 0), turned(blob.size(), 0), mirrored(blob.size(), 0), disk(blob.size(), 0);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const double u = (x + 0.5) / n - 0.5, v = (y + 0.5) / n - 0.5;
+            const bool inside = (u + 0.1) * (u + 0.1) / 0.09 + v * v / 0.02 < 1.0 || (std::abs(u - 0.2) < 0.05 && v > -0.3 && v < 0.2);
+            blob[std::size_t(y * n + x)] = inside;
+            disk[std::size_t(y * n + x)] = u * u + v * v < 0.2;
+        }
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            turned[std::size_t(x * n + (n - 1 - y))] = blob[std::size_t(y * n + x)]; // a quarter turn
+            mirrored[std::size_t(y * n + (n - 1 - x))] = blob[std::size_t(y * n + x)];
+        }
+    const auto a = silhouetteFeatures(blob, n), b = silhouetteFeatures(turned, n), c = silhouetteFeatures(mirrored, n);
+    double size = 0.0;
+    for (int k = 0; k < kViewFeatures; ++k) {
+        CHECK(b[std::size_t(k)] == Approx(a[std::size_t(k)]).margin(0.02 * std::abs(a[std::size_t(k)]) + 1e-3));
+        CHECK(c[std::size_t(k)] == Approx(a[std::size_t(k)]).margin(0.02 * std::abs(a[std::size_t(k)]) + 1e-3));
+        size += a[std::size_t(k)];
+    }
+    CHECK(size > 0.1);
+    const auto round = silhouetteFeatures(disk, n);
+    for (int k = 0; k < kViewFeatures; ++k) {
+        // Radial moments of a centred disk smaller than the unit disk do not vanish (m = 0); others do.
+        INFO("feature " << k);
+        if (k >= kZernikeMoments) CHECK(round[std::size_t(k)] < 0.02);
+    }
+    CHECK(silhouetteFeatures(std::vector<uint8_t>(blob.size(), 0), n) == std::array<float, kViewFeatures>{});
+    CHECK_THROWS_AS(silhouetteFeatures(blob, n + 1), std::invalid_argument);
+}
+
+TEST_CASE("query light field: the dodecahedron's 60 rotations are distinct permutations of its 10 view axes and form a group", "[query]")
+{
+    const auto& rotations = dodecahedronRotations();
+    REQUIRE(rotations.size() == 60);
+    const std::set<std::array<uint8_t, kViewsPerLightField>> distinct(rotations.begin(), rotations.end());
+    CHECK(distinct.size() == 60);
+    std::array<uint8_t, kViewsPerLightField> identity{};
+    for (int i = 0; i < kViewsPerLightField; ++i) identity[std::size_t(i)] = uint8_t(i);
+    CHECK(distinct.count(identity) == 1);
+    for (const auto& p : rotations) {
+        std::array<uint8_t, kViewsPerLightField> sorted = p;
+        std::sort(sorted.begin(), sorted.end());
+        CHECK(sorted == identity);
+        for (const auto& q : rotations) {
+            std::array<uint8_t, kViewsPerLightField> composed{};
+            for (int i = 0; i < kViewsPerLightField; ++i) composed[std::size_t(i)] = p[q[std::size_t(i)]];
+            CHECK(distinct.count(composed) == 1);
+        }
+    }
+    CHECK(lightFieldDirections().size() == std::size_t(kLightFields * kViewsPerLightField));
+}
+
+TEST_CASE("query light field (render): a sphere's silhouettes are discs filling the view; a turned, scaled, re-tessellated model is nearest itself", "[query]")
+{
+    render::ContextOptions contextOptions;
+    contextOptions.validation = true;
+    render::VulkanContext context(contextOptions);
+    render::ModelViews views(context);
+
+    // A unit sphere framed by its own radius: every silhouette is the inscribed disc (pi / 4 of the square).
+    const TriangleSoup sphere = buildShape(roundBall(48));
+    const std::vector<float> ball = lightFieldDescriptor(views, sphere);
+    REQUIRE(ball.size() == kLightFieldLength);
+    {
+        MaterialTable materials;
+        Mesh mesh;
+        for (const auto& p : sphere.positions) mesh.positions.push_back({float(p[0]), float(p[1]), float(p[2])});
+        mesh.normals.assign(mesh.positions.size(), {0, 0, 1});
+        mesh.materials.assign(mesh.positions.size(), 1);
+        mesh.triangles = sphere.triangles;
+        mesh.triangleMaterials.assign(mesh.triangles.size(), 1);
+        const std::vector<render::Mask> masks = views.silhouettes(mesh, {0, 0, 0}, 1.0, {{1, 0, 0}, {0, 0.6, 0.8}}, 64);
+        REQUIRE(masks.size() == 2);
+        for (const render::Mask& m : masks) {
+            const double covered = double(std::count(m.begin(), m.end(), 1)) / double(m.size());
+            CHECK(covered == Approx(M_PI / 4.0).epsilon(0.03));
+            CHECK(m[0] == 0);
+            CHECK(m[32 * 64 + 32] == 1);
+        }
+        CHECK_THROWS_AS(views.silhouettes(Mesh{}, {0, 0, 0}, 1.0, {{1, 0, 0}}, 64), std::invalid_argument);
+    }
+
+    const std::vector<LabeledModel> set = syntheticSet(2, 23);
+    std::vector<std::vector<float>> described;
+    for (const LabeledModel& m : set) described.push_back(lightFieldDescriptor(views, buildShape(m.shape)));
+    std::mt19937_64 random(12);
+    for (std::size_t i = 0; i < set.size(); i += 3) {
+        INFO(set[i].name);
+        const std::vector<float> moved = lightFieldDescriptor(views, buildShape(movedCopy(set[i].shape, random)));
+        const double self = lightFieldDistance(moved, described[i]);
+        for (std::size_t j = 0; j < set.size(); ++j)
+            if (set[j].label != set[i].label) CHECK(lightFieldDistance(moved, described[j]) > self);
+    }
+    CHECK(lightFieldDistance(ball, ball) == 0.0);
+    CHECK(context.validationMessages() == 0);
+}
+
