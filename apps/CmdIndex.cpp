@@ -146,14 +146,14 @@ struct Views {
     std::unique_ptr<render::ModelViews> views;
 };
 
-Views openViews(bool quiet)
+Views openViews(bool quiet, const std::string& without)
 {
     Views v;
     try {
         v.context = std::make_unique<render::VulkanContext>();
         v.views = std::make_unique<render::ModelViews>(*v.context);
     } catch (const std::exception& e) {
-        if (!quiet) std::cerr << "vdbclay: no light fields or thumbnails (" << e.what() << ")\n";
+        if (!quiet) std::cerr << "vdbclay: " << without << " (" << e.what() << ")\n";
         v = Views{};
     }
     return v;
@@ -170,7 +170,7 @@ int runIndexAdd(const IndexOptions& o)
         return kExitFailure;
     }
     query::ModelLibrary library(o.library, true);
-    Views views = o.noRender ? Views{} : openViews(o.json);
+    Views views = o.noRender ? Views{} : openViews(o.json, "models are added without light fields or thumbnails");
     const auto progress = terminalProgress("index add", !o.json);
     nlohmann::json skipped = nlohmann::json::array();
     uint64_t added = 0, present = 0;
@@ -270,7 +270,7 @@ int runQuery(const QueryOptions& o)
     query::describeShape(mesh, description);
     // The light field needs the renderer: drawn when the ranking uses it and the library holds any.
     if ((descriptor == query::Descriptor::LightField || descriptor == query::Descriptor::Combined) && library.count(query::Descriptor::LightField) > 0) {
-        Views views = openViews(o.json || descriptor == query::Descriptor::LightField);
+        Views views = openViews(o.json || descriptor == query::Descriptor::LightField, "the ranking leaves the light field out");
         if (views.views) description.lightField = query::lightFieldDescriptor(*views.views, mesh);
         else if (descriptor == query::Descriptor::LightField) {
             printError("the light field needs a Vulkan device, and none is usable here (use --descriptor clusterd2 or d2)");

@@ -138,6 +138,7 @@ struct DesktopEditor::Impl {
     bool rightHeld = false;
     std::optional<std::array<double, 3>> orbitPivot; // the surface under the cursor when the orbit began
     std::optional<SurfaceHit> hover;
+    std::optional<std::array<double, 3>> hoverOutsidePanels; // where a model found by the query panel goes
     std::optional<BrushSettings> brushBeforeModifier; // the brush to go back to after a Ctrl or Shift stroke
     Adjust adjust = Adjust::None;
     double adjustFromX = 0.0;
@@ -642,6 +643,7 @@ struct DesktopEditor::Impl {
         ImGui_ImplGlfw_NewFrame();
         if (options.beforeUi) options.beforeUi(frames);
         ImGui::NewFrame();
+        panels.brushPoint = hoverOutsidePanels;
         for (const Command& c : panels.draw(worker, figures)) apply(c);
         ImGui::Render();
         if (!panels.openRequested.empty() || panels.discardRecoveryRequested) return false;
@@ -651,6 +653,7 @@ struct DesktopEditor::Impl {
             const Ray ray = rayAt(cursorX, cursorY);
             std::optional<SurfaceHit> hit;
             if (session.tryPick(ray.origin, ray.direction, 1e30, &hit)) hover = hit;
+            if (hover && !ImGui::GetIO().WantCaptureMouse) hoverOutsidePanels = hover->point;
         }
         const auto inputDone = Clock::now();
 

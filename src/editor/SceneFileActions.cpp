@@ -11,7 +11,10 @@
 #include "voxelize/TriangleMesh.h"
 #include "voxelize/Voxelizer.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <functional>
 #include <filesystem>
 #include <stdexcept>
 
@@ -33,6 +36,28 @@ std::vector<std::string> sessionInputs(const EditingSession& session) { return {
 
 } // namespace
 
+namespace {
+
+/// Saves `volume` as a tool in SCENE.imports/NAME.vdb and returns the op that adds it where it lies.
+nlohmann::json addToolOp(const EditingSession& session, const Volume& volume, const std::string& name, const std::string& material,
+                         const std::string& source)
+{
+    if (volume.stats().empty)
+        throw std::runtime_error("'" + source + "' holds no solid on the scene's lattice (voxel size " + std::to_string(volume.voxelSize()) + ")");
+    const double voxelSize = volume.voxelSize();
+    const std::filesystem::path folder = std::filesystem::path(session.scenePath()).string() + ".imports";
+    std::filesystem::create_directories(folder);
+    const std::string toolPath = absolute((folder / (name + ".vdb")).string());
+    saveVolume(volume, toolPath);
+    const GridTool tool(loadVolume(toolPath)); // as the op will read it: its pivot goes where it was
+    nlohmann::json op = {{"mode", "add"}, {"brush", {{"shape", "grid"}, {"file", toolPath}}}};
+    op["at"] = {tool.pivot()[0] * voxelSize, tool.pivot()[1] * voxelSize, tool.pivot()[2] * voxelSize};
+    if (!material.empty()) op["material"] = material;
+    return op;
+}
+
+} // namespace
+
 nlohmann::json importIntoScene(const EditingSession& session, const std::string& path, const std::string& material)
 {
     const double voxelSize = session.scene().voxelSize();
@@ -48,16 +73,37 @@ nlohmann::json importIntoScene(const EditingSession& session, const std::string&
         if (!material.empty()) options.material = material;
         volume = importLevelSet(path, options);
     }
-    if (volume.stats().empty) throw std::runtime_error("'" + path + "' holds no solid on the scene's lattice (voxel size " + std::to_string(voxelSize) + ")");
-    const std::filesystem::path folder = std::filesystem::path(session.scenePath()).string() + ".imports";
-    std::filesystem::create_directories(folder);
-    const std::string toolPath = absolute((folder / (std::filesystem::path(path).stem().string() + ".vdb")).string());
-    saveVolume(volume, toolPath);
-    const GridTool tool(loadVolume(toolPath)); // as the op will read it: its pivot goes where it was
-    nlohmann::json op = {{"mode", "add"}, {"brush", {{"shape", "grid"}, {"file", toolPath}}}};
-    op["at"] = {tool.pivot()[0] * voxelSize, tool.pivot()[1] * voxelSize, tool.pivot()[2] * voxelSize};
-    if (!material.empty()) op["material"] = material;
-    return op;
+    return addToolOp(session, volume, std::filesystem::path(path).stem().string(), material, path);
+}
+
+nlohmann::json placeModelIntoScene(const EditingSession& session, const std::string& path, const std::array<double, 3>& centre, double radius,
+                                   const std::string& material)
+{
+    if (!(radius > 0.0) || !std::isfinite(radius)) throw std::invalid_argument("a model is placed with a positive radius");
+    TriangleSoup mesh = loadTriangleMesh(path);
+    // The bounding box's centre to `centre`, its farthest corner `radius` from it.
+    std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+    for (const auto& p : mesh.positions)
+        for (int a = 0; a < 3; ++a) {
+            lo[std::size_t(a)] = std::min(lo[std::size_t(a)], p[std::size_t(a)]);
+            hi[std::size_t(a)] = std::max(hi[std::size_t(a)], p[std::size_t(a)]);
+        }
+    const double halfDiagonal = 0.5 * std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    if (!(halfDiagonal > 0.0)) throw std::runtime_error("'" + path + "' has no extent to place");
+    const double scale = radius / halfDiagonal;
+    for (auto& p : mesh.positions)
+        for (int a = 0; a < 3; ++a)
+            p[std::size_t(a)] = centre[std::size_t(a)] + (p[std::size_t(a)] - 0.5 * (lo[std::size_t(a)] + hi[std::size_t(a)])) * scale;
+    VoxelizeOptions options;
+    options.voxelSize = session.scene().voxelSize();
+    options.material = material;
+    // A name of its own per placement: a recorded op reads its tool again on replay, so a later placement
+    // must not write over an earlier one's.
+    char tag[32];
+    std::snprintf(tag, sizeof tag, "%016llx",
+                  static_cast<unsigned long long>(std::hash<std::string>()(path + "|" + std::to_string(centre[0]) + "," + std::to_string(centre[1]) + "," +
+                                                                          std::to_string(centre[2]) + "|" + std::to_string(radius) + "|" + material)));
+    return addToolOp(session, voxelizeMesh(mesh, options), std::filesystem::path(path).stem().string() + "-" + tag, material, path);
 }
 
 void exportSceneMesh(EditingSession& session, const std::string& path)

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <string>
 
 namespace vdbclay {
@@ -17,6 +18,11 @@ namespace vdbclay {
 /// (apply it as a Command::Kind::ApplyOp). `material` names a scene material for every voxel (empty: the
 /// mesh's own). Throws for unreadable or empty inputs.
 nlohmann::json importIntoScene(const EditingSession& session, const std::string& path, const std::string& material);
+
+/// The same for a model placed at `centre` (world units), scaled so that its bounding box's half
+/// diagonal is `radius` (a library model found by the query panel, dropped at the brush).
+nlohmann::json placeModelIntoScene(const EditingSession& session, const std::string& path, const std::array<double, 3>& centre, double radius,
+                                   const std::string& material);
 
 /// The scene (its autosaved state, level 0) as a mesh file (format from the extension) or as a standard
 /// .vdb level set. Atomic.

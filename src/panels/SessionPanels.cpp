@@ -154,6 +154,7 @@ std::vector<Command> SessionPanels::draw(SessionWorker& session, const FrameFigu
             if (ImGui::CollapsingHeader("Materials")) materialsPanel(session, out);
             if (ImGui::CollapsingHeader("Tools")) toolsPanel(session, out);
             if (ImGui::CollapsingHeader("File", ImGuiTreeNodeFlags_DefaultOpen)) filePanel(session, out);
+            if (ImGui::CollapsingHeader("Find models")) query.draw(session, brushPoint, out, status, widgetRects);
             if (ImGui::CollapsingHeader("View")) viewPanel();
             ImGui::Checkbox("Stats", &showStats);
             ImGui::SameLine();
@@ -175,6 +176,7 @@ std::vector<Command> SessionPanels::draw(SessionWorker& session, const FrameFigu
         ImGui::End();
     }
     if (const auto chosen = browser_.draw()) fileChosen(session, *chosen, out);
+    query.drawBrowser();
     return out;
 }
 

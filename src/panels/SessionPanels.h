@@ -1,10 +1,11 @@
 // The editor's Dear ImGui panels, which the desktop window and the headset's menu quad both draw: brush (mode, shape, size, strength, falloff, pressure, material,
-// symmetry), custom brush editor, materials, tools, file actions (through a file browser), the view's
-// look, stats and help. They read the session and return commands; they never change the scene
+// symmetry), custom brush editor, materials, tools, file actions (through a file browser), finding
+// models like the sculpture (QueryPanel), the view's look, stats and help. They read the session and return commands; they never change the scene
 // themselves.
 #pragma once
 
 #include "panels/FileBrowser.h"
+#include "panels/QueryPanel.h"
 #include "editor/SessionWorker.h"
 #include "render/RenderTypes.h"
 
@@ -73,6 +74,10 @@ public:
     std::string helpText;     // the shortcuts in effect (the window's keymap)
     std::string status;       // the last action's outcome, shown at the bottom
     std::string openRequested; // a scene the user asked to open instead (the front end reopens)
+    /// Where the brush is, set by the front end each frame (the last surface point under the pointer
+    /// outside the panels, a hand's brush): where a found model is placed.
+    std::optional<std::array<double, 3>> brushPoint;
+    QueryPanel query; // "Find models"
     /// The user chose to drop the edits recovered after a crash (the front end reopens the scene
     /// discarding them).
     bool discardRecoveryRequested = false;

@@ -205,8 +205,11 @@ private:
         figures_.missedFrames = report_.missedFrames;
         figures_.detail = comfort_.detail();
         figures_.pendingEdits = worker_.pending();
+        menus_.panels().brushPoint = brushOffMenu_;
         std::vector<Command> commands = menus_.update(hands, options_.dominantHand, worker_, figures_, seconds);
         const VrControls::Output out = controls_.update(hands, worker_.brush(), world_);
+        // A model found in the menu goes where the brush was last while the hand did not point at the menu.
+        if (out.brush && !hands.pointerOnMenu) brushOffMenu_ = arr(*out.brush);
         world_ = out.world;
         commands.insert(commands.end(), out.commands.begin(), out.commands.end());
         for (const Command& c : commands) {
@@ -329,6 +332,7 @@ private:
     render::StreamedSceneChunks chunks_;
     SessionWorker worker_;
     VrControls controls_;
+    std::optional<std::array<double, 3>> brushOffMenu_;
     VrComfort comfort_;
     WorldTransform world_;
     std::vector<render::RenderView> eyes_;

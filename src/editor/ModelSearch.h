@@ -1,0 +1,75 @@
+// The editor's search of a model library (src/query) with the sculpture, and the placing of a found
+// model at the brush: both run on a thread of their own, so the frame that asks never waits; the frame
+// polls for the outcome. The sculpture is what the view shows (each shown brick's mesh at its level),
+// whole or within a box; it is ranked by the descriptors computed on the CPU (ClusterD2+Color, D2 or
+// both combined; the light field needs the renderer's silhouettes, which the command line draws).
+#pragma once
+
+#include "query/ModelLibrary.h"
+#include "render/OffscreenTarget.h"
+#include "sculpt/Brush.h"
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vdbclay {
+
+class EditingSession;
+
+struct ModelSearchRequest {
+    std::string library;
+    std::optional<WorldBounds> box; // absent: the whole sculpture as shown
+    query::Descriptor descriptor = query::Descriptor::Combined;
+    query::Metric metric = query::Metric::ChiSquare;
+    std::size_t k = 8;
+};
+
+struct ModelSearchResult {
+    query::ModelRecord model;
+    double distance = 0.0;
+    render::Image thumbnail; // empty when the library holds none
+};
+
+/// What a finished job left: results, an op placing a model, or why it failed (one line).
+struct ModelSearchOutcome {
+    std::optional<std::vector<ModelSearchResult>> results;
+    std::optional<nlohmann::json> placement;
+    std::string error;
+};
+
+class ModelSearch {
+public:
+    ModelSearch();
+    /// Waits for a job under way (a search takes a fraction of a second).
+    ~ModelSearch();
+    ModelSearch(const ModelSearch&) = delete;
+    ModelSearch& operator=(const ModelSearch&) = delete;
+
+    /// Starts a search; false (nothing started) while a job runs. `session` must outlive the job: its
+    /// scene is read from the job's thread (shown bricks' meshes, safe beside the frame and the editor).
+    bool search(const EditingSession& session, const ModelSearchRequest& request);
+    /// Starts placing the model file at `centre`, scaled to `radius` (placeModelIntoScene); false while
+    /// a job runs. Apply the outcome's op as a Command::Kind::ApplyOp: one undoable edit.
+    bool place(const EditingSession& session, const std::string& modelPath, const std::array<double, 3>& centre, double radius,
+               const std::string& material);
+    bool busy() const;
+    /// The outcome of the job that finished since the last call, once.
+    std::optional<ModelSearchOutcome> take();
+    /// Waits for the job under way (tests, replays).
+    void wait();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+/// The sculpture as the view shows it (each shown brick's mesh), triangles with their centroid in `box`
+/// when one is given, as a soup with the materials' colours.
+TriangleSoup shownSculpture(const EditingSession& session, const std::optional<WorldBounds>& box);
+
+} // namespace vdbclay
