@@ -156,7 +156,7 @@ TEST_CASE("query ClusterD2+Color: CIELAB of known colours and their colour codes
     CHECK(colourCode({0.9f, 0.9f, 0.9f}) != colourCode({0.8f, 0.1f, 0.1f}));
 }
 
-TEST_CASE("query ClusterD2+Color: a model moved, turned, scaled and re-tessellated stays nearest itself; the descriptor is repeatable", "[query]")
+TEST_CASE("query ClusterD2+Color: a model moved, turned, scaled and re-tessellated stays nearest itself, and the descriptor is repeatable", "[query]")
 {
     const std::vector<LabeledModel> set = syntheticSet(3, 17);
     std::vector<Histogram> described;
@@ -213,7 +213,7 @@ TEST_CASE("query descriptors: on the synthetic set ClusterD2+Color's nearest nei
     CHECK(precision >= 2.0 * chance);
 }
 
-TEST_CASE("query light field: a view's features ignore its turn and mirroring in the image; a disk's moments and outline coefficients vanish", "[query]")
+TEST_CASE("query light field: a view's features ignore its turn and mirroring in the image, and a disk's moments and outline coefficients vanish", "[query]")
 {
     const int n = kSilhouetteSize;
     std::vector<uint8_t> blob(std::size_t(n * n), 0), turned(blob.size(), 0), mirrored(blob.size(), 0), disk(blob.size(), 0);
@@ -269,7 +269,7 @@ TEST_CASE("query light field: the dodecahedron's 60 rotations are distinct permu
     CHECK(lightFieldDirections().size() == std::size_t(kLightFields * kViewsPerLightField));
 }
 
-TEST_CASE("query light field (render): a sphere's silhouettes are discs filling the view; a turned, scaled, re-tessellated model is nearest itself", "[query]")
+TEST_CASE("query light field (render): a sphere's silhouettes are discs filling the view, and a turned, scaled, re-tessellated model is nearest itself", "[query]")
 {
     render::ContextOptions contextOptions;
     contextOptions.validation = true;

@@ -351,7 +351,8 @@ int meshReaderMain(int argc, char** argv)
     const uint64_t memoryBytes = std::strtoull(argv[2], nullptr, 10);
     ::signal(SIGPIPE, SIG_DFL);
     answerOnPipe(1, path, [&] { return readMeshWithAssimp(path); }, memoryBytes);
-    return 0;
+    std::fflush(stderr);
+    ::_exit(0); // as the forked reader: no static destructors or leak report after the answer
 }
 
 } // namespace vdbclay
