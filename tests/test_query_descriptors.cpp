@@ -314,3 +314,4 @@ TEST_CASE("query light field (render): a sphere's silhouettes are discs filling 
     CHECK(context.validationMessages() == 0);
 }
 
+

@@ -293,7 +293,7 @@ std::vector<float> lightFieldSummary(const std::vector<float>& descriptor)
     return std::vector<float>(descriptor.begin(), descriptor.begin() + kViewFeatures);
 }
 
-double lightFieldDistance(const std::vector<float>& a, const std::vector<float>& b)
+double lightFieldDistance(const std::vector<float>& a, const std::vector<float>& b, int queryFields)
 {
     if (a.size() != kLightFieldLength || b.size() != kLightFieldLength) throw std::invalid_argument("not a light-field descriptor");
     const auto view = [](const std::vector<float>& d, int field, int v) {
@@ -302,7 +302,7 @@ double lightFieldDistance(const std::vector<float>& a, const std::vector<float>&
     const auto& rotations = dodecahedronRotations();
     double best = std::numeric_limits<double>::max();
     std::array<double, kViewsPerLightField * kViewsPerLightField> cost{};
-    for (int fa = 0; fa < kLightFields; ++fa)
+    for (int fa = 0; fa < std::clamp(queryFields, 1, kLightFields); ++fa)
         for (int fb = 0; fb < kLightFields; ++fb) {
             for (int va = 0; va < kViewsPerLightField; ++va)
                 for (int vb = 0; vb < kViewsPerLightField; ++vb)

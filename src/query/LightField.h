@@ -44,8 +44,11 @@ std::vector<float> lightFieldFromSilhouettes(const std::vector<std::vector<uint8
 /// vertex filling the view) and describes them. Throws std::invalid_argument for a mesh without area.
 std::vector<float> lightFieldDescriptor(render::ModelViews& views, const TriangleSoup& mesh);
 
-/// The light-field distance of two descriptors (L1, least over rotations and light-field pairs).
-double lightFieldDistance(const std::vector<float>& a, const std::vector<float>& b);
+/// The light-field distance of a query `a` to a model `b`: L1, least over the 60 rotations and over the
+/// pairs of `a`'s first `queryFields` light fields with all of `b`'s. One query field against ten already
+/// tries 600 relative turns; the synthetic set ranks as well as with all 100 pairs (mAP 0.965 against
+/// 0.970) at a tenth of the time, what a query of 64 shortlisted models needs to stay within 2 ms.
+double lightFieldDistance(const std::vector<float>& a, const std::vector<float>& b, int queryFields = 1);
 /// The part FLANN indexes: the mean view.
 std::vector<float> lightFieldSummary(const std::vector<float>& descriptor);
 

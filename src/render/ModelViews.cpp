@@ -15,7 +15,18 @@ std::size_t tilesPerFrame(int size) { return std::min<std::size_t>(100, std::siz
 
 } // namespace
 
-ModelViews::ModelViews(VulkanContext& context) : context_(context), renderer_(std::make_unique<Renderer>(context)) {}
+namespace {
+
+RendererOptions bothSides()
+{
+    RendererOptions o;
+    o.cullBackFaces = false;
+    return o;
+}
+
+} // namespace
+
+ModelViews::ModelViews(VulkanContext& context) : context_(context), renderer_(std::make_unique<Renderer>(context, bothSides())) {}
 
 ModelViews::~ModelViews() = default;
 
@@ -25,14 +36,7 @@ std::vector<Mask> ModelViews::silhouettes(const Mesh& mesh, const std::array<dou
     if (mesh.triangles.empty()) throw std::invalid_argument("cannot draw the silhouettes of an empty mesh");
     if (!(radius > 0.0) || !std::isfinite(radius)) throw std::invalid_argument("silhouettes need a positive radius");
     if (size < 8 || size > 1024) throw std::invalid_argument("silhouette size " + std::to_string(size) + " is outside 8 .. 1024");
-    // Both sides of each triangle: a model file's triangles may face either way.
-    Mesh twoSided = mesh;
-    twoSided.triangles.reserve(2 * mesh.triangles.size());
-    for (const auto& t : mesh.triangles) twoSided.triangles.push_back({t[0], t[2], t[1]});
-    twoSided.triangleMaterials.resize(mesh.triangles.size(), kEmptyMaterial);
-    const std::vector<MaterialId> materials = twoSided.triangleMaterials;
-    twoSided.triangleMaterials.insert(twoSided.triangleMaterials.end(), materials.begin(), materials.end());
-    renderer_->setChunk(0, twoSided);
+    renderer_->setChunk(0, mesh); // drawn from both sides (bothSides): a model file's triangles may face either way
     ShadingOptions shading;
     renderer_->setShading(shading);
 

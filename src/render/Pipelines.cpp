@@ -55,7 +55,7 @@ VkPipeline createPipeline(VkDevice device, VkRenderPass pass, VkPipelineLayout l
     raster.polygonMode = shape.polygonMode;
     // Meshes are closed, counter-clockwise seen from outside; the projection flips Y for Vulkan, which
     // keeps counter-clockwise as the front face.
-    raster.cullMode = shape.meshInput && shape.polygonMode == VK_POLYGON_MODE_FILL ? VK_CULL_MODE_BACK_BIT
+    raster.cullMode = shape.meshInput && shape.cullBackFaces && shape.polygonMode == VK_POLYGON_MODE_FILL ? VK_CULL_MODE_BACK_BIT
                                                                                     : VK_CULL_MODE_NONE;
     raster.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
     raster.lineWidth = 1.0f;
@@ -114,7 +114,7 @@ VkShaderModule shaderModule(VkDevice device, const uint32_t* code, std::size_t b
     return module;
 }
 
-Pipelines::Pipelines(const VulkanContext& context, VkRenderPass renderPass) : context_(context)
+Pipelines::Pipelines(const VulkanContext& context, VkRenderPass renderPass, bool cullBackFaces) : context_(context)
 {
     const auto start = std::chrono::steady_clock::now();
     VkDevice device = context.device();
@@ -151,6 +151,7 @@ Pipelines::Pipelines(const VulkanContext& context, VkRenderPass renderPass) : co
         PipelineShape surface;
         surface.vert = meshVert;
         surface.frag = meshFrag;
+        surface.cullBackFaces = cullBackFaces;
         surface_ = createPipeline(device, renderPass, layout_, surface);
         if (context.supportsWireframe()) {
             PipelineShape wireframe = surface;

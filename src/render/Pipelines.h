@@ -21,6 +21,7 @@ struct GpuVertex {
 struct PipelineShape {
     VkShaderModule vert = VK_NULL_HANDLE, frag = VK_NULL_HANDLE;
     bool meshInput = true; // GpuVertex per vertex (culled back faces); false: the vertex shader makes its positions
+    bool cullBackFaces = true; // mesh input: false draws both sides (model files whose triangles face either way)
     VkPolygonMode polygonMode = VK_POLYGON_MODE_FILL;
     bool depthTest = true;
     bool depthWrite = true;
@@ -35,7 +36,8 @@ VkShaderModule shaderModule(VkDevice device, const uint32_t* code, std::size_t b
 
 class Pipelines {
 public:
-    Pipelines(const VulkanContext& context, VkRenderPass renderPass);
+    /// `cullBackFaces`: the surface pipeline's (RendererOptions::cullBackFaces).
+    Pipelines(const VulkanContext& context, VkRenderPass renderPass, bool cullBackFaces = true);
     ~Pipelines();
     Pipelines(const Pipelines&) = delete;
     Pipelines& operator=(const Pipelines&) = delete;

@@ -36,6 +36,9 @@ struct RendererOptions {
     /// ring); a picture leaves it at 0.
     uint64_t uploadBytesPerFrame = 0;
     VkFormat colourFormat = VK_FORMAT_R8G8B8A8_UNORM; // of every target drawn into (a swapchain's may differ)
+    /// Sculptures are closed and face outwards: their back faces are culled. Model files' triangles may
+    /// face either way (retrieval's silhouettes and thumbnails draw both sides).
+    bool cullBackFaces = true;
 };
 
 struct RenderView {
