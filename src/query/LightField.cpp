@@ -136,10 +136,17 @@ const ZernikeBasis& basisFor(int size)
     return other;
 }
 
-double viewDistance(const float* a, const float* b)
+/// L1 over a view's features, in eight running sums the compiler keeps in one vector register (a single
+/// sum's order would forbid it): the light field's distance is a hundred of these per pair of fields.
+float viewDistance(const float* a, const float* b)
 {
-    double d = 0.0;
-    for (int k = 0; k < kViewFeatures; ++k) d += std::abs(double(a[k]) - double(b[k]));
+    float lanes[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    int k = 0;
+    for (; k + 8 <= kViewFeatures; k += 8)
+        for (int l = 0; l < 8; ++l) lanes[l] += std::abs(a[k + l] - b[k + l]);
+    float d = 0.0f;
+    for (; k < kViewFeatures; ++k) d += std::abs(a[k] - b[k]);
+    for (float lane : lanes) d += lane;
     return d;
 }
 
@@ -301,16 +308,16 @@ double lightFieldDistance(const std::vector<float>& a, const std::vector<float>&
     };
     const auto& rotations = dodecahedronRotations();
     double best = std::numeric_limits<double>::max();
-    std::array<double, kViewsPerLightField * kViewsPerLightField> cost{};
+    std::array<float, kViewsPerLightField * kViewsPerLightField> cost{};
     for (int fa = 0; fa < std::clamp(queryFields, 1, kLightFields); ++fa)
         for (int fb = 0; fb < kLightFields; ++fb) {
             for (int va = 0; va < kViewsPerLightField; ++va)
                 for (int vb = 0; vb < kViewsPerLightField; ++vb)
                     cost[std::size_t(va * kViewsPerLightField + vb)] = viewDistance(view(a, fa, va), view(b, fb, vb));
             for (const auto& p : rotations) {
-                double sum = 0.0;
+                float sum = 0.0f;
                 for (int v = 0; v < kViewsPerLightField; ++v) sum += cost[std::size_t(v * kViewsPerLightField + p[std::size_t(v)])];
-                best = std::min(best, sum);
+                best = std::min(best, double(sum));
             }
         }
     return best;

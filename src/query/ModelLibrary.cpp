@@ -139,15 +139,21 @@ struct ModelLibrary::Impl {
         }
     }
 
-    /// The stored vector of one model's descriptor; empty when it has none.
-    std::vector<float> vector(int64_t model, Descriptor d) const
+    /// The stored vectors of some models' descriptor, by model (those without it left out), in one
+    /// statement: a light-field shortlist reads 64 of them per query.
+    std::map<int64_t, std::vector<float>> vectors(const std::vector<int64_t>& models, Descriptor d) const
     {
-        Statement s(db, "SELECT vector FROM descriptors WHERE model = ?1 AND kind = ?2");
-        s.integer(1, model);
-        s.text(2, descriptorName(d));
-        if (!s.step()) return {};
-        const auto* data = static_cast<const float*>(sqlite3_column_blob(s.get(), 0));
-        return std::vector<float>(data, data + sqlite3_column_bytes(s.get(), 0) / int(sizeof(float)));
+        std::map<int64_t, std::vector<float>> out;
+        if (models.empty()) return out;
+        std::string sql = "SELECT model, vector FROM descriptors WHERE kind = ?1 AND model IN (";
+        for (std::size_t i = 0; i < models.size(); ++i) sql += (i ? "," : "") + std::to_string(models[i]);
+        Statement s(db, (sql + ")").c_str());
+        s.text(1, descriptorName(d));
+        while (s.step()) {
+            const auto* data = static_cast<const float*>(sqlite3_column_blob(s.get(), 1));
+            out[sqlite3_column_int64(s.get(), 0)] = std::vector<float>(data, data + sqlite3_column_bytes(s.get(), 1) / int(sizeof(float)));
+        }
+        return out;
     }
 };
 
@@ -400,10 +406,24 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
         }
         return si;
     };
-    // The exact distance of the query to the i-th model of a descriptor's index.
-    const auto exact = [&](Descriptor kind, const SearchIndex& si, std::size_t i) {
-        if (kind != Descriptor::LightField) return histogramDistance(indexedPart(query, kind), si.vectors[i], metric);
-        return lightFieldDistance(query.lightField, impl_->vector(si.indexed[i].id, Descriptor::LightField));
+    // The exact distances of the query to some models of a descriptor's index (positions in it).
+    const auto exact = [&](Descriptor kind, const SearchIndex& si, const std::vector<std::size_t>& positions) {
+        std::vector<double> out;
+        if (kind != Descriptor::LightField) {
+            const std::vector<float> q = indexedPart(query, kind);
+            for (std::size_t i : positions) out.push_back(histogramDistance(q, si.vectors[i], metric));
+            return out;
+        }
+        std::vector<int64_t> ids;
+        for (std::size_t i : positions) ids.push_back(si.indexed[i].id);
+        const std::map<int64_t, std::vector<float>> full = impl_->vectors(ids, Descriptor::LightField);
+        for (int64_t id : ids) {
+            const auto at = full.find(id);
+            if (at == full.end() || at->second.size() != kLightFieldLength)
+                throw LibraryError("the library '" + path_ + "' is damaged: a light field of the wrong length");
+            out.push_back(lightFieldDistance(query.lightField, at->second));
+        }
+        return out;
     };
     const auto shortlistOf = [&](Descriptor kind, const SearchIndex& si) {
         const std::size_t shortlist = std::min(si.indexed.size(), std::max<std::size_t>(4 * k, 64));
@@ -414,7 +434,9 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
         if (indexedPart(query, descriptor).empty())
             throw LibraryError(std::string("the query has no ") + descriptorName(descriptor) + " descriptor (it needs a renderer)");
         SearchIndex& si = searchIndex(descriptor);
-        for (std::size_t i : shortlistOf(descriptor, si)) hits.push_back({si.indexed[i], exact(descriptor, si, i)});
+        const std::vector<std::size_t> shortlist = shortlistOf(descriptor, si);
+        const std::vector<double> distances = exact(descriptor, si, shortlist);
+        for (std::size_t j = 0; j < shortlist.size(); ++j) hits.push_back({si.indexed[shortlist[j]], distances[j]});
     } else {
         // Each stored descriptor's shortlist; every candidate ranked by the mean of its distances, each
         // over that descriptor's typical distance between the library's models (so none outweighs).
@@ -429,12 +451,20 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
                 // Pairs a fixed stride apart: the same figure for the same library.
                 double sum = 0.0;
                 const std::size_t pairs = std::min<std::size_t>(64, si.indexed.size() - 1);
+                std::vector<std::pair<std::size_t, std::size_t>> chosen;
                 for (std::size_t p = 0; p < pairs; ++p) {
-                    const std::size_t a = p * si.indexed.size() / pairs, b = (a + si.indexed.size() / 2 + 1) % si.indexed.size();
-                    sum += kind == Descriptor::LightField
-                               ? lightFieldDistance(impl_->vector(si.indexed[a].id, kind), impl_->vector(si.indexed[b].id, kind))
-                               : histogramDistance(si.vectors[a], si.vectors[b], metric);
+                    const std::size_t a = p * si.indexed.size() / pairs;
+                    chosen.emplace_back(a, (a + si.indexed.size() / 2 + 1) % si.indexed.size());
                 }
+                std::map<int64_t, std::vector<float>> full;
+                if (kind == Descriptor::LightField) {
+                    std::vector<int64_t> ids;
+                    for (const auto& [a, b] : chosen) ids.push_back(si.indexed[a].id), ids.push_back(si.indexed[b].id);
+                    full = impl_->vectors(ids, kind);
+                }
+                for (const auto& [a, b] : chosen)
+                    sum += kind == Descriptor::LightField ? lightFieldDistance(full.at(si.indexed[a].id), full.at(si.indexed[b].id))
+                                                          : histogramDistance(si.vectors[a], si.vectors[b], metric);
                 si.typicalDistance = sum > 0.0 ? sum / double(pairs) : 1.0;
             }
             for (std::size_t i : shortlistOf(kind, si)) candidates.emplace(si.indexed[i].id, std::make_pair(si.indexed[i], std::vector<double>()));
@@ -443,10 +473,12 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
             SearchIndex& si = searchIndex(kind);
             std::map<int64_t, std::size_t> position;
             for (std::size_t i = 0; i < si.indexed.size(); ++i) position[si.indexed[i].id] = i;
-            for (auto& [id, candidate] : candidates) {
-                const auto at = position.find(id);
-                if (at != position.end()) candidate.second.push_back(exact(kind, si, at->second) / si.typicalDistance);
-            }
+            std::vector<std::size_t> positions;
+            std::vector<int64_t> ids;
+            for (const auto& entry : candidates)
+                if (const auto at = position.find(entry.first); at != position.end()) positions.push_back(at->second), ids.push_back(entry.first);
+            const std::vector<double> distances = exact(kind, si, positions);
+            for (std::size_t j = 0; j < ids.size(); ++j) candidates.at(ids[j]).second.push_back(distances[j] / si.typicalDistance);
         }
         for (auto& [id, candidate] : candidates) {
             if (candidate.second.empty()) continue;
