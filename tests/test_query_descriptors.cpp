@@ -310,6 +310,17 @@ TEST_CASE("query light field (render): a sphere's silhouettes are discs filling 
         for (std::size_t j = 0; j < set.size(); ++j)
             if (set[j].label != set[i].label) CHECK(lightFieldDistance(moved, described[j]) > self);
     }
+    // The set's nearest neighbours by light field: of the same family far above chance.
+    int right = 0;
+    for (std::size_t i = 0; i < set.size(); ++i) {
+        std::size_t best = i == 0 ? 1 : 0;
+        for (std::size_t j = 0; j < set.size(); ++j)
+            if (j != i && lightFieldDistance(described[i], described[j]) < lightFieldDistance(described[i], described[best])) best = j;
+        right += set[best].label == set[i].label;
+    }
+    const double precision = double(right) / double(set.size()), chance = 1.0 / double(syntheticFamilies().size());
+    INFO("nearest-neighbour precision " << precision << " (chance " << chance << ")");
+    CHECK(precision >= 3.0 * chance);
     CHECK(lightFieldDistance(ball, ball) == 0.0);
     CHECK(context.validationMessages() == 0);
 }
