@@ -74,7 +74,8 @@ CLI::App* addQueryCommand(CLI::App& parent, QueryOptions& o)
 
 namespace {
 
-/// A scene (.vdb or store) as a model: its level `lod` meshed, coloured by its materials.
+/// A scene (.vdb or store) as a model: its level `lod` meshed, coloured by its materials, the lattice's
+/// facets smoothed away.
 TriangleSoup sceneModel(const std::string& path, int lod)
 {
     Mesh mesh;
@@ -97,7 +98,7 @@ TriangleSoup sceneModel(const std::string& path, int lod)
         materials = volume.materials();
     }
     if (mesh.triangles.empty()) throw std::runtime_error("'" + path + "' has no surface to search with");
-    return query::soupOfMesh(mesh, materials);
+    return query::smoothedSculpture(query::soupOfMesh(mesh, materials));
 }
 
 struct Found {

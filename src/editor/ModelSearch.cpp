@@ -62,7 +62,7 @@ TriangleSoup shownSculpture(const EditingSession& session, const std::optional<W
             all.triangleMaterials.push_back(t < m.triangleMaterials.size() ? m.triangleMaterials[t] : MaterialId(1));
         }
     }
-    return query::soupOfMesh(all, scene.materials());
+    return query::smoothedSculpture(query::soupOfMesh(all, scene.materials()));
 }
 
 ModelSearch::ModelSearch() : impl_(std::make_unique<Impl>()) {}

@@ -69,7 +69,8 @@ private:
 };
 
 /// The sculpture as the view shows it (each shown brick's mesh), triangles with their centroid in `box`
-/// when one is given, as a soup with the materials' colours.
+/// when one is given, as a soup with the materials' colours, the lattice's facets smoothed away
+/// (query::smoothedSculpture).
 TriangleSoup shownSculpture(const EditingSession& session, const std::optional<WorldBounds>& box);
 
 } // namespace vdbclay

@@ -161,7 +161,17 @@ Histogram describeOnce(const Prepared& p, const ClusterD2Options& options, uint6
     };
     const std::vector<double> c1 = smooth(c0), c2 = smooth(c1), c3 = smooth(c2);
     std::vector<double> saliency(count);
-    for (std::size_t i = 0; i < count; ++i) saliency[i] = std::abs(c2[i] - c1[i]) + std::abs(c3[i] - c2[i]);
+    double meanCurvature = 0.0;
+    for (std::size_t i = 0; i < count; ++i) {
+        saliency[i] = std::abs(c2[i] - c1[i]) + std::abs(c3[i] - c2[i]);
+        meanCurvature += std::abs(c1[i]) / double(count);
+    }
+    // A difference far below the surface's own curvature is no feature, only how the mesh was cut (a
+    // sphere's poles, a voxel lattice's facets): such samples rank alike, in the order they were drawn
+    // (at random), so a featureless surface gives samples spread evenly rather than its tessellation's.
+    const double floor = options.featureFloor * meanCurvature;
+    for (double& d : saliency)
+        if (d < floor) d = 0.0;
     std::vector<uint32_t> order(count);
     std::iota(order.begin(), order.end(), 0u);
     const std::size_t shapeCount = std::max<std::size_t>(1, std::size_t(double(count) * options.shapeShare));

@@ -16,6 +16,7 @@ struct ClusterD2Options {
     std::size_t minSamples = 6144;  // samples at the least (a convex surface, whose |K| integrates to 4 pi)
     std::size_t maxSamples = 16384; // however curved the surface
     double shapeShare = 0.10;       // the samples with the highest difference of curvature maps kept
+    double featureFloor = 0.02;     // differences below this share of the mean |C1| count as none
     double colourSameShare = 0.80;  // a colour sample has fewer neighbours of its colour code than this share
     std::size_t minNeighbours = 5;
     uint64_t seed = 1;

@@ -17,6 +17,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <unordered_map>
 
 namespace vdbclay::query {
 
@@ -112,8 +113,8 @@ struct SearchIndex {
     std::unique_ptr<DescriptorIndex> index;
     std::vector<ModelRecord> indexed;
     std::vector<std::vector<float>> vectors; // what the index holds, per indexed model
-    double typicalDistance = 1.0;            // the mean distance between the library's models (Combined)
-    bool typicalKnown = false;
+    std::unordered_map<int64_t, std::size_t> positionOf; // a model id's place in `indexed`
+    std::map<Metric, double> typicalDistance; // the mean distance between the library's models (Combined), per metric
 };
 
 double histogramDistance(const std::vector<float>& a, const std::vector<float>& b, Metric metric)
@@ -356,6 +357,7 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
         if (si.index) return si;
         si.indexed.clear();
         si.vectors.clear();
+        si.positionOf.clear();
         Statement s(impl_->db, "SELECT models.id, name, path, label, triangles, r, g, b, vector FROM descriptors JOIN models ON models.id = "
                                "descriptors.model WHERE kind = ?1 ORDER BY models.id");
         s.text(1, descriptorName(kind));
@@ -373,6 +375,7 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
                 if (v.size() != kLightFieldLength) throw LibraryError("the library '" + path_ + "' is damaged: a light field of the wrong length");
                 v = lightFieldSummary(v);
             }
+            si.positionOf[r.id] = si.indexed.size();
             si.indexed.push_back(r);
             si.vectors.push_back(std::move(v));
         }
@@ -429,6 +432,31 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
         const std::size_t shortlist = std::min(si.indexed.size(), std::max<std::size_t>(4 * k, 64));
         return si.index->size() ? si.index->nearest(indexedPart(query, kind), shortlist) : std::vector<std::size_t>();
     };
+    // A descriptor's typical distance in this library: the mean over up to 64 pairs of its models a fixed
+    // stride apart (the same figure for the same library), kept per metric.
+    const auto typicalDistance = [&](Descriptor kind, SearchIndex& si) {
+        const Metric used = kind == Descriptor::LightField ? Metric::ChiSquare : metric; // the light field's is L1 either way
+        if (const auto known = si.typicalDistance.find(used); known != si.typicalDistance.end()) return known->second;
+        const std::size_t n = si.indexed.size();
+        std::vector<std::pair<std::size_t, std::size_t>> pairs;
+        for (std::size_t p = 0; n > 2 && p < std::min<std::size_t>(64, n - 1); ++p) {
+            const std::size_t a = p * n / std::min<std::size_t>(64, n - 1);
+            pairs.emplace_back(a, (a + n / 2 + 1) % n);
+        }
+        std::map<int64_t, std::vector<float>> full;
+        if (kind == Descriptor::LightField) {
+            std::vector<int64_t> ids;
+            for (const auto& pair : pairs) ids.push_back(si.indexed[pair.first].id), ids.push_back(si.indexed[pair.second].id);
+            full = impl_->vectors(ids, kind);
+        }
+        double sum = 0.0;
+        for (const auto& pair : pairs)
+            sum += kind == Descriptor::LightField ? lightFieldDistance(full.at(si.indexed[pair.first].id), full.at(si.indexed[pair.second].id))
+                                                  : histogramDistance(si.vectors[pair.first], si.vectors[pair.second], metric);
+        const double typical = sum > 0.0 ? sum / double(pairs.size()) : 1.0;
+        si.typicalDistance[used] = typical;
+        return typical;
+    };
     std::vector<QueryHit> hits;
     if (descriptor != Descriptor::Combined) {
         if (indexedPart(query, descriptor).empty())
@@ -446,39 +474,17 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
         std::map<int64_t, std::pair<ModelRecord, std::vector<double>>> candidates;
         for (Descriptor kind : kinds) {
             SearchIndex& si = searchIndex(kind);
-            if (!si.typicalKnown && si.indexed.size() > 1) {
-                si.typicalKnown = true;
-                // Pairs a fixed stride apart: the same figure for the same library.
-                double sum = 0.0;
-                const std::size_t pairs = std::min<std::size_t>(64, si.indexed.size() - 1);
-                std::vector<std::pair<std::size_t, std::size_t>> chosen;
-                for (std::size_t p = 0; p < pairs; ++p) {
-                    const std::size_t a = p * si.indexed.size() / pairs;
-                    chosen.emplace_back(a, (a + si.indexed.size() / 2 + 1) % si.indexed.size());
-                }
-                std::map<int64_t, std::vector<float>> full;
-                if (kind == Descriptor::LightField) {
-                    std::vector<int64_t> ids;
-                    for (const auto& [a, b] : chosen) ids.push_back(si.indexed[a].id), ids.push_back(si.indexed[b].id);
-                    full = impl_->vectors(ids, kind);
-                }
-                for (const auto& [a, b] : chosen)
-                    sum += kind == Descriptor::LightField ? lightFieldDistance(full.at(si.indexed[a].id), full.at(si.indexed[b].id))
-                                                          : histogramDistance(si.vectors[a], si.vectors[b], metric);
-                si.typicalDistance = sum > 0.0 ? sum / double(pairs) : 1.0;
-            }
             for (std::size_t i : shortlistOf(kind, si)) candidates.emplace(si.indexed[i].id, std::make_pair(si.indexed[i], std::vector<double>()));
         }
         for (Descriptor kind : kinds) {
             SearchIndex& si = searchIndex(kind);
-            std::map<int64_t, std::size_t> position;
-            for (std::size_t i = 0; i < si.indexed.size(); ++i) position[si.indexed[i].id] = i;
             std::vector<std::size_t> positions;
             std::vector<int64_t> ids;
             for (const auto& entry : candidates)
-                if (const auto at = position.find(entry.first); at != position.end()) positions.push_back(at->second), ids.push_back(entry.first);
+                if (const auto at = si.positionOf.find(entry.first); at != si.positionOf.end()) positions.push_back(at->second), ids.push_back(entry.first);
             const std::vector<double> distances = exact(kind, si, positions);
-            for (std::size_t j = 0; j < ids.size(); ++j) candidates.at(ids[j]).second.push_back(distances[j] / si.typicalDistance);
+            const double typical = typicalDistance(kind, si);
+            for (std::size_t j = 0; j < ids.size(); ++j) candidates.at(ids[j]).second.push_back(distances[j] / typical);
         }
         for (auto& [id, candidate] : candidates) {
             if (candidate.second.empty()) continue;

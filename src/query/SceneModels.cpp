@@ -1,5 +1,7 @@
 #include "query/SceneModels.h"
 
+#include "query/MeshCurvature.h"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -33,6 +35,34 @@ TriangleSoup soupOfMesh(const Mesh& mesh, const MaterialTable& materials)
         soup.triangleMaterials.push_back(it->second);
     }
     return soup;
+}
+
+TriangleSoup smoothedSculpture(const TriangleSoup& soup, int passes)
+{
+    const WeldedMesh welded = weldMesh(soup);
+    std::vector<std::array<double, 3>> positions = welded.positions, next(positions.size());
+    const auto step = [&](double factor) {
+        for (std::size_t v = 0; v < positions.size(); ++v) {
+            const uint32_t from = welded.neighbourStart[v], to = welded.neighbourStart[v + 1];
+            next[v] = positions[v];
+            if (from == to || welded.boundary[v]) continue; // an open rim stays where it is
+            std::array<double, 3> mean{0, 0, 0};
+            for (uint32_t i = from; i < to; ++i)
+                for (int a = 0; a < 3; ++a) mean[std::size_t(a)] += positions[welded.neighbours[i]][std::size_t(a)] / double(to - from);
+            for (int a = 0; a < 3; ++a) next[v][std::size_t(a)] += factor * (mean[std::size_t(a)] - positions[v][std::size_t(a)]);
+        }
+        positions.swap(next);
+    };
+    for (int p = 0; p < passes; ++p) {
+        step(0.5);   // shrinks and smooths
+        step(-0.53); // grows back: the shape's size stays
+    }
+    TriangleSoup out;
+    out.positions = std::move(positions);
+    out.triangles = welded.triangles;
+    out.triangleMaterials = soup.triangleMaterials;
+    out.materials = soup.materials;
+    return out;
 }
 
 Mesh meshOfSoup(const TriangleSoup& soup, MaterialTable& materials)
