@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 #include <set>
 
@@ -72,6 +73,22 @@ TriangleSoup paintedEllipsoid(int axis, double threshold, int tessellation, cons
     }
     return soup;
 }
+
+/// The share of the set's models whose nearest other model (by `distance` between positions) is of
+/// their family.
+double nearestNeighbourPrecision(const std::vector<LabeledModel>& set, const std::function<double(std::size_t, std::size_t)>& distance)
+{
+    int right = 0;
+    for (std::size_t i = 0; i < set.size(); ++i) {
+        std::size_t best = i == 0 ? 1 : 0;
+        for (std::size_t j = 0; j < set.size(); ++j)
+            if (j != i && distance(i, j) < distance(i, best)) best = j;
+        right += set[best].label == set[i].label;
+    }
+    return double(right) / double(set.size());
+}
+
+double chance() { return 1.0 / double(syntheticFamilies().size()); }
 
 } // namespace
 
@@ -201,16 +218,9 @@ TEST_CASE("query descriptors: on the synthetic set ClusterD2+Color's nearest nei
     const std::vector<LabeledModel> set = syntheticSet(6, 3);
     std::vector<Histogram> d;
     for (const LabeledModel& m : set) d.push_back(smoothHistogram(clusterD2ColorDescriptor(buildShape(m.shape))));
-    int right = 0;
-    for (std::size_t i = 0; i < set.size(); ++i) {
-        std::size_t best = i == 0 ? 1 : 0;
-        for (std::size_t j = 0; j < set.size(); ++j)
-            if (j != i && chiSquareDistance(d[i], d[j]) < chiSquareDistance(d[i], d[best])) best = j;
-        right += set[best].label == set[i].label;
-    }
-    const double precision = double(right) / double(set.size()), chance = 1.0 / double(syntheticFamilies().size());
-    INFO("nearest-neighbour precision " << precision << " (chance " << chance << ")");
-    CHECK(precision >= 2.0 * chance);
+    const double precision = nearestNeighbourPrecision(set, [&](std::size_t i, std::size_t j) { return chiSquareDistance(d[i], d[j]); });
+    INFO("nearest-neighbour precision " << precision << " (chance " << chance() << ")");
+    CHECK(precision >= 2.0 * chance());
 }
 
 TEST_CASE("query light field: a view's features ignore its turn and mirroring in the image, and a disk's moments and outline coefficients vanish", "[query]")
@@ -311,16 +321,10 @@ TEST_CASE("query light field (render): a sphere's silhouettes are discs filling 
             if (set[j].label != set[i].label) CHECK(lightFieldDistance(moved, described[j]) > self);
     }
     // The set's nearest neighbours by light field: of the same family far above chance.
-    int right = 0;
-    for (std::size_t i = 0; i < set.size(); ++i) {
-        std::size_t best = i == 0 ? 1 : 0;
-        for (std::size_t j = 0; j < set.size(); ++j)
-            if (j != i && lightFieldDistance(described[i], described[j]) < lightFieldDistance(described[i], described[best])) best = j;
-        right += set[best].label == set[i].label;
-    }
-    const double precision = double(right) / double(set.size()), chance = 1.0 / double(syntheticFamilies().size());
-    INFO("nearest-neighbour precision " << precision << " (chance " << chance << ")");
-    CHECK(precision >= 3.0 * chance);
+    const double precision =
+        nearestNeighbourPrecision(set, [&](std::size_t i, std::size_t j) { return lightFieldDistance(described[i], described[j]); });
+    INFO("nearest-neighbour precision " << precision << " (chance " << chance() << ")");
+    CHECK(precision >= 3.0 * chance());
     CHECK(lightFieldDistance(ball, ball) == 0.0);
     CHECK(context.validationMessages() == 0);
 }

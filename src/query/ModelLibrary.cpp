@@ -60,6 +60,19 @@ private:
 
 std::vector<float> toFloats(const Histogram& h) { return std::vector<float>(h.begin(), h.end()); }
 
+/// A model record from a row whose first columns are id, name, path, label, triangles, r, g, b.
+ModelRecord recordOf(Statement& s)
+{
+    ModelRecord r;
+    r.id = sqlite3_column_int64(s.get(), 0);
+    r.name = s.column(1);
+    r.path = s.column(2);
+    r.label = s.column(3);
+    r.triangles = uint64_t(sqlite3_column_int64(s.get(), 4));
+    for (int k = 0; k < 3; ++k) r.colour[std::size_t(k)] = float(sqlite3_column_double(s.get(), 5 + k));
+    return r;
+}
+
 } // namespace
 
 const char* descriptorName(Descriptor d)
@@ -302,16 +315,7 @@ std::vector<ModelRecord> ModelLibrary::models() const
 {
     std::vector<ModelRecord> out;
     Statement s(impl_->db, "SELECT id, name, path, label, triangles, r, g, b FROM models ORDER BY id");
-    while (s.step()) {
-        ModelRecord r;
-        r.id = sqlite3_column_int64(s.get(), 0);
-        r.name = s.column(1);
-        r.path = s.column(2);
-        r.label = s.column(3);
-        r.triangles = uint64_t(sqlite3_column_int64(s.get(), 4));
-        for (int k = 0; k < 3; ++k) r.colour[std::size_t(k)] = float(sqlite3_column_double(s.get(), 5 + k));
-        out.push_back(r);
-    }
+    while (s.step()) out.push_back(recordOf(s));
     return out;
 }
 
@@ -362,13 +366,7 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
                                "descriptors.model WHERE kind = ?1 ORDER BY models.id");
         s.text(1, descriptorName(kind));
         while (s.step()) {
-            ModelRecord r;
-            r.id = sqlite3_column_int64(s.get(), 0);
-            r.name = s.column(1);
-            r.path = s.column(2);
-            r.label = s.column(3);
-            r.triangles = uint64_t(sqlite3_column_int64(s.get(), 4));
-            for (int c = 0; c < 3; ++c) r.colour[std::size_t(c)] = float(sqlite3_column_double(s.get(), 5 + c));
+            const ModelRecord r = recordOf(s);
             const auto* data = static_cast<const float*>(sqlite3_column_blob(s.get(), 8));
             std::vector<float> v(data, data + sqlite3_column_bytes(s.get(), 8) / int(sizeof(float)));
             if (kind == Descriptor::LightField) {
