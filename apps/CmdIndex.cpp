@@ -105,6 +105,15 @@ struct Found {
     std::string path, name, label;
 };
 
+/// A model's path as the library keeps it: absolute, so that the editor (or a query run elsewhere) finds
+/// the file to place.
+std::string absolutePath(const fs::path& p)
+{
+    std::error_code ec;
+    const fs::path full = fs::absolute(p, ec);
+    return (ec ? p : full).lexically_normal().string();
+}
+
 /// The mesh files the inputs name: files as given, folders' meshes (their subfolders' with --recursive),
 /// sorted, each with a name (its path under the folder, without extension) and a class (its folder).
 std::vector<Found> findMeshes(const IndexOptions& o)
@@ -126,10 +135,10 @@ std::vector<Found> findMeshes(const IndexOptions& o)
                 const fs::path relative = fs::relative(f, input, ec);
                 const std::string name = (relative.parent_path() / relative.stem()).generic_string();
                 const std::string label = relative.has_parent_path() ? relative.parent_path().filename().string() : std::string();
-                out.push_back({f.string(), name, label});
+                out.push_back({absolutePath(f), name, label});
             }
         } else if (fs::is_regular_file(input, ec)) {
-            out.push_back({input, fs::path(input).stem().string(), ""});
+            out.push_back({absolutePath(input), fs::path(input).stem().string(), ""});
         } else {
             throw UsageError("'" + input + "' does not exist");
         }

@@ -2,6 +2,7 @@
 // library on a thread of its own, and a found model is placed at the brush as one undoable edit.
 #include "editor/EditingSession.h"
 #include "editor/ModelSearch.h"
+#include "editor/SessionWorker.h"
 #include "query/SyntheticModels.h"
 #include "support/CliRun.h"
 #include "support/QuietSession.h"
@@ -118,4 +119,76 @@ TEST_CASE("editor query: the sculpture finds the round model first, a box of not
     const ModelSearchOutcome failed = finished(search);
     CHECK_FALSE(failed.placement);
     CHECK_FALSE(failed.error.empty());
+}
+
+#include "panels/QueryPanel.h"
+
+#include <imgui.h>
+
+TEST_CASE("editor query panel: Search and Place at the brush clicked through ImGui give one placing command", "[editor][query]")
+{
+    TempDir dir;
+    for (const query::LabeledModel& m : query::syntheticSet(1, 5)) {
+        std::filesystem::create_directories(dir.path() / "models" / m.label);
+        query::writeColouredPly(query::buildShape(m.shape), (dir.path() / "models" / m.label / (m.name + ".ply")).string());
+    }
+    REQUIRE(runCli(dir, "index add lib.vdblib models --recursive").exitCode == 0); // with thumbnails
+    REQUIRE(runCli(dir, "new ball.vdb --shape sphere --size 24").exitCode == 0);
+    EditingSession session(dir.file("ball.vdb"), quietSession());
+    settle(session);
+    SessionWorker worker(session);
+
+    ImGuiContext* imgui = ImGui::CreateContext();
+    ImGuiIO& io = ImGui::GetIO();
+    io.IniFilename = nullptr;
+    io.DisplaySize = ImVec2(600, 900);
+    unsigned char* pixels = nullptr;
+    int width = 0, height = 0;
+    io.Fonts->GetTexDataAsRGBA32(&pixels, &width, &height);
+    QueryPanel panel;
+    panel.library = dir.file("lib.vdblib");
+    std::map<std::string, std::array<float, 4>> rects;
+    std::vector<Command> issued;
+    std::string status;
+    const std::optional<std::array<double, 3>> brushAt = std::array<double, 3>{20, 0, 0};
+    const auto frame = [&](std::optional<std::array<float, 4>> over, bool down) {
+        io.DeltaTime = 1.0f / 60.0f;
+        if (over) io.MousePos = ImVec2(0.5f * ((*over)[0] + (*over)[2]), 0.5f * ((*over)[1] + (*over)[3]));
+        io.MouseDown[0] = down;
+        ImGui::NewFrame();
+        ImGui::SetNextWindowPos(ImVec2(0, 0));
+        ImGui::SetNextWindowSize(ImVec2(600, 900));
+        ImGui::Begin("Find models");
+        panel.draw(worker, brushAt, issued, status, rects);
+        ImGui::End();
+        ImGui::Render();
+    };
+    const auto click = [&](const std::string& label) {
+        INFO(label);
+        REQUIRE(rects.count(label) == 1);
+        const auto at = rects.at(label);
+        frame(at, false);
+        frame(at, true);
+        frame(at, false);
+    };
+    frame(std::nullopt, false);
+    click("Search");
+    panel.search().wait();
+    frame(std::nullopt, false); // the results come in
+    INFO(status);
+    REQUIRE(panel.results().size() == 6);
+    for (const ModelSearchResult& r : panel.results()) CHECK(r.thumbnail.width == 128); // drawn as cells
+    frame(std::nullopt, false); // the result rows are laid out
+    REQUIRE(issued.empty());
+    click("Place 1");
+    panel.search().wait();
+    frame(std::nullopt, false); // the placing comes in
+    REQUIRE(issued.size() == 1);
+    CHECK(issued[0].kind == Command::Kind::ApplyOp);
+    CHECK(std::filesystem::exists(issued[0].op.at("brush").at("file").get<std::string>()));
+    CHECK(status.find("placed") != std::string::npos);
+    ImGui::DestroyContext(imgui);
+    worker.submit(issued[0]);
+    worker.waitIdle();
+    CHECK(session.history().undoDepth() == 1);
 }
