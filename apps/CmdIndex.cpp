@@ -278,6 +278,10 @@ int runQuery(const QueryOptions& o)
     const TriangleSoup mesh = isMeshPath(o.input) ? loadTriangleMesh(o.input) : sceneModel(o.input, o.lod);
     query::ModelDescription description;
     query::describeShape(mesh, description);
+    if (descriptor == query::Descriptor::LightField && library.count(query::Descriptor::LightField) == 0) {
+        printError("the library '" + o.library + "' holds no light fields (its models were added with --no-render or without a Vulkan device)");
+        return kExitFailure;
+    }
     // The light field needs the renderer: drawn when the ranking uses it and the library holds any.
     if ((descriptor == query::Descriptor::LightField || descriptor == query::Descriptor::Combined) && library.count(query::Descriptor::LightField) > 0) {
         Views views = openViews(o.json || descriptor == query::Descriptor::LightField, "the ranking leaves the light field out");

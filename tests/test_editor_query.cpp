@@ -125,7 +125,7 @@ TEST_CASE("editor query: the sculpture finds the round model first, a box of not
 
 #include <imgui.h>
 
-TEST_CASE("editor query panel: Search and Place at the brush clicked through ImGui give one placing command", "[editor][query]")
+TEST_CASE("editor query panel (render): Search and Place at the brush clicked through ImGui give one placing command", "[editor][query]")
 {
     TempDir dir;
     for (const query::LabeledModel& m : query::syntheticSet(1, 5)) {

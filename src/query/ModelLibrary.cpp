@@ -9,6 +9,7 @@
 #include "render/ModelViews.h"
 
 #include <sqlite3.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -57,6 +58,17 @@ public:
 private:
     sqlite3_stmt* s_ = nullptr;
 };
+
+/// Runs `sql` on `db`; throws LibraryError naming `what`.
+void execOn(sqlite3* db, const char* sql, const std::string& what)
+{
+    char* message = nullptr;
+    if (sqlite3_exec(db, sql, nullptr, nullptr, &message) != SQLITE_OK) {
+        const std::string text = message ? message : "unknown error";
+        sqlite3_free(message);
+        throw LibraryError(what + ": " + text);
+    }
+}
 
 std::vector<float> toFloats(const Histogram& h) { return std::vector<float>(h.begin(), h.end()); }
 
@@ -143,15 +155,7 @@ struct ModelLibrary::Impl {
     mutable std::mutex indexMutex;
     mutable std::map<Descriptor, SearchIndex> indexes;
 
-    void exec(const char* sql) const
-    {
-        char* message = nullptr;
-        if (sqlite3_exec(db, sql, nullptr, nullptr, &message) != SQLITE_OK) {
-            const std::string text = message ? message : "unknown error";
-            sqlite3_free(message);
-            throw LibraryError("the library's database failed: " + text);
-        }
-    }
+    void exec(const char* sql) const { execOn(db, sql, "the library's database failed"); }
 
     /// The stored vectors of some models' descriptor, by model (those without it left out), in one
     /// statement: a light-field shortlist reads 64 of them per query.
@@ -171,13 +175,63 @@ struct ModelLibrary::Impl {
     }
 };
 
+namespace {
+
+/// Makes an empty library at `path` atomically: its tables are written under a temporary name, which
+/// is renamed to `path` once they are committed, so a stopped `index add` never leaves a file that is
+/// not a library (SQLite makes its file empty at open, and writes it at the first commit).
+void createLibrary(const std::string& path)
+{
+    namespace fs = std::filesystem;
+    const std::string temporary = path + ".new-" + std::to_string(::getpid());
+    std::error_code ec;
+    fs::remove(temporary, ec);
+    sqlite3* db = nullptr;
+    if (sqlite3_open_v2(temporary.c_str(), &db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) != SQLITE_OK) {
+        const std::string message = db ? sqlite3_errmsg(db) : "out of memory";
+        sqlite3_close(db);
+        throw LibraryError("cannot make the library '" + path + "': " + message);
+    }
+    try {
+        const std::string what = "cannot make the library '" + path + "'";
+        execOn(db, "BEGIN", what);
+        execOn(db, "CREATE TABLE library(key TEXT PRIMARY KEY, value TEXT NOT NULL)", what);
+        execOn(db, "CREATE TABLE models(id INTEGER PRIMARY KEY AUTOINCREMENT, name TEXT NOT NULL UNIQUE, path TEXT NOT NULL, "
+                   "label TEXT NOT NULL, triangles INTEGER NOT NULL, r REAL, g REAL, b REAL)", what);
+        execOn(db, "CREATE TABLE descriptors(model INTEGER NOT NULL REFERENCES models(id) ON DELETE CASCADE, kind TEXT NOT NULL, "
+                   "vector BLOB NOT NULL, PRIMARY KEY(model, kind))", what);
+        execOn(db, "CREATE TABLE thumbnails(model INTEGER PRIMARY KEY REFERENCES models(id) ON DELETE CASCADE, png BLOB NOT NULL)", what);
+        {
+            Statement put(db, "INSERT INTO library(key, value) VALUES ('format', ?1), ('version', ?2)");
+            put.text(1, kFormatName);
+            put.text(2, std::to_string(kFormatVersion));
+            put.step();
+        }
+        execOn(db, "COMMIT", what);
+    } catch (...) {
+        sqlite3_close(db);
+        fs::remove(temporary, ec);
+        throw;
+    }
+    sqlite3_close(db);
+    fs::rename(temporary, path, ec);
+    if (ec) {
+        fs::remove(temporary, ec);
+        throw LibraryError("cannot make the library '" + path + "': " + ec.message());
+    }
+}
+
+} // namespace
+
 ModelLibrary::ModelLibrary(const std::string& path, bool create) : path_(path), impl_(std::make_unique<Impl>())
 {
     namespace fs = std::filesystem;
     std::error_code ec;
-    const bool exists = fs::exists(path, ec);
-    if (!exists && !create) throw LibraryError("'" + path + "' does not exist (make one with 'vdbclay index add " + path + " MODELS...')");
-    if (exists) {
+    if (!fs::exists(path, ec)) {
+        if (!create) throw LibraryError("'" + path + "' does not exist (make one with 'vdbclay index add " + path + " MODELS...')");
+        createLibrary(path);
+    }
+    {
         // A foreign file is refused before SQLite opens it (SQLite would take any file and fail later).
         std::ifstream in(path, std::ios::binary);
         char magic[16] = {};
@@ -185,8 +239,7 @@ ModelLibrary::ModelLibrary(const std::string& path, bool create) : path_(path), 
         if (in.gcount() != 16 || std::memcmp(magic, "SQLite format 3", 16) != 0)
             throw LibraryError("'" + path + "' is not a VDBClay model library (not an SQLite database)");
     }
-    const int flags = SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0);
-    if (sqlite3_open_v2(path.c_str(), &impl_->db, flags, nullptr) != SQLITE_OK) {
+    if (sqlite3_open_v2(path.c_str(), &impl_->db, SQLITE_OPEN_READWRITE, nullptr) != SQLITE_OK) {
         const std::string message = impl_->db ? sqlite3_errmsg(impl_->db) : "out of memory";
         sqlite3_close(impl_->db);
         impl_->db = nullptr;
@@ -195,39 +248,20 @@ ModelLibrary::ModelLibrary(const std::string& path, bool create) : path_(path), 
     sqlite3_busy_timeout(impl_->db, 5000);
     try {
         impl_->exec("PRAGMA journal_mode=WAL");
-        bool hasMeta = false;
+        std::string format, version;
         {
-            Statement s(impl_->db, "SELECT name FROM sqlite_master WHERE type='table' AND name='library'");
-            hasMeta = s.step();
-        }
-        if (!hasMeta) {
-            Statement count(impl_->db, "SELECT count(*) FROM sqlite_master");
-            count.step();
-            if (sqlite3_column_int64(count.get(), 0) > 0) throw LibraryError("'" + path + "' is an SQLite database but not a VDBClay model library");
-            impl_->exec("BEGIN");
-            impl_->exec("CREATE TABLE library(key TEXT PRIMARY KEY, value TEXT NOT NULL)");
-            impl_->exec("CREATE TABLE models(id INTEGER PRIMARY KEY AUTOINCREMENT, name TEXT NOT NULL UNIQUE, path TEXT NOT NULL, "
-                        "label TEXT NOT NULL, triangles INTEGER NOT NULL, r REAL, g REAL, b REAL)");
-            impl_->exec("CREATE TABLE descriptors(model INTEGER NOT NULL REFERENCES models(id) ON DELETE CASCADE, kind TEXT NOT NULL, "
-                        "vector BLOB NOT NULL, PRIMARY KEY(model, kind))");
-            impl_->exec("CREATE TABLE thumbnails(model INTEGER PRIMARY KEY REFERENCES models(id) ON DELETE CASCADE, png BLOB NOT NULL)");
-            Statement put(impl_->db, "INSERT INTO library(key, value) VALUES ('format', ?1), ('version', ?2)");
-            put.text(1, kFormatName);
-            put.text(2, std::to_string(kFormatVersion));
-            put.step();
-            impl_->exec("COMMIT");
-        } else {
+            Statement meta(impl_->db, "SELECT name FROM sqlite_master WHERE type='table' AND name='library'");
+            if (!meta.step()) throw LibraryError("'" + path + "' is an SQLite database but not a VDBClay model library");
             Statement s(impl_->db, "SELECT key, value FROM library WHERE key IN ('format', 'version')");
-            std::string format, version;
             while (s.step()) (s.column(0) == "format" ? format : version) = s.column(1);
-            if (format != kFormatName) throw LibraryError("'" + path + "' is not a VDBClay model library");
-            if (std::atoi(version.c_str()) > kFormatVersion)
-                throw LibraryError("'" + path + "' was written by a newer VDBClay (library version " + version + "; this one reads " +
-                                   std::to_string(kFormatVersion) + ")");
-            Statement tables(impl_->db, "SELECT count(*) FROM sqlite_master WHERE type='table' AND name IN ('models', 'descriptors', 'thumbnails')");
-            tables.step();
-            if (sqlite3_column_int64(tables.get(), 0) != 3) throw LibraryError("the library '" + path + "' is damaged: tables are missing");
         }
+        if (format != kFormatName) throw LibraryError("'" + path + "' is not a VDBClay model library");
+        if (std::atoi(version.c_str()) > kFormatVersion)
+            throw LibraryError("'" + path + "' was written by a newer VDBClay (library version " + version + "; this one reads " +
+                               std::to_string(kFormatVersion) + ")");
+        Statement tables(impl_->db, "SELECT count(*) FROM sqlite_master WHERE type='table' AND name IN ('models', 'descriptors', 'thumbnails')");
+        tables.step();
+        if (sqlite3_column_int64(tables.get(), 0) != 3) throw LibraryError("the library '" + path + "' is damaged: tables are missing");
         impl_->exec("PRAGMA foreign_keys=ON");
     } catch (...) {
         sqlite3_close(impl_->db);
