@@ -38,10 +38,10 @@ IndexCommands addIndexCommand(CLI::App& parent, IndexOptions& o)
     c.add->add_flag("--recursive", o.recursive, "Read the folders' subfolders too (a model's class is the folder it is in)");
     c.add->add_flag("--no-render", o.noRender,
                     "Make neither light fields nor thumbnails (no Vulkan device needed; such models are searched by clusterd2 and d2)");
-    c.add->add_flag("--json", o.json, "Print {\"added\", \"already_there\", \"skipped\": [{\"path\", \"error\"}], \"models\"}");
+    c.add->add_flag("--json", o.json, "Print {\"added\", \"already_there\", \"skipped\": [{\"path\", \"error\"}], \"models\", \"light_fields\"}");
     c.info = index->add_subcommand("info", "The models of a library");
     c.info->add_option("library", o.library, "The library")->required()->type_name("LIBRARY");
-    c.info->add_flag("--json", o.json, "Print {\"models\": [{\"name\", \"class\", \"path\", \"triangles\", \"colour\"}], \"descriptors\"}");
+    c.info->add_flag("--json", o.json, "Print {\"models\": [{\"name\", \"class\", \"path\", \"triangles\", \"colour\"}], \"descriptors\": {\"clusterd2\", \"d2\", \"lightfield\": models holding it}}");
     c.remove = index->add_subcommand("remove", "Remove a model from a library");
     c.remove->add_option("library", o.library, "The library")->required()->type_name("LIBRARY");
     c.remove->add_option("name", o.name, "The model's name (as 'index info' lists it)")->required()->type_name("NAME");
