@@ -272,10 +272,11 @@ TriangleSoup receiveFromChild(pid_t child, int fd, const std::string& path, cons
 }
 
 /// The reader program: VDBCLAY_MESH_READER, else vdbclay-read-mesh beside this executable; none when
-/// neither is there to run.
+/// neither is there to run, or when VDBCLAY_MESH_READER is "fork".
 std::optional<std::string> meshReaderProgram()
 {
-    if (const char* given = std::getenv("VDBCLAY_MESH_READER"); given && *given) return ::access(given, X_OK) == 0 ? std::optional<std::string>(given) : std::nullopt;
+    if (const char* given = std::getenv("VDBCLAY_MESH_READER"); given && *given)
+        return std::string(given) != "fork" && ::access(given, X_OK) == 0 ? std::optional<std::string>(given) : std::nullopt;
     std::error_code ec;
     const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
     if (ec) return std::nullopt;

@@ -65,7 +65,8 @@ TriangleSoup loadTriangleMesh(const std::string& path, const MeshReadLimits& lim
 TriangleSoup loadTriangleMesh(const std::string& path); // with meshReadLimits(path)
 
 /// The program loadTriangleMesh runs to read a file (installed beside vdbclay; VDBCLAY_MESH_READER names
-/// another). Without it the reading runs in a fork of this process.
+/// another). Without it, or with VDBCLAY_MESH_READER=fork (a process of one thread, such as a fuzzer,
+/// forks safely and faster), the reading runs in a fork of this process.
 constexpr const char* kMeshReaderProgram = "vdbclay-read-mesh";
 /// That program's main: `PROGRAM PATH MEMORY_BYTES` reads PATH and answers on stdout.
 int meshReaderMain(int argc, char** argv);

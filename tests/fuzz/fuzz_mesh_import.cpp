@@ -30,6 +30,14 @@ void requirePrintable(const char* message)
 
 } // namespace
 
+// libFuzzer runs one thread: a fork of it is safe, and ten times faster than starting the reader
+// program for each input.
+extern "C" int LLVMFuzzerInitialize(int*, char***)
+{
+    ::setenv("VDBCLAY_MESH_READER", "fork", 1);
+    return 0;
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
 {
     if (size < 2) return 0;
