@@ -176,6 +176,21 @@ void writeSet(const TempDir& dir, const std::vector<LabeledModel>& set)
     }
 }
 
+/// A torus of the set (syntheticSet(3, ...)'s second) moved, turned, scaled and tessellated anew, written
+/// as probe.ply; returns the torus.
+const LabeledModel& writeMovedTorus(const TempDir& dir, const std::vector<LabeledModel>& set)
+{
+    const LabeledModel& target = set[3 * 4 + 1];
+    REQUIRE(target.label == "torus");
+    SyntheticShape moved = target.shape;
+    moved.rotation = {0.5, 0.5, 0.5, 0.5};
+    moved.scale *= 3.0;
+    moved.position = {-40, 7, 12};
+    moved.tessellation += 9;
+    writeColouredPly(buildShape(moved), dir.file("probe.ply"));
+    return target;
+}
+
 } // namespace
 
 TEST_CASE("query library: index add, info, query and remove, and a moved and re-tessellated model finds itself first, after reopening too", "[query]")
@@ -196,15 +211,7 @@ TEST_CASE("query library: index add, info, query and remove, and a moved and re-
     // The colour read back is the model's (rounded to 8 bits).
     for (int k = 0; k < 3; ++k) CHECK(info.at("models")[0].at("colour")[std::size_t(k)].get<double>() == Approx(set[0].shape.colour[std::size_t(k)]).margin(0.01));
 
-    // A torus of the set moved, turned, scaled and tessellated anew.
-    const LabeledModel& target = set[3 * 4 + 1];
-    REQUIRE(target.label == "torus");
-    SyntheticShape moved = target.shape;
-    moved.rotation = {0.5, 0.5, 0.5, 0.5};
-    moved.scale *= 3.0;
-    moved.position = {-40, 7, 12};
-    moved.tessellation += 9;
-    writeColouredPly(buildShape(moved), dir.file("probe.ply"));
+    const LabeledModel& target = writeMovedTorus(dir, set);
     for (const std::string descriptor : {"clusterd2", "d2", "combined"})
         for (const std::string metric : {"chi2", "jsd"}) {
             INFO(descriptor << " " << metric);
@@ -251,14 +258,7 @@ TEST_CASE("query library (render): index add draws light fields and thumbnails, 
     CHECK(added.at("light_fields") == true);
     const nlohmann::json info = parseJsonOutput(runCli(dir, "index info lib.vdblib --json"));
     for (const char* kind : {"clusterd2", "d2", "lightfield"}) CHECK(info.at("descriptors").at(kind) == set.size());
-    const LabeledModel& target = set[3 * 4 + 1];
-    REQUIRE(target.label == "torus");
-    SyntheticShape moved = target.shape;
-    moved.rotation = {0.5, 0.5, 0.5, 0.5};
-    moved.scale *= 3.0;
-    moved.position = {-40, 7, 12};
-    moved.tessellation += 9;
-    writeColouredPly(buildShape(moved), dir.file("probe.ply"));
+    const LabeledModel& target = writeMovedTorus(dir, set);
     for (const std::string descriptor : {"lightfield", "combined"}) {
         INFO(descriptor);
         const nlohmann::json result = parseJsonOutput(runCli(dir, "query lib.vdblib probe.ply -k 3 --json --descriptor " + descriptor));
