@@ -436,21 +436,10 @@ TEST_CASE("cli: an in-place sculpt killed at random moments leaves the old or th
     runStrokeScript(after, parseStrokeScript(script));
     const std::vector<char> pristine = readBytes(file);
 
-    auto startSculpt = [&] {
-        const pid_t pid = ::fork();
-        if (pid == 0) {
-            if (::chdir(dir.path().c_str()) != 0) ::_exit(127);
-            const int devnull = ::open("/dev/null", O_WRONLY);
-            ::dup2(devnull, 1), ::dup2(devnull, 2);
-            ::execl(kCli, kCli, "sculpt", "scene.vdb", "carve.json", "-o", "scene.vdb", "--threads", "1", (char*)nullptr);
-            ::_exit(127);
-        }
-        return pid;
-    };
+    const auto startSculpt = [&] { return startCli({"sculpt", "scene.vdb", "carve.json", "-o", "scene.vdb", "--threads", "1"}, "", dir.path().string()); };
     // How long one run takes here, so the kills spread over all of it (the save included).
     const auto start = std::chrono::steady_clock::now();
-    int status = 0;
-    ::waitpid(startSculpt(), &status, 0);
+    const int status = finishCli(startSculpt());
     REQUIRE((WIFEXITED(status) && WEXITSTATUS(status) == 0));
     const double runMicros = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
     REQUIRE(identical(loadVolume(file), after));
@@ -460,10 +449,7 @@ TEST_CASE("cli: an in-place sculpt killed at random moments leaves the old or th
     int sawOld = 0, sawNew = 0;
     for (int trial = 0; trial < 40; ++trial) {
         writeBytes(file, pristine.data(), pristine.size());
-        const pid_t pid = startSculpt();
-        ::usleep(useconds_t(when(rng)));
-        ::kill(pid, SIGKILL);
-        ::waitpid(pid, &status, 0);
+        finishCli(startSculpt(), std::chrono::microseconds(int64_t(when(rng))));
         INFO("trial " << trial);
         const Volume now = loadVolume(file); // never torn: it loads
         const bool isOld = identical(now, before), isNew = identical(now, after);

@@ -328,13 +328,8 @@ TEST_CASE("query library: foreign, damaged and newer libraries, unreadable model
     CHECK_FALSE(std::filesystem::exists(dir.file("e.vdblib")));
 }
 
-#include <csignal>
 #include <cstdlib>
-#include <fcntl.h>
 #include <random>
-#include <sys/wait.h>
-#include <thread>
-#include <unistd.h>
 
 TEST_CASE("query library: an index add killed at any moment leaves a library with whole models that opens and answers", "[query][kill]")
 {
@@ -346,21 +341,7 @@ TEST_CASE("query library: an index add killed at any moment leaves a library wit
     writeSet(dir, set);
     // The add runs without the renderer (--no-render): what is killed is the database's writing.
     const auto run = [&](const std::string& library, std::optional<std::chrono::microseconds> killAfter, const std::string& output) {
-        const pid_t child = ::fork();
-        if (child == 0) {
-            const int out = ::open(output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-            ::dup2(out, 1), ::dup2(out, 2);
-            ::execl(kCli, kCli, "index", "add", library.c_str(), dir.file("models").c_str(), "--recursive", "--no-render", "--json",
-                    static_cast<char*>(nullptr));
-            ::_exit(127);
-        }
-        if (killAfter) {
-            std::this_thread::sleep_for(*killAfter);
-            ::kill(child, SIGKILL);
-        }
-        int status = 0;
-        ::waitpid(child, &status, 0);
-        return status;
+        return finishCli(startCli({"index", "add", library, dir.file("models"), "--recursive", "--no-render", "--json"}, output), killAfter);
     };
     const auto printed = [&](const std::string& output) {
         std::ifstream in(output);

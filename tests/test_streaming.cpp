@@ -9,6 +9,7 @@
 #include "scene/Synthesize.h"
 #include "scene/ViewSelection.h"
 #include "sculpt/StrokeScript.h"
+#include "support/CliRun.h"
 #include "support/HermiteProbe.h"
 #include "support/PyramidCompare.h"
 #include "support/TestUtil.h"
@@ -423,21 +424,7 @@ TEST_CASE("SIGKILL at any moment loses at most the edits since the last autosave
         after.push_back(std::move(next));
     }
     const auto run = [&](const std::string& path, std::optional<std::chrono::microseconds> killAfter) {
-        const pid_t child = ::fork();
-        if (child == 0) {
-            const int devnull = ::open("/dev/null", O_WRONLY);
-            ::dup2(devnull, 1), ::dup2(devnull, 2);
-            ::execl(kCli, kCli, "sculpt", path.c_str(), dir.file("ops.json").c_str(), "--autosave-every",
-                    std::to_string(kEvery).c_str(), "--memory-budget", "16", static_cast<char*>(nullptr));
-            ::_exit(127);
-        }
-        if (killAfter) {
-            std::this_thread::sleep_for(*killAfter);
-            ::kill(child, SIGKILL);
-        }
-        int status = 0;
-        ::waitpid(child, &status, 0);
-        return status;
+        return finishCli(startCli({"sculpt", path, dir.file("ops.json"), "--autosave-every", std::to_string(kEvery), "--memory-budget", "16"}), killAfter);
     };
     // One run to the end: it applies every edit, and tells how long a run takes, so the kills below
     // land at moments spread over a run (a killed run ends early either way).

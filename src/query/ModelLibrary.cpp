@@ -122,13 +122,6 @@ void describeViews(render::ModelViews& views, const TriangleSoup& mesh, ModelDes
     description.thumbnailPng = render::encodePng(views.thumbnail(meshOfSoup(mesh, materials), materials, options));
 }
 
-ModelDescription describeModel(const TriangleSoup& mesh, render::ModelViews* views)
-{
-    ModelDescription d;
-    describeShape(mesh, d);
-    if (views) describeViews(*views, mesh, d);
-    return d;
-}
 
 namespace {
 
@@ -502,7 +495,7 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
         // over that descriptor's typical distance between the library's models (so none outweighs).
         std::vector<Descriptor> kinds;
         for (Descriptor kind : kStoredDescriptors)
-            if (!indexedPart(query, kind).empty() && count(kind) > 0) kinds.push_back(kind);
+            if (!indexedPart(query, kind).empty() && !searchIndex(kind).indexed.empty()) kinds.push_back(kind);
         std::map<int64_t, std::pair<ModelRecord, std::vector<double>>> candidates;
         for (Descriptor kind : kinds) {
             SearchIndex& si = searchIndex(kind);

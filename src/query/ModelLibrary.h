@@ -51,8 +51,6 @@ void describeShape(const TriangleSoup& mesh, ModelDescription& description);
 /// What the renderer draws (the light field, a thumbnail of `thumbnailSize` pixels): on the thread that
 /// owns `views`.
 void describeViews(render::ModelViews& views, const TriangleSoup& mesh, ModelDescription& description, int thumbnailSize = 128);
-/// Both; the drawn parts only with `views`.
-ModelDescription describeModel(const TriangleSoup& mesh, render::ModelViews* views);
 
 struct ModelRecord {
     int64_t id = 0;
@@ -76,7 +74,7 @@ public:
     ModelLibrary(const ModelLibrary&) = delete;
     ModelLibrary& operator=(const ModelLibrary&) = delete;
 
-    /// Adds a model with its descriptors (describeModel). Throws LibraryError when the name is taken or
+    /// Adds a model with its descriptors (describeShape, describeViews). Throws LibraryError when the name is taken or
     /// the description lacks D2 or ClusterD2.
     ModelRecord add(const std::string& name, const std::string& sourcePath, const std::string& label, const TriangleSoup& mesh,
                     const ModelDescription& description);
@@ -89,7 +87,7 @@ public:
     /// The model's thumbnail (PNG bytes); empty when it has none.
     std::string thumbnail(int64_t model) const;
 
-    /// The `k` models nearest `query` (a description as describeModel makes it): FLANN's shortlist ranked
+    /// The `k` models nearest `query` (described as the models are): FLANN's shortlist ranked
     /// exactly, nearest first. Combined ranks by the mean of each stored descriptor's distance over its
     /// typical distance in this library. Throws LibraryError when the query lacks the descriptor.
     std::vector<QueryHit> query(const ModelDescription& query, std::size_t k, Descriptor descriptor = Descriptor::ClusterD2,

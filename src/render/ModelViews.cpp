@@ -49,7 +49,10 @@ std::vector<Mask> ModelViews::silhouettes(const Mesh& mesh, const std::array<dou
         const std::size_t count = std::min(perFrame, directions.size() - first);
         const int columns = int(std::ceil(std::sqrt(double(count))));
         const int rows = int((count + std::size_t(columns) - 1) / std::size_t(columns));
-        OffscreenTarget target(context_, columns * size, rows * size);
+        // One picture of tiles, kept for the next model (a library's models all take the same size).
+        if (!tiles_ || tiles_->width() != columns * size || tiles_->height() != rows * size)
+            tiles_ = std::make_unique<OffscreenTarget>(context_, columns * size, rows * size);
+        OffscreenTarget& target = *tiles_;
         std::vector<RenderView> views(count);
         for (std::size_t i = 0; i < count; ++i) {
             const auto& d = directions[first + i];

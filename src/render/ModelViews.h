@@ -38,6 +38,7 @@ public:
 private:
     VulkanContext& context_;
     std::unique_ptr<Renderer> renderer_;
+    std::unique_ptr<OffscreenTarget> tiles_; // the silhouettes' last picture
 };
 
 } // namespace vdbclay::render

@@ -1,4 +1,5 @@
-// Running the vdbclay binary from tests: its exit code, stdout and stderr.
+// Running the vdbclay binary from tests: its exit code, stdout and stderr; or started and stopped at a
+// chosen moment (the kill tests).
 #pragma once
 
 #include "support/TestUtil.h"
@@ -6,10 +7,18 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <chrono>
+#include <csignal>
+#include <cerrno>
 #include <cstdlib>
+#include <fcntl.h>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
+#include <vector>
 
 namespace vdbclay::test {
 
@@ -44,6 +53,43 @@ inline CommandResult runCli(const TempDir& dir, const std::string& args, const s
     std::filesystem::remove(outPath);
     std::filesystem::remove(errPath);
     return r;
+}
+
+/// Starts the vdbclay binary with `args` (no shell) in `workingDir` (empty: this process's), its stdout
+/// and stderr to `output` (empty: /dev/null); returns its pid, for finishCli.
+inline pid_t startCli(const std::vector<std::string>& args, const std::string& output = "", const std::string& workingDir = "")
+{
+    // Everything the child needs is made before the fork: a threaded process's child may only make the
+    // calls a signal handler may (chdir, open, dup2, exec).
+    std::vector<std::string> words{kCli};
+    words.insert(words.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (std::string& w : words) argv.push_back(w.data());
+    argv.push_back(nullptr);
+    const std::string sink = output.empty() ? "/dev/null" : output;
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+        if (!workingDir.empty() && ::chdir(workingDir.c_str()) != 0) ::_exit(127);
+        const int out = ::open(sink.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        ::dup2(out, 1), ::dup2(out, 2);
+        ::execv(kCli, argv.data());
+        ::_exit(127);
+    }
+    return pid;
+}
+
+/// Waits for a run startCli began, killing it (SIGKILL) after `killAfter` when one is given; returns
+/// waitpid's status.
+inline int finishCli(pid_t pid, std::optional<std::chrono::microseconds> killAfter = std::nullopt)
+{
+    if (killAfter) {
+        std::this_thread::sleep_for(*killAfter);
+        ::kill(pid, SIGKILL);
+    }
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    return status;
 }
 
 /// The command failed cleanly: a small non-zero exit code (no signal) and one error line on stderr.
