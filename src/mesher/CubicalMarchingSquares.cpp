@@ -10,9 +10,11 @@
 // sharp feature on the face while the other pairing's do not; then the other pairing is. Segments are
 // linked into components; each component gets one inner vertex, the least-squares point of its
 // crossing planes (truncated SVD, clamped to the cell grown to the component's face points) when its
-// normals span the sharp angle, else the mean of its vertices, and is fanned from it. A fan with a
-// triangle that folds back against the surface's normals at both of its loop points (a concave crease's
-// planes can put the point where) gets a centre nearer the mean point, or else the loop is triangulated
+// normals span the sharp angle, else the mean of its vertices, and is fanned from it (a corner that
+// planes read around the cell make is taken only on the cell's own edge line). A fan with a triangle
+// that folds back against the surface's normals at both of its loop points, or against the sheet nearer
+// its centroid (a concave crease's planes can put the point where) gets a centre nearer the mean point,
+// or else the loop is triangulated
 // without one, its diagonals chosen so that none folds (never between points that may share a cell face,
 // so neighbouring cells cannot both draw one). A concave crease's sharp fan that leans back past either
 // loop point's normal is triangulated that way too.
@@ -163,6 +165,9 @@ void accumulate(std::array<double, 3>& sum, const std::array<T, 3>& v)
 /// neighbouring squares and cells never meet on a shared side. Under half the crossings' corner margin
 /// (kOffsetMarginCode, 2.4e-4), ten times the distance below which analyzeTopology merges vertices.
 constexpr double kFeatureInsetVoxels = 1e-4;
+/// How far (in voxels) a corner found from the crossings around a cell may lie from the line of the
+/// cell's own sharp edge.
+constexpr double kCornerOffEdgeVoxels = 0.1;
 /// A fan triangle folds when its normal lies more than 120 degrees (this cosine past perpendicular) from
 /// the surface's normals at both of its loop points: less is a crease's bridge leaning (and a rotated
 /// box's corner fans lean that far without folding).
@@ -307,7 +312,10 @@ struct CubicalMarchingSquaresMesher::Buffers {
         // Nearer the mean point first, then the loop alone, then anywhere in the cell. A concave crease's
         // vertex (below its loop's mean point) whose fan leans back past one loop point's normal gives way
         // to the loop alone too.
-        if (foldsOfFan(centre, ids, n) > 0 && !unfoldFan(centre, ids, n)) {
+        // Judged strictly first (a bridge facing back from the sheet it stands for folds too); a centre that
+        // only leans so, as a ridge's fans may, stays when no strictly unfolded centre lies towards the mean.
+        if (foldsOfFan(centre, ids, n, FoldTest::Strict) > 0 && !unfoldFan(centre, ids, n, FoldTest::Strict) &&
+            foldsOfFan(centre, ids, n, FoldTest::BothPoints) > 0 && !unfoldFan(centre, ids, n, FoldTest::BothPoints)) {
             if (triangulateLoop(ids, materials, n)) return;
             placeUnfolded(centre, ids, n, cell);
         }
@@ -383,28 +391,47 @@ struct CubicalMarchingSquaresMesher::Buffers {
         return true;
     }
 
+    /// How a fan triangle is judged: folded against the normals at both of its loop points, or strictly,
+    /// also against the sheet whose tangent plane lies nearer its centroid (a bridge across a crease
+    /// stands for that sheet there, and must not face back from it).
+    enum class FoldTest { BothPoints, Strict };
+
     /// The fan triangles from `centre` (as stored, a float) that fold.
-    int foldsOfFan(const std::array<double, 3>& centre, const uint32_t* ids, std::size_t n) const
+    int foldsOfFan(const std::array<double, 3>& centre, const uint32_t* ids, std::size_t n, FoldTest test) const
     {
         const std::array<double, 3> c{float(centre[0]), float(centre[1]), float(centre[2])};
         int folds = 0;
         for (std::size_t i = 0; i < n; ++i) {
             const uint32_t a = ids[i], b = ids[i + 1 < n ? i + 1 : 0];
-            folds += foldsAgainst(c, a, b, {a, b});
+            folds += foldsAgainst(c, a, b, {a, b}) || (test == FoldTest::Strict && foldsAgainst(c, a, b, {nearerPlane(c, a, b)}));
         }
         return folds;
+    }
+
+    /// Of a triangle's two loop points, the one whose tangent plane lies nearer its centroid: the sheet
+    /// of the surface the triangle stands for there, where a crease bridges two.
+    uint32_t nearerPlane(const std::array<double, 3>& c, uint32_t a, uint32_t b) const
+    {
+        const auto& p = chunk.mesh.positions;
+        const auto& m = chunk.mesh.normals;
+        const auto distance = [&](uint32_t q) {
+            double d = 0.0;
+            for (int k = 0; k < 3; ++k) d += ((c[k] + p[a][k] + p[b][k]) / 3.0 - p[q][k]) * m[q][k];
+            return std::fabs(d);
+        };
+        return distance(a) <= distance(b) ? a : b;
     }
 
     /// A fan that folds (at a concave crease the loop's mean point, or its sharp feature, can lie where
     /// some triangles face back) gets another centre where none folds, if one lies between it and the
     /// loop's mean point. Returns whether it found one.
-    bool unfoldFan(std::array<double, 3>& centre, const uint32_t* ids, std::size_t n) const
+    bool unfoldFan(std::array<double, 3>& centre, const uint32_t* ids, std::size_t n, FoldTest test) const
     {
         const std::array<double, 3> mean = loopMean(ids, n);
         for (double s : {0.25, 0.5, 0.75, 1.0}) {
             const std::array<double, 3> at{centre[0] + s * (mean[0] - centre[0]), centre[1] + s * (mean[1] - centre[1]),
                                            centre[2] + s * (mean[2] - centre[2])};
-            if (foldsOfFan(at, ids, n) == 0) {
+            if (foldsOfFan(at, ids, n, test) == 0) {
                 centre = at;
                 return true;
             }
@@ -433,7 +460,7 @@ struct CubicalMarchingSquaresMesher::Buffers {
                     const std::array<double, 3> at{cell.lo[0] + inset + span * i / kSteps, cell.lo[1] + inset + span * j / kSteps,
                                                    cell.lo[2] + inset + span * k / kSteps};
                     const double gap = tangentPlaneGap(at, ids, n);
-                    if (gap > allowed || foldsOfFan(at, ids, n) > 0) continue;
+                    if (gap > allowed || foldsOfFan(at, ids, n, FoldTest::Strict) > 0) continue;
                     const std::pair<int, double> score{leansOfFan(at, ids, n), gap};
                     if (score < best) {
                         best = score;
@@ -1296,7 +1323,11 @@ private:
                 const QefSolution wide = solveQef(ata, atb, massPoint);
                 const Eigen::Vector3d& corner = wide.point;
                 const double eps = 1e-6 * ctx_.voxelSize;
-                if (wide.rank == 3 && (corner.array() >= lo.array() - eps).all() && (corner.array() <= hi.array() + eps).all())
+                // A corner of this cell's own edge lies on the edge's line; planes of other surfaces
+                // near the cell (a second part, a crease beside) can meet elsewhere in it.
+                const Eigen::Vector3d offEdge = (corner - own.point) - (corner - own.point).dot(own.weakestDirection) * own.weakestDirection;
+                if (wide.rank == 3 && (corner.array() >= lo.array() - eps).all() && (corner.array() <= hi.array() + eps).all() &&
+                    offEdge.norm() <= kCornerOffEdgeVoxels * ctx_.voxelSize)
                     return corner;
             }
         }
