@@ -125,18 +125,50 @@ TEST_CASE("editor query: the sculpture finds the round model first, a box of not
 
 #include <imgui.h>
 
-TEST_CASE("editor query panel (render): Search and Place at the brush clicked through ImGui give one placing command", "[editor][query]")
+TEST_CASE("editor query panel (render): the search ranks with the sculpture's light field, and Search and Place at the brush clicked through ImGui give one placing command", "[editor][query]")
 {
     TempDir dir;
     for (const query::LabeledModel& m : query::syntheticSet(1, 5)) {
         std::filesystem::create_directories(dir.path() / "models" / m.label);
         query::writeColouredPly(query::buildShape(m.shape), (dir.path() / "models" / m.label / (m.name + ".ply")).string());
     }
-    REQUIRE(runCli(dir, "index add lib.vdblib models --recursive").exitCode == 0); // with thumbnails
+    query::SyntheticShape round;
+    round.family = "ellipsoid";
+    round.proportions = {1.0, 1.0 / 0.7, 1.0 / 0.5};
+    round.tessellation = 40;
+    query::writeColouredPly(query::buildShape(round), dir.file("models/round.ply"));
+    REQUIRE(runCli(dir, "index add lib.vdblib models --recursive").exitCode == 0); // with light fields and thumbnails
     REQUIRE(runCli(dir, "new ball.vdb --shape sphere --size 24").exitCode == 0);
     EditingSession session(dir.file("ball.vdb"), quietSession());
     settle(session);
     SessionWorker worker(session);
+
+    // The search draws the sculpture's silhouettes on its own thread and device: the voxel ball's light
+    // field finds the round model first, alone and combined.
+    {
+        ModelSearch search;
+        ModelSearchRequest request;
+        request.library = dir.file("lib.vdblib");
+        request.k = 3;
+        request.lightField = true;
+        for (const query::Descriptor d : {query::Descriptor::LightField, query::Descriptor::Combined}) {
+            INFO(query::descriptorName(d));
+            request.descriptor = d;
+            REQUIRE(search.search(session, request));
+            const ModelSearchOutcome found = finished(search);
+            INFO(found.error);
+            REQUIRE(found.results);
+            CHECK(found.note.empty());
+            REQUIRE(found.results->size() == 3);
+            CHECK((*found.results)[0].model.name == "round");
+            CHECK((*found.results)[0].distance < (*found.results)[1].distance);
+        }
+        // Without the light field asked for, ranking by it is refused in one line.
+        request.lightField = false;
+        request.descriptor = query::Descriptor::LightField;
+        REQUIRE(search.search(session, request));
+        CHECK(finished(search).error.find("lightfield") != std::string::npos);
+    }
 
     ImGuiContext* imgui = ImGui::CreateContext();
     ImGuiIO& io = ImGui::GetIO();
@@ -147,6 +179,7 @@ TEST_CASE("editor query panel (render): Search and Place at the brush clicked th
     io.Fonts->GetTexDataAsRGBA32(&pixels, &width, &height);
     QueryPanel panel;
     panel.library = dir.file("lib.vdblib");
+    panel.lightField = true;
     std::map<std::string, std::array<float, 4>> rects;
     std::vector<Command> issued;
     std::string status;
@@ -176,7 +209,8 @@ TEST_CASE("editor query panel (render): Search and Place at the brush clicked th
     panel.search().wait();
     frame(std::nullopt, false); // the results come in
     INFO(status);
-    REQUIRE(panel.results().size() == 6);
+    REQUIRE(panel.results().size() == 7);
+    CHECK(status.find("without the light field") == std::string::npos);
     for (const ModelSearchResult& r : panel.results()) CHECK(r.thumbnail.width == 128); // drawn as cells
     frame(std::nullopt, false); // the result rows are laid out
     REQUIRE(issued.empty());

@@ -5,6 +5,7 @@
 #include "query/Isodata.h"
 #include "query/LightField.h"
 #include "query/MeshCurvature.h"
+#include "query/SilhouetteMesh.h"
 #include "query/SyntheticModels.h"
 #include "render/ModelViews.h"
 #include "render/VulkanContext.h"
@@ -337,4 +338,124 @@ TEST_CASE("query light field (render): a sphere's silhouettes are discs filling 
     CHECK(context.validationMessages() == 0);
 }
 
+namespace {
 
+/// The soup with each triangle's corners its own (as a file without shared vertices has them).
+TriangleSoup unshared(const TriangleSoup& soup)
+{
+    TriangleSoup out = soup;
+    out.positions.clear();
+    for (auto& t : out.triangles)
+        for (uint32_t& v : t) {
+            out.positions.push_back(soup.positions[v]);
+            v = uint32_t(out.positions.size() - 1);
+        }
+    return out;
+}
+
+/// Whether every pixel where two masks differ lies within `reach` pixels of the first mask's outline
+/// (a pixel of the other value within the square of that reach around it).
+bool differOnlyNearOutline(const render::Mask& a, const render::Mask& b, int size, int reach)
+{
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            if (a[std::size_t(y * size + x)] == b[std::size_t(y * size + x)]) continue;
+            bool nearOutline = false;
+            for (int dy = -reach; dy <= reach && !nearOutline; ++dy)
+                for (int dx = -reach; dx <= reach && !nearOutline; ++dx) {
+                    const int u = x + dx, v = y + dy;
+                    nearOutline = u >= 0 && v >= 0 && u < size && v < size && a[std::size_t(v * size + u)] != a[std::size_t(y * size + x)];
+                }
+            if (!nearOutline) return false;
+        }
+    return true;
+}
+
+} // namespace
+
+TEST_CASE("query silhouette mesh: clustering keeps closed surfaces closed and open ones open, welds unshared corners, and thins with the cell", "[query]")
+{
+    std::mt19937_64 random(5);
+    for (const std::string& family : syntheticFamilies()) {
+        INFO(family);
+        const TriangleSoup soup = buildShape(randomShape(family, random));
+        std::array<double, 3> lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+        for (const auto& p : soup.positions)
+            for (std::size_t a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+        const double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+        std::size_t previous = soup.triangles.size();
+        for (const double cell : {extent / 400.0, extent / 100.0, extent / 25.0}) {
+            const SilhouetteMesh fine = silhouetteMesh(soup, cell);
+            CHECK(fine.closed);
+            CHECK(fine.mesh.triangles.size() <= previous);
+            previous = fine.mesh.triangles.size();
+            // A cluster's point is the mean of its corners: inside the model's box.
+            for (const auto& p : fine.mesh.positions)
+                for (std::size_t a = 0; a < 3; ++a) CHECK((p[a] >= float(lo[a]) - 1e-4f && p[a] <= float(hi[a]) + 1e-4f));
+            // Corners that are not shared cluster the same way.
+            const SilhouetteMesh loose = silhouetteMesh(unshared(soup), cell);
+            CHECK(loose.closed);
+            CHECK(loose.mesh.triangles.size() == fine.mesh.triangles.size());
+        }
+        TriangleSoup open = soup;
+        open.triangles.erase(open.triangles.begin() + std::ptrdiff_t(open.triangles.size() / 2));
+        CHECK_FALSE(silhouetteMesh(open, extent / 400.0).closed);
+    }
+    // A fine unit sphere (about 100k triangles) in cells of a pixel of a 128-pixel view: about 4 pi
+    // 64^2 cells on the surface, two triangles each.
+    const TriangleSoup fine = buildShape(roundBall(158));
+    const SilhouetteMesh pixels = silhouetteMesh(fine, 2.0 / 128.0);
+    CHECK(pixels.closed);
+    CHECK(pixels.mesh.triangles.size() < fine.triangles.size() * 3 / 4);
+    CHECK(silhouetteMesh(fine, 8.0 / 128.0).mesh.triangles.size() < fine.triangles.size() / 8);
+    CHECK_THROWS_AS(silhouetteMesh(fine, 0.0), std::invalid_argument);
+}
+
+TEST_CASE("query silhouette mesh (render): a clustered closed surface's front faces draw the silhouettes of all its triangles but near the outline, inside out too", "[query]")
+{
+    render::ContextOptions contextOptions;
+    contextOptions.validation = true;
+    render::VulkanContext context(contextOptions);
+    render::ModelViews views(context);
+    const auto meshOf = [](const TriangleSoup& soup) {
+        Mesh mesh;
+        for (const auto& p : soup.positions) mesh.positions.push_back({float(p[0]), float(p[1]), float(p[2])});
+        mesh.normals.assign(mesh.positions.size(), {0, 0, 1});
+        mesh.materials.assign(mesh.positions.size(), 1);
+        mesh.triangles = soup.triangles;
+        mesh.triangleMaterials.assign(mesh.triangles.size(), 1);
+        return mesh;
+    };
+    std::mt19937_64 random(8);
+    constexpr int kSize = 128;
+    for (const std::string& family : syntheticFamilies()) {
+        INFO(family);
+        SyntheticShape shape = randomShape(family, random);
+        shape.tessellation = 64;
+        const TriangleSoup soup = buildShape(shape);
+        std::array<double, 3> centre{0, 0, 0};
+        for (const auto& p : soup.positions)
+            for (std::size_t a = 0; a < 3; ++a) centre[a] += p[a] / double(soup.positions.size());
+        double radius = 0.0;
+        for (const auto& p : soup.positions)
+            radius = std::max(radius, std::sqrt((p[0] - centre[0]) * (p[0] - centre[0]) + (p[1] - centre[1]) * (p[1] - centre[1]) +
+                                                (p[2] - centre[2]) * (p[2] - centre[2])));
+        const std::vector<std::array<double, 3>> directions(lightFieldDirections().begin(), lightFieldDirections().begin() + 10);
+        const std::vector<render::Mask> full = views.silhouettes(meshOf(soup), centre, radius, directions, kSize);
+        const SilhouetteMesh clustered = silhouetteMesh(soup, kSilhouetteCellPixels * 2.0 * radius / kSize);
+        REQUIRE(clustered.closed);
+        const std::vector<render::Mask> fronts = views.silhouettes(clustered.mesh, centre, radius, directions, kSize, true);
+        // Turned inside out, the other faces face the eye and cover the same.
+        Mesh inverted = clustered.mesh;
+        for (auto& t : inverted.triangles) std::swap(t[1], t[2]);
+        const std::vector<render::Mask> backs = views.silhouettes(inverted, centre, radius, directions, kSize, true);
+        for (std::size_t i = 0; i < directions.size(); ++i) {
+            INFO("view " << i);
+            CHECK(std::count(full[i].begin(), full[i].end(), 1) > kSize * kSize / 20);
+            // A cluster's point lies in its cell: a corner moves by at most the cell's diagonal.
+            CHECK(differOnlyNearOutline(full[i], fronts[i], kSize, int(std::ceil(kSilhouetteCellPixels * std::sqrt(3.0)))));
+            CHECK(differOnlyNearOutline(fronts[i], backs[i], kSize, 1));
+        }
+    }
+    CHECK(context.validationMessages() == 0);
+}

@@ -178,6 +178,7 @@ struct DesktopEditor::Impl {
         panels.wireframe = settings.wireframe;
         panels.stabilizer = float(settings.stabilizerPixels);
         panels.helpText = desktopShortcutsHelp(keymap);
+        panels.query.lightField = true; // a window has a renderer: searches draw the sculpture's silhouettes
     }
 
     std::array<int, 2> windowSize() const

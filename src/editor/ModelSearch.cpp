@@ -2,8 +2,11 @@
 
 #include "editor/EditingSession.h"
 #include "editor/SceneFileActions.h"
+#include "query/LightField.h"
 #include "query/SceneModels.h"
 #include "render/ImageFile.h"
+#include "render/ModelViews.h"
+#include "render/VulkanContext.h"
 
 #include <functional>
 #include <mutex>
@@ -16,6 +19,28 @@ struct ModelSearch::Impl {
     mutable std::mutex mutex;
     bool running = false;
     std::optional<ModelSearchOutcome> outcome;
+    // The light field's renderer, made by the first search that asks for it and used by the jobs alone
+    // (one at a time); a device of its own, so that the window's queue is never shared.
+    std::unique_ptr<render::VulkanContext> context;
+    std::unique_ptr<render::ModelViews> views;
+    std::string viewsUnavailable; // why there is none, once it failed
+
+    /// The silhouettes' renderer, or null (and `why`) where there is no usable device.
+    render::ModelViews* silhouettes(std::string& why)
+    {
+        if (!views && viewsUnavailable.empty()) {
+            try {
+                context = std::make_unique<render::VulkanContext>();
+                views = std::make_unique<render::ModelViews>(*context);
+            } catch (const std::exception& e) {
+                views.reset();
+                context.reset();
+                viewsUnavailable = e.what();
+            }
+        }
+        why = viewsUnavailable;
+        return views.get();
+    }
 
     bool start(std::function<ModelSearchOutcome()> work)
     {
@@ -71,7 +96,7 @@ ModelSearch::~ModelSearch() { wait(); }
 
 bool ModelSearch::search(const EditingSession& session, const ModelSearchRequest& request)
 {
-    return impl_->start([&session, request] {
+    return impl_->start([&session, request, impl = impl_.get()] {
         const query::ModelLibrary library(request.library, false);
         const TriangleSoup sculpture = shownSculpture(session, request.box);
         if (sculpture.triangles.empty())
@@ -79,6 +104,11 @@ bool ModelSearch::search(const EditingSession& session, const ModelSearchRequest
         query::ModelDescription description;
         query::describeShape(sculpture, description);
         ModelSearchOutcome outcome;
+        if (request.lightField) {
+            std::string why;
+            if (render::ModelViews* views = impl->silhouettes(why)) description.lightField = query::lightFieldDescriptor(*views, sculpture);
+            else outcome.note = "ranked without the light field (" + why + ")";
+        }
         outcome.results.emplace();
         for (const query::QueryHit& hit : library.query(description, request.k, request.descriptor, request.metric)) {
             ModelSearchResult r{hit.model, hit.distance, {}};

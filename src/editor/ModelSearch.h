@@ -1,8 +1,9 @@
 // The editor's search of a model library (src/query) with the sculpture, and the placing of a found
 // model at the brush: both run on a thread of their own, so the frame that asks never waits; the frame
 // polls for the outcome. The sculpture is what the view shows (each shown brick's mesh at its level),
-// whole or within a box; it is ranked by the descriptors computed on the CPU (ClusterD2+Color, D2 or
-// both combined; the light field needs the renderer's silhouettes, which the command line draws).
+// whole or within a box; it is described as the command line describes a query (ClusterD2+Color and D2
+// on the CPU, and where asked the light field, its silhouettes drawn by a renderer the search makes on
+// its own thread and device, on its first such search).
 #pragma once
 
 #include "query/ModelLibrary.h"
@@ -27,6 +28,9 @@ struct ModelSearchRequest {
     query::Descriptor descriptor = query::Descriptor::Combined;
     query::Metric metric = query::Metric::ChiSquare;
     std::size_t k = 8;
+    /// Describe the sculpture's light field too (combined then ranks with it, as the command line
+    /// does). Without a usable Vulkan device the search goes on without it and says so in its note.
+    bool lightField = false;
 };
 
 struct ModelSearchResult {
@@ -40,6 +44,7 @@ struct ModelSearchOutcome {
     std::optional<std::vector<ModelSearchResult>> results;
     std::optional<nlohmann::json> placement;
     std::string error;
+    std::string note; // what the search did without (the light field, and why)
 };
 
 class ModelSearch {

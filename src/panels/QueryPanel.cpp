@@ -10,8 +10,9 @@ namespace vdbclay {
 
 namespace {
 
-constexpr const char* kDescriptorLabels[] = {"combined", "clusterd2", "d2"};
-constexpr query::Descriptor kDescriptors[] = {query::Descriptor::Combined, query::Descriptor::ClusterD2, query::Descriptor::D2};
+constexpr const char* kDescriptorLabels[] = {"combined", "clusterd2", "d2", "lightfield"};
+constexpr query::Descriptor kDescriptors[] = {query::Descriptor::Combined, query::Descriptor::ClusterD2, query::Descriptor::D2,
+                                              query::Descriptor::LightField};
 constexpr const char* kLibraryTitle = "Choose a model library";
 /// Thumbnails are drawn as this many cells a side (ImGui 1.86's Vulkan backend draws one texture, its
 /// font's: a picture is coloured rectangles, a few hundred after merging runs).
@@ -52,6 +53,7 @@ void QueryPanel::draw(SessionWorker& session, const std::optional<std::array<dou
                 thumbnails_.push_back(std::move(cells));
             }
             status = results_.empty() ? "find models: the library is empty" : "found " + std::to_string(results_.size()) + " models";
+            if (!done->note.empty()) status += "; " + done->note;
         } else if (done->placement) {
             Command c;
             c.kind = Command::Kind::ApplyOp;
@@ -65,8 +67,12 @@ void QueryPanel::draw(SessionWorker& session, const std::optional<std::array<dou
     ImGui::SameLine();
     if (ImGui::Button("...##library"))
         browser_.open(kLibraryTitle, std::filesystem::absolute(session.scenePath()).parent_path().string(), {".vdblib"}, false);
-    ImGui::Combo("Ranking", &descriptor, kDescriptorLabels, IM_ARRAYSIZE(kDescriptorLabels));
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("combined: ClusterD2+Color and D2 together; the light field is the command line's");
+    // The light field is offered where the front end lets the search draw silhouettes.
+    const int rankings = IM_ARRAYSIZE(kDescriptorLabels) - (lightField ? 0 : 1);
+    descriptor = std::clamp(descriptor, 0, rankings - 1);
+    ImGui::Combo("Ranking", &descriptor, kDescriptorLabels, rankings);
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip(lightField ? "combined: ClusterD2+Color, D2 and the light field together" : "combined: ClusterD2+Color and D2 together");
     ImGui::SliderInt("Models", &count, 1, 32);
     ImGui::Checkbox("Only inside the box", &useBox);
     if (useBox) {
@@ -82,8 +88,9 @@ void QueryPanel::draw(SessionWorker& session, const std::optional<std::array<dou
         ModelSearchRequest request;
         request.library = library;
         if (useBox) request.box = WorldBounds{Vec3d(boxMin[0], boxMin[1], boxMin[2]), Vec3d(boxMax[0], boxMax[1], boxMax[2])};
-        request.descriptor = kDescriptors[std::clamp(descriptor, 0, int(IM_ARRAYSIZE(kDescriptors)) - 1)];
+        request.descriptor = kDescriptors[descriptor];
         request.k = std::size_t(std::max(1, count));
+        request.lightField = lightField;
         if (library.empty()) status = "find models: choose a library first (vdbclay index add makes one)";
         else search_.search(session.session(), request);
     }

@@ -31,7 +31,10 @@ public:
     std::string library;  // the library file searched
     bool useBox = false;  // search with the part of the sculpture inside the box only
     float boxMin[3] = {-8, -8, -8}, boxMax[3] = {8, 8, 8};
-    int descriptor = 0;   // kDescriptors' index: combined, clusterd2, d2
+    int descriptor = 0;   // kDescriptors' index: combined, clusterd2, d2, lightfield
+    /// Searches draw the sculpture's silhouettes too (ModelSearchRequest::lightField): the front ends
+    /// with a renderer set it; headless sessions and tests leave it off.
+    bool lightField = false;
     int count = 8;        // models listed
 
     /// What the last search found (the panel lists it).

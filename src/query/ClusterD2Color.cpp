@@ -1,5 +1,7 @@
 #include "query/ClusterD2Color.h"
 
+#include <tbb/parallel_for.h>
+
 #include "query/Isodata.h"
 #include "query/MeshCurvature.h"
 #include "query/SurfaceSamples.h"
@@ -259,12 +261,15 @@ Histogram clusterD2ColorDescriptor(const TriangleSoup& input, const ClusterD2Opt
     const Prepared prepared = prepare(input, options);
     // Samples, their selection and the clusters vary from one draw to the next: the mean of a few runs
     // (seeds seed, seed + 1, ...) holds still where one run would not.
-    Histogram mean(std::size_t(std::max(1, options.bins)), 0.0);
+    // The runs in parallel, summed in order (the same mean on any number of threads).
     const int runs = std::max(1, options.runs);
-    for (int r = 0; r < runs; ++r) {
-        const Histogram h = describeOnce(prepared, options, options.seed + uint64_t(r), r == 0 ? details : nullptr);
+    std::vector<Histogram> each(static_cast<std::size_t>(runs));
+    tbb::parallel_for(0, runs, [&](int r) {
+        each[std::size_t(r)] = describeOnce(prepared, options, options.seed + uint64_t(r), r == 0 ? details : nullptr);
+    });
+    Histogram mean(std::size_t(std::max(1, options.bins)), 0.0);
+    for (const Histogram& h : each)
         for (std::size_t b = 0; b < mean.size(); ++b) mean[b] += h[b] / double(runs);
-    }
     return mean;
 }
 

@@ -1,5 +1,7 @@
 #include "query/LightField.h"
 
+#include "query/SilhouetteMesh.h"
+
 #include "render/ModelViews.h"
 
 #include <tbb/parallel_for.h>
@@ -282,15 +284,12 @@ std::vector<float> lightFieldDescriptor(render::ModelViews& views, const Triangl
             const Vec d{p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]};
             radius = std::max(radius, std::sqrt(dot(d, d)));
         }
-    // A silhouette needs positions only: the soup's vertices shared (a third of meshOfSoup's to transform).
-    Mesh shape;
-    shape.positions.reserve(soup.positions.size());
-    for (const Vec& p : soup.positions) shape.positions.push_back({float(p[0]), float(p[1]), float(p[2])});
-    shape.normals.assign(shape.positions.size(), {0.0f, 0.0f, 1.0f});
-    shape.materials.assign(shape.positions.size(), MaterialId(1));
-    shape.triangles = soup.triangles;
-    shape.triangleMaterials.assign(shape.triangles.size(), MaterialId(1));
-    const std::vector<std::vector<uint8_t>> masks = views.silhouettes(shape, centre, radius, lightFieldDirections(), kSilhouetteSize);
+    // Vertices clustered in cells of about a pixel (the view is 2 radii across); a model too thin for
+    // that keeps its own triangles.
+    SilhouetteMesh shape = silhouetteMesh(soup, kSilhouetteCellPixels * 2.0 * radius / kSilhouetteSize);
+    if (shape.mesh.triangles.empty()) shape = silhouetteMesh(soup, 1e-9 * radius);
+    const std::vector<std::vector<uint8_t>> masks =
+        views.silhouettes(shape.mesh, centre, radius, lightFieldDirections(), kSilhouetteSize, shape.closed);
     return lightFieldFromSilhouettes(masks, kSilhouetteSize);
 }
 

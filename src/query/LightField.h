@@ -29,6 +29,9 @@ constexpr int kViewFeatures = kZernikeMoments + kFourierCoefficients;
 constexpr std::size_t kLightFieldLength = std::size_t(kViewFeatures) * (1 + kLightFields * kViewsPerLightField);
 /// Silhouettes are drawn this many pixels square.
 constexpr int kSilhouetteSize = 128;
+/// Vertices drawn in silhouettes are clustered in cells this many pixels wide (SilhouetteMesh.h): below
+/// what the features resolve (moments and outline coefficients of order 10, about a tenth of the view).
+constexpr double kSilhouetteCellPixels = 1.0;
 
 /// The view directions: light field f's view v at f * kViewsPerLightField + v.
 const std::vector<std::array<double, 3>>& lightFieldDirections();

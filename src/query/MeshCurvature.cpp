@@ -31,10 +31,10 @@ uint64_t edgeKey(uint32_t a, uint32_t b) { return a < b ? (uint64_t(a) << 32) | 
 
 } // namespace
 
-WeldedMesh weldMesh(const TriangleSoup& soup)
+VertexWeld weldVertices(const TriangleSoup& soup)
 {
-    WeldedMesh out;
-    std::vector<uint32_t> remap(soup.positions.size());
+    VertexWeld out;
+    out.index.resize(soup.positions.size());
     double extent = 0.0;
     for (const Vec& p : soup.positions)
         for (double c : p) extent = std::max(extent, std::abs(c));
@@ -46,8 +46,17 @@ WeldedMesh weldMesh(const TriangleSoup& soup)
         const Cell key{std::llround(p[0] / cell), std::llround(p[1] / cell), std::llround(p[2] / cell)};
         const auto [at, inserted] = seen.emplace(key, uint32_t(out.positions.size()));
         if (inserted) out.positions.push_back(p);
-        remap[i] = at->second;
+        out.index[i] = at->second;
     }
+    return out;
+}
+
+WeldedMesh weldMesh(const TriangleSoup& soup)
+{
+    WeldedMesh out;
+    VertexWeld weld = weldVertices(soup);
+    out.positions = std::move(weld.positions);
+    const std::vector<uint32_t>& remap = weld.index;
     out.triangles.reserve(soup.triangles.size());
     std::unordered_map<uint64_t, uint32_t> edgeUses;
     edgeUses.reserve(soup.triangles.size() * 2);

@@ -23,6 +23,13 @@ struct WeldedMesh {
 
 WeldedMesh weldMesh(const TriangleSoup& soup);
 
+/// The weld alone: each soup vertex's index among the joined positions.
+struct VertexWeld {
+    std::vector<std::array<double, 3>> positions;
+    std::vector<uint32_t> index; // per soup vertex
+};
+VertexWeld weldVertices(const TriangleSoup& soup);
+
 /// The integral of |K| over the surface: the sum of the vertices' angle defects (2 pi less their
 /// triangles' angles; pi on a boundary). 4 pi for any convex closed surface.
 double absoluteGaussianCurvature(const WeldedMesh& mesh);

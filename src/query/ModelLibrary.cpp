@@ -8,6 +8,8 @@
 #include "render/ImageFile.h"
 #include "render/ModelViews.h"
 
+#include <tbb/parallel_for.h>
+
 #include <sqlite3.h>
 #include <unistd.h>
 
@@ -445,12 +447,16 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
         std::vector<int64_t> ids;
         for (std::size_t i : positions) ids.push_back(si.indexed[i].id);
         const std::map<int64_t, std::vector<float>> full = impl_->vectors(ids, Descriptor::LightField);
+        std::vector<const std::vector<float>*> vectors;
         for (int64_t id : ids) {
             const auto at = full.find(id);
             if (at == full.end() || at->second.size() != kLightFieldLength)
                 throw LibraryError("the library '" + path_ + "' is damaged: a light field of the wrong length");
-            out.push_back(lightFieldDistance(query.lightField, at->second));
+            vectors.push_back(&at->second);
         }
+        // About 10 us each (600 turns of ten views): a combined query's up to 192 share the cores.
+        out.resize(vectors.size());
+        tbb::parallel_for(std::size_t(0), vectors.size(), [&](std::size_t i) { out[i] = lightFieldDistance(query.lightField, *vectors[i]); });
         return out;
     };
     const auto shortlistOf = [&](Descriptor kind, const SearchIndex& si) {

@@ -17,28 +17,34 @@ std::size_t tilesPerFrame(int size) { return std::min<std::size_t>(100, std::siz
 
 namespace {
 
-RendererOptions bothSides()
+RendererOptions drawing(bool backFaces, bool depthOnly)
 {
     RendererOptions o;
-    o.cullBackFaces = false;
+    o.cullBackFaces = !backFaces;
+    o.depthOnly = depthOnly;
     return o;
 }
 
 } // namespace
 
-ModelViews::ModelViews(VulkanContext& context) : context_(context), renderer_(std::make_unique<Renderer>(context, bothSides())) {}
+ModelViews::ModelViews(VulkanContext& context) : context_(context), renderer_(std::make_unique<Renderer>(context, drawing(true, false))) {}
 
 ModelViews::~ModelViews() = default;
 
 std::vector<Mask> ModelViews::silhouettes(const Mesh& mesh, const std::array<double, 3>& centre, double radius,
-                                          const std::vector<std::array<double, 3>>& directions, int size)
+                                          const std::vector<std::array<double, 3>>& directions, int size, bool closedSurface)
 {
     if (mesh.triangles.empty()) throw std::invalid_argument("cannot draw the silhouettes of an empty mesh");
     if (!(radius > 0.0) || !std::isfinite(radius)) throw std::invalid_argument("silhouettes need a positive radius");
     if (size < 8 || size > 1024) throw std::invalid_argument("silhouette size " + std::to_string(size) + " is outside 8 .. 1024");
-    renderer_->setChunk(0, mesh); // drawn from both sides (bothSides): a model file's triangles may face either way
+    // Depth alone. A model file's triangles may face either way: both sides are drawn, unless the
+    // surface closes (then every line of sight through it crosses a triangle facing the eye).
+    std::unique_ptr<Renderer>& chosen = silhouetteRenderers_[closedSurface ? 1 : 0];
+    if (!chosen) chosen = std::make_unique<Renderer>(context_, drawing(!closedSurface, true));
+    Renderer& renderer = *chosen;
+    renderer.setChunk(0, mesh);
     ShadingOptions shading;
-    renderer_->setShading(shading);
+    renderer.setShading(shading);
 
     // A parallel projection, nearly: an eye a hundred radii away whose view just holds the sphere.
     const double distance = 100.0 * radius;
@@ -66,7 +72,7 @@ std::vector<Mask> ModelViews::silhouettes(const Mesh& mesh, const std::array<dou
             views[i].target = &target;
             views[i].viewport = {int(i % std::size_t(columns)) * size, int(i / std::size_t(columns)) * size, size, size};
         }
-        renderer_->render(views);
+        renderer.render(views);
         const std::vector<float> depth = target.depth();
         const std::size_t width = std::size_t(columns) * std::size_t(size);
         for (std::size_t i = 0; i < count; ++i) {
@@ -78,7 +84,7 @@ std::vector<Mask> ModelViews::silhouettes(const Mesh& mesh, const std::array<dou
             masks.push_back(std::move(mask));
         }
     }
-    renderer_->removeChunk(0);
+    renderer.removeChunk(0);
     return masks;
 }
 

@@ -86,8 +86,10 @@ VkPipeline createPipeline(VkDevice device, VkRenderPass pass, VkPipelineLayout l
     dynamic.dynamicStateCount = 2;
     dynamic.pDynamicStates = dynamicStates;
 
+    if (shape.frag == VK_NULL_HANDLE) attachment.colorWriteMask = 0; // depth alone
+
     VkGraphicsPipelineCreateInfo info{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
-    info.stageCount = 2;
+    info.stageCount = shape.frag == VK_NULL_HANDLE ? 1 : 2;
     info.pStages = stages;
     info.pVertexInputState = &input;
     info.pInputAssemblyState = &assembly;
@@ -114,7 +116,7 @@ VkShaderModule shaderModule(VkDevice device, const uint32_t* code, std::size_t b
     return module;
 }
 
-Pipelines::Pipelines(const VulkanContext& context, VkRenderPass renderPass, bool cullBackFaces) : context_(context)
+Pipelines::Pipelines(const VulkanContext& context, VkRenderPass renderPass, bool cullBackFaces, bool depthOnly) : context_(context)
 {
     const auto start = std::chrono::steady_clock::now();
     VkDevice device = context.device();
@@ -150,7 +152,7 @@ Pipelines::Pipelines(const VulkanContext& context, VkRenderPass renderPass, bool
     try {
         PipelineShape surface;
         surface.vert = meshVert;
-        surface.frag = meshFrag;
+        surface.frag = depthOnly ? VK_NULL_HANDLE : meshFrag;
         surface.cullBackFaces = cullBackFaces;
         surface_ = createPipeline(device, renderPass, layout_, surface);
         if (context.supportsWireframe()) {

@@ -19,7 +19,7 @@ struct GpuVertex {
 /// What a graphics pipeline draws with: triangles (or their edges), one colour attachment and reversed
 /// depth, viewport and scissor set at draw time.
 struct PipelineShape {
-    VkShaderModule vert = VK_NULL_HANDLE, frag = VK_NULL_HANDLE;
+    VkShaderModule vert = VK_NULL_HANDLE, frag = VK_NULL_HANDLE; // no fragment shader: depth alone, no colour
     bool meshInput = true; // GpuVertex per vertex (culled back faces); false: the vertex shader makes its positions
     bool cullBackFaces = true; // mesh input: false draws both sides (model files whose triangles face either way)
     VkPolygonMode polygonMode = VK_POLYGON_MODE_FILL;
@@ -36,8 +36,8 @@ VkShaderModule shaderModule(VkDevice device, const uint32_t* code, std::size_t b
 
 class Pipelines {
 public:
-    /// `cullBackFaces`: the surface pipeline's (RendererOptions::cullBackFaces).
-    Pipelines(const VulkanContext& context, VkRenderPass renderPass, bool cullBackFaces = true);
+    /// `cullBackFaces`, `depthOnly`: the surface pipeline's (RendererOptions).
+    Pipelines(const VulkanContext& context, VkRenderPass renderPass, bool cullBackFaces = true, bool depthOnly = false);
     ~Pipelines();
     Pipelines(const Pipelines&) = delete;
     Pipelines& operator=(const Pipelines&) = delete;

@@ -189,7 +189,7 @@ struct Renderer::Impl {
     {
         VkDevice device = c.device();
         compatiblePass = createRenderPass(device, o.colourFormat, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
-        pipelines = std::make_unique<Pipelines>(c, compatiblePass, options.cullBackFaces);
+        pipelines = std::make_unique<Pipelines>(c, compatiblePass, options.cullBackFaces, options.depthOnly);
         {
             VkBufferCreateInfo probe{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
             probe.size = 1 << 16;

@@ -39,6 +39,8 @@ struct RendererOptions {
     /// Sculptures are closed and face outwards: their back faces are culled. Model files' triangles may
     /// face either way (retrieval's silhouettes and thumbnails draw both sides).
     bool cullBackFaces = true;
+    /// Surfaces write depth alone, no colour (silhouettes read from depth; no shading to pay for).
+    bool depthOnly = false;
 };
 
 struct RenderView {

@@ -142,6 +142,7 @@ VrMenus::VrMenus(const render::VulkanContext& vulkan, VkRenderPass eyePass) : vu
     panels_.canvas = std::array<float, 2>{float(kMenuPixelsWide), float(kMenuPixelsHigh)};
     panels_.panelWidth = float(kMenuPixelsWide - 20);
     panels_.showStats = false;
+    panels_.query.lightField = true; // a headset has a renderer: searches draw the sculpture's silhouettes
 }
 
 VrMenus::~VrMenus()
