@@ -39,6 +39,28 @@ ModelSearchOutcome finished(ModelSearch& search)
     return *outcome;
 }
 
+/// A search's outcome, which must have found `k` models: names the error otherwise.
+ModelSearchOutcome foundModels(ModelSearch& search, const EditingSession& session, const ModelSearchRequest& request)
+{
+    INFO(query::descriptorName(request.descriptor));
+    REQUIRE(search.search(session, request));
+    const ModelSearchOutcome found = finished(search);
+    INFO(found.error);
+    REQUIRE(found.results);
+    REQUIRE(found.results->size() == request.k);
+    return found;
+}
+
+/// The smooth unit sphere a voxel ball should find first, as a model file.
+void writeRoundModel(const std::string& path)
+{
+    query::SyntheticShape round;
+    round.family = "ellipsoid";
+    round.proportions = {1.0, 1.0 / 0.7, 1.0 / 0.5};
+    round.tessellation = 40;
+    query::writeColouredPly(query::buildShape(round), path);
+}
+
 } // namespace
 
 TEST_CASE("editor query: the sculpture finds the round model first, a box of nothing says so, a placed model is one edit that undoes", "[editor][query]")
@@ -48,11 +70,7 @@ TEST_CASE("editor query: the sculpture finds the round model first, a box of not
         std::filesystem::create_directories(dir.path() / "models" / m.label);
         query::writeColouredPly(query::buildShape(m.shape), (dir.path() / "models" / m.label / (m.name + ".ply")).string());
     }
-    query::SyntheticShape round;
-    round.family = "ellipsoid";
-    round.proportions = {1.0, 1.0 / 0.7, 1.0 / 0.5};
-    round.tessellation = 40;
-    query::writeColouredPly(query::buildShape(round), dir.file("models/round.ply"));
+    writeRoundModel(dir.file("models/round.ply"));
     REQUIRE(runCli(dir, "index add lib.vdblib models --recursive --no-render").exitCode == 0);
     REQUIRE(runCli(dir, "new ball.vdb --shape sphere --size 24").exitCode == 0);
 
@@ -63,13 +81,8 @@ TEST_CASE("editor query: the sculpture finds the round model first, a box of not
     request.library = dir.file("lib.vdblib");
     request.k = 3;
     for (const query::Descriptor d : {query::Descriptor::Combined, query::Descriptor::ClusterD2, query::Descriptor::D2}) {
-        INFO(query::descriptorName(d));
         request.descriptor = d;
-        REQUIRE(search.search(session, request));
-        const ModelSearchOutcome found = finished(search);
-        INFO(found.error);
-        REQUIRE(found.results);
-        REQUIRE(found.results->size() == 3);
+        const ModelSearchOutcome found = foundModels(search, session, request);
         // The voxel ball reads as the round model by every ranking (ClusterD2+Color's featureless
         // surface: samples spread evenly, not along the lattice's facets).
         CHECK((*found.results)[0].model.name == "round");
@@ -132,11 +145,7 @@ TEST_CASE("editor query panel (render): the search ranks with the sculpture's li
         std::filesystem::create_directories(dir.path() / "models" / m.label);
         query::writeColouredPly(query::buildShape(m.shape), (dir.path() / "models" / m.label / (m.name + ".ply")).string());
     }
-    query::SyntheticShape round;
-    round.family = "ellipsoid";
-    round.proportions = {1.0, 1.0 / 0.7, 1.0 / 0.5};
-    round.tessellation = 40;
-    query::writeColouredPly(query::buildShape(round), dir.file("models/round.ply"));
+    writeRoundModel(dir.file("models/round.ply"));
     REQUIRE(runCli(dir, "index add lib.vdblib models --recursive").exitCode == 0); // with light fields and thumbnails
     REQUIRE(runCli(dir, "new ball.vdb --shape sphere --size 24").exitCode == 0);
     EditingSession session(dir.file("ball.vdb"), quietSession());
@@ -152,14 +161,9 @@ TEST_CASE("editor query panel (render): the search ranks with the sculpture's li
         request.k = 3;
         request.lightField = true;
         for (const query::Descriptor d : {query::Descriptor::LightField, query::Descriptor::Combined}) {
-            INFO(query::descriptorName(d));
             request.descriptor = d;
-            REQUIRE(search.search(session, request));
-            const ModelSearchOutcome found = finished(search);
-            INFO(found.error);
-            REQUIRE(found.results);
+            const ModelSearchOutcome found = foundModels(search, session, request);
             CHECK(found.note.empty());
-            REQUIRE(found.results->size() == 3);
             CHECK((*found.results)[0].model.name == "round");
             CHECK((*found.results)[0].distance < (*found.results)[1].distance);
         }

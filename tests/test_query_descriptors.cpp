@@ -43,6 +43,18 @@ SyntheticShape movedCopy(SyntheticShape s, std::mt19937_64& random)
     return s;
 }
 
+/// The soup as the renderer takes it (positions and triangles; silhouettes read nothing else).
+Mesh drawable(const TriangleSoup& soup)
+{
+    Mesh mesh;
+    for (const auto& p : soup.positions) mesh.positions.push_back({float(p[0]), float(p[1]), float(p[2])});
+    mesh.normals.assign(mesh.positions.size(), {0, 0, 1});
+    mesh.materials.assign(mesh.positions.size(), 1);
+    mesh.triangles = soup.triangles;
+    mesh.triangleMaterials.assign(mesh.triangles.size(), 1);
+    return mesh;
+}
+
 std::array<double, 3> rotateByQuaternion(const std::array<double, 4>& q, const std::array<double, 3>& v)
 {
     const double x = q[0], y = q[1], z = q[2], w = q[3];
@@ -300,13 +312,7 @@ TEST_CASE("query light field (render): a sphere's silhouettes are discs filling 
     const std::vector<float> ball = lightFieldDescriptor(views, sphere);
     REQUIRE(ball.size() == kLightFieldLength);
     {
-        MaterialTable materials;
-        Mesh mesh;
-        for (const auto& p : sphere.positions) mesh.positions.push_back({float(p[0]), float(p[1]), float(p[2])});
-        mesh.normals.assign(mesh.positions.size(), {0, 0, 1});
-        mesh.materials.assign(mesh.positions.size(), 1);
-        mesh.triangles = sphere.triangles;
-        mesh.triangleMaterials.assign(mesh.triangles.size(), 1);
+        const Mesh mesh = drawable(sphere);
         const std::vector<render::Mask> masks = views.silhouettes(mesh, {0, 0, 0}, 1.0, {{1, 0, 0}, {0, 0.6, 0.8}}, 64);
         REQUIRE(masks.size() == 2);
         for (const render::Mask& m : masks) {
@@ -417,15 +423,6 @@ TEST_CASE("query silhouette mesh (render): a clustered closed surface's front fa
     contextOptions.validation = true;
     render::VulkanContext context(contextOptions);
     render::ModelViews views(context);
-    const auto meshOf = [](const TriangleSoup& soup) {
-        Mesh mesh;
-        for (const auto& p : soup.positions) mesh.positions.push_back({float(p[0]), float(p[1]), float(p[2])});
-        mesh.normals.assign(mesh.positions.size(), {0, 0, 1});
-        mesh.materials.assign(mesh.positions.size(), 1);
-        mesh.triangles = soup.triangles;
-        mesh.triangleMaterials.assign(mesh.triangles.size(), 1);
-        return mesh;
-    };
     std::mt19937_64 random(8);
     constexpr int kSize = 128;
     for (const std::string& family : syntheticFamilies()) {
@@ -441,7 +438,7 @@ TEST_CASE("query silhouette mesh (render): a clustered closed surface's front fa
             radius = std::max(radius, std::sqrt((p[0] - centre[0]) * (p[0] - centre[0]) + (p[1] - centre[1]) * (p[1] - centre[1]) +
                                                 (p[2] - centre[2]) * (p[2] - centre[2])));
         const std::vector<std::array<double, 3>> directions(lightFieldDirections().begin(), lightFieldDirections().begin() + 10);
-        const std::vector<render::Mask> full = views.silhouettes(meshOf(soup), centre, radius, directions, kSize);
+        const std::vector<render::Mask> full = views.silhouettes(drawable(soup), centre, radius, directions, kSize);
         const SilhouetteMesh clustered = silhouetteMesh(soup, kSilhouetteCellPixels * 2.0 * radius / kSize);
         REQUIRE(clustered.closed);
         const std::vector<render::Mask> fronts = views.silhouettes(clustered.mesh, centre, radius, directions, kSize, true);
