@@ -1,12 +1,11 @@
 #include "query/ClusterD2Color.h"
 
-#include <tbb/parallel_for.h>
-
 #include "query/Isodata.h"
 #include "query/MeshCurvature.h"
 #include "query/SurfaceSamples.h"
 
 #include <flann/flann.hpp>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>

@@ -29,8 +29,9 @@ SilhouetteMesh silhouetteMesh(const TriangleSoup& soup, double cell)
     // cluster, or the surface would open where they straddle a cell's side.
     const VertexWeld weld = weldVertices(soup);
     std::array<double, 3> lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-    for (const auto& p : weld.positions)
-        for (std::size_t a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+    for (const auto& t : soup.triangles) // the corners drawn (a file's other vertices may be anything)
+        for (const uint32_t v : t)
+            for (std::size_t a = 0; a < 3; ++a) lo[a] = std::min(lo[a], soup.positions[v][a]), hi[a] = std::max(hi[a], soup.positions[v][a]);
     for (std::size_t a = 0; a < 3; ++a) cell = std::max(cell, (hi[a] - lo[a]) / double((1 << 21) - 2)); // keys fit 21 bits
 
     // Each used vertex's cluster, a cluster's position the mean of its vertices (inside its cell).
