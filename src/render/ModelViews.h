@@ -1,6 +1,6 @@
 // Pictures of one model after another for retrieval (src/query): silhouettes seen from many directions
-// (the light-field descriptor) and shaded thumbnails. One renderer serves every model, so a library
-// of thousands pays for its pipelines once.
+// (the light-field descriptor) and shaded thumbnails. Its renderers serve every model, so a library
+// of thousands pays for their pipelines once.
 #pragma once
 
 #include "mesher/Mesh.h"
