@@ -414,6 +414,11 @@ TEST_CASE("query silhouette mesh: clustering keeps closed surfaces closed and op
     CHECK(pixels.closed);
     CHECK(pixels.mesh.triangles.size() < fine.triangles.size() * 3 / 4);
     CHECK(silhouetteMesh(fine, 8.0 / 128.0).mesh.triangles.size() < fine.triangles.size() / 8);
+    // A cell wider than the model: every triangle would vanish, so the welded triangles are kept.
+    const SilhouetteMesh whole = silhouetteMesh(fine, 10.0);
+    CHECK(whole.closed);
+    CHECK(whole.mesh.triangles.size() == silhouetteMesh(fine, 1e-12).mesh.triangles.size());
+    CHECK(whole.mesh.triangles.size() > fine.triangles.size() * 9 / 10);
     CHECK_THROWS_AS(silhouetteMesh(fine, 0.0), std::invalid_argument);
 }
 

@@ -284,10 +284,8 @@ std::vector<float> lightFieldDescriptor(render::ModelViews& views, const Triangl
             const Vec d{p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]};
             radius = std::max(radius, std::sqrt(dot(d, d)));
         }
-    // Vertices clustered in cells of about a pixel (the view is 2 radii across); a model too thin for
-    // that keeps its own triangles.
-    SilhouetteMesh shape = silhouetteMesh(soup, kSilhouetteCellPixels * 2.0 * radius / kSilhouetteSize);
-    if (shape.mesh.triangles.empty()) shape = silhouetteMesh(soup, 1e-9 * radius);
+    // Vertices clustered in cells of about a pixel (the view is 2 radii across).
+    const SilhouetteMesh shape = silhouetteMesh(soup, kSilhouetteCellPixels * 2.0 * radius / kSilhouetteSize);
     const std::vector<std::vector<uint8_t>> masks =
         views.silhouettes(shape.mesh, centre, radius, lightFieldDirections(), kSilhouetteSize, shape.closed);
     return lightFieldFromSilhouettes(masks, kSilhouetteSize);

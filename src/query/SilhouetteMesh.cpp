@@ -12,12 +12,44 @@ namespace vdbclay::query {
 
 namespace {
 
-/// A cell's key: 21 bits per axis, cells counted from the lowest corner.
+/// A cell's key: 21 bits per axis, cells counted from the lowest corner (a welded position may lie a
+/// rounding below it).
 uint64_t cellKey(const std::array<double, 3>& p, const std::array<double, 3>& lo, double cell)
 {
     uint64_t key = 0;
-    for (std::size_t a = 0; a < 3; ++a) key = key << 21 | uint64_t(std::floor((p[a] - lo[a]) / cell));
+    for (std::size_t a = 0; a < 3; ++a) key = key << 21 | uint64_t(std::clamp(std::floor((p[a] - lo[a]) / cell), 0.0, double((1 << 21) - 1)));
     return key;
+}
+
+/// `out`'s mesh: the soup's triangles on the vertices `vertexOf` (per welded vertex) gives them, those
+/// whose corners meet dropped, and whether the triangles close.
+void buildTriangles(const TriangleSoup& soup, const VertexWeld& weld, const std::vector<uint32_t>& vertexOf,
+                    std::vector<std::array<float, 3>> positions, SilhouetteMesh& out)
+{
+    Mesh& mesh = out.mesh;
+    mesh = Mesh{};
+    mesh.positions = std::move(positions);
+    mesh.normals.assign(mesh.positions.size(), {0.0f, 0.0f, 1.0f});
+    mesh.materials.assign(mesh.positions.size(), MaterialId(1));
+    // Directed edges counted +1 one way and -1 the other: all zero when the surface closes.
+    std::unordered_map<uint64_t, int> edgeBalance;
+    edgeBalance.reserve(soup.triangles.size() * 2);
+    for (const auto& t : soup.triangles) {
+        const std::array<uint32_t, 3> c{vertexOf[weld.index[t[0]]], vertexOf[weld.index[t[1]]], vertexOf[weld.index[t[2]]]};
+        if (c[0] == c[1] || c[1] == c[2] || c[2] == c[0]) continue;
+        mesh.triangles.push_back(c);
+        for (int i = 0; i < 3; ++i) {
+            const uint32_t a = c[std::size_t(i)], b = c[std::size_t((i + 1) % 3)];
+            edgeBalance[uint64_t(std::min(a, b)) << 32 | std::max(a, b)] += a < b ? 1 : -1;
+        }
+    }
+    mesh.triangleMaterials.assign(mesh.triangles.size(), MaterialId(1));
+    out.closed = !mesh.triangles.empty();
+    for (const auto& [edge, balance] : edgeBalance)
+        if (balance != 0) {
+            out.closed = false;
+            break;
+        }
 }
 
 } // namespace
@@ -36,7 +68,6 @@ SilhouetteMesh silhouetteMesh(const TriangleSoup& soup, double cell)
 
     // Each used vertex's cluster, a cluster's position the mean of its vertices (inside its cell).
     SilhouetteMesh out;
-    Mesh& mesh = out.mesh;
     std::vector<uint32_t> clusterOf(weld.positions.size(), UINT32_MAX);
     std::unordered_map<uint64_t, uint32_t> clusters;
     std::vector<std::array<double, 4>> sums;
@@ -51,30 +82,20 @@ SilhouetteMesh silhouetteMesh(const TriangleSoup& soup, double cell)
             for (std::size_t a = 0; a < 3; ++a) s[a] += weld.positions[v][a];
             s[3] += 1.0;
         }
-    mesh.positions.reserve(sums.size());
-    for (const auto& s : sums) mesh.positions.push_back({float(s[0] / s[3]), float(s[1] / s[3]), float(s[2] / s[3])});
-    mesh.normals.assign(mesh.positions.size(), {0.0f, 0.0f, 1.0f});
-    mesh.materials.assign(mesh.positions.size(), MaterialId(1));
-
-    // Directed edges counted +1 one way and -1 the other: all zero when the surface closes.
-    std::unordered_map<uint64_t, int> edgeBalance;
-    edgeBalance.reserve(soup.triangles.size() * 2);
-    for (const auto& t : soup.triangles) {
-        const std::array<uint32_t, 3> c{clusterOf[weld.index[t[0]]], clusterOf[weld.index[t[1]]], clusterOf[weld.index[t[2]]]};
-        if (c[0] == c[1] || c[1] == c[2] || c[2] == c[0]) continue;
-        mesh.triangles.push_back(c);
-        for (int i = 0; i < 3; ++i) {
-            const uint32_t a = c[std::size_t(i)], b = c[std::size_t((i + 1) % 3)];
-            edgeBalance[uint64_t(std::min(a, b)) << 32 | std::max(a, b)] += a < b ? 1 : -1;
+    std::vector<std::array<float, 3>> positions;
+    positions.reserve(sums.size());
+    for (const auto& s : sums) positions.push_back({float(s[0] / s[3]), float(s[1] / s[3]), float(s[2] / s[3])});
+    buildTriangles(soup, weld, clusterOf, std::move(positions), out);
+    if (out.mesh.triangles.empty() && !soup.triangles.empty()) {
+        // Every triangle fell inside a cell (a model far smaller than the cell): its welded triangles.
+        std::vector<uint32_t> itself(weld.positions.size());
+        std::vector<std::array<float, 3>> welded;
+        for (uint32_t v = 0; v < itself.size(); ++v) {
+            itself[v] = v;
+            welded.push_back({float(weld.positions[v][0]), float(weld.positions[v][1]), float(weld.positions[v][2])});
         }
+        buildTriangles(soup, weld, itself, std::move(welded), out);
     }
-    mesh.triangleMaterials.assign(mesh.triangles.size(), MaterialId(1));
-    out.closed = !mesh.triangles.empty();
-    for (const auto& [edge, balance] : edgeBalance)
-        if (balance != 0) {
-            out.closed = false;
-            break;
-        }
     return out;
 }
 

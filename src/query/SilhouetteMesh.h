@@ -20,7 +20,8 @@ struct SilhouetteMesh {
 };
 
 /// `soup`'s triangles with their corners welded, then clustered on a grid of `cell` (world units, > 0;
-/// at least the model's extent / 2^21). Throws std::invalid_argument for a cell that is not positive.
+/// at least the model's extent / 2^21); where every triangle falls inside a cell, the welded triangles
+/// unclustered. Throws std::invalid_argument for a cell that is not positive.
 SilhouetteMesh silhouetteMesh(const TriangleSoup& soup, double cell);
 
 } // namespace vdbclay::query
