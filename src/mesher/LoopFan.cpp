@@ -52,9 +52,7 @@ public:
             return true;
         };
         if (fanIsOpen(centre)) return;
-        std::array<double, 3> mean{};
-        for (std::size_t i = 0; i < n; ++i)
-            for (int a = 0; a < 3; ++a) mean[a] += positions[ids[i]][a] / double(n);
+        const std::array<double, 3> mean = loopMean(ids, n);
         for (double step : {0.01, 0.1, 0.25, 0.5, 0.75, 1.0}) {
             std::array<double, 3> moved;
             for (int a = 0; a < 3; ++a) moved[a] = centre[a] + step * (mean[a] - centre[a]);
