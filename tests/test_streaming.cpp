@@ -512,9 +512,18 @@ TEST_CASE("the scene keeps the shown bricks' meshes within the memory budget and
 
 namespace {
 
-/// Random stamps across brick faces, then a stamp inside one brick, with the given view: every kept mesh
-/// must be the one its brick makes now, and the inside stamp must leave the other bricks' versions.
-void checkKeptMeshesAfterStamps(const Viewer& view, double pixelTolerance, std::size_t levelsShown)
+/// A stamp of radius 3: its mode and centre (with `onSurface`, its height taken from the surface there).
+struct StampAt {
+    std::string mode;
+    std::array<double, 3> at;
+    bool onSurface = true;
+};
+
+/// Random stamps across brick faces, then `besideCutEdge`'s, then a stamp inside one brick, with the given
+/// view: every kept mesh must be the one its brick makes now, and the inside stamp must leave the other
+/// bricks' versions.
+void checkKeptMeshesAfterStamps(const Viewer& view, double pixelTolerance, std::size_t levelsShown,
+                                const std::vector<StampAt>& besideCutEdge = {})
 {
     TempDir dir;
     const std::string path = makeTerrain(dir);
@@ -546,6 +555,15 @@ void checkKeptMeshesAfterStamps(const Viewer& view, double pixelTolerance, std::
         }
     };
     meshAll();
+    // Moves a point down onto the surface, where the meshes are.
+    const auto onSurface = [&](std::array<double, 3>& at) {
+        const Volume now = scene.residentLevel0();
+        for (int32_t y = 120; y > 0; --y)
+            if (now.materialAt({int32_t(at[0]), y, int32_t(at[2])}) != kEmptyMaterial) {
+                at[1] = y;
+                return;
+            }
+    };
 
     // Random stamps at integer positions, two in three of them beside a brick face: crossing it, or
     // touching the voxels next to it, on either side.
@@ -560,13 +578,7 @@ void checkKeptMeshesAfterStamps(const Viewer& view, double pixelTolerance, std::
             const int gap = std::uniform_int_distribution<int>(-3, 4)(rng); // <= 0: the brush crosses the face
             at[std::size_t(axis)] = 64.0 + side * (radius + gap);
         }
-        // On the surface, where the meshes are.
-        const Volume now = scene.residentLevel0();
-        for (int32_t y = 120; y > 0; --y)
-            if (now.materialAt({int32_t(at[0]), y, int32_t(at[2])}) != kEmptyMaterial) {
-                at[1] = y;
-                break;
-            }
+        onSurface(at);
         nlohmann::json op{{"mode", modes[i % 4]}, {"brush", {{"shape", "sphere"}, {"radius", radius}}}, {"at", at}};
         if (i % 4 == 2) op["material"] = "red";
         const nlohmann::json materials = nlohmann::json::array({{{"name", "red"}, {"color", {0.8, 0.1, 0.1}}}});
@@ -576,6 +588,21 @@ void checkKeptMeshesAfterStamps(const Viewer& view, double pixelTolerance, std::
         checkKeptMeshes("stamp " + std::to_string(i) + " " + op.dump());
     }
     CHECK(inPieces > 0);
+
+    // Stamps across and beside the planes where the cut ends inside the scene (space the view culls, or
+    // does not show at any level), given: the meshes there close the cut with the coarsest level's cells
+    // outside it, which read the voxels on those planes, and are kept while no edit reaches them.
+    for (const StampAt& stamp : besideCutEdge) {
+        std::array<double, 3> at = stamp.at;
+        const std::string& mode = stamp.mode;
+        if (stamp.onSurface) onSurface(at);
+        const nlohmann::json materials = nlohmann::json::array({{{"name", "red"}, {"color", {0.8, 0.1, 0.1}}}});
+        nlohmann::json op{{"mode", mode}, {"brush", {{"shape", "sphere"}, {"radius", 3}}}, {"at", at}};
+        if (mode == "paint") op["material"] = "red";
+        scene.sculpt(parseStrokeScript(nlohmann::json{{"materials", materials}, {"ops", {op}}}.dump()));
+        scene.frame(view);
+        checkKeptMeshes("a stamp at the cut's edge " + op.dump());
+    }
 
     // A small stamp in the middle of a level-0 brick, on its surface: only that brick's mesh is made again.
     const Volume resident = scene.residentLevel0();
@@ -619,6 +646,25 @@ TEST_CASE("after stamps anywhere (across brick faces too), every kept mesh is th
 TEST_CASE("kept meshes beside a coarser brick after stamps are the ones the bricks make now", "[streaming]")
 {
     checkKeptMeshesAfterStamps(lookingAt({-60, 80, -60}, {128, 30, 128}), 10.0, 2); // level 0 near, level 1 far
+}
+
+// This view shows level 0 near and level 1 far, and culls the level-0 brick at x 0..64, z 192..256,
+// whose level-1 parent it shows in part: the cut ends on the planes z = 192 (x < 64) and x = 64
+// (z > 192), inside the terrain.
+TEST_CASE("kept meshes where the cut ends inside the scene after stamps across its edge are the ones the bricks make now", "[streaming]")
+{
+    checkKeptMeshesAfterStamps(lookingAt({-40, 45, 20}, {200, 30, 60}), 10.0, 2,
+                               {{"add", {30, 0, 190}},
+                                {"remove", {66, 0, 220}},
+                                {"paint", {20, 0, 193}},
+                                {"add", {67, 0, 230}},
+                                {"add", {40, 0, 186}},
+                                {"remove", {30, 0, 191}},
+                                {"add", {63, 0, 194}},
+                                {"add", {30, 3, 30}, false},
+                                {"add", {100, 2, 40}, false},
+                                {"remove", {40, 1, 100}, false},
+                                {"paint", {20, 2, 20}, false}});
 }
 
 TEST_CASE("an edit where the view shows a coarse level shows at level 0 until it is saved, then at the coarse level again", "[streaming]")

@@ -27,7 +27,13 @@ Mesh meshLodBrick(const std::vector<const Volume*>& levels, const LodCut& cut, c
 std::vector<MeshChunk> meshLodBrickChunks(const std::vector<const Volume*>& levels, const LodCut& cut, const LodBrick& brick,
                                           const MeshOptions& options,
                                           const std::vector<std::array<int32_t, 3>>* onlyLeaves = nullptr);
-/// Then the transition cells, appended to the welded chunks.
-void appendLodTransitions(const std::vector<const Volume*>& levels, const LodCut& cut, const LodBrick& brick, Mesh& mesh);
+/// A transition cell's closed box on the level-0 lattice.
+struct TransitionCellBox {
+    LodCut::Point lo, hi;
+};
+/// Then the transition cells, appended to the welded chunks (`cells`, optional: the boxes of the cells
+/// meshed, in the order they were, which is all their triangles read of the finest level).
+void appendLodTransitions(const std::vector<const Volume*>& levels, const LodCut& cut, const LodBrick& brick, Mesh& mesh,
+                          std::vector<TransitionCellBox>* cells = nullptr);
 
 } // namespace vdbclay

@@ -375,7 +375,8 @@ Mesh meshLodBrick(const std::vector<const Volume*>& levels, const LodCut& cut, c
     return mesh;
 }
 
-void appendLodTransitions(const std::vector<const Volume*>& levels, const LodCut& cut, const LodBrick& brick, Mesh& mesh)
+void appendLodTransitions(const std::vector<const Volume*>& levels, const LodCut& cut, const LodBrick& brick, Mesh& mesh,
+                          std::vector<TransitionCellBox>* cells)
 {
     const int level = brick.level;
     checkLevel(levels, level);
@@ -422,6 +423,7 @@ void appendLodTransitions(const std::vector<const Volume*>& levels, const LodCut
                         }
                         if (!meshed.insert(cell).second) continue; // on two faces: once
                         transitions.meshCell(level, cell, mesh);
+                        if (cells) cells->push_back({clo, chi});
                     }
         }
     }
@@ -457,6 +459,7 @@ void appendLodTransitions(const std::vector<const Volume*>& levels, const LodCut
                     }
                     if (cut.levelAround(lo, hi) >= 0 || !cut.transitionCell(top, cell)) continue;
                     transitions.meshCell(top, cell, mesh);
+                    if (cells) cells->push_back({lo, hi});
                 }
     }
 }

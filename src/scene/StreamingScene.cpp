@@ -64,10 +64,43 @@ struct LeafMesh {
     std::vector<uint32_t> blend;    // per vertex of the chunk (vertexMaterialBlend)
 };
 
+/// A brick's transition cells, meshed apart from its leaves, with the boxes of those cells: a level-0
+/// brick's (towards the space outside the cut) stay as they are while no edit reaches their cells.
+struct TransitionMesh {
+    Mesh mesh; // its own vertices, appended after the welded leaves
+    std::vector<uint8_t> occlusion;
+    std::vector<uint32_t> blend;
+    std::vector<TransitionCellBox> cells;
+};
+
+/// Appends `part` to `mesh`, its triangles shifted past the vertices `mesh` held.
+void appendMesh(Mesh& mesh, const Mesh& part)
+{
+    const uint32_t base = uint32_t(mesh.positions.size());
+    mesh.positions.insert(mesh.positions.end(), part.positions.begin(), part.positions.end());
+    mesh.normals.insert(mesh.normals.end(), part.normals.begin(), part.normals.end());
+    mesh.materials.insert(mesh.materials.end(), part.materials.begin(), part.materials.end());
+    for (const auto& t : part.triangles) mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    mesh.triangleMaterials.insert(mesh.triangleMaterials.end(), part.triangleMaterials.begin(), part.triangleMaterials.end());
+}
+
+/// Whether a level-0 change reaches what a transition cell's vertices read: the cell's points and
+/// edges, and the voxels their occlusion and material blend sample around them.
+bool reachesCell(const BlockChange& change, const TransitionCellBox& cell)
+{
+    for (std::size_t a = 0; a < 3; ++a) {
+        // The changed voxels, and the edges leaving them upwards.
+        const int64_t lo = int64_t(change.origin[a]) + change.min[a], hi = int64_t(change.origin[a]) + change.max[a] + 1;
+        if (hi < cell.lo[a] - kOcclusionReach || lo > cell.hi[a] + kOcclusionReach) return false;
+    }
+    return true;
+}
+
 } // namespace
 
 struct StreamingScene::BrickMeshPieces {
     std::vector<std::shared_ptr<const LeafMesh>> leaves; // in the order of their origins
+    std::shared_ptr<const TransitionMesh> transitions;
     uint64_t leafLogSeq = 0; // the leaf log's last entry when made
     uint64_t inputs = 0;     // the brick's mesh version counting loads only (meshVersionLocked)
     uint64_t bytes = 0;
@@ -378,11 +411,10 @@ struct StreamingScene::Impl {
                 out->occlusion[v] = uint8_t(welded[v] & 0xffu);
                 out->blend[v] = welded[v] >> 8;
             }
-            appendLodTransitions(levelsOf, *in.cut, brick, out->mesh);
-            const std::vector<uint8_t> transitions = vertexOcclusion(volume, out->mesh, welded.size());
-            out->occlusion.insert(out->occlusion.end(), transitions.begin(), transitions.end());
-            const std::vector<uint32_t> transitionBlend = vertexMaterialBlend(volume, out->mesh, welded.size());
-            out->blend.insert(out->blend.end(), transitionBlend.begin(), transitionBlend.end());
+            const TransitionMesh& transitions = *out->pieces->transitions;
+            appendMesh(out->mesh, transitions.mesh);
+            out->occlusion.insert(out->occlusion.end(), transitions.occlusion.begin(), transitions.occlusion.end());
+            out->blend.insert(out->blend.end(), transitions.blend.begin(), transitions.blend.end());
         } else {
             // A brick outside the last frame's cut (asked for directly) is meshed alone at its level.
             out->mesh = meshLodBrick(levelsOf, in.cut->shows(brick) ? *in.cut : LodCut({brick}), brick, options.meshing);
@@ -488,12 +520,31 @@ struct StreamingScene::Impl {
         });
         next->leaves = std::move(kept);
         next->leaves.insert(next->leaves.end(), made.begin(), made.end());
+        // A coarse brick's transition cells read the finer bricks on its faces, which edits change
+        // without a log of it here: made every time.
+        const bool transitionsHold = reuse && key.level == 0 && in.old->transitions &&
+                                     std::none_of(changed.begin(), changed.end(), [&](const BlockChange& c) {
+                                         const auto& cells = in.old->transitions->cells;
+                                         return std::any_of(cells.begin(), cells.end(), [&](const TransitionCellBox& cell) { return reachesCell(c, cell); });
+                                     });
+        if (transitionsHold) {
+            next->transitions = in.old->transitions;
+        } else {
+            auto transitions = std::make_shared<TransitionMesh>();
+            appendLodTransitions(levelsOf, *in.cut, brick, transitions->mesh, &transitions->cells);
+            transitions->occlusion = vertexOcclusion(volume, transitions->mesh);
+            transitions->blend = vertexMaterialBlend(volume, transitions->mesh);
+            next->transitions = std::move(transitions);
+        }
         std::sort(next->leaves.begin(), next->leaves.end(),
                   [](const auto& a, const auto& b) { return a->chunk.leafOrigin < b->chunk.leafOrigin; });
         next->bytes = sizeof(BrickMeshPieces);
         for (const auto& leaf : next->leaves)
             next->bytes += sizeof(LeafMesh) + leaf->chunk.mesh.memoryBytes() + leaf->chunk.vertexKeys.capacity() * sizeof(uint64_t) +
                            leaf->occlusion.capacity() + leaf->blend.capacity() * sizeof(uint32_t);
+        const TransitionMesh& t = *next->transitions;
+        next->bytes += sizeof(TransitionMesh) + t.mesh.memoryBytes() + t.occlusion.capacity() + t.blend.capacity() * sizeof(uint32_t) +
+                       t.cells.capacity() * sizeof(TransitionCellBox);
         return next;
     }
 
