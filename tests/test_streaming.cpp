@@ -664,7 +664,12 @@ TEST_CASE("kept meshes where the cut ends inside the scene after stamps across i
                                 {"add", {30, 3, 30}, false},
                                 {"add", {100, 2, 40}, false},
                                 {"remove", {40, 1, 100}, false},
-                                {"paint", {20, 2, 20}, false}});
+                                {"paint", {20, 2, 20}, false},
+                                {"add", {140, 0, 150}},
+                                {"add", {130, 0, 200}},
+                                {"remove", {150, 0, 130}},
+                                {"add", {125, 0, 190}},
+                                {"paint", {126, 0, 140}}});
 }
 
 TEST_CASE("an edit where the view shows a coarse level shows at level 0 until it is saved, then at the coarse level again", "[streaming]")

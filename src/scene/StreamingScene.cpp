@@ -96,13 +96,46 @@ bool reachesCell(const BlockChange& change, const TransitionCellBox& cell)
     return true;
 }
 
+/// What a brick's mesh reads besides the edits the leaf log tells, per direction from the brick
+/// (directionIndex): which bricks of the cut touch it on that side, and their loads; at 13, the brick's
+/// own loads and the bricks beside it that entered or left the trees. A change on one side leaves the
+/// leaves far from that side as they were.
+struct MeshReadVersions {
+    std::array<uint64_t, 27> sides{};
+
+    bool operator==(const MeshReadVersions& other) const { return sides == other.sides; }
+    bool operator!=(const MeshReadVersions& other) const { return sides != other.sides; }
+};
+
+/// The leaves of a level-0 brick's pieces (its own, and one layer past its high faces) whose cells or
+/// occlusion read as far as `direction` (directionIndex) from the brick: within kMeshReach of its faces
+/// on that side.
+std::vector<IndexCoord> leavesReadingSide(const IndexCoord& brickMin, int direction)
+{
+    constexpr int32_t kLeavesAcross = kBrickEdge / kLeafDim + 1;
+    std::array<int32_t, 3> first{}, last{};
+    for (std::size_t a = 0; a < 3; ++a) {
+        const int step = int(direction / (a == 0 ? 1 : a == 1 ? 3 : 9)) % 3 - 1;
+        first[a] = 0, last[a] = kLeavesAcross - 1;
+        // Leaf i spans [i, i + 1] leaves from the brick's low face.
+        if (step < 0) last[a] = (kMeshReach - 1) / kLeafDim;
+        if (step > 0) first[a] = (kBrickEdge - kMeshReach) / kLeafDim;
+    }
+    std::vector<IndexCoord> out;
+    for (int32_t i = first[0]; i <= last[0]; ++i)
+        for (int32_t j = first[1]; j <= last[1]; ++j)
+            for (int32_t k = first[2]; k <= last[2]; ++k)
+                out.push_back({brickMin[0] + i * kLeafDim, brickMin[1] + j * kLeafDim, brickMin[2] + k * kLeafDim});
+    return out;
+}
+
 } // namespace
 
 struct StreamingScene::BrickMeshPieces {
     std::vector<std::shared_ptr<const LeafMesh>> leaves; // in the order of their origins
     std::shared_ptr<const TransitionMesh> transitions;
     uint64_t leafLogSeq = 0; // the leaf log's last entry when made
-    uint64_t inputs = 0;     // the brick's mesh version counting loads only (meshVersionLocked)
+    MeshReadVersions inputs; // what the brick's mesh read of the loads around it
     uint64_t bytes = 0;
 };
 
@@ -117,7 +150,8 @@ struct StreamingScene::Impl {
         // that side leave the neighbour's mesh as it was.
         std::array<std::array<uint64_t, 27>, kReachClasses> sides{};
         std::shared_ptr<const BrickMesh> mesh; // the last made, while the brick is shown
-        uint64_t meshInputs = 0;  // meshVersionLocked(key, true) when it was made
+        MeshReadVersions meshInputs; // meshReadVersionsLocked(key) when it was made
+        uint64_t meshContent = 0;    // `version` when it was made
         uint64_t loadVersion = 0; // the version it was loaded at: changes other than edits
         // A mesh also reads bricks the cut does not show, where they are in the trees: the points of a
         // brick of its own level beside it (its face cells and a leaf beyond), and those of the finer
@@ -238,24 +272,11 @@ struct StreamingScene::Impl {
         for (std::thread& t : workers) t.join();
     }
 
-    /// Changes when the brick's content, or the bricks its mesh reads (those of the cut touching it,
-    /// and their content), change. 0 when it is not resident. `loadsOnly`: counts the bricks' loads, not
-    /// their edits (which the leaf log tells). Lock held.
-    uint64_t meshVersionLocked(const BrickKey& key, bool loadsOnly = false) const
+    /// fn(other, towards) for each brick of the cut touching a brick (itself included), with the side of
+    /// `other` that the brick lies on (directionIndex of `towards`; 13 for the brick itself).
+    template <typename Fn>
+    void forEachTouchingInCut(const BrickKey& key, const Fn& fn) const
     {
-        const auto it = resident.find(key);
-        if (it == resident.end()) return 0;
-        // Order-independent sums over the cut's bricks touching this one: which they are, and their content.
-        uint64_t v = (loadsOnly ? it->second.loadVersion : it->second.version) * 0x9E3779B97F4A7C15ull;
-        // Pieces re-made per leaf are kept only while no brick beside moved (their face cells read it);
-        // finer bricks moving inside it change only the transition cells, which are made every time.
-        v += it->second.besideMoved * 0xD6E8FEB86659FD93ull;
-        if (!loadsOnly) {
-            v += it->second.finerMoved * 0xA0761D6478BD642Full;
-            const auto stamp = maskStamps.find(key);
-            if (stamp != maskStamps.end()) v += stamp->second * 0xC2B2AE3D27D4EB4Full;
-        }
-        const LodBrickHash hash;
         const int64_t own = int64_t(kLodBrickVoxels) << key.level;
         LodCut::Point lo, hi;
         for (int a = 0; a < 3; ++a) {
@@ -263,21 +284,58 @@ struct StreamingScene::Impl {
             hi[std::size_t(a)] = lo[std::size_t(a)] + own;
         }
         cut->forEachTouching(lo, hi, [&](const LodBrick& other) {
-            v += hash(other) * 0x100000001B3ull;
-            const auto r = resident.find({other.level, other.brick});
-            if (r == resident.end()) return;
-            // Which side of `other` this brick lies on, and how far into it this brick's mesh reads.
             std::array<int, 3> towards{};
             const int64_t otherSize = int64_t(kLodBrickVoxels) << other.level;
             for (int a = 0; a < 3; ++a) {
                 const int64_t olo = int64_t(other.brick[std::size_t(a)]) * otherSize, ohi = olo + otherSize;
                 towards[std::size_t(a)] = hi[std::size_t(a)] <= olo ? -1 : lo[std::size_t(a)] >= ohi ? 1 : 0;
             }
+            fn(other, towards);
+        });
+    }
+
+    /// Changes when the brick's content, or the bricks its mesh reads (those of the cut touching it,
+    /// and their content), change. 0 when it is not resident. Lock held.
+    uint64_t meshVersionLocked(const BrickKey& key) const
+    {
+        const auto it = resident.find(key);
+        if (it == resident.end()) return 0;
+        // Order-independent sums over the cut's bricks touching this one: which they are, and their content.
+        uint64_t v = it->second.version * 0x9E3779B97F4A7C15ull;
+        v += it->second.besideMoved * 0xD6E8FEB86659FD93ull;
+        v += it->second.finerMoved * 0xA0761D6478BD642Full;
+        const auto stamp = maskStamps.find(key);
+        if (stamp != maskStamps.end()) v += stamp->second * 0xC2B2AE3D27D4EB4Full;
+        const LodBrickHash hash;
+        forEachTouchingInCut(key, [&](const LodBrick& other, const std::array<int, 3>& towards) {
+            v += hash(other) * 0x100000001B3ull;
+            const auto r = resident.find({other.level, other.brick});
+            if (r == resident.end()) return;
+            // How far into `other` this brick's mesh reads, on the side of it this brick lies on.
             const int reachClass = std::clamp(key.level - other.level, 0, kReachClasses - 1);
-            v += (loadsOnly ? r->second.loadVersion : r->second.sides[std::size_t(reachClass)][std::size_t(directionIndex(towards))]) *
-                 0xC2B2AE3D27D4EB4Full;
+            v += r->second.sides[std::size_t(reachClass)][std::size_t(directionIndex(towards))] * 0xC2B2AE3D27D4EB4Full;
         });
         return v;
+    }
+
+    /// What a resident brick's mesh reads of the loads around it, per side (MeshReadVersions). Lock held.
+    MeshReadVersions meshReadVersionsLocked(const BrickKey& key) const
+    {
+        MeshReadVersions out;
+        const auto it = resident.find(key);
+        if (it == resident.end()) return out;
+        // Pieces re-made per leaf are kept only while no brick beside moved (their face cells read it);
+        // finer bricks moving inside it change only the transition cells, which are made every time.
+        out.sides[13] = it->second.loadVersion * 0x9E3779B97F4A7C15ull + it->second.besideMoved * 0xD6E8FEB86659FD93ull;
+        const LodBrickHash hash;
+        forEachTouchingInCut(key, [&](const LodBrick& other, const std::array<int, 3>& towards) {
+            // The side of this brick that `other` lies on.
+            uint64_t& side = out.sides[std::size_t(directionIndex({-towards[0], -towards[1], -towards[2]}))];
+            side += hash(other) * 0x100000001B3ull;
+            const auto r = resident.find({other.level, other.brick});
+            if (r != resident.end()) side += r->second.loadVersion * 0xC2B2AE3D27D4EB4Full;
+        });
+        return out;
     }
 
     uint64_t estimateOf(const BrickKey& key) const
@@ -312,13 +370,14 @@ struct StreamingScene::Impl {
         meshShare = meshSamples++ == 0 ? share : 0.9 * meshShare + 0.1 * share;
     }
 
-    /// `inputs`: meshVersionLocked(key, true) when the mesh was made.
-    void keepMesh(const BrickKey& key, Resident& r, std::shared_ptr<const BrickMesh> mesh, uint64_t inputs)
+    /// `inputs`: meshReadVersionsLocked(key) when the mesh was made; `content`: the brick's version then.
+    void keepMesh(const BrickKey& key, Resident& r, std::shared_ptr<const BrickMesh> mesh, const MeshReadVersions& inputs, uint64_t content)
     {
         residentBytes += mesh->bytes;
         meshBytes += mesh->bytes;
         r.mesh = std::move(mesh);
         r.meshInputs = inputs;
+        r.meshContent = content;
         meshed.insert(key);
     }
 
@@ -331,9 +390,11 @@ struct StreamingScene::Impl {
         /// (above level 0 only the transition cells, which read the finer levels, are made again).
         bool inPieces = false;
         std::shared_ptr<const BrickMeshPieces> old;
-        bool reuse = false;               // `old`'s pieces hold where `changed` does not reach
+        bool reuse = false;               // `old`'s pieces hold where `changed` and `movedSides` do not reach
         std::vector<BlockChange> changed; // level-0 leaves edits changed since `old`, near the brick
-        uint64_t inputs = 0;              // meshVersionLocked(key, true)
+        std::vector<int> movedSides;      // a level-0 brick's: directions where the cut or the loads changed
+        MeshReadVersions inputs;          // meshReadVersionsLocked(key)
+        uint64_t content = 0;             // the brick's version
         uint64_t version = 0;             // meshVersionLocked(key)
         uint64_t leafLogSeq = 0;
         VoxelMask mask;
@@ -346,12 +407,19 @@ struct StreamingScene::Impl {
         in.key = key;
         in.cut = cut;
         in.inPieces = inPieces && cut->shows({key.level, key.brick});
-        in.inputs = meshVersionLocked(key, true);
+        in.inputs = meshReadVersionsLocked(key);
+        in.content = resident.at(key).version;
         in.version = meshVersionLocked(key);
         in.leafLogSeq = leafLogSeq;
         in.mask = mask;
         if (!in.inPieces) return in;
-        in.reuse = old && old->inputs == in.inputs && old->leafLogSeq >= leafLogFloor;
+        // A level-0 brick's pieces hold where the loads and the cut around it did not change: a side that
+        // did makes the leaves reading it again (a coarse brick's, all of them).
+        if (old && old->leafLogSeq >= leafLogFloor && old->inputs.sides[13] == in.inputs.sides[13]) {
+            for (int d = 0; d < 27; ++d)
+                if (old->inputs.sides[std::size_t(d)] != in.inputs.sides[std::size_t(d)]) in.movedSides.push_back(d);
+            in.reuse = in.movedSides.empty() || key.level == 0;
+        }
         in.old = std::move(old);
         if (!in.reuse || key.level != 0) return in;
         // The leaves edits changed since `old`, near enough for this brick's cells or occlusion to read
@@ -485,6 +553,12 @@ struct StreamingScene::Impl {
         if (reuse) {
             for (const IndexCoord& leaf : leavesAffectedBy(changed, options.meshing))
                 if (inPiecesBox(key, leaf, 0)) remesh.push_back(leaf);
+            for (int side : in.movedSides) {
+                const std::vector<IndexCoord> near = leavesReadingSide(brickBox(key.brick).min, side);
+                remesh.insert(remesh.end(), near.begin(), near.end());
+            }
+            std::sort(remesh.begin(), remesh.end());
+            remesh.erase(std::unique(remesh.begin(), remesh.end()), remesh.end());
         }
         std::vector<MeshChunk> fresh = meshLodBrickChunks(levelsOf, *in.cut, brick, options.meshing, reuse ? &remesh : nullptr);
         // Occlusion samples reach 3.5 voxels beyond a chunk's cells (which end a voxel past its leaf): the
@@ -522,7 +596,7 @@ struct StreamingScene::Impl {
         next->leaves.insert(next->leaves.end(), made.begin(), made.end());
         // A coarse brick's transition cells read the finer bricks on its faces, which edits change
         // without a log of it here: made every time.
-        const bool transitionsHold = reuse && key.level == 0 && in.old->transitions &&
+        const bool transitionsHold = reuse && key.level == 0 && in.movedSides.empty() && in.old->transitions &&
                                      std::none_of(changed.begin(), changed.end(), [&](const BlockChange& c) {
                                          const auto& cells = in.old->transitions->cells;
                                          return std::any_of(cells.begin(), cells.end(), [&](const TransitionCellBox& cell) { return reachesCell(c, cell); });
@@ -1519,10 +1593,12 @@ std::shared_ptr<const StreamingScene::BrickMesh> StreamingScene::meshBrick(const
     auto it = s.resident.find(key);
     if (it == s.resident.end()) return nullptr;
     if (it->second.mesh && it->second.mesh->version == s.meshVersionLocked(key)) return it->second.mesh;
-    // A mesh made again for edits (the loads around unchanged) is made in pieces, so that the next
-    // edits re-mesh only the leaves they reach; others are made whole and take less memory.
-    const uint64_t inputs = s.meshVersionLocked(key, true);
-    const bool forEdits = it->second.mesh && it->second.meshInputs == inputs;
+    // A mesh made again for edits is made in pieces, so that the next edits re-mesh only the leaves they
+    // reach: the loads around unchanged, or a level-0 brick edited since or already in pieces (the cut
+    // moving beside it re-makes the leaves on that side). Others are made whole and take less memory.
+    const Impl::Resident& r = it->second;
+    const bool forEdits = r.mesh && (r.meshInputs == s.meshReadVersionsLocked(key) ||
+                                     (key.level == 0 && (r.mesh->pieces || r.version != r.meshContent)));
     const Impl::MeshInputs in = s.meshInputsLocked(key, forEdits, forEdits ? it->second.mesh->pieces : nullptr);
     lock.unlock();
     std::shared_ptr<const BrickMesh> out = s.makeMesh(in);
@@ -1534,7 +1610,7 @@ std::shared_ptr<const StreamingScene::BrickMesh> StreamingScene::meshBrick(const
     s.dropMesh(key, it->second);
     if (s.makeRoom(out->bytes)) {
         const auto kept = s.resident.find(key); // makeRoom may have evicted it, if it was not wanted
-        if (kept != s.resident.end()) s.keepMesh(key, kept->second, out, in.inputs);
+        if (kept != s.resident.end()) s.keepMesh(key, kept->second, out, in.inputs, in.content);
     }
     return out;
 }
