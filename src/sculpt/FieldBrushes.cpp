@@ -139,15 +139,16 @@ bool holdsSolid(const SolidDistances& solid)
     return std::any_of(solid.material.begin(), solid.material.end(), [](MaterialId m) { return m != kEmptyMaterial; });
 }
 
-/// The old surface's signed distance in world units, on the lattice box solidDistances rebuilt it over.
-LatticeGrid worldDistances(const SolidDistances& solid, const std::array<int32_t, 3>& origin, double voxelSize)
+/// The old surface's signed distance in world units, on the lattice box solidDistances rebuilt it over
+/// (taking its distances; its materials stay).
+LatticeGrid worldDistances(SolidDistances& solid, const std::array<int32_t, 3>& origin, double voxelSize)
 {
     LatticeGrid grid;
     grid.origin = origin;
     grid.dims = solid.dims;
     grid.voxelSize = voxelSize;
-    grid.values.resize(solid.distance.size());
-    for (std::size_t n = 0; n < grid.values.size(); ++n) grid.values[n] = float(double(solid.distance[n]) * voxelSize);
+    grid.values = std::move(solid.distance);
+    for (float& v : grid.values) v = float(double(v) * voxelSize);
     return grid;
 }
 
@@ -535,7 +536,7 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
         dims[std::size_t(a)] = int32_t(std::ceil(to / h)) - lo[std::size_t(a)] + 1;
     }
     // The old field, rebuilt from the Hermite data in the region, and the materials there.
-    const SolidDistances solid = solidDistances(volume, lo, dims, float(band / h));
+    SolidDistances solid = solidDistances(volume, lo, dims, float(band / h));
     if (!holdsSolid(solid)) return {}; // nothing solid to reshape
     const LatticeGrid old = worldDistances(solid, lo, h);
     // Only points inside the brush change (the weight is zero elsewhere, and the written-back field is
@@ -583,7 +584,8 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
             break;
         }
         // Moved from where the stroke began, never back past where its earlier stamps put the surface.
-        const LatticeGrid began = worldDistances(solidDistances(*strokeStart, lo, dims, float(band / h)), lo, h);
+        SolidDistances start = solidDistances(*strokeStart, lo, dims, float(band / h));
+        const LatticeGrid began = worldDistances(start, lo, h);
         forEachPoint(inBrush, [&](int32_t i, int32_t j, int32_t k) {
             const std::size_t n = old.index(i, j, k);
             const float moved = float(began.values[n] - weight[n] * d);
@@ -668,8 +670,10 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     }
 
     // Write back inside the brush: add what the new field holds and the old did not, then remove what the
-    // new field leaves. Outside the brush nothing changes.
-    const double lipschitz = std::max({1.0, next.lipschitz(inBrush.grown(1, next.dims)), old.lipschitz()});
+    // new field leaves. Outside the brush nothing changes. The grids' values (at most the band in size)
+    // decide the clipped fields only within the band of the brush's box; beyond it, the brush's distance.
+    const int32_t bandPoints = int32_t(std::ceil(band / h)) + 2;
+    const double lipschitz = std::max({1.0, next.lipschitz(inBrush.grown(1, next.dims)), old.lipschitz(inBrush.grown(bandPoints, old.dims))});
     EditStats stats = applyCsg(volume, ClippedGridField(next, 1.0, changed, &old, lipschitz), CsgOp{CsgMode::Add, material, 1.0, {}});
     stats.append(applyCsg(volume, ClippedGridField(next, -1.0, changed, nullptr, lipschitz), CsgOp{CsgMode::Remove, material, 1.0, {}}));
     return stats;
@@ -717,7 +721,7 @@ EditStats applyBlendedAdd(Volume& volume, const SdfField& brush, const CsgOp& op
     }
     if (!fits) return applyCsg(volume, brush, op);
     // The old surface's distance, before the brush changes it.
-    const SolidDistances solid = solidDistances(volume, lo, dims, float(band / h));
+    SolidDistances solid = solidDistances(volume, lo, dims, float(band / h));
     EditStats stats = applyCsg(volume, brush, op);
     if (!holdsSolid(solid)) return stats; // nothing to blend into
     const LatticeGrid old = worldDistances(solid, lo, h);

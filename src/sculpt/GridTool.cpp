@@ -83,6 +83,16 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
     }
     const std::size_t sentinel = crossings.size();
     seeds.push_back({std::numeric_limits<float>::max(), 0.0f, 0.0f, 0.0f, 0.0f, 0.0f});
+    const int nx = box.dims[0], ny = box.dims[1], nz = box.dims[2];
+    // Blocks of 2^3 points: those within the band of a seeded point's block.
+    constexpr int kBlock = 2;
+    const bool banded = std::isfinite(band);
+    const int bx = (nx + kBlock - 1) / kBlock, by = (ny + kBlock - 1) / kBlock, bz = (nz + kBlock - 1) / kBlock;
+    const auto blockIndex = [&](int i, int j, int k) {
+        return (std::size_t(i / kBlock) * std::size_t(by) + std::size_t(j / kBlock)) * std::size_t(bz) + std::size_t(k / kBlock);
+    };
+    std::vector<uint8_t> nearBlock;
+    if (banded) nearBlock.assign(std::size_t(bx) * std::size_t(by) * std::size_t(bz), 0);
     for (std::size_t id = 0; id < crossings.size(); ++id) {
         const Crossing& c = crossings[id];
         if (inRegion(c.before, region) == inRegion(c.after, region)) continue;
@@ -96,23 +106,13 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
                     const float candidate = seedDistance(seeds[id], float(i), float(j), float(k));
                     const std::size_t n = box.index(i, j, k);
                     if (candidate < d[n]) d[n] = candidate, nearest[n] = int32_t(id);
+                    if (banded) nearBlock[blockIndex(i, j, k)] = 1;
                 }
     }
-    const int nx = box.dims[0], ny = box.dims[1], nz = box.dims[2];
-    // Blocks of 2^3 points: those within the band of a seeded point's block.
-    constexpr int kBlock = 2;
-    const bool banded = std::isfinite(band);
-    const int bx = (nx + kBlock - 1) / kBlock, by = (ny + kBlock - 1) / kBlock, bz = (nz + kBlock - 1) / kBlock;
-    const auto blockIndex = [&](int i, int j, int k) {
-        return (std::size_t(i / kBlock) * std::size_t(by) + std::size_t(j / kBlock)) * std::size_t(bz) + std::size_t(k / kBlock);
-    };
-    std::vector<uint8_t> nearBlock;
+    // Per row (i, j): the span of k its blocks within the band cover (points outside it are never
+    // offered anything).
+    std::vector<std::array<int, 2>> rowSpan;
     if (banded) {
-        nearBlock.assign(std::size_t(bx) * std::size_t(by) * std::size_t(bz), 0);
-        for (int i = 0; i < nx; ++i)
-            for (int j = 0; j < ny; ++j)
-                for (int k = 0; k < nz; ++k)
-                    if (nearest[box.index(i, j, k)] >= 0) nearBlock[blockIndex(i, j, k)] = 1;
         // Grown by the band plus a block (the seeds sit anywhere in theirs), one axis at a time.
         const int grow = int(std::ceil(band / float(kBlock))) + 1;
         const int bdims[3] = {bx, by, bz};
@@ -129,7 +129,19 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
                             nearBlock[std::size_t(std::ptrdiff_t(n) + std::ptrdiff_t(t - at) * std::ptrdiff_t(stride[axis]))] = 1;
                     }
         }
+        rowSpan.assign(std::size_t(bx) * std::size_t(by), {nz, -1});
+        for (int a = 0; a < bx; ++a)
+            for (int b = 0; b < by; ++b) {
+                const uint8_t* row = &nearBlock[(std::size_t(a) * std::size_t(by) + std::size_t(b)) * std::size_t(bz)];
+                int first = 0, last = bz - 1;
+                while (first <= last && !row[first]) ++first;
+                while (last >= first && !row[last]) --last;
+                if (first <= last) rowSpan[std::size_t(a) * std::size_t(by) + std::size_t(b)] = {first * kBlock, std::min(nz - 1, last * kBlock + kBlock - 1)};
+            }
     }
+    const auto spanOf = [&](int i, int j) -> std::array<int, 2> {
+        return banded ? rowSpan[std::size_t(i / kBlock) * std::size_t(by) + std::size_t(j / kBlock)] : std::array<int, 2>{0, nz - 1};
+    };
     struct Step {
         int di, dj, dk;
         std::ptrdiff_t offset; // in the arrays
@@ -186,10 +198,13 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
             tbb::parallel_for(tbb::blocked_range<int>(first, last + 1, 4), [&](const tbb::blocked_range<int>& rows) {
                 for (int r = rows.begin(); r != rows.end(); ++r) {
                     const int j = front - 2 * r;
-                    if (sign > 0)
-                        for (int k = 0; k < nz; ++k) offer(r, j, k, 1);
-                    else
-                        for (int k = nz - 1; k >= 0; --k) offer(nx - 1 - r, ny - 1 - j, k, -1);
+                    if (sign > 0) {
+                        const auto [k0, k1] = spanOf(r, j);
+                        for (int k = k0; k <= k1; ++k) offer(r, j, k, 1);
+                    } else {
+                        const auto [k0, k1] = spanOf(nx - 1 - r, ny - 1 - j);
+                        for (int k = k1; k >= k0; --k) offer(nx - 1 - r, ny - 1 - j, k, -1);
+                    }
                 }
             });
         }
