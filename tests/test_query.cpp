@@ -416,3 +416,44 @@ TEST_CASE("query library: a sculpted scene (.vdb, and a store at a level of deta
     checkCleanFailure(runCli(dir, "query lib.vdblib ball.vdbclay --lod 9"));
 }
 
+
+TEST_CASE("query library: addAll adds a batch in one transaction, and a batch with a taken name (in the library or twice in it) adds nothing", "[query]")
+{
+    TempDir dir;
+    const std::vector<LabeledModel> set = syntheticSet(1, 5);
+    REQUIRE(set.size() >= 4);
+    std::vector<TriangleSoup> meshes;
+    std::vector<ModelDescription> descriptions(set.size());
+    for (std::size_t i = 0; i < set.size(); ++i) {
+        meshes.push_back(buildShape(set[i].shape));
+        describeShape(meshes[i], descriptions[i]);
+    }
+    const auto batch = [&](std::initializer_list<std::pair<std::size_t, std::string>> picks) {
+        std::vector<ModelLibrary::NewModel> out;
+        for (const auto& [i, name] : picks) out.push_back({name, "models/" + name + ".ply", set[i].label, &meshes[i], &descriptions[i]});
+        return out;
+    };
+    ModelLibrary library(dir.file("batch.vdblib"), true);
+    const std::vector<ModelRecord> added = library.addAll(batch({{0, "a"}, {1, "b"}, {2, "c"}}));
+    REQUIRE(added.size() == 3);
+    CHECK(added[1].name == "b");
+    CHECK(added[1].label == set[1].label);
+    CHECK(added[1].triangles == meshes[1].triangles.size());
+    CHECK(library.models().size() == 3);
+    // Each finds itself first, at distance zero.
+    for (std::size_t i = 0; i < 3; ++i) {
+        const std::vector<QueryHit> hits = library.query(descriptions[i], 1, Descriptor::D2);
+        REQUIRE(hits.size() == 1);
+        CHECK(hits[0].model.id == added[i].id);
+        CHECK(hits[0].distance == Approx(0.0).margin(1e-12));
+    }
+    CHECK_THROWS_AS(library.addAll(batch({{3, "d"}, {0, "a"}})), LibraryError); // "a" is taken
+    CHECK_THROWS_AS(library.addAll(batch({{3, "e"}, {3, "e"}})), LibraryError); // twice in the batch
+    CHECK(library.models().size() == 3);
+    CHECK_FALSE(library.contains("d"));
+    CHECK_FALSE(library.contains("e"));
+    // Reopened, the three are there with their descriptors.
+    const ModelLibrary reopened(dir.file("batch.vdblib"), false);
+    CHECK(reopened.models().size() == 3);
+    CHECK(reopened.count(Descriptor::ClusterD2) == 3);
+}

@@ -41,6 +41,12 @@ public:
     Statement(const Statement&) = delete;
     Statement& operator=(const Statement&) = delete;
     sqlite3_stmt* get() { return s_; }
+    /// Ready to run again, with new bindings.
+    void reset()
+    {
+        sqlite3_reset(s_);
+        sqlite3_clear_bindings(s_);
+    }
     void text(int i, const std::string& v) { sqlite3_bind_text(s_, i, v.c_str(), int(v.size()), SQLITE_TRANSIENT); }
     void integer(int i, int64_t v) { sqlite3_bind_int64(s_, i, v); }
     void blob(int i, const void* data, std::size_t bytes) { sqlite3_bind_blob(s_, i, data, int(bytes), SQLITE_TRANSIENT); }
@@ -261,6 +267,9 @@ ModelLibrary::ModelLibrary(const std::string& path, bool create) : path_(path), 
         tables.step();
         if (sqlite3_column_int64(tables.get(), 0) != 3) throw LibraryError("the library '" + path + "' is damaged: tables are missing");
         impl_->exec("PRAGMA foreign_keys=ON");
+        // Light fields read through the mapped file instead of a read() per page: a combined query's
+        // ~170 of them in half the time.
+        impl_->exec("PRAGMA mmap_size=4294967296");
     } catch (...) {
         sqlite3_close(impl_->db);
         impl_->db = nullptr;
@@ -285,40 +294,54 @@ bool ModelLibrary::contains(const std::string& name) const
 ModelRecord ModelLibrary::add(const std::string& name, const std::string& sourcePath, const std::string& label, const TriangleSoup& mesh,
                               const ModelDescription& description)
 {
-    if (contains(name)) throw LibraryError("a model named '" + name + "' is in the library already");
-    if (description.d2.empty() || description.clusterD2.empty()) throw LibraryError("the model '" + name + "' was not described");
-    ModelRecord r;
-    r.name = name;
-    r.path = sourcePath;
-    r.label = label;
-    r.triangles = mesh.triangles.size();
-    r.colour = meanColour(mesh);
+    return addAll({{name, sourcePath, label, &mesh, &description}}).front();
+}
+
+std::vector<ModelRecord> ModelLibrary::addAll(const std::vector<NewModel>& models)
+{
+    for (const NewModel& m : models)
+        if (m.description->d2.empty() || m.description->clusterD2.empty()) throw LibraryError("the model '" + m.name + "' was not described");
+    std::vector<ModelRecord> out;
     impl_->exec("BEGIN IMMEDIATE");
     try {
         Statement put(impl_->db, "INSERT INTO models(name, path, label, triangles, r, g, b) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
-        put.text(1, name);
-        put.text(2, sourcePath);
-        put.text(3, label);
-        put.integer(4, int64_t(r.triangles));
-        for (int k = 0; k < 3; ++k) sqlite3_bind_double(put.get(), 5 + k, r.colour[std::size_t(k)]);
-        put.step();
-        r.id = sqlite3_last_insert_rowid(impl_->db);
-        const auto store = [&](Descriptor kind, const std::vector<float>& vector) {
-            if (vector.empty()) return;
-            Statement d(impl_->db, "INSERT INTO descriptors(model, kind, vector) VALUES (?1, ?2, ?3)");
-            d.integer(1, r.id);
-            d.text(2, descriptorName(kind));
-            d.blob(3, vector.data(), vector.size() * sizeof(float));
-            d.step();
-        };
-        store(Descriptor::D2, toFloats(description.d2));
-        store(Descriptor::ClusterD2, toFloats(description.clusterD2));
-        store(Descriptor::LightField, description.lightField);
-        if (!description.thumbnailPng.empty()) {
-            Statement t(impl_->db, "INSERT INTO thumbnails(model, png) VALUES (?1, ?2)");
-            t.integer(1, r.id);
-            t.blob(2, description.thumbnailPng.data(), description.thumbnailPng.size());
-            t.step();
+        Statement descriptor(impl_->db, "INSERT INTO descriptors(model, kind, vector) VALUES (?1, ?2, ?3)");
+        Statement thumbnail(impl_->db, "INSERT INTO thumbnails(model, png) VALUES (?1, ?2)");
+        for (const NewModel& m : models) {
+            if (contains(m.name)) throw LibraryError("a model named '" + m.name + "' is in the library already");
+            ModelRecord r;
+            r.name = m.name;
+            r.path = m.sourcePath;
+            r.label = m.label;
+            r.triangles = m.mesh->triangles.size();
+            r.colour = meanColour(*m.mesh);
+            put.reset();
+            put.text(1, r.name);
+            put.text(2, r.path);
+            put.text(3, r.label);
+            put.integer(4, int64_t(r.triangles));
+            for (int k = 0; k < 3; ++k) sqlite3_bind_double(put.get(), 5 + k, r.colour[std::size_t(k)]);
+            put.step();
+            r.id = sqlite3_last_insert_rowid(impl_->db);
+            const auto store = [&](Descriptor kind, const std::vector<float>& vector) {
+                if (vector.empty()) return;
+                descriptor.reset();
+                descriptor.integer(1, r.id);
+                descriptor.text(2, descriptorName(kind));
+                descriptor.blob(3, vector.data(), vector.size() * sizeof(float));
+                descriptor.step();
+            };
+            const ModelDescription& d = *m.description;
+            store(Descriptor::D2, toFloats(d.d2));
+            store(Descriptor::ClusterD2, toFloats(d.clusterD2));
+            store(Descriptor::LightField, d.lightField);
+            if (!d.thumbnailPng.empty()) {
+                thumbnail.reset();
+                thumbnail.integer(1, r.id);
+                thumbnail.blob(2, d.thumbnailPng.data(), d.thumbnailPng.size());
+                thumbnail.step();
+            }
+            out.push_back(std::move(r));
         }
         impl_->exec("COMMIT");
     } catch (...) {
@@ -327,7 +350,7 @@ ModelRecord ModelLibrary::add(const std::string& name, const std::string& source
     }
     std::lock_guard<std::mutex> lock(impl_->indexMutex);
     impl_->indexes.clear();
-    return r;
+    return out;
 }
 
 bool ModelLibrary::remove(const std::string& name)

@@ -78,6 +78,15 @@ public:
     /// the description lacks D2 or ClusterD2.
     ModelRecord add(const std::string& name, const std::string& sourcePath, const std::string& label, const TriangleSoup& mesh,
                     const ModelDescription& description);
+    /// A model for addAll: what add() takes (pointers, not copies: a batch may be large).
+    struct NewModel {
+        std::string name, sourcePath, label;
+        const TriangleSoup* mesh = nullptr;
+        const ModelDescription* description = nullptr;
+    };
+    /// Adds models as add() does, in one transaction: all of them, or none when one is refused (a name
+    /// taken, in the library or earlier in the batch). Far faster than one add() each for many models.
+    std::vector<ModelRecord> addAll(const std::vector<NewModel>& models);
     /// Removes the model of that name; false when there is none.
     bool remove(const std::string& name);
     bool contains(const std::string& name) const;
