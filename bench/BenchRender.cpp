@@ -231,9 +231,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
         if (std::fabs(cx - sx * voxel) > 32 + 48 || std::fabs(cz - sz * voxel) > 32 + 48) continue;
         const auto m = scene.meshBrick(key);
         if (!m) continue;
-        const uint32_t base = uint32_t(changed.positions.size());
-        changed.positions.insert(changed.positions.end(), m->mesh.positions.begin(), m->mesh.positions.end());
-        for (auto t : m->mesh.triangles) changed.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+        appendMesh(changed, m->mesh);
     }
     f.openvdbMeshMs = openvdbRemeshMs(changed, voxel);
     return f;

@@ -88,15 +88,7 @@ Mesh meshCut(const Levels& levels, const std::vector<LodBrick>& shown)
 {
     const LodCut cut(shown);
     Mesh all;
-    for (const LodBrick& b : shown) {
-        const Mesh m = meshLodBrick(levels.pointers(), cut, b, cms());
-        const uint32_t base = uint32_t(all.positions.size());
-        all.positions.insert(all.positions.end(), m.positions.begin(), m.positions.end());
-        all.normals.insert(all.normals.end(), m.normals.begin(), m.normals.end());
-        all.materials.insert(all.materials.end(), m.materials.begin(), m.materials.end());
-        for (const auto& t : m.triangles) all.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
-        all.triangleMaterials.insert(all.triangleMaterials.end(), m.triangleMaterials.begin(), m.triangleMaterials.end());
-    }
+    for (const LodBrick& b : shown) appendMesh(all, meshLodBrick(levels.pointers(), cut, b, cms()));
     return all;
 }
 

@@ -850,10 +850,7 @@ TEST_CASE("a view of level 0 beside level 1 is closed: the bricks beside it whos
     Mesh all;
     for (const BrickKey& key : scene.shownBricks()) {
         levels.insert(key.level);
-        const Mesh& m = scene.meshBrick(key)->mesh;
-        const uint32_t base = uint32_t(all.positions.size());
-        all.positions.insert(all.positions.end(), m.positions.begin(), m.positions.end());
-        for (const auto& t : m.triangles) all.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+        appendMesh(all, scene.meshBrick(key)->mesh);
     }
     REQUIRE(levels.size() == 2);
     // Welded a little wider than kMergeDistanceVoxels: the bricks compute a shared vertex apart, in floats.

@@ -17,6 +17,16 @@ uint64_t Mesh::memoryBytes() const
            triangleMaterials.capacity() * sizeof(triangleMaterials[0]);
 }
 
+void appendMesh(Mesh& mesh, const Mesh& part)
+{
+    const uint32_t base = uint32_t(mesh.positions.size());
+    mesh.positions.insert(mesh.positions.end(), part.positions.begin(), part.positions.end());
+    mesh.normals.insert(mesh.normals.end(), part.normals.begin(), part.normals.end());
+    mesh.materials.insert(mesh.materials.end(), part.materials.begin(), part.materials.end());
+    for (const auto& t : part.triangles) mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    mesh.triangleMaterials.insert(mesh.triangleMaterials.end(), part.triangleMaterials.begin(), part.triangleMaterials.end());
+}
+
 uint64_t contentHash(const Mesh& m)
 {
     uint64_t h = 1469598103934665603ull;

@@ -73,17 +73,6 @@ struct TransitionMesh {
     std::vector<TransitionCellBox> cells;
 };
 
-/// Appends `part` to `mesh`, its triangles shifted past the vertices `mesh` held.
-void appendMesh(Mesh& mesh, const Mesh& part)
-{
-    const uint32_t base = uint32_t(mesh.positions.size());
-    mesh.positions.insert(mesh.positions.end(), part.positions.begin(), part.positions.end());
-    mesh.normals.insert(mesh.normals.end(), part.normals.begin(), part.normals.end());
-    mesh.materials.insert(mesh.materials.end(), part.materials.begin(), part.materials.end());
-    for (const auto& t : part.triangles) mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
-    mesh.triangleMaterials.insert(mesh.triangleMaterials.end(), part.triangleMaterials.begin(), part.triangleMaterials.end());
-}
-
 /// Whether a level-0 change reaches what a transition cell's vertices read: the cell's points and
 /// edges, and the voxels their occlusion and material blend sample around them.
 bool reachesCell(const BlockChange& change, const TransitionCellBox& cell)
