@@ -155,11 +155,13 @@ TEST_CASE("query D2: on the synthetic set the nearest neighbour is of the same f
 
 // --- the library and its commands ---------------------------------------------------------------
 
+#include "query/LightField.h"
 #include "query/ModelLibrary.h"
 #include "render/ImageFile.h"
 #include "support/CliRun.h"
 
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <sqlite3.h>
 
@@ -456,4 +458,75 @@ TEST_CASE("query library: addAll adds a batch in one transaction, and a batch wi
     const ModelLibrary reopened(dir.file("batch.vdblib"), false);
     CHECK(reopened.models().size() == 3);
     CHECK(reopened.count(Descriptor::ClusterD2) == 3);
+}
+
+TEST_CASE("query library: light fields are stored at 8 bits (version 2), and a version-1 library's float light fields answer the same", "[query]")
+{
+    TempDir dir;
+    const std::vector<LabeledModel> set = syntheticSet(1, 9);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::vector<TriangleSoup> meshes;
+    std::vector<ModelDescription> descriptions(3);
+    std::vector<ModelLibrary::NewModel> adds;
+    for (std::size_t i = 0; i < 3; ++i) meshes.push_back(buildShape(set[i].shape));
+    for (std::size_t i = 0; i < 3; ++i) {
+        describeShape(meshes[i], descriptions[i]);
+        descriptions[i].lightField.resize(kLightFieldLength);
+        for (float& v : descriptions[i].lightField) v = std::pow(unit(rng), 3.0f); // no renderer needed
+        adds.push_back({"m" + std::to_string(i), "", set[i].label, &meshes[i], &descriptions[i]});
+    }
+    const std::string path = dir.file("lf.vdblib");
+    const auto answers = [&] {
+        const ModelLibrary library(path, false);
+        std::vector<std::vector<std::pair<std::string, double>>> out;
+        for (const ModelDescription& d : descriptions) {
+            std::vector<std::pair<std::string, double>> hits;
+            for (const QueryHit& h : library.query(d, 3, Descriptor::LightField)) hits.push_back({h.model.name, h.distance});
+            out.push_back(hits);
+        }
+        return out;
+    };
+    const auto sql = [&](const std::string& statement, const std::function<void(sqlite3_stmt*)>& bind = nullptr) {
+        sqlite3* db = nullptr;
+        REQUIRE(sqlite3_open(path.c_str(), &db) == SQLITE_OK);
+        sqlite3_stmt* s = nullptr;
+        REQUIRE(sqlite3_prepare_v2(db, statement.c_str(), -1, &s, nullptr) == SQLITE_OK);
+        if (bind) bind(s);
+        std::string first;
+        if (sqlite3_step(s) == SQLITE_ROW && sqlite3_column_text(s, 0)) first = reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
+        sqlite3_finalize(s);
+        sqlite3_close(db);
+        return first;
+    };
+    {
+        ModelLibrary library(path, true);
+        library.addAll(adds);
+    }
+    CHECK(sql("SELECT value FROM library WHERE key = 'version'") == "2");
+    CHECK(sql("SELECT length(vector) FROM descriptors WHERE kind = 'lightfield' LIMIT 1") == std::to_string(kLightFieldLength));
+    const auto before = answers();
+    for (std::size_t i = 0; i < 3; ++i) {
+        REQUIRE(before[i].size() == 3);
+        CHECK(before[i][0].first == "m" + std::to_string(i)); // itself first, at distance zero
+        CHECK(before[i][0].second == 0.0);
+    }
+    // As version 1 wrote them: floats (the 8-bit values, so that they quantize back to the same bytes).
+    for (std::size_t i = 0; i < 3; ++i) {
+        const std::vector<float> floats = dequantizeLightField(quantizeLightField(descriptions[i].lightField));
+        sql("UPDATE descriptors SET vector = ?1 WHERE kind = 'lightfield' AND model = (SELECT id FROM models WHERE name = ?2)", [&](sqlite3_stmt* s) {
+            sqlite3_bind_blob(s, 1, floats.data(), int(floats.size() * sizeof(float)), SQLITE_TRANSIENT);
+            sqlite3_bind_text(s, 2, ("m" + std::to_string(i)).c_str(), -1, SQLITE_TRANSIENT);
+        });
+    }
+    sql("UPDATE library SET value = '1' WHERE key = 'version'");
+    for (Descriptor d : {Descriptor::LightField})
+        std::filesystem::remove(ModelLibrary(path, false).indexPath(d)); // FLANN's saved index, made again
+    CHECK(sql("SELECT length(vector) FROM descriptors WHERE kind = 'lightfield' LIMIT 1") == std::to_string(4 * kLightFieldLength));
+    CHECK(answers() == before);
+    // A light field of neither length is damage, said so.
+    sql("UPDATE descriptors SET vector = zeroblob(100) WHERE kind = 'lightfield'");
+    std::filesystem::remove(ModelLibrary(path, false).indexPath(Descriptor::LightField));
+    const ModelLibrary damaged(path, false);
+    CHECK_THROWS_WITH(damaged.query(descriptions[0], 3, Descriptor::LightField), Catch::Contains("a light field of the wrong length"));
 }

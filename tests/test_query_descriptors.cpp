@@ -300,6 +300,65 @@ TEST_CASE("query light field: the dodecahedron's 60 rotations are distinct permu
     CHECK(lightFieldDirections().size() == std::size_t(kLightFields * kViewsPerLightField));
 }
 
+TEST_CASE("query light field: 8-bit light fields round-trip within a quantum, and their distance is the L1 of the bytes, least over the turns", "[query]")
+{
+    std::mt19937 rng(13);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    // Features spread over [0, 1] with many small ones, as the real ones are; and the clamped ends.
+    const auto randomField = [&] {
+        std::vector<float> f(kLightFieldLength);
+        for (float& v : f) v = std::pow(unit(rng), 3.0f);
+        return f;
+    };
+    const std::vector<float> a = randomField(), b = randomField();
+    const QuantizedLightField qa = quantizeLightField(a), qb = quantizeLightField(b);
+    REQUIRE(qa.size() == kLightFieldLength);
+    const std::vector<float> back = dequantizeLightField(qa);
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        // Half a step of 1/255 on the square root.
+        CHECK(std::fabs(std::sqrt(back[i]) - std::sqrt(a[i])) <= 0.5f / 255.0f + 1e-6f);
+    }
+    CHECK(quantizeLightField(back) == qa); // quantized again: the same bytes
+    std::vector<float> ends(kLightFieldLength, 0.0f);
+    ends[0] = -0.5f, ends[1] = 1.0f, ends[2] = 7.0f, ends[3] = std::numeric_limits<float>::quiet_NaN();
+    const QuantizedLightField qe = quantizeLightField(ends);
+    CHECK(int(qe[0]) == 0);
+    CHECK(int(qe[1]) == 255);
+    CHECK(int(qe[2]) == 255);
+    CHECK(int(qe[3]) == 0);
+    CHECK_THROWS_AS(quantizeLightField(std::vector<float>(10)), std::invalid_argument);
+
+    // The distance against its definition, computed plainly: least over b's light fields and the 60
+    // turns of the sum over a's first light field's views of the L1 of their bytes, over 255.
+    const auto plain = [](const QuantizedLightField& x, const QuantizedLightField& y) {
+        long best = std::numeric_limits<long>::max();
+        for (int fb = 0; fb < kLightFields; ++fb)
+            for (const auto& turn : dodecahedronRotations()) {
+                long sum = 0;
+                for (int v = 0; v < kViewsPerLightField; ++v)
+                    for (int k = 0; k < kViewFeatures; ++k)
+                        sum += std::abs(int(x[std::size_t((1 + v) * kViewFeatures + k)]) -
+                                        int(y[std::size_t((1 + fb * kViewsPerLightField + turn[std::size_t(v)]) * kViewFeatures + k)]));
+                best = std::min(best, sum);
+            }
+        return double(best) / 255.0;
+    };
+    CHECK(lightFieldDistance(qa, qb) == plain(qa, qb));
+    CHECK(lightFieldDistance(qb, qa) == plain(qb, qa));
+    CHECK(lightFieldDistance(qa, qa) == 0.0);
+    // b's views taken from a, light field 3 turned: the distance is zero again.
+    QuantizedLightField turned = qb;
+    const auto& turn = dodecahedronRotations()[17];
+    for (int v = 0; v < kViewsPerLightField; ++v)
+        std::copy_n(qa.begin() + (1 + v) * kViewFeatures, kViewFeatures, turned.begin() + (1 + 3 * kViewsPerLightField + turn[std::size_t(v)]) * kViewFeatures);
+    CHECK(lightFieldDistance(qa, turned) == 0.0);
+    CHECK(plain(qa, turned) == 0.0);
+    // Near the float distance of the square roots: each feature a half step off at most.
+    std::vector<float> rootA(a.size()), rootB(b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) rootA[i] = std::sqrt(a[i]), rootB[i] = std::sqrt(b[i]);
+    CHECK(std::fabs(lightFieldDistance(qa, qb) - lightFieldDistance(rootA, rootB)) <= kViewsPerLightField * kViewFeatures * (1.0 / 255.0) + 1e-3);
+}
+
 TEST_CASE("query light field (render): a sphere's silhouettes are discs filling the view, and a turned, scaled, re-tessellated model is nearest itself", "[query]")
 {
     render::ContextOptions contextOptions;

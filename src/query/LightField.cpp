@@ -6,7 +6,12 @@
 
 #include <tbb/parallel_for.h>
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <limits>
@@ -318,6 +323,86 @@ double lightFieldDistance(const std::vector<float>& a, const std::vector<float>&
             }
         }
     return best;
+}
+
+QuantizedLightField quantizeLightField(const std::vector<float>& descriptor)
+{
+    if (descriptor.size() != kLightFieldLength) throw std::invalid_argument("not a light-field descriptor");
+    QuantizedLightField out(descriptor.size());
+    for (std::size_t i = 0; i < descriptor.size(); ++i) {
+        const double v = std::clamp(double(descriptor[i]), 0.0, 1.0); // NaN reads 0
+        out[i] = uint8_t(std::lround(255.0 * std::sqrt(std::isnan(v) ? 0.0 : v)));
+    }
+    return out;
+}
+
+std::vector<float> dequantizeLightField(const QuantizedLightField& descriptor)
+{
+    if (descriptor.size() != kLightFieldLength) throw std::invalid_argument("not a light-field descriptor");
+    std::vector<float> out(descriptor.size());
+    for (std::size_t i = 0; i < descriptor.size(); ++i) {
+        const float q = float(descriptor[i]) / 255.0f;
+        out[i] = q * q;
+    }
+    return out;
+}
+
+namespace {
+
+/// A quantized view's features padded with zeros to three 16-byte blocks.
+constexpr int kPaddedFeatures = 48;
+static_assert(kViewFeatures <= kPaddedFeatures);
+using PaddedView = std::array<uint8_t, kPaddedFeatures>;
+
+/// The views of light fields [0, fields) of a quantized light field, padded.
+std::vector<PaddedView> paddedViews(const QuantizedLightField& d, int fields)
+{
+    std::vector<PaddedView> out(std::size_t(fields * kViewsPerLightField), PaddedView{});
+    for (std::size_t v = 0; v < out.size(); ++v) std::copy_n(d.data() + (1 + v) * kViewFeatures, kViewFeatures, out[v].data());
+    return out;
+}
+
+/// L1 of two padded views: sums of absolute byte differences, 16 at a time.
+inline int viewSad(const PaddedView& a, const PaddedView& b)
+{
+#ifdef __SSE2__
+    __m128i sum = _mm_setzero_si128();
+    for (int block = 0; block < kPaddedFeatures; block += 16) {
+        const __m128i x = _mm_loadu_si128(reinterpret_cast<const __m128i*>(a.data() + block));
+        const __m128i y = _mm_loadu_si128(reinterpret_cast<const __m128i*>(b.data() + block));
+        sum = _mm_add_epi64(sum, _mm_sad_epu8(x, y));
+    }
+    return _mm_cvtsi128_si32(sum) + _mm_cvtsi128_si32(_mm_srli_si128(sum, 8));
+#else
+    int sum = 0;
+    for (int k = 0; k < kPaddedFeatures; ++k) sum += std::abs(int(a[std::size_t(k)]) - int(b[std::size_t(k)]));
+    return sum;
+#endif
+}
+
+} // namespace
+
+double lightFieldDistance(const QuantizedLightField& a, const QuantizedLightField& b, int queryFields)
+{
+    if (a.size() != kLightFieldLength || b.size() != kLightFieldLength) throw std::invalid_argument("not a light-field descriptor");
+    const int fields = std::clamp(queryFields, 1, kLightFields);
+    const std::vector<PaddedView> va = paddedViews(a, fields), vb = paddedViews(b, kLightFields);
+    const auto& rotations = dodecahedronRotations();
+    int best = std::numeric_limits<int>::max();
+    std::array<int, kViewsPerLightField * kViewsPerLightField> cost{};
+    for (int fa = 0; fa < fields; ++fa)
+        for (int fb = 0; fb < kLightFields; ++fb) {
+            for (int i = 0; i < kViewsPerLightField; ++i)
+                for (int j = 0; j < kViewsPerLightField; ++j)
+                    cost[std::size_t(i * kViewsPerLightField + j)] =
+                        viewSad(va[std::size_t(fa * kViewsPerLightField + i)], vb[std::size_t(fb * kViewsPerLightField + j)]);
+            for (const auto& p : rotations) {
+                int sum = 0;
+                for (int v = 0; v < kViewsPerLightField; ++v) sum += cost[std::size_t(v * kViewsPerLightField + p[std::size_t(v)])];
+                best = std::min(best, sum);
+            }
+        }
+    return double(best) / 255.0;
 }
 
 } // namespace vdbclay::query

@@ -20,13 +20,15 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <unordered_map>
 
 namespace vdbclay::query {
 
 namespace {
 
-constexpr int kFormatVersion = 1;
+/// 2: light fields stored at 8 bits per feature (version 1's, as floats, are read too).
+constexpr int kFormatVersion = 2;
 constexpr const char* kFormatName = "vdbclay-model-library";
 
 /// One prepared statement, finalized when it goes.
@@ -158,21 +160,33 @@ struct ModelLibrary::Impl {
 
     void exec(const char* sql) const { execOn(db, sql, "the library's database failed"); }
 
-    /// The stored vectors of some models' descriptor, by model (those without it left out), in one
-    /// statement: a light-field shortlist reads 64 of them per query.
-    std::map<int64_t, std::vector<float>> vectors(const std::vector<int64_t>& models, Descriptor d) const
+    /// The stored light fields of some models, by model (those without one left out), in one statement:
+    /// a light-field shortlist reads 64 of them per query. Throws LibraryError for one of a wrong length.
+    std::map<int64_t, QuantizedLightField> lightFields(const std::vector<int64_t>& models, const std::string& path) const
     {
-        std::map<int64_t, std::vector<float>> out;
+        std::map<int64_t, QuantizedLightField> out;
         if (models.empty()) return out;
         std::string sql = "SELECT model, vector FROM descriptors WHERE kind = ?1 AND model IN (";
         for (std::size_t i = 0; i < models.size(); ++i) sql += (i ? "," : "") + std::to_string(models[i]);
         Statement s(db, (sql + ")").c_str());
-        s.text(1, descriptorName(d));
-        while (s.step()) {
-            const auto* data = static_cast<const float*>(sqlite3_column_blob(s.get(), 1));
-            out[sqlite3_column_int64(s.get(), 0)] = std::vector<float>(data, data + sqlite3_column_bytes(s.get(), 1) / int(sizeof(float)));
-        }
+        s.text(1, descriptorName(Descriptor::LightField));
+        while (s.step())
+            out[sqlite3_column_int64(s.get(), 0)] = storedLightField(sqlite3_column_blob(s.get(), 1), sqlite3_column_bytes(s.get(), 1), path);
         return out;
+    }
+
+    /// A stored light field: 8 bits per feature, or (version 1) floats, which are quantized as read.
+    static QuantizedLightField storedLightField(const void* data, int bytes, const std::string& path)
+    {
+        if (bytes == int(kLightFieldLength)) {
+            const auto* b = static_cast<const uint8_t*>(data);
+            return QuantizedLightField(b, b + bytes);
+        }
+        if (bytes == int(kLightFieldLength * sizeof(float))) {
+            const auto* f = static_cast<const float*>(data);
+            return quantizeLightField(std::vector<float>(f, f + kLightFieldLength));
+        }
+        throw LibraryError("the library '" + path + "' is damaged: a light field of the wrong length");
     }
 };
 
@@ -267,9 +281,10 @@ ModelLibrary::ModelLibrary(const std::string& path, bool create) : path_(path), 
         tables.step();
         if (sqlite3_column_int64(tables.get(), 0) != 3) throw LibraryError("the library '" + path + "' is damaged: tables are missing");
         impl_->exec("PRAGMA foreign_keys=ON");
-        // Light fields read through the mapped file instead of a read() per page: a combined query's
-        // ~170 of them in half the time.
+        // Light fields read through the mapped file instead of a read() per page (a combined query's ~170
+        // of them in half the time), and a cache that holds a query's pages.
         impl_->exec("PRAGMA mmap_size=4294967296");
+        impl_->exec("PRAGMA cache_size=-65536");
     } catch (...) {
         sqlite3_close(impl_->db);
         impl_->db = nullptr;
@@ -302,6 +317,7 @@ std::vector<ModelRecord> ModelLibrary::addAll(const std::vector<NewModel>& model
     for (const NewModel& m : models)
         if (m.description->d2.empty() || m.description->clusterD2.empty()) throw LibraryError("the model '" + m.name + "' was not described");
     std::vector<ModelRecord> out;
+    bool storedQuantized = false;
     impl_->exec("BEGIN IMMEDIATE");
     try {
         Statement put(impl_->db, "INSERT INTO models(name, path, label, triangles, r, g, b) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
@@ -334,7 +350,15 @@ std::vector<ModelRecord> ModelLibrary::addAll(const std::vector<NewModel>& model
             const ModelDescription& d = *m.description;
             store(Descriptor::D2, toFloats(d.d2));
             store(Descriptor::ClusterD2, toFloats(d.clusterD2));
-            store(Descriptor::LightField, d.lightField);
+            if (!d.lightField.empty()) {
+                const QuantizedLightField q = quantizeLightField(d.lightField);
+                descriptor.reset();
+                descriptor.integer(1, r.id);
+                descriptor.text(2, descriptorName(Descriptor::LightField));
+                descriptor.blob(3, q.data(), q.size());
+                descriptor.step();
+                storedQuantized = true;
+            }
             if (!d.thumbnailPng.empty()) {
                 thumbnail.reset();
                 thumbnail.integer(1, r.id);
@@ -343,6 +367,9 @@ std::vector<ModelRecord> ModelLibrary::addAll(const std::vector<NewModel>& model
             }
             out.push_back(std::move(r));
         }
+        // A library of version 1 holding a light field of 8 bits is of version 2 (older readers refuse it
+        // as newer, rather than as damaged).
+        if (storedQuantized) impl_->exec("UPDATE library SET value = '2' WHERE key = 'version' AND CAST(value AS INTEGER) < 2");
         impl_->exec("COMMIT");
     } catch (...) {
         sqlite3_exec(impl_->db, "ROLLBACK", nullptr, nullptr, nullptr);
@@ -422,11 +449,14 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
         s.text(1, descriptorName(kind));
         while (s.step()) {
             const ModelRecord r = recordOf(s);
-            const auto* data = static_cast<const float*>(sqlite3_column_blob(s.get(), 8));
-            std::vector<float> v(data, data + sqlite3_column_bytes(s.get(), 8) / int(sizeof(float)));
+            const void* blob = sqlite3_column_blob(s.get(), 8);
+            const int bytes = sqlite3_column_bytes(s.get(), 8);
+            std::vector<float> v;
             if (kind == Descriptor::LightField) {
-                if (v.size() != kLightFieldLength) throw LibraryError("the library '" + path_ + "' is damaged: a light field of the wrong length");
-                v = lightFieldSummary(v);
+                v = lightFieldSummary(dequantizeLightField(Impl::storedLightField(blob, bytes, path_)));
+            } else {
+                const auto* data = static_cast<const float*>(blob);
+                v.assign(data, data + bytes / int(sizeof(float)));
             }
             si.positionOf[r.id] = si.indexed.size();
             si.indexed.push_back(r);
@@ -463,6 +493,12 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
         return si;
     };
     // The exact distances of the query to some models of a descriptor's index (positions in it).
+    // The query's light field at the stored precision, made once.
+    std::optional<QuantizedLightField> quantized;
+    const auto quantizedQuery = [&]() -> const QuantizedLightField& {
+        if (!quantized) quantized = quantizeLightField(query.lightField);
+        return *quantized;
+    };
     const auto exact = [&](Descriptor kind, const SearchIndex& si, const std::vector<std::size_t>& positions) {
         std::vector<double> out;
         if (kind != Descriptor::LightField) {
@@ -472,17 +508,17 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
         }
         std::vector<int64_t> ids;
         for (std::size_t i : positions) ids.push_back(si.indexed[i].id);
-        const std::map<int64_t, std::vector<float>> full = impl_->vectors(ids, Descriptor::LightField);
-        std::vector<const std::vector<float>*> vectors;
+        const std::map<int64_t, QuantizedLightField> full = impl_->lightFields(ids, path_);
+        std::vector<const QuantizedLightField*> vectors;
         for (int64_t id : ids) {
             const auto at = full.find(id);
-            if (at == full.end() || at->second.size() != kLightFieldLength)
-                throw LibraryError("the library '" + path_ + "' is damaged: a light field of the wrong length");
+            if (at == full.end()) throw LibraryError("the library '" + path_ + "' is damaged: a light field is missing");
             vectors.push_back(&at->second);
         }
-        // About 10 us each (600 turns of ten views): a combined query's up to 192 share the cores.
+        // 600 turns of ten views each, on bytes: a combined query's up to 192 share the cores.
         out.resize(vectors.size());
-        tbb::parallel_for(std::size_t(0), vectors.size(), [&](std::size_t i) { out[i] = lightFieldDistance(query.lightField, *vectors[i]); });
+        const QuantizedLightField& q = quantizedQuery();
+        tbb::parallel_for(std::size_t(0), vectors.size(), [&](std::size_t i) { out[i] = lightFieldDistance(q, *vectors[i]); });
         return out;
     };
     const auto shortlistOf = [&](Descriptor kind, const SearchIndex& si) {
@@ -500,11 +536,11 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
             const std::size_t a = p * n / std::min<std::size_t>(64, n - 1);
             pairs.emplace_back(a, (a + n / 2 + 1) % n);
         }
-        std::map<int64_t, std::vector<float>> full;
+        std::map<int64_t, QuantizedLightField> full;
         if (kind == Descriptor::LightField) {
             std::vector<int64_t> ids;
             for (const auto& pair : pairs) ids.push_back(si.indexed[pair.first].id), ids.push_back(si.indexed[pair.second].id);
-            full = impl_->vectors(ids, kind);
+            full = impl_->lightFields(ids, path_);
         }
         double sum = 0.0;
         for (const auto& pair : pairs)
