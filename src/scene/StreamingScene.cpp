@@ -93,7 +93,6 @@ struct MeshReadVersions {
     std::array<uint64_t, 27> sides{};
 
     bool operator==(const MeshReadVersions& other) const { return sides == other.sides; }
-    bool operator!=(const MeshReadVersions& other) const { return sides != other.sides; }
 };
 
 /// The leaves of a level-0 brick's pieces (its own, and one layer past its high faces) whose cells or
