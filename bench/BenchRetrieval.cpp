@@ -24,6 +24,7 @@
 #include <iostream>
 #include <map>
 #include <random>
+#include <type_traits>
 
 namespace vdbclay::bench {
 
@@ -185,14 +186,19 @@ int benchRetrieval(bool json, bool quick, const std::string& dir)
     std::mt19937_64 random(7);
     std::uniform_int_distribution<std::size_t> pick(0, descriptors.size() - 1);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
+    // Every component scaled by 0.8 .. 1.2; a histogram's then summing to 1 again.
+    const auto jitter = [&](const auto& v, bool normalize) {
+        std::remove_cv_t<std::remove_reference_t<decltype(v)>> out(v.size());
+        double sum = 0.0;
+        for (std::size_t b = 0; b < v.size(); ++b) sum += out[b] = v[b] * (0.8 + 0.4 * unit(random));
+        if (normalize && sum > 0.0)
+            for (auto& x : out) x /= sum;
+        return out;
+    };
     std::vector<std::vector<float>> vectors;
     std::vector<query::Histogram> histograms;
     for (std::size_t i = 0; i < large; ++i) {
-        const query::Histogram& a = descriptors[pick(random)];
-        query::Histogram h(a.size());
-        double sum = 0.0;
-        for (std::size_t b = 0; b < a.size(); ++b) sum += h[b] = a[b] * (0.8 + 0.4 * unit(random));
-        for (double& v : h) v /= sum;
+        query::Histogram h = jitter(descriptors[pick(random)], true);
         vectors.emplace_back(h.begin(), h.end());
         histograms.push_back(std::move(h));
     }
@@ -217,18 +223,6 @@ int benchRetrieval(bool json, bool quick, const std::string& dir)
     double largeLibraryBuildMs = 0.0;
     {
         query::ModelLibrary big(largePath, true);
-        const auto jitter = [&](const std::vector<float>& v, bool normalize) {
-            std::vector<float> out(v.size());
-            double sum = 0.0;
-            for (std::size_t b = 0; b < v.size(); ++b) sum += out[b] = float(double(v[b]) * (0.8 + 0.4 * unit(random)));
-            if (normalize && sum > 0.0)
-                for (float& x : out) x = float(double(x) / sum);
-            return out;
-        };
-        const auto jitterHistogram = [&](const query::Histogram& h) {
-            const std::vector<float> mixed = jitter(std::vector<float>(h.begin(), h.end()), true);
-            return query::Histogram(mixed.begin(), mixed.end());
-        };
         largeLibraryBuildMs = timeMs([&] {
             constexpr std::size_t kBatch = 2000;
             for (std::size_t first = 0; first < large; first += kBatch) {
@@ -238,8 +232,8 @@ int benchRetrieval(bool json, bool quick, const std::string& dir)
                     source.push_back(pick(random));
                     const query::ModelDescription& d = descriptions[source.back()];
                     query::ModelDescription mixed;
-                    mixed.d2 = jitterHistogram(d.d2);
-                    mixed.clusterD2 = jitterHistogram(d.clusterD2);
+                    mixed.d2 = jitter(d.d2, true);
+                    mixed.clusterD2 = jitter(d.clusterD2, true);
                     if (!d.lightField.empty()) mixed.lightField = jitter(d.lightField, false);
                     batch.push_back(std::move(mixed));
                 }

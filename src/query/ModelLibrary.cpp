@@ -339,24 +339,21 @@ std::vector<ModelRecord> ModelLibrary::addAll(const std::vector<NewModel>& model
             for (int k = 0; k < 3; ++k) sqlite3_bind_double(put.get(), 5 + k, r.colour[std::size_t(k)]);
             put.step();
             r.id = sqlite3_last_insert_rowid(impl_->db);
-            const auto store = [&](Descriptor kind, const std::vector<float>& vector) {
-                if (vector.empty()) return;
+            const auto store = [&](Descriptor kind, const void* data, std::size_t bytes) {
                 descriptor.reset();
                 descriptor.integer(1, r.id);
                 descriptor.text(2, descriptorName(kind));
-                descriptor.blob(3, vector.data(), vector.size() * sizeof(float));
+                descriptor.blob(3, data, bytes);
                 descriptor.step();
             };
             const ModelDescription& d = *m.description;
-            store(Descriptor::D2, toFloats(d.d2));
-            store(Descriptor::ClusterD2, toFloats(d.clusterD2));
+            for (const auto& [kind, histogram] : {std::pair<Descriptor, const Histogram*>{Descriptor::D2, &d.d2}, {Descriptor::ClusterD2, &d.clusterD2}}) {
+                const std::vector<float> floats = toFloats(*histogram);
+                store(kind, floats.data(), floats.size() * sizeof(float));
+            }
             if (!d.lightField.empty()) {
                 const QuantizedLightField q = quantizeLightField(d.lightField);
-                descriptor.reset();
-                descriptor.integer(1, r.id);
-                descriptor.text(2, descriptorName(Descriptor::LightField));
-                descriptor.blob(3, q.data(), q.size());
-                descriptor.step();
+                store(Descriptor::LightField, q.data(), q.size());
                 storedQuantized = true;
             }
             if (!d.thumbnailPng.empty()) {
@@ -492,13 +489,13 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
         }
         return si;
     };
-    // The exact distances of the query to some models of a descriptor's index (positions in it).
     // The query's light field at the stored precision, made once.
     std::optional<QuantizedLightField> quantized;
     const auto quantizedQuery = [&]() -> const QuantizedLightField& {
         if (!quantized) quantized = quantizeLightField(query.lightField);
         return *quantized;
     };
+    // The exact distances of the query to some models of a descriptor's index (positions in it).
     const auto exact = [&](Descriptor kind, const SearchIndex& si, const std::vector<std::size_t>& positions) {
         std::vector<double> out;
         if (kind != Descriptor::LightField) {

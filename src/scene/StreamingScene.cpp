@@ -73,16 +73,22 @@ struct TransitionMesh {
     std::vector<TransitionCellBox> cells;
 };
 
-/// Whether a level-0 change reaches what a transition cell's vertices read: the cell's points and
-/// edges, and the voxels their occlusion and material blend sample around them.
-bool reachesCell(const BlockChange& change, const TransitionCellBox& cell)
+/// Whether level-0 changes reach what some transition cells' vertices read: the cells' points and edges,
+/// and the voxels their occlusion and material blend sample around them.
+bool reachesAnyCell(const std::vector<BlockChange>& changes, const std::vector<TransitionCellBox>& cells)
 {
-    for (std::size_t a = 0; a < 3; ++a) {
-        // The changed voxels, and the edges leaving them upwards.
-        const int64_t lo = int64_t(change.origin[a]) + change.min[a], hi = int64_t(change.origin[a]) + change.max[a] + 1;
-        if (hi < cell.lo[a] - kOcclusionReach || lo > cell.hi[a] + kOcclusionReach) return false;
-    }
-    return true;
+    const auto reaches = [](const BlockChange& change, const TransitionCellBox& cell) {
+        for (std::size_t a = 0; a < 3; ++a) {
+            // The changed voxels, and the edges leaving them upwards.
+            const int64_t lo = int64_t(change.origin[a]) + change.min[a], hi = int64_t(change.origin[a]) + change.max[a] + 1;
+            if (hi < cell.lo[a] - kOcclusionReach || lo > cell.hi[a] + kOcclusionReach) return false;
+        }
+        return true;
+    };
+    for (const BlockChange& change : changes)
+        for (const TransitionCellBox& cell : cells)
+            if (reaches(change, cell)) return true;
+    return false;
 }
 
 /// What a brick's mesh reads besides the edits the leaf log tells, per direction from the brick
@@ -389,14 +395,22 @@ struct StreamingScene::Impl {
     };
 
     /// The inputs of a resident brick's mesh as the scene holds them now. Lock held.
-    MeshInputs meshInputsLocked(const BrickKey& key, bool inPieces = false, std::shared_ptr<const BrickMeshPieces> old = nullptr) const
+    /// `forEdits`: whether it may be made in pieces, from the kept mesh's where they hold.
+    MeshInputs meshInputsLocked(const BrickKey& key, bool forEdits = false) const
     {
         MeshInputs in;
         in.key = key;
         in.cut = cut;
-        in.inPieces = inPieces && cut->shows({key.level, key.brick});
         in.inputs = meshReadVersionsLocked(key);
-        in.content = resident.at(key).version;
+        const Resident& r = resident.at(key);
+        in.content = r.version;
+        // A mesh made again for edits is made in pieces, so that the next edits re-mesh only the leaves
+        // they reach: the loads around unchanged, or a level-0 brick edited since or already in pieces
+        // (the cut moving beside it re-makes the leaves on that side). Others are made whole and take
+        // less memory.
+        in.inPieces = forEdits && r.mesh && cut->shows({key.level, key.brick}) &&
+                      (r.meshInputs == in.inputs || (key.level == 0 && (r.mesh->pieces || r.version != r.meshContent)));
+        std::shared_ptr<const BrickMeshPieces> old = in.inPieces ? r.mesh->pieces : nullptr;
         in.version = meshVersionLocked(key);
         in.leafLogSeq = leafLogSeq;
         in.mask = mask;
@@ -584,11 +598,8 @@ struct StreamingScene::Impl {
         next->leaves.insert(next->leaves.end(), made.begin(), made.end());
         // A coarse brick's transition cells read the finer bricks on its faces, which edits change
         // without a log of it here: made every time.
-        const bool transitionsHold = reuse && key.level == 0 && in.movedSides.empty() && in.old->transitions &&
-                                     std::none_of(changed.begin(), changed.end(), [&](const BlockChange& c) {
-                                         const auto& cells = in.old->transitions->cells;
-                                         return std::any_of(cells.begin(), cells.end(), [&](const TransitionCellBox& cell) { return reachesCell(c, cell); });
-                                     });
+        const bool transitionsHold =
+            reuse && key.level == 0 && in.movedSides.empty() && in.old->transitions && !reachesAnyCell(changed, in.old->transitions->cells);
         if (transitionsHold) {
             next->transitions = in.old->transitions;
         } else {
@@ -1581,13 +1592,7 @@ std::shared_ptr<const StreamingScene::BrickMesh> StreamingScene::meshBrick(const
     auto it = s.resident.find(key);
     if (it == s.resident.end()) return nullptr;
     if (it->second.mesh && it->second.mesh->version == s.meshVersionLocked(key)) return it->second.mesh;
-    // A mesh made again for edits is made in pieces, so that the next edits re-mesh only the leaves they
-    // reach: the loads around unchanged, or a level-0 brick edited since or already in pieces (the cut
-    // moving beside it re-makes the leaves on that side). Others are made whole and take less memory.
-    const Impl::Resident& r = it->second;
-    const bool forEdits = r.mesh && (r.meshInputs == s.meshReadVersionsLocked(key) ||
-                                     (key.level == 0 && (r.mesh->pieces || r.version != r.meshContent)));
-    const Impl::MeshInputs in = s.meshInputsLocked(key, forEdits, forEdits ? it->second.mesh->pieces : nullptr);
+    const Impl::MeshInputs in = s.meshInputsLocked(key, true);
     lock.unlock();
     std::shared_ptr<const BrickMesh> out = s.makeMesh(in);
     lock.lock();
