@@ -330,8 +330,10 @@ TEST_CASE("query library: foreign, damaged and newer libraries, unreadable model
     CHECK_FALSE(std::filesystem::exists(dir.file("e.vdblib")));
 }
 
+#include <algorithm>
 #include <cstdlib>
 #include <random>
+#include <unistd.h>
 
 TEST_CASE("query library: an index add killed at any moment leaves a library with whole models that opens and answers", "[query][kill]")
 {
@@ -520,13 +522,154 @@ TEST_CASE("query library: light fields are stored at 8 bits (version 2), and a v
         });
     }
     sql("UPDATE library SET value = '1' WHERE key = 'version'");
-    for (Descriptor d : {Descriptor::LightField})
-        std::filesystem::remove(ModelLibrary(path, false).indexPath(d)); // FLANN's saved index, made again
+    // FLANN's saved index and the light fields' records, kept for the same models, are made again (a
+    // model's stored vectors never change in place but here).
+    std::filesystem::remove(ModelLibrary(path, false).indexPath(Descriptor::LightField));
+    std::filesystem::remove(ModelLibrary(path, false).lightFieldRecordsPath());
     CHECK(sql("SELECT length(vector) FROM descriptors WHERE kind = 'lightfield' LIMIT 1") == std::to_string(4 * kLightFieldLength));
     CHECK(answers() == before);
     // A light field of neither length is damage, said so.
     sql("UPDATE descriptors SET vector = zeroblob(100) WHERE kind = 'lightfield'");
     std::filesystem::remove(ModelLibrary(path, false).indexPath(Descriptor::LightField));
+    std::filesystem::remove(ModelLibrary(path, false).lightFieldRecordsPath());
     const ModelLibrary damaged(path, false);
     CHECK_THROWS_WITH(damaged.query(descriptions[0], 3, Descriptor::LightField), Catch::Contains("a light field of the wrong length"));
 }
+
+TEST_CASE("query library: the light fields' records beside a library answer as the stored light fields, and are made again when missing, stale, damaged or another library's", "[query]")
+{
+    TempDir dir;
+    const std::vector<LabeledModel> set = syntheticSet(1, 3);
+    const TriangleSoup mesh = buildShape(set[0].shape);
+    ModelDescription shape;
+    describeShape(mesh, shape);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    // Random light fields (no renderer needed), each kept with its name.
+    const auto described = [&](std::size_t n) {
+        std::vector<ModelDescription> out(n, shape);
+        for (ModelDescription& d : out) {
+            d.lightField.resize(kLightFieldLength);
+            for (float& v : d.lightField) v = std::pow(unit(rng), 3.0f);
+        }
+        return out;
+    };
+    const auto addTo = [&](ModelLibrary& library, const std::vector<ModelDescription>& descriptions, std::size_t first) {
+        std::vector<ModelLibrary::NewModel> adds;
+        std::vector<std::string> names;
+        for (std::size_t i = 0; i < descriptions.size(); ++i) names.push_back("m" + std::to_string(first + i));
+        for (std::size_t i = 0; i < descriptions.size(); ++i) adds.push_back({names[i], "", "", &mesh, &descriptions[i]});
+        library.addAll(adds);
+    };
+    const std::string path = dir.file("records.vdblib");
+    std::vector<ModelDescription> models = described(40);
+    {
+        ModelLibrary library(path, true);
+        addTo(library, models, 0);
+    }
+    const std::vector<ModelDescription> queries = described(3);
+    using Answers = std::vector<std::vector<std::pair<std::string, double>>>;
+    // The library's five nearest by light field, and the same by brute force over the models' light
+    // fields as stored (fewer models than a shortlist: every one is ranked exactly).
+    const auto answers = [&](Descriptor descriptor) {
+        const ModelLibrary library(path, false);
+        Answers out;
+        for (const ModelDescription& q : queries) {
+            auto& hits = out.emplace_back();
+            for (const QueryHit& h : library.query(q, 5, descriptor)) hits.push_back({h.model.name, h.distance});
+        }
+        return out;
+    };
+    const auto bruteForce = [&] {
+        Answers out;
+        for (const ModelDescription& q : queries) {
+            std::vector<std::pair<double, std::size_t>> all;
+            for (std::size_t i = 0; i < models.size(); ++i)
+                all.push_back({lightFieldDistance(quantizeLightField(q.lightField), quantizeLightField(models[i].lightField)), i});
+            std::sort(all.begin(), all.end());
+            auto& hits = out.emplace_back();
+            for (std::size_t r = 0; r < 5; ++r) hits.push_back({"m" + std::to_string(all[r].second), all[r].first});
+        }
+        return out;
+    };
+    const std::string records = ModelLibrary(path, false).lightFieldRecordsPath();
+    const std::uintmax_t bytesOf40 = 32 + 40 * kLightFieldLength;
+    CHECK_FALSE(std::filesystem::exists(records));
+    const Answers expected = bruteForce();
+    CHECK(answers(Descriptor::LightField) == expected);
+    REQUIRE(std::filesystem::exists(records));
+    CHECK(std::filesystem::file_size(records) == bytesOf40);
+    const Answers combined = answers(Descriptor::Combined);
+
+    SECTION("kept while the library's models are the same")
+    {
+        const auto written = std::filesystem::last_write_time(records);
+        CHECK(answers(Descriptor::LightField) == expected);
+        CHECK(std::filesystem::last_write_time(records) == written);
+    }
+    SECTION("made again when a model is added or removed")
+    {
+        {
+            ModelLibrary library(path, false);
+            const std::vector<ModelDescription> more = described(1);
+            addTo(library, more, 40);
+            models.push_back(more[0]);
+        }
+        CHECK(answers(Descriptor::LightField) == bruteForce());
+        CHECK(std::filesystem::file_size(records) == bytesOf40 + kLightFieldLength);
+        {
+            ModelLibrary library(path, false);
+            REQUIRE(library.remove("m40"));
+            models.pop_back();
+        }
+        CHECK(answers(Descriptor::LightField) == expected);
+        CHECK(std::filesystem::file_size(records) == bytesOf40);
+    }
+    SECTION("made again when truncated or its header is damaged")
+    {
+        std::filesystem::resize_file(records, bytesOf40 - 100);
+        CHECK(answers(Descriptor::LightField) == expected);
+        CHECK(std::filesystem::file_size(records) == bytesOf40);
+        {
+            std::fstream f(records, std::ios::in | std::ios::out | std::ios::binary);
+            f.seekp(24);
+            f.put('\x5a');
+        }
+        CHECK(answers(Descriptor::LightField) == expected);
+        CHECK(answers(Descriptor::Combined) == combined);
+    }
+    SECTION("never another library's: a new library at the same path, with the same model ids")
+    {
+        std::filesystem::remove(path);
+        std::filesystem::remove(path + "-wal");
+        std::filesystem::remove(path + "-shm");
+        models = described(40);
+        {
+            ModelLibrary library(path, true);
+            addTo(library, models, 0);
+        }
+        const Answers fresh = bruteForce();
+        CHECK(fresh != expected);
+        CHECK(answers(Descriptor::LightField) == fresh);
+    }
+    SECTION("held in memory where the file cannot be written, answering the same")
+    {
+        std::filesystem::remove(records);
+        std::filesystem::create_directory(records + ".new-" + std::to_string(::getpid())); // the writer's temporary name
+        CHECK(answers(Descriptor::LightField) == expected);
+        CHECK(answers(Descriptor::Combined) == combined);
+        CHECK_FALSE(std::filesystem::exists(records));
+    }
+    SECTION("used once where it cannot replace the file (a folder in its place), answering the same")
+    {
+        std::filesystem::remove(records);
+        std::filesystem::create_directory(records);
+        CHECK(answers(Descriptor::LightField) == expected);
+        CHECK(std::filesystem::is_directory(records));
+        std::size_t leftovers = 0;
+        for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(path).parent_path()))
+            leftovers += entry.path().filename().string().find(".records.new-") != std::string::npos;
+        CHECK(leftovers == 0);
+    }
+}
+

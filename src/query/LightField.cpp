@@ -325,6 +325,16 @@ double lightFieldDistance(const std::vector<float>& a, const std::vector<float>&
     return best;
 }
 
+namespace {
+
+float dequantizedFeature(uint8_t q)
+{
+    const float v = float(q) / 255.0f;
+    return v * v;
+}
+
+} // namespace
+
 QuantizedLightField quantizeLightField(const std::vector<float>& descriptor)
 {
     if (descriptor.size() != kLightFieldLength) throw std::invalid_argument("not a light-field descriptor");
@@ -340,10 +350,14 @@ std::vector<float> dequantizeLightField(const QuantizedLightField& descriptor)
 {
     if (descriptor.size() != kLightFieldLength) throw std::invalid_argument("not a light-field descriptor");
     std::vector<float> out(descriptor.size());
-    for (std::size_t i = 0; i < descriptor.size(); ++i) {
-        const float q = float(descriptor[i]) / 255.0f;
-        out[i] = q * q;
-    }
+    for (std::size_t i = 0; i < descriptor.size(); ++i) out[i] = dequantizedFeature(descriptor[i]);
+    return out;
+}
+
+std::vector<float> quantizedLightFieldSummary(const uint8_t* descriptor)
+{
+    std::vector<float> out(kViewFeatures);
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = dequantizedFeature(descriptor[i]);
     return out;
 }
 
@@ -355,10 +369,10 @@ static_assert(kViewFeatures <= kPaddedFeatures);
 using PaddedView = std::array<uint8_t, kPaddedFeatures>;
 
 /// The views of light fields [0, fields) of a quantized light field, padded.
-std::vector<PaddedView> paddedViews(const QuantizedLightField& d, int fields)
+std::vector<PaddedView> paddedViews(const uint8_t* d, int fields)
 {
     std::vector<PaddedView> out(std::size_t(fields * kViewsPerLightField), PaddedView{});
-    for (std::size_t v = 0; v < out.size(); ++v) std::copy_n(d.data() + (1 + v) * kViewFeatures, kViewFeatures, out[v].data());
+    for (std::size_t v = 0; v < out.size(); ++v) std::copy_n(d + (1 + v) * kViewFeatures, kViewFeatures, out[v].data());
     return out;
 }
 
@@ -385,6 +399,11 @@ inline int viewSad(const PaddedView& a, const PaddedView& b)
 double lightFieldDistance(const QuantizedLightField& a, const QuantizedLightField& b, int queryFields)
 {
     if (a.size() != kLightFieldLength || b.size() != kLightFieldLength) throw std::invalid_argument("not a light-field descriptor");
+    return lightFieldDistance(a.data(), b.data(), queryFields);
+}
+
+double lightFieldDistance(const uint8_t* a, const uint8_t* b, int queryFields)
+{
     const int fields = std::clamp(queryFields, 1, kLightFields);
     const std::vector<PaddedView> va = paddedViews(a, fields), vb = paddedViews(b, kLightFields);
     const auto& rotations = dodecahedronRotations();

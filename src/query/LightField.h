@@ -64,9 +64,13 @@ using QuantizedLightField = std::vector<uint8_t>;
 QuantizedLightField quantizeLightField(const std::vector<float>& descriptor);
 /// The features back (v = (q / 255)^2).
 std::vector<float> dequantizeLightField(const QuantizedLightField& descriptor);
+/// lightFieldSummary(dequantizeLightField(d)) of kLightFieldLength bytes in place.
+std::vector<float> quantizedLightFieldSummary(const uint8_t* descriptor);
 /// lightFieldDistance on quantized light fields: L1 of the quantized features over 255 (so on the scale of
 /// square roots of the features), least over the same turns.
 double lightFieldDistance(const QuantizedLightField& a, const QuantizedLightField& b, int queryFields = 1);
+/// The same on kLightFieldLength bytes each (a record in place).
+double lightFieldDistance(const uint8_t* a, const uint8_t* b, int queryFields = 1);
 
 /// The 60 rotations of the dodecahedron onto itself, as permutations of the 10 view axes.
 const std::vector<std::array<uint8_t, kViewsPerLightField>>& dodecahedronRotations();

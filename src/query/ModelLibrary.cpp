@@ -3,6 +3,7 @@
 #include "query/ClusterD2Color.h"
 #include "query/DescriptorIndex.h"
 #include "query/HistogramDistance.h"
+#include "query/LightFieldRecords.h"
 #include "query/SceneModels.h"
 #include "query/SurfaceSamples.h"
 #include "render/ImageFile.h"
@@ -20,7 +21,10 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <iomanip>
 #include <optional>
+#include <random>
+#include <sstream>
 #include <unordered_map>
 
 namespace vdbclay::query {
@@ -95,6 +99,18 @@ ModelRecord recordOf(Statement& s)
     return r;
 }
 
+/// A library's identity: random, so that files kept beside a library (FLANN's indexes, the light fields'
+/// records) are not taken for those of another library made later at the same path, whose model ids
+/// start again at 1.
+std::string newLibraryIdentity()
+{
+    std::random_device device;
+    std::ostringstream out;
+    out << std::hex << std::setfill('0');
+    for (int i = 0; i < 4; ++i) out << std::setw(8) << uint32_t(device());
+    return out.str();
+}
+
 } // namespace
 
 const char* descriptorName(Descriptor d)
@@ -141,6 +157,7 @@ struct SearchIndex {
     std::unique_ptr<DescriptorIndex> index;
     std::vector<ModelRecord> indexed;
     std::vector<std::vector<float>> vectors; // what the index holds, per indexed model
+    std::unique_ptr<LightFieldRecords> lightFields; // the light field's whole vectors, per indexed model
     std::unordered_map<int64_t, std::size_t> positionOf; // a model id's place in `indexed`
     std::map<Metric, double> typicalDistance; // the mean distance between the library's models (Combined), per metric
 };
@@ -155,24 +172,74 @@ double histogramDistance(const std::vector<float>& a, const std::vector<float>& 
 
 struct ModelLibrary::Impl {
     sqlite3* db = nullptr;
+    std::string identity; // empty for a library made before identities that cannot be written (read-only)
     mutable std::mutex indexMutex;
     mutable std::map<Descriptor, SearchIndex> indexes;
 
     void exec(const char* sql) const { execOn(db, sql, "the library's database failed"); }
 
-    /// The stored light fields of some models, by model (those without one left out), in one statement:
-    /// a light-field shortlist reads 64 of them per query. Throws LibraryError for one of a wrong length.
-    std::map<int64_t, QuantizedLightField> lightFields(const std::vector<int64_t>& models, const std::string& path) const
+    /// The library's identity; one is given to a library made before identities were, where it can be written.
+    std::string storedIdentity() const
     {
-        std::map<int64_t, QuantizedLightField> out;
-        if (models.empty()) return out;
-        std::string sql = "SELECT model, vector FROM descriptors WHERE kind = ?1 AND model IN (";
-        for (std::size_t i = 0; i < models.size(); ++i) sql += (i ? "," : "") + std::to_string(models[i]);
-        Statement s(db, (sql + ")").c_str());
-        s.text(1, descriptorName(Descriptor::LightField));
-        while (s.step())
-            out[sqlite3_column_int64(s.get(), 0)] = storedLightField(sqlite3_column_blob(s.get(), 1), sqlite3_column_bytes(s.get(), 1), path);
-        return out;
+        const auto read = [&] {
+            Statement s(db, "SELECT value FROM library WHERE key = 'identity'");
+            return s.step() ? s.column(0) : std::string();
+        };
+        if (std::string known = read(); !known.empty()) return known;
+        Statement put(db, "INSERT OR IGNORE INTO library(key, value) VALUES ('identity', ?1)");
+        put.text(1, newLibraryIdentity());
+        if (sqlite3_step(put.get()) != SQLITE_DONE) return {};
+        return read();
+    }
+
+    /// The light field's search entries: the models holding one, their summaries, and their whole vectors
+    /// as records (mapped from `recordsPath`, made again from the stored vectors when missing or stale,
+    /// held in memory where the file cannot be written), all from one snapshot of the database.
+    void loadLightFields(SearchIndex& si, const std::string& recordsPath, const std::string& path) const
+    {
+        constexpr const char* kRows = " FROM descriptors JOIN models ON models.id = descriptors.model WHERE kind = ?1 ORDER BY models.id";
+        exec("BEGIN");
+        try {
+            std::vector<int64_t> ids;
+            {
+                Statement s(db, (std::string("SELECT models.id, name, path, label, triangles, r, g, b") + kRows).c_str());
+                s.text(1, descriptorName(Descriptor::LightField));
+                while (s.step()) {
+                    ModelRecord r = recordOf(s);
+                    ids.push_back(r.id);
+                    si.positionOf[r.id] = si.indexed.size();
+                    si.indexed.push_back(std::move(r));
+                }
+            }
+            // Without an identity (an old library that cannot be written) a file beside it cannot be trusted.
+            si.lightFields = identity.empty() ? nullptr : LightFieldRecords::map(recordsPath, identity, ids);
+            const auto write = [&](const std::string& file) {
+                LightFieldRecordsWriter writer(file, identity, ids);
+                Statement s(db, (std::string("SELECT vector") + kRows).c_str());
+                s.text(1, descriptorName(Descriptor::LightField));
+                std::size_t rows = 0;
+                for (; s.step(); ++rows) {
+                    if (rows == ids.size()) break;
+                    writer.append(storedLightField(sqlite3_column_blob(s.get(), 0), sqlite3_column_bytes(s.get(), 0), path));
+                }
+                if (rows != ids.size()) throw LibraryError("the library '" + path + "' changed while its light fields were read");
+                return writer.finish();
+            };
+            if (!si.lightFields) {
+                try {
+                    si.lightFields = write(identity.empty() ? std::string() : recordsPath);
+                } catch (const LibraryError&) {
+                    throw;
+                } catch (const std::runtime_error&) {
+                    si.lightFields = write(""); // the file could not be completed: in memory
+                }
+            }
+            exec("COMMIT");
+        } catch (...) {
+            sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+            throw;
+        }
+        for (std::size_t i = 0; i < si.indexed.size(); ++i) si.vectors.push_back(quantizedLightFieldSummary((*si.lightFields)[i]));
     }
 
     /// A stored light field: 8 bits per feature, or (version 1) floats, which are quantized as read.
@@ -220,9 +287,10 @@ void createLibrary(const std::string& path)
                    "vector BLOB NOT NULL, PRIMARY KEY(model, kind))", what);
         execOn(db, "CREATE TABLE thumbnails(model INTEGER PRIMARY KEY REFERENCES models(id) ON DELETE CASCADE, png BLOB NOT NULL)", what);
         {
-            Statement put(db, "INSERT INTO library(key, value) VALUES ('format', ?1), ('version', ?2)");
+            Statement put(db, "INSERT INTO library(key, value) VALUES ('format', ?1), ('version', ?2), ('identity', ?3)");
             put.text(1, kFormatName);
             put.text(2, std::to_string(kFormatVersion));
+            put.text(3, newLibraryIdentity());
             put.step();
         }
         execOn(db, "COMMIT", what);
@@ -281,8 +349,9 @@ ModelLibrary::ModelLibrary(const std::string& path, bool create) : path_(path), 
         tables.step();
         if (sqlite3_column_int64(tables.get(), 0) != 3) throw LibraryError("the library '" + path + "' is damaged: tables are missing");
         impl_->exec("PRAGMA foreign_keys=ON");
-        // Light fields read through the mapped file instead of a read() per page (a combined query's ~170
-        // of them in half the time), and a cache that holds a query's pages.
+        impl_->identity = impl_->storedIdentity();
+        // Descriptors read through the mapped file instead of a read() per page, and a cache that holds a
+        // query's pages.
         impl_->exec("PRAGMA mmap_size=4294967296");
         impl_->exec("PRAGMA cache_size=-65536");
     } catch (...) {
@@ -441,25 +510,22 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
         si.indexed.clear();
         si.vectors.clear();
         si.positionOf.clear();
-        Statement s(impl_->db, "SELECT models.id, name, path, label, triangles, r, g, b, vector FROM descriptors JOIN models ON models.id = "
-                               "descriptors.model WHERE kind = ?1 ORDER BY models.id");
-        s.text(1, descriptorName(kind));
-        while (s.step()) {
-            const ModelRecord r = recordOf(s);
-            const void* blob = sqlite3_column_blob(s.get(), 8);
-            const int bytes = sqlite3_column_bytes(s.get(), 8);
-            std::vector<float> v;
-            if (kind == Descriptor::LightField) {
-                v = lightFieldSummary(dequantizeLightField(Impl::storedLightField(blob, bytes, path_)));
-            } else {
-                const auto* data = static_cast<const float*>(blob);
-                v.assign(data, data + bytes / int(sizeof(float)));
+        si.lightFields.reset();
+        if (kind == Descriptor::LightField) {
+            impl_->loadLightFields(si, lightFieldRecordsPath(), path_);
+        } else {
+            Statement s(impl_->db, "SELECT models.id, name, path, label, triangles, r, g, b, vector FROM descriptors JOIN models ON models.id = "
+                                   "descriptors.model WHERE kind = ?1 ORDER BY models.id");
+            s.text(1, descriptorName(kind));
+            while (s.step()) {
+                const ModelRecord r = recordOf(s);
+                const auto* data = static_cast<const float*>(sqlite3_column_blob(s.get(), 8));
+                si.positionOf[r.id] = si.indexed.size();
+                si.indexed.push_back(r);
+                si.vectors.emplace_back(data, data + sqlite3_column_bytes(s.get(), 8) / int(sizeof(float)));
             }
-            si.positionOf[r.id] = si.indexed.size();
-            si.indexed.push_back(r);
-            si.vectors.push_back(std::move(v));
         }
-        std::string stamp = std::to_string(si.vectors.size());
+        std::string stamp = impl_->identity + "," + std::to_string(si.vectors.size());
         for (const ModelRecord& r : si.indexed) stamp += "," + std::to_string(r.id);
         const std::string file = indexPath(kind), stampFile = file + ".models";
         std::string saved;
@@ -468,7 +534,7 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
             std::getline(in, saved);
         }
         try {
-            if (saved == stamp && std::filesystem::exists(file)) si.index = std::make_unique<DescriptorIndex>(si.vectors, file);
+            if (!impl_->identity.empty() && saved == stamp && std::filesystem::exists(file)) si.index = std::make_unique<DescriptorIndex>(si.vectors, file);
         } catch (const std::exception&) {
             si.index.reset(); // damaged or stale: built again below
         }
@@ -503,19 +569,10 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
             for (std::size_t i : positions) out.push_back(histogramDistance(q, si.vectors[i], metric));
             return out;
         }
-        std::vector<int64_t> ids;
-        for (std::size_t i : positions) ids.push_back(si.indexed[i].id);
-        const std::map<int64_t, QuantizedLightField> full = impl_->lightFields(ids, path_);
-        std::vector<const QuantizedLightField*> vectors;
-        for (int64_t id : ids) {
-            const auto at = full.find(id);
-            if (at == full.end()) throw LibraryError("the library '" + path_ + "' is damaged: a light field is missing");
-            vectors.push_back(&at->second);
-        }
-        // 600 turns of ten views each, on bytes: a combined query's up to 192 share the cores.
-        out.resize(vectors.size());
+        // 600 turns of ten views each, on bytes read in place: a combined query's up to 192 share the cores.
+        out.resize(positions.size());
         const QuantizedLightField& q = quantizedQuery();
-        tbb::parallel_for(std::size_t(0), vectors.size(), [&](std::size_t i) { out[i] = lightFieldDistance(q, *vectors[i]); });
+        tbb::parallel_for(std::size_t(0), positions.size(), [&](std::size_t i) { out[i] = lightFieldDistance(q.data(), (*si.lightFields)[positions[i]]); });
         return out;
     };
     const auto shortlistOf = [&](Descriptor kind, const SearchIndex& si) {
@@ -533,15 +590,9 @@ std::vector<QueryHit> ModelLibrary::query(const ModelDescription& query, std::si
             const std::size_t a = p * n / std::min<std::size_t>(64, n - 1);
             pairs.emplace_back(a, (a + n / 2 + 1) % n);
         }
-        std::map<int64_t, QuantizedLightField> full;
-        if (kind == Descriptor::LightField) {
-            std::vector<int64_t> ids;
-            for (const auto& pair : pairs) ids.push_back(si.indexed[pair.first].id), ids.push_back(si.indexed[pair.second].id);
-            full = impl_->lightFields(ids, path_);
-        }
         double sum = 0.0;
         for (const auto& pair : pairs)
-            sum += kind == Descriptor::LightField ? lightFieldDistance(full.at(si.indexed[pair.first].id), full.at(si.indexed[pair.second].id))
+            sum += kind == Descriptor::LightField ? lightFieldDistance((*si.lightFields)[pair.first], (*si.lightFields)[pair.second])
                                                   : histogramDistance(si.vectors[pair.first], si.vectors[pair.second], metric);
         const double typical = sum > 0.0 ? sum / double(pairs.size()) : 1.0;
         si.typicalDistance[used] = typical;

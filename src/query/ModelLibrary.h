@@ -1,7 +1,8 @@
 // A library of 3D models to search by shape: an SQLite database of model records (name, source path,
 // class, triangle count, mean colour, thumbnail) with their descriptor vectors, so reopening never
-// recomputes, and beside it FLANN's index per descriptor (LIBRARY.d2.flann, ...), rebuilt from the stored
-// vectors when it is missing or no longer matches the records. Each model is added in a transaction of
+// recomputes, and beside it FLANN's index per descriptor (LIBRARY.d2.flann, ...) and the light fields'
+// records (LIBRARY.lightfield.records), made again from the stored vectors when missing or no longer
+// matching the records. Each model is added in a transaction of
 // its own: a killed `index add` leaves the library as it was or with whole models added.
 #pragma once
 
@@ -104,6 +105,8 @@ public:
     const std::string& path() const { return path_; }
     /// The FLANN index file of a stored descriptor.
     std::string indexPath(Descriptor descriptor) const;
+    /// The file of the light fields' records (LightFieldRecords.h), beside the FLANN indexes.
+    std::string lightFieldRecordsPath() const { return path_ + ".lightfield.records"; }
 
 private:
     struct Impl;
