@@ -683,6 +683,10 @@ double blendReach(double width, double voxelSize) { return width + 4.0 * voxelSi
 
 namespace {
 
+/// Voxels of the old solid's depth a blended add reads: its fillet only adds, so only the lattice points
+/// on edges that cross the old surface (within sqrt 3 of it) take part in a new crossing.
+constexpr float kBlendInnerBand = 3.0f;
+
 /// A field grown by `by` world units: where a blended add's fillet may reach.
 class GrownField : public SdfField {
 public:
@@ -721,19 +725,21 @@ EditStats applyBlendedAdd(Volume& volume, const SdfField& brush, const CsgOp& op
     }
     if (!fits) return applyCsg(volume, brush, op);
     // The old surface's distance, before the brush changes it.
-    SolidDistances solid = solidDistances(volume, lo, dims, float(band / h));
+    SolidDistances solid = solidDistances(volume, lo, dims, float(band / h), kBlendInnerBand);
     EditStats stats = applyCsg(volume, brush, op);
     if (!holdsSolid(solid)) return stats; // nothing to blend into
     const LatticeGrid old = worldDistances(solid, lo, h);
     const GrownField reach(brush, width);
     const PointRange inReach = pointsWithin(old, reach.bounds());
     LatticeGrid next = old;
-    // Where the old distance is capped (the surface lies beyond the band), the fillet adds nothing the
-    // exact add has not: the point keeps its old value and the brush need not be evaluated there.
+    // Where the old distance is capped outside (the surface lies beyond the band), the fillet adds nothing
+    // the exact add has not: the point keeps its old value and the brush need not be evaluated there.
+    // Inside, the fillet's value goes on from the capped distance (the field stays continuous; it is
+    // solid there either way).
     const float capped = float(band * (1.0 - 1e-6));
     forEachPoint(inReach, [&](int32_t i, int32_t j, int32_t k) {
         const std::size_t n = old.index(i, j, k);
-        if (std::fabs(old.values[n]) >= capped) return;
+        if (old.values[n] >= capped) return;
         const double a = old.values[n], b = brush.distance(old.pointOf(i, j, k));
         const double t = std::max(width - std::fabs(a - b), 0.0) / width;
         next.values[n] = float(std::min(a, b) - 0.25 * width * t * t);

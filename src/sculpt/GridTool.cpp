@@ -70,9 +70,17 @@ inline float seedDistance(const SurfaceSeed& c, float i, float j, float k)
 /// `band` (voxels, finite): distances beyond it are capped at it, and the propagation skips the blocks
 /// of points farther than it (and a block more) from every seeded point: a crossing reaches a point
 /// through points about as near to it, which those blocks hold.
+/// `innerBand` (voxels, at most `band`, with the box's `material`): the same inside the region, whose
+/// points beyond it are not computed either. A point's nearest crossing is carried to it through points
+/// on its own side (the ball round it up to that crossing holds no surface), so the points outside the
+/// region keep exactly their distances.
 std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>& crossings, MaterialId region,
-                                     float band = std::numeric_limits<float>::infinity())
+                                     float band = std::numeric_limits<float>::infinity(), float innerBand = std::numeric_limits<float>::infinity(),
+                                     const std::vector<MaterialId>* material = nullptr)
 {
+    innerBand = std::min(innerBand, band);
+    const bool innerCapped = material && innerBand < band;
+    const auto capAt = [&](std::size_t n) { return innerCapped && inRegion((*material)[n], region) ? innerBand : band; };
     std::vector<float> d(box.size(), std::numeric_limits<float>::max());
     std::vector<int32_t> nearest(box.size(), -1);
     std::vector<SurfaceSeed> seeds(crossings.size());
@@ -163,12 +171,13 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
         float best = d[n];
         int32_t bestId = nearest[n];
         const bool inner = i > 0 && j > 0 && k > 0 && i < nx - 1 && j < ny - 1 && k < nz - 1;
-        if (banded && inner && best >= band) {
+        const float cap = capAt(n);
+        if (banded && inner && best >= cap) {
             // A neighbour's crossing lies at most a step (< 1.75) nearer to this point than to the
             // neighbour: none can bring it within the band unless a neighbour lies within band + 1.75.
             float nearestNeighbour = std::numeric_limits<float>::max();
             for (const Step& s : earlier) nearestNeighbour = std::min(nearestNeighbour, d[std::size_t(std::ptrdiff_t(n) + sign * s.offset)]);
-            if (nearestNeighbour >= band + 1.75f) return;
+            if (nearestNeighbour >= cap + 1.75f) return;
         }
         for (const Step& s : earlier) {
             std::size_t q;
@@ -209,7 +218,7 @@ std::vector<float> boundaryDistances(const Box& box, const std::vector<Crossing>
             });
         }
     if (banded)
-        for (float& v : d) v = std::min(v, band);
+        for (std::size_t n = 0; n < d.size(); ++n) d[n] = std::min(d[n], capAt(n));
     return d;
 }
 
@@ -441,7 +450,8 @@ std::optional<PackedSample> GridTool::sampleAt(const std::array<int32_t, 3>& ijk
     return *s;
 }
 
-SolidDistances solidDistances(const Volume& volume, const std::array<int32_t, 3>& origin, const std::array<int32_t, 3>& dims, float band)
+SolidDistances solidDistances(const Volume& volume, const std::array<int32_t, 3>& origin, const std::array<int32_t, 3>& dims, float band,
+                              float innerBand)
 {
     const Box box{origin, dims};
     SolidDistances out;
@@ -449,7 +459,7 @@ SolidDistances solidDistances(const Volume& volume, const std::array<int32_t, 3>
     out.dims = dims;
     std::vector<Crossing> crossings;
     readLattice(volume, box, out.material, crossings);
-    out.distance = boundaryDistances(box, crossings, kEmptyMaterial, band);
+    out.distance = boundaryDistances(box, crossings, kEmptyMaterial, band, innerBand, &out.material);
     for (std::size_t n = 0; n < out.distance.size(); ++n) {
         const float magnitude = std::max(out.distance[n], kLeastDistance);
         out.distance[n] = out.material[n] != kEmptyMaterial ? -magnitude : magnitude;

@@ -46,13 +46,15 @@ struct ToolField {
 /// propagation carries the nearest crossing through the box (Euclidean to any depth; crossings outside the
 /// box are not seen). With the material at each point. Points indexed (x * dims[1] + y) * dims[2] + z.
 /// `band` (voxels): magnitudes are capped at it, and the work spent on points beyond it is skipped.
+/// `innerBand` (voxels): the same inside the solid, for brushes that read only a thin layer of it (the
+/// distances outside do not change).
 struct SolidDistances {
     std::array<int32_t, 3> origin{0, 0, 0}, dims{0, 0, 0};
     std::vector<float> distance;
     std::vector<MaterialId> material;
 };
 SolidDistances solidDistances(const Volume& volume, const std::array<int32_t, 3>& origin, const std::array<int32_t, 3>& dims,
-                              float band = std::numeric_limits<float>::infinity());
+                              float band = std::numeric_limits<float>::infinity(), float innerBand = std::numeric_limits<float>::infinity());
 
 /// Where the solid's boundary crosses the lattice edges inside a box (Hermite crossings between solid
 /// and empty), index space.
