@@ -138,18 +138,23 @@ double normalDot(const std::array<T, 3>& a, const std::array<T, 3>& b)
     return double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2];
 }
 
+/// The least length of a crossing's normal projected onto a face for its tangent line there to take part
+/// in a 2D sharp feature: a surface within 3 degrees of the face's plane (a cylinder's side tangent to a
+/// lattice plane, its rim on another) has no direction on it that its normal's rounding does not swing.
+constexpr double kMinFaceNormal = 0.05;
+
 /// Whether the normals at the two ends of a segment on a face with normal `axis`, projected onto the
 /// face, span the sharp angle there, and so do the normals themselves: the segment is then a candidate
-/// for a 2D sharp feature. A normal along the axis has no direction on the face, and a surface nearly
-/// parallel to the face turns its normals' small differences into wide angles on it: a feature the
-/// surface does not have, whose fan folds.
+/// for a 2D sharp feature. A normal (nearly) along the axis has no direction on the face, and a surface
+/// nearly parallel to the face turns its normals' small differences into wide angles on it: a feature
+/// the surface does not have, whose fan folds.
 template<typename T>
 bool segmentBends(const std::array<T, 3>& normalA, const std::array<T, 3>& normalB, int axis, double cosSharp)
 {
     if (normalDot(normalA, normalB) > cosSharp * std::sqrt(normalDot(normalA, normalA) * normalDot(normalB, normalB))) return false;
     const Vec2 a = project(normalA, axis), b = project(normalB, axis);
     const double aa = a.x * a.x + a.y * a.y, bb = b.x * b.x + b.y * b.y;
-    if (aa < 1e-12 || bb < 1e-12) return false;
+    if (aa < kMinFaceNormal * kMinFaceNormal || bb < kMinFaceNormal * kMinFaceNormal) return false;
     return a.x * b.x + a.y * b.y <= cosSharp * std::sqrt(aa * bb);
 }
 
