@@ -19,9 +19,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <map>
 #include <mutex>
-#include <iomanip>
 #include <optional>
 #include <random>
 #include <sstream>
