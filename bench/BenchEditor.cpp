@@ -30,6 +30,7 @@
 #include <iostream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 
@@ -56,6 +57,9 @@ struct EditorFigures {
     std::vector<FrameSample> frames;
     std::vector<double> latencyFrames; // per edit: frames until the view showed it (1 = the frame it was submitted in)
     std::map<std::string, std::vector<double>> latencyByMode;
+    std::vector<double> appliedFrames; // per edit: frames until the worker had applied it (the rest is meshing and selection)
+    std::map<std::string, std::vector<double>> appliedByMode;
+    std::vector<double> currentFrames; // per edit: frames until the view was current at its points (later edits there meshed too)
     std::map<std::string, std::vector<double>> stampMsByMode; // the worker's time per stroke step
     /// Per mode: the worker's time over all its ops and the stroke points they applied (merged or not): a
     /// figure that does not move with how many points the worker happened to merge.
@@ -222,12 +226,17 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
 
     // Frames at 90 Hz: each submits the commands that arrived by then and never waits for the worker.
     // An edit is visible once the worker applied it and the view shows level 0 at the points it was made
-    // (and their mirror images): a coarse brick shown there still holds the data before it.
+    // (and their mirror images) with meshes made from the bricks' content since it (a coarse brick shown
+    // there still holds the data before it). Later edits of a stroke need not be meshed yet: that is when
+    // the view is current there, reported apart.
     struct Waiting {
         std::size_t frame = 0; // submitted in
         uint64_t command = 0;  // its place in the order submitted, from 1: applied once the worker did that many
         std::string mode;
         std::vector<std::array<double, 3>> at;
+        std::optional<std::size_t> appliedIn; // the first frame that found it applied
+        std::vector<uint64_t> contentAt;      // per point, its brick's content then (StreamingScene::brickContent)
+        std::optional<std::size_t> visibleIn;
     };
     std::vector<std::string> commandModes; // per command, in the order submitted: the stroke's mode, or ""
     for (std::size_t i = 0; i < plan.size(); ++i)
@@ -265,12 +274,23 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
     };
     std::vector<Waiting> waiting;
     // Not yet drawn as it is now at a point: shown at a coarse level, or by a mesh older than its brick.
-    const auto notDrawnAt = [&](const std::array<double, 3>& world) {
-        if (session.scene().shownLevelAt(world).value_or(0) > 0) return true;
+    const auto level0Brick = [&](const std::array<double, 3>& world) {
         BrickKey key;
         for (std::size_t a = 0; a < 3; ++a) key.brick[a] = int32_t(std::floor(world[a] / (voxel * kBrickEdge)));
+        return key;
+    };
+    // Not yet drawn as it is now at a point: shown at a coarse level, or by a mesh older than its brick.
+    const auto notCurrentAt = [&](const std::array<double, 3>& world) {
+        if (session.scene().shownLevelAt(world).value_or(0) > 0) return true;
+        const BrickKey key = level0Brick(world);
         const std::optional<uint64_t> drawn = chunks.versionOf(key);
         return drawn && *drawn != session.scene().brickVersion(key);
+    };
+    // Drawn at level 0 with a mesh made from the brick's content `content` or later.
+    const auto drawnSince = [&](const std::array<double, 3>& world, uint64_t content) {
+        if (session.scene().shownLevelAt(world).value_or(0) > 0) return false;
+        const std::optional<uint64_t> drawn = chunks.contentOf(level0Brick(world));
+        return !drawn || *drawn >= content;
     };
     bool baselineDone = false;
     uint64_t submitted = 0;
@@ -294,7 +314,11 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
                 else if (c.kind != Command::Kind::StrokeBegin && c.kind != Command::Kind::StrokeMove) continue;
                 // The tool's first stamp builds its fields: the second is the one reported.
                 if (planMode[i] == "tool" && ++toolsSubmitted == 1) continue;
-                waiting.push_back({i, submitted, planMode[i], {at, {at[0], at[1], 2.0 * cz - at[2]}}});
+                Waiting& w = waiting.emplace_back();
+                w.frame = i;
+                w.command = submitted;
+                w.mode = planMode[i];
+                w.at = {at, {at[0], at[1], 2.0 * cz - at[2]}};
             }
             FrameReport report;
             s.streamMs = timeMs([&] { report = worker.frame(double(i) / 90.0, kViewport); });
@@ -309,8 +333,17 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
             f.frames.push_back(s);
             const uint64_t done = worker.snapshot().commandsApplied;
             for (auto it = waiting.begin(); it != waiting.end();) {
-                if (done >= it->command && std::none_of(it->at.begin(), it->at.end(), notDrawnAt)) {
-                    const double frames = double(i - it->frame + 1);
+                if (done >= it->command && !it->appliedIn) {
+                    it->appliedIn = i;
+                    for (const auto& world : it->at) it->contentAt.push_back(session.scene().brickContent(level0Brick(world)).value_or(0));
+                }
+                if (it->appliedIn && !it->visibleIn) {
+                    bool all = true;
+                    for (std::size_t p = 0; p < it->at.size(); ++p) all = all && drawnSince(it->at[p], it->contentAt[p]);
+                    if (all) it->visibleIn = i;
+                }
+                if (it->visibleIn && std::none_of(it->at.begin(), it->at.end(), notCurrentAt)) {
+                    const double frames = double(*it->visibleIn - it->frame + 1);
                     if (it->mode == "tool") {
                         f.toolFrameMs = s.cpuMs; // the frame that re-meshed and drew it
                         f.toolMeshMs = s.meshMs;
@@ -318,6 +351,9 @@ EditorFigures measure(int extent, bool quick, uint64_t budget, const fs::path& d
                     } else {
                         f.latencyFrames.push_back(frames);
                         f.latencyByMode[it->mode].push_back(frames);
+                        f.appliedFrames.push_back(double(*it->appliedIn - it->frame + 1));
+                        f.appliedByMode[it->mode].push_back(f.appliedFrames.back());
+                        f.currentFrames.push_back(double(i - it->frame + 1));
                     }
                     it = waiting.erase(it);
                 } else {
@@ -374,6 +410,11 @@ int benchEditor(bool json, bool quick, double memoryBudgetMb)
         for (const auto& [mode, frames] : f.latencyByMode) byMode[mode] = spread(frames);
         visible["by_mode"] = byMode;
         out["edit_to_visible_frames"] = visible;
+        nlohmann::json applied = spread(f.appliedFrames), appliedModes = nlohmann::json::object();
+        for (const auto& [mode, frames] : f.appliedByMode) appliedModes[mode] = spread(frames);
+        applied["by_mode"] = appliedModes;
+        out["edit_to_applied_frames"] = applied;
+        out["edit_to_current_frames"] = spread(f.currentFrames);
         for (const auto& [mode, ms] : f.stampMsByMode) steps[mode] = spread(ms);
         out["step_ms"] = steps;
         nlohmann::json perPoint = nlohmann::json::object();
@@ -415,8 +456,21 @@ int benchEditor(bool json, bool quick, double memoryBudgetMb)
     t.rows.push_back({"edit to visible p50 / p99 / max", fixed(percentile(f.latencyFrames, 0.5), 0) + " / " + fixed(percentile(f.latencyFrames, 0.99), 0) + " / " +
                                                               fixed(maximum(f.latencyFrames), 0) + " frames",
                       "CSG <= 2, reshaping <= 4"});
-    for (const auto& [mode, frames] : f.latencyByMode)
-        t.rows.push_back({"  edit to visible, " + mode + " (p50 / max)", fixed(percentile(frames, 0.5), 0) + " / " + fixed(maximum(frames), 0) + " frames", ""});
+    t.rows.push_back({"  until the view is current there too (the stroke's later edits meshed), p50 / p99 / max",
+                      fixed(percentile(f.currentFrames, 0.5), 0) + " / " + fixed(percentile(f.currentFrames, 0.99), 0) + " / " +
+                          fixed(maximum(f.currentFrames), 0) + " frames",
+                      ""});
+    t.rows.push_back({"  of which until the worker applied it, p50 / p99 / max", fixed(percentile(f.appliedFrames, 0.5), 0) + " / " +
+                                                                                      fixed(percentile(f.appliedFrames, 0.99), 0) + " / " +
+                                                                                      fixed(maximum(f.appliedFrames), 0) + " frames",
+                      ""});
+    for (const auto& [mode, frames] : f.latencyByMode) {
+        const std::vector<double>& applied = f.appliedByMode.at(mode);
+        t.rows.push_back({"  edit to visible, " + mode + " (p50 / max; applied p50 / max)",
+                          fixed(percentile(frames, 0.5), 0) + " / " + fixed(maximum(frames), 0) + "; " + fixed(percentile(applied, 0.5), 0) + " / " +
+                              fixed(maximum(applied), 0) + " frames",
+                          ""});
+    }
     t.rows.push_back({"triangles drawn (mean)", fixed(mean(triangles) / 1e6, 2) + " M", ""});
     t.rows.push_back({"upload per frame (mean / max)", megabytes(mean(upload)) + " / " + megabytes(maximum(upload)), ""});
     t.rows.push_back({"resident (max) / budget", megabytes(maximum(resident)) + " / " + megabytes(double(f.budget)), "within the budget"});

@@ -72,7 +72,7 @@ void BrickMeshWorkers::work()
         std::string failure;
         try {
             if (const std::shared_ptr<const StreamingScene::BrickMesh> mesh = scene_.meshBrick(key))
-                done = Finished{key, mesh->version, mesh->hash, packChunk(mesh->mesh, key.level, {&mesh->occlusion, &mesh->masked, &mesh->blend})};
+                done = Finished{key, mesh->version, mesh->content, mesh->hash, packChunk(mesh->mesh, key.level, {&mesh->occlusion, &mesh->masked, &mesh->blend})};
         } catch (const std::exception& e) {
             failure = "meshing brick " + std::to_string(key.level) + ":" + std::to_string(key.brick[0]) + "," +
                       std::to_string(key.brick[1]) + "," + std::to_string(key.brick[2]) + " failed: " + e.what();

@@ -20,6 +20,7 @@ public:
     struct Finished {
         BrickKey key;
         uint64_t version = 0; // StreamingScene::brickVersion the mesh was made at
+        uint64_t content = 0; // StreamingScene::brickContent the mesh was made at
         uint64_t hash = 0;    // StreamingScene::BrickMesh::hash
         PackedChunk packed;
     };

@@ -49,6 +49,13 @@ std::optional<uint64_t> StreamedSceneChunks::versionOf(const BrickKey& key) cons
     return it->second.version;
 }
 
+std::optional<uint64_t> StreamedSceneChunks::contentOf(const BrickKey& key) const
+{
+    const auto it = uploaded_.find(key);
+    if (it == uploaded_.end()) return std::nullopt;
+    return it->second.content;
+}
+
 std::vector<BrickKey> StreamedSceneChunks::drawnBricks() const
 {
     std::vector<BrickKey> out;
@@ -117,21 +124,22 @@ StreamedSceneChunks::SyncReport StreamedSceneChunks::sync(const StreamingScene& 
     const std::set<BrickKey> shownSet(shown.begin(), shown.end());
     report.shown = shown.size();
     // A mesh equal to the one drawn is not uploaded again, only marked as of its version.
-    const auto uploadChanged = [&](const BrickKey& key, uint64_t version, uint64_t hash, const std::function<PackedChunk()>& pack) {
+    const auto uploadChanged = [&](const BrickKey& key, uint64_t version, uint64_t content, uint64_t hash, const std::function<PackedChunk()>& pack) {
         ++report.meshed;
         const auto it = uploaded_.find(key);
         if (it != uploaded_.end() && it->second.meshHash == hash) {
             it->second.version = version;
+            it->second.content = content;
             return;
         }
         const ChunkId id = it != uploaded_.end() ? it->second.id : nextId_++;
         renderer.setPackedChunk(id, pack());
-        uploaded_[key] = {id, version, hash};
+        uploaded_[key] = {id, version, content, hash};
         ++report.uploaded;
     };
     if (workers_)
         for (BrickMeshWorkers::Finished& f : workers_->takeFinished())
-            if (shownSet.count(f.key)) uploadChanged(f.key, f.version, f.hash, [&] { return std::move(f.packed); });
+            if (shownSet.count(f.key)) uploadChanged(f.key, f.version, f.content, f.hash, [&] { return std::move(f.packed); });
     // What needs a mesh: edited bricks (drawn with their old mesh meanwhile) first, then new ones.
     const std::vector<uint64_t> versions = scene.brickVersions(shown);
     std::vector<BrickKey> edited, fresh;
@@ -155,7 +163,7 @@ StreamedSceneChunks::SyncReport StreamedSceneChunks::sync(const StreamingScene& 
                 const std::shared_ptr<const StreamingScene::BrickMesh> m =
                     meshes_ == Meshes::KeptByScene ? scene.meshBrick(key) : scene.meshBrickAfresh(key);
                 if (m)
-                    uploadChanged(key, m->version, m->hash,
+                    uploadChanged(key, m->version, m->content, m->hash,
                                   [&] { return packChunk(m->mesh, key.level, {&m->occlusion, &m->masked, &m->blend}); });
             }
     }

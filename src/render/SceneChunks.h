@@ -75,6 +75,8 @@ public:
     std::optional<ChunkId> chunkOf(const BrickKey& key) const;
     /// The brick version (StreamingScene::brickVersion) its drawn mesh was made at, if it has one.
     std::optional<uint64_t> versionOf(const BrickKey& key) const;
+    /// The brick's content (StreamingScene::brickContent) its drawn mesh was made from, if it has one.
+    std::optional<uint64_t> contentOf(const BrickKey& key) const;
     /// The bricks drawn: those shown that have a mesh, and those standing in for shown ones still without.
     std::vector<BrickKey> drawnBricks() const;
 
@@ -82,6 +84,7 @@ private:
     struct Uploaded {
         ChunkId id;
         uint64_t version;  // StreamingScene::brickVersion the chunk was made at
+        uint64_t content;  // StreamingScene::brickContent it was made from
         uint64_t meshHash; // of its mesh: a brick meshed again to the same mesh is not uploaded again
     };
     Meshes meshes_;

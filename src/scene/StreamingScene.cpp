@@ -493,6 +493,7 @@ struct StreamingScene::Impl {
         }
         out->masked = maskedVertices(in.mask, out->mesh, scene.voxelSize());
         out->version = in.version;
+        out->content = in.content;
         out->hash = contentHash(out->mesh);
         for (uint8_t o : out->occlusion) out->hash = (out->hash ^ o) * 1099511628211ull;
         for (uint8_t m : out->masked) out->hash = (out->hash ^ m) * 1099511628211ull;
@@ -1571,6 +1572,14 @@ uint64_t StreamingScene::brickVersion(const BrickKey& key) const
 {
     std::lock_guard<std::mutex> lock(impl_->mutex);
     return impl_->meshVersionLocked(key);
+}
+
+std::optional<uint64_t> StreamingScene::brickContent(const BrickKey& key) const
+{
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    const auto it = impl_->resident.find(key);
+    if (it == impl_->resident.end()) return std::nullopt;
+    return it->second.version;
 }
 
 std::vector<uint64_t> StreamingScene::brickVersions(const std::vector<BrickKey>& keys) const

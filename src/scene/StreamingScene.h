@@ -158,6 +158,9 @@ public:
     /// (loaded again, sculpted), the bricks of the view's cut that touch it, or theirs; 0 when the brick
     /// is not resident.
     uint64_t brickVersion(const BrickKey& key) const;
+    /// The content version of a resident brick's own data: it only grows, with each edit or load of it;
+    /// nullopt when the brick is not resident. A mesh made at content c holds every edit up to c.
+    std::optional<uint64_t> brickContent(const BrickKey& key) const;
     /// brickVersion of each brick, under one lock.
     std::vector<uint64_t> brickVersions(const std::vector<BrickKey>& keys) const;
     /// The mesh of a resident brick on its own level's lattice (meshLodBrick with the scene's
@@ -175,6 +178,7 @@ public:
         std::vector<uint8_t> masked;    // per vertex, 1 where the mask keeps its voxel; empty: none masked
         std::vector<uint32_t> blend;    // per vertex (vertexMaterialBlend): the material beside its own, and its share
         uint64_t version = 0;
+        uint64_t content = 0; // brickContent when it was made
         uint64_t hash = 0;  // of the mesh and its per-vertex shading: equal meshes need no new upload
         uint64_t bytes = 0; // what it takes in memory, its pieces included
         /// Once edits re-mesh the brick (its own or, for a coarse brick, finer ones beside it): the
