@@ -724,6 +724,72 @@ TEST_CASE("an edit in empty space, where no brick was stored, shows at once", "[
     CHECK(mesh->mesh.triangleCount() > 100);
 }
 
+TEST_CASE("each edit and undo tells the edit listeners the level-0 bricks whose content it changed, outside the scene's locks", "[streaming][worker]")
+{
+    TempDir dir;
+    const std::string path = makeTerrain(dir);
+    StreamingScene scene(path, roomyEditableOptions());
+    settleView(scene, lookingAt({400, 120, 400}, {128, 30, 128}));
+    std::vector<std::vector<BrickKey>> heard;
+    std::vector<std::map<BrickKey, uint64_t>> contentsHeard;
+    const uint64_t id = scene.addEditListener([&](const std::vector<BrickKey>& changed) {
+        heard.push_back(changed);
+        // The scene's own calls work here: the listener runs outside its locks.
+        std::map<BrickKey, uint64_t>& contents = contentsHeard.emplace_back();
+        for (const BrickKey& key : changed) contents[key] = scene.brickContent(key).value_or(0);
+    });
+    // Every level-0 brick an edit could reach, and their contents before it.
+    std::vector<BrickKey> candidates;
+    for (int32_t x = 0; x < 4; ++x)
+        for (int32_t y = 0; y < 2; ++y)
+            for (int32_t z = 0; z < 4; ++z) candidates.push_back({0, {x, y, z}});
+    const auto contents = [&] {
+        std::map<BrickKey, uint64_t> out;
+        for (const BrickKey& key : candidates) out[key] = scene.brickContent(key).value_or(0);
+        return out;
+    };
+    const auto changedBetween = [&](const std::map<BrickKey, uint64_t>& before, const std::map<BrickKey, uint64_t>& after) {
+        std::set<BrickKey> out;
+        for (const auto& [key, content] : after)
+            if (content != before.at(key)) out.insert(key);
+        return out;
+    };
+    // Stamps across the faces between bricks (64, 128), and one in a single brick.
+    for (const std::array<double, 3> at : {std::array<double, 3>{64.0, 30.0, 64.0}, {128.0, 25.0, 70.0}, {100.0, 30.0, 100.0}}) {
+        const nlohmann::json op{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 9}}}, {"at", at}};
+        const std::map<BrickKey, uint64_t> before = contents();
+        std::vector<LeafChange> changes;
+        heard.clear();
+        contentsHeard.clear();
+        const StreamingScene::EditReport report = scene.sculpt(parseStrokeScript(nlohmann::json{{"ops", {op}}}.dump()), &changes);
+        const std::set<BrickKey> changed = changedBetween(before, contents());
+        INFO("a stamp at " << at[0] << "," << at[1] << "," << at[2]);
+        REQUIRE(heard.size() == 1);
+        CHECK(std::set<BrickKey>(heard[0].begin(), heard[0].end()) == changed);
+        CHECK(heard[0].size() == report.bricksChanged);
+        CHECK(!changed.empty());
+        for (const auto& [key, content] : contentsHeard[0]) CHECK(content == contents().at(key)); // already committed
+        // Undone: the same bricks again.
+        std::vector<LeafImage> undo;
+        for (const LeafChange& c : changes) undo.push_back({c.origin, c.before});
+        const std::map<BrickKey, uint64_t> beforeUndo = contents();
+        heard.clear();
+        scene.restoreLeaves(undo);
+        REQUIRE(heard.size() == 1);
+        CHECK(std::set<BrickKey>(heard[0].begin(), heard[0].end()) == changedBetween(beforeUndo, contents()));
+        CHECK(std::set<BrickKey>(heard[0].begin(), heard[0].end()) == changed);
+    }
+    // An edit that changes nothing tells nothing; a removed listener hears nothing.
+    heard.clear();
+    const nlohmann::json nothing{{"mode", "remove"}, {"brush", {{"shape", "sphere"}, {"radius", 3}}}, {"at", {100.0, 240.0, 100.0}}};
+    CHECK(scene.sculpt(parseStrokeScript(nlohmann::json{{"ops", {nothing}}}.dump())).bricksChanged == 0);
+    CHECK(heard.empty());
+    scene.removeEditListener(id);
+    const nlohmann::json op{{"mode", "add"}, {"brush", {{"shape", "sphere"}, {"radius", 5}}}, {"at", {40.0, 30.0, 40.0}}};
+    CHECK(scene.sculpt(parseStrokeScript(nlohmann::json{{"ops", {op}}}.dump())).bricksChanged > 0);
+    CHECK(heard.empty());
+}
+
 TEST_CASE("meshes made on workers while edits, loads and evictions run beside them settle to the meshes each brick makes afresh", "[streaming][worker]")
 {
     TempDir dir;

@@ -34,6 +34,17 @@ void BrickMeshWorkers::request(const std::vector<BrickKey>& bricks)
     if (bricks.empty()) idle_.notify_all();
 }
 
+void BrickMeshWorkers::requestFirst(const std::vector<BrickKey>& bricks)
+{
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        for (auto key = bricks.rbegin(); key != bricks.rend(); ++key)
+            if (std::find(inHand_.begin(), inHand_.end(), *key) == inHand_.end() && std::find(queue_.begin(), queue_.end(), *key) == queue_.end())
+                queue_.push_front(*key);
+    }
+    wake_.notify_all();
+}
+
 std::vector<BrickMeshWorkers::Finished> BrickMeshWorkers::takeFinished()
 {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -36,6 +36,9 @@ public:
     /// Replaces what is asked for, most needed first. A brick a worker has in hand is not asked for
     /// again: if its mesh comes out older than the scene by then, the next request asks anew.
     void request(const std::vector<BrickKey>& bricks);
+    /// Puts bricks ahead of what is asked for (those queued or in hand stay where they are): from any
+    /// thread, as an edit lands, so that its bricks are meshed before the next frame asks.
+    void requestFirst(const std::vector<BrickKey>& bricks);
     /// The meshes finished since the last call, in the order they were finished (bricks no longer
     /// resident give none).
     std::vector<Finished> takeFinished();

@@ -98,9 +98,16 @@ StreamedSceneChunks::StreamedSceneChunks(Meshes meshes) : meshes_(meshes)
 StreamedSceneChunks::StreamedSceneChunks(const StreamingScene& scene, int meshThreads)
     : meshes_(Meshes::OnWorkers), scene_(&scene), workers_(std::make_unique<BrickMeshWorkers>(scene, meshThreads))
 {
+    // An edit's bricks are meshed as it lands, not when the next frame finds their versions changed: a
+    // stamp that lands after a frame's sync is drawn a frame sooner.
+    BrickMeshWorkers* workers = workers_.get();
+    editListener_ = scene.addEditListener([workers](const std::vector<BrickKey>& changed) { workers->requestFirst(changed); });
 }
 
-StreamedSceneChunks::~StreamedSceneChunks() = default;
+StreamedSceneChunks::~StreamedSceneChunks()
+{
+    if (scene_ && editListener_) scene_->removeEditListener(editListener_);
+}
 
 void StreamedSceneChunks::waitForMeshes() const
 {

@@ -90,6 +90,7 @@ private:
     Meshes meshes_;
     const StreamingScene* scene_ = nullptr; // OnWorkers: the scene the workers mesh
     std::unique_ptr<BrickMeshWorkers> workers_;
+    uint64_t editListener_ = 0; // OnWorkers: StreamingScene::addEditListener's id
     std::map<BrickKey, Uploaded> uploaded_;
     ChunkId nextId_ = ChunkId(1) << 62; // apart from leaf ids
 };

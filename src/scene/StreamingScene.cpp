@@ -197,6 +197,16 @@ struct StreamingScene::Impl {
     uint64_t edits = 0;
     uint64_t lodBricksWritten = 0;
     uint64_t versions = 0; // the last content version handed out
+    // Told of each edit's changed bricks (addEditListener), under their own lock: called outside `mutex`.
+    mutable std::mutex listenersMutex;
+    mutable std::vector<std::pair<uint64_t, EditListener>> editListeners;
+    mutable uint64_t nextListener = 1;
+    void tellEditListeners(const std::vector<BrickKey>& changed) const
+    {
+        if (changed.empty()) return;
+        std::lock_guard<std::mutex> lock(listenersMutex);
+        for (const auto& [id, listener] : editListeners) listener(changed);
+    }
     // Level-0 leaves edits changed (with the bounds of what changed in them), each with a number;
     // numbers up to leafLogFloor are forgotten.
     std::deque<std::pair<uint64_t, BlockChange>> leafLog;
@@ -1349,7 +1359,10 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
     for (std::size_t i = 0; i < bricks.size(); ++i) bytes[i] = s.pasteBrick(bricks[i], work, leaves[i]);
     lock.lock();
     s.clearEvicted();
-    for (std::size_t i = 0; i < bricks.size(); ++i) report.bricksChanged += s.commitBrick(bricks[i], bytes[i], reached, leaves[i]);
+    std::vector<BrickKey> changed;
+    for (std::size_t i = 0; i < bricks.size(); ++i)
+        if (s.commitBrick(bricks[i], bytes[i], reached, leaves[i])) changed.push_back({0, bricks[i]});
+    report.bricksChanged += changed.size();
     s.materials = work.materials();
     if (work.mask() != s.mask) {
         const VoxelMask old = std::move(s.mask);
@@ -1359,6 +1372,9 @@ StreamingScene::EditReport StreamingScene::sculpt(const StrokeScript& script, st
     }
     s.edits += script.ops.size();
     s.keepWork(std::move(work), bricks);
+    lock.unlock();
+    trees.unlock();
+    s.tellEditListeners(changed);
     return report;
 }
 
@@ -1426,9 +1442,15 @@ StreamingScene::EditReport StreamingScene::restoreLeaves(const std::vector<LeafI
         bytes[i] = s.pasteBrick(bricks[i], work, changed[i]);
     }
     lock.lock();
-    for (std::size_t i = 0; i < bricks.size(); ++i) report.bricksChanged += s.commitBrick(bricks[i], bytes[i], reached, changed[i]);
+    std::vector<BrickKey> changedBricks;
+    for (std::size_t i = 0; i < bricks.size(); ++i)
+        if (s.commitBrick(bricks[i], bytes[i], reached, changed[i])) changedBricks.push_back({0, bricks[i]});
+    report.bricksChanged += changedBricks.size();
     ++s.edits;
     s.keepWork(std::move(work), bricks);
+    lock.unlock();
+    trees.unlock();
+    s.tellEditListeners(changedBricks);
     return report;
 }
 
@@ -1572,6 +1594,21 @@ uint64_t StreamingScene::brickVersion(const BrickKey& key) const
 {
     std::lock_guard<std::mutex> lock(impl_->mutex);
     return impl_->meshVersionLocked(key);
+}
+
+uint64_t StreamingScene::addEditListener(EditListener listener) const
+{
+    std::lock_guard<std::mutex> lock(impl_->listenersMutex);
+    const uint64_t id = impl_->nextListener++;
+    impl_->editListeners.emplace_back(id, std::move(listener));
+    return id;
+}
+
+void StreamingScene::removeEditListener(uint64_t id) const
+{
+    std::lock_guard<std::mutex> lock(impl_->listenersMutex);
+    auto& all = impl_->editListeners;
+    all.erase(std::remove_if(all.begin(), all.end(), [&](const auto& entry) { return entry.first == id; }), all.end());
 }
 
 std::optional<uint64_t> StreamingScene::brickContent(const BrickKey& key) const

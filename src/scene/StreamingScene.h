@@ -158,6 +158,12 @@ public:
     /// (loaded again, sculpted), the bricks of the view's cut that touch it, or theirs; 0 when the brick
     /// is not resident.
     uint64_t brickVersion(const BrickKey& key) const;
+    /// Called on the editing thread after each edit (sculpt, restoreLeaves) with the level-0 bricks whose
+    /// content it changed, outside the scene's locks: meshers start on them before a frame asks. Returns
+    /// an id for removeEditListener. (Registering observes the scene; it does not change it.)
+    using EditListener = std::function<void(const std::vector<BrickKey>&)>;
+    uint64_t addEditListener(EditListener listener) const;
+    void removeEditListener(uint64_t id) const;
     /// The content version of a resident brick's own data: it only grows, with each edit or load of it;
     /// nullopt when the brick is not resident. A mesh made at content c holds every edit up to c.
     std::optional<uint64_t> brickContent(const BrickKey& key) const;
