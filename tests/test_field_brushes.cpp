@@ -404,3 +404,33 @@ TEST_CASE("field brushes: an inner band leaves the distances outside the solid e
     CHECK(outsideChecked > 100000);
     CHECK(insideBeyond > 10000);
 }
+
+TEST_CASE("field brushes: a symmetric op's copies prepared side by side give exactly the copies applied one by one", "[field]")
+{
+    // Mirror copies far apart (prepared together) and close (one by one either way), every reshaping mode
+    // and a blended add, a continued inflate stroke (its start kept for both copies), on a ball whose
+    // mirror plane is off its centre and off the lattice.
+    const std::vector<std::string> modes = {R"("mode": "smooth", "strength": 1)",
+                                            R"("mode": "flatten", "strength": 0.8)",
+                                            R"("mode": "inflate", "distance": 2, "strength": 1)",
+                                            R"("mode": "deflate", "distance": 1.5, "strength": 1)",
+                                            R"("mode": "move", "offset": [0, 3, 1], "strength": 1)",
+                                            R"("mode": "add", "blend": 2.5)"};
+    // On the surface, x from the mirror plane: 17 (the copies' regions lie apart) and 4 (they meet).
+    for (const auto& [x, y] : {std::pair<double, double>{17.0, 6.0}, {4.0, 17.5}})
+        for (const std::string& mode : modes) {
+            const std::string brush = R"("brush": {"shape": "sphere", "radius": 5}, "symmetry": {"mirror": ["x"], "center": [0.3, 0, 0]})";
+            const std::string first = "[" + std::to_string(x) + ", " + std::to_string(y) + ", 2.2]";
+            const std::string next = "[" + std::to_string(x) + ", " + std::to_string(y - 0.5) + ", 4.7]";
+            std::string ops = "{" + mode + ", " + brush + R"(, "at": )" + first + "}";
+            if (mode.find("inflate") != std::string::npos)
+                ops += ", {" + mode + ", " + brush + R"(, "at": )" + next + R"(, "stroke": "continue"})";
+            const StrokeScript script = parseStrokeScript(R"({"ops": [)" + ops + "]}");
+            Volume together = sphereVolume(18.0), oneByOne = sphereVolume(18.0);
+            runStrokeScript(together, script);
+            runStrokeScript(oneByOne, script, {}, nullptr, false);
+            INFO(mode << " at x = " << x);
+            CHECK(changedBlocks(together, oneByOne).empty());
+            CHECK_FALSE(changedBlocks(together, sphereVolume(18.0)).empty());
+        }
+}

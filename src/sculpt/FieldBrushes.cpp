@@ -476,8 +476,24 @@ void checkFieldBrush(const Volume& volume, const SdfField& brush, const FieldBru
         throw std::invalid_argument("unknown material id " + std::to_string(*op.material));
 }
 
+namespace {
+
+/// What a prepared field brush writes back from: the old field, the new one, and a move's swept brush.
+struct FieldBrushState {
+    LatticeGrid old, next;
+    std::optional<DraggedField> dragged;
+};
+
+} // namespace
+
 EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrushOp& op, const Volume* strokeStart)
 {
+    return prepareFieldBrush(volume, brush, op, strokeStart)(volume);
+}
+
+EditWriteBack prepareFieldBrush(const Volume& volume, const SdfField& brush, const FieldBrushOp& op, const Volume* strokeStart)
+{
+    const auto nothing = [](Volume&) { return EditStats{}; };
     checkFieldBrush(volume, brush, op);
     const double h = volume.voxelSize();
     const WorldBounds bounds = brush.bounds();
@@ -519,7 +535,7 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
             normal += sample.normal * w;
             total += w;
         }
-        if (total <= 0.0 || normal.length() < 1e-9) return {}; // no surface under the brush
+        if (total <= 0.0 || normal.length() < 1e-9) return nothing; // no surface under the brush
         centroid /= total;
         normal.normalize();
         double gap = 0.0;
@@ -537,12 +553,14 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     }
     // The old field, rebuilt from the Hermite data in the region, and the materials there.
     SolidDistances solid = solidDistances(volume, lo, dims, float(band / h));
-    if (!holdsSolid(solid)) return {}; // nothing solid to reshape
-    const LatticeGrid old = worldDistances(solid, lo, h);
+    if (!holdsSolid(solid)) return nothing; // nothing solid to reshape
+    const auto state = std::make_shared<FieldBrushState>();
+    state->old = worldDistances(solid, lo, h);
+    const LatticeGrid& old = state->old;
     // Only points inside the brush change (the weight is zero elsewhere, and the written-back field is
     // clipped by the brush): the work below is done on the brush's points, not on the whole band. A move
     // changes the region its brush sweeps along the drag.
-    std::optional<DraggedField> dragged;
+    std::optional<DraggedField>& dragged = state->dragged;
     if (op.mode == FieldMode::Move) dragged.emplace(brush, op.offset);
     const SdfField& changed = dragged ? static_cast<const SdfField&>(*dragged) : brush;
     const PointRange inBrush = pointsWithin(old, changed.bounds());
@@ -571,7 +589,8 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     std::vector<float> weight(old.values.size(), 0.0f);
     forEachPoint(inBrush, [&](int32_t i, int32_t j, int32_t k) { weight[old.index(i, j, k)] = float(weightAt(old.pointOf(i, j, k))); });
 
-    LatticeGrid next = old;
+    state->next = old;
+    LatticeGrid& next = state->next;
     switch (op.mode) {
     case FieldMode::Inflate:
     case FieldMode::Deflate: {
@@ -674,9 +693,12 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
     // decide the clipped fields only within the band of the brush's box; beyond it, the brush's distance.
     const int32_t bandPoints = int32_t(std::ceil(band / h)) + 2;
     const double lipschitz = std::max({1.0, next.lipschitz(inBrush.grown(1, next.dims)), old.lipschitz(inBrush.grown(bandPoints, old.dims))});
-    EditStats stats = applyCsg(volume, ClippedGridField(next, 1.0, changed, &old, lipschitz), CsgOp{CsgMode::Add, material, 1.0, {}});
-    stats.append(applyCsg(volume, ClippedGridField(next, -1.0, changed, nullptr, lipschitz), CsgOp{CsgMode::Remove, material, 1.0, {}}));
-    return stats;
+    return [state, &brush, material, lipschitz](Volume& target) {
+        const SdfField& changed = state->dragged ? static_cast<const SdfField&>(*state->dragged) : brush;
+        EditStats stats = applyCsg(target, ClippedGridField(state->next, 1.0, changed, &state->old, lipschitz), CsgOp{CsgMode::Add, material, 1.0, {}});
+        stats.append(applyCsg(target, ClippedGridField(state->next, -1.0, changed, nullptr, lipschitz), CsgOp{CsgMode::Remove, material, 1.0, {}}));
+        return stats;
+    };
 }
 
 double blendReach(double width, double voxelSize) { return width + 4.0 * voxelSize; }
@@ -712,6 +734,12 @@ private:
 
 EditStats applyBlendedAdd(Volume& volume, const SdfField& brush, const CsgOp& op, double width)
 {
+    return prepareBlendedAdd(volume, brush, op, width)(volume);
+}
+
+EditWriteBack prepareBlendedAdd(const Volume& volume, const SdfField& brush, const CsgOp& op, double width)
+{
+    const auto exact = [&brush, op](Volume& target) { return applyCsg(target, brush, op); };
     checkCsgLimits(volume.voxelSize(), volume.materials(), brush, op);
     if (!(width > 0.0) || !std::isfinite(width)) throw std::invalid_argument("a blend's width must be positive");
     const double h = volume.voxelSize(), band = blendReach(width, h);
@@ -723,15 +751,17 @@ EditStats applyBlendedAdd(Volume& volume, const SdfField& brush, const CsgOp& op
         dims[std::size_t(a)] = int32_t(std::ceil((bounds.max[a] + band) / h)) - lo[std::size_t(a)] + 1;
         fits = dims[std::size_t(a)] <= kMaxFieldBrushVoxels;
     }
-    if (!fits) return applyCsg(volume, brush, op);
+    if (!fits) return exact;
     // The old surface's distance, before the brush changes it.
     SolidDistances solid = solidDistances(volume, lo, dims, float(band / h), kBlendInnerBand);
-    EditStats stats = applyCsg(volume, brush, op);
-    if (!holdsSolid(solid)) return stats; // nothing to blend into
-    const LatticeGrid old = worldDistances(solid, lo, h);
+    if (!holdsSolid(solid)) return exact; // nothing to blend into
+    const auto state = std::make_shared<FieldBrushState>();
+    state->old = worldDistances(solid, lo, h);
+    const LatticeGrid& old = state->old;
     const GrownField reach(brush, width);
     const PointRange inReach = pointsWithin(old, reach.bounds());
-    LatticeGrid next = old;
+    state->next = old;
+    LatticeGrid& next = state->next;
     // Where the old distance is capped outside (the surface lies beyond the band), the fillet adds nothing
     // the exact add has not: the point keeps its old value and the brush need not be evaluated there.
     // Inside, the fillet's value goes on from the capped distance (the field stays continuous; it is
@@ -745,8 +775,12 @@ EditStats applyBlendedAdd(Volume& volume, const SdfField& brush, const CsgOp& op
         next.values[n] = float(std::min(a, b) - 0.25 * width * t * t);
     });
     const double lipschitz = std::max({1.0, next.lipschitz(inReach.grown(1, next.dims)), old.lipschitz()});
-    stats.append(applyCsg(volume, ClippedGridField(next, 1.0, reach, &old, lipschitz), op));
-    return stats;
+    // The brush exactly, then the fillet where it meets the old surface.
+    return [state, &brush, op, width, lipschitz](Volume& target) {
+        EditStats stats = applyCsg(target, brush, op);
+        stats.append(applyCsg(target, ClippedGridField(state->next, 1.0, GrownField(brush, width), &state->old, lipschitz), op));
+        return stats;
+    };
 }
 
 } // namespace vdbclay

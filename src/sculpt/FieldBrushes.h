@@ -23,6 +23,7 @@
 #include "sculpt/Csg.h"
 #include "vdb_hermite/Volume.h"
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -85,6 +86,14 @@ void checkFieldBrush(const Volume& volume, const SdfField& brush, const FieldBru
 /// where the stroke found it (the stroke's swept weight), never their sum.
 EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrushOp& op, const Volume* strokeStart = nullptr);
 
+/// What an op writes, prepared from the volume as it stands: applying it to that volume (or to one
+/// that differs only outside the op's region) is the op. Preparing only reads, so the copies of a
+/// symmetric op whose regions lie apart are prepared side by side.
+using EditWriteBack = std::function<EditStats(Volume&)>;
+/// applyFieldBrush in two steps (it checks the op first, throwing as applyFieldBrush does). `brush` and
+/// `strokeStart` must outlive the write-back.
+EditWriteBack prepareFieldBrush(const Volume& volume, const SdfField& brush, const FieldBrushOp& op, const Volume* strokeStart = nullptr);
+
 /// An add that blends into the surface (clay pressed on, not a sphere stuck on): the brush is added
 /// exactly (applyCsg), then the fillet where it meets the old surface, the smooth union
 ///   min(a, b) - k/4 h^2,  h = max(k - |a - b|, 0) / k
@@ -92,6 +101,8 @@ EditStats applyFieldBrush(Volume& volume, const SdfField& brush, const FieldBrus
 /// within k of the brush. A fillet region wider than kMaxFieldBrushVoxels is left out (the add stays
 /// exact): the op is decided by its size, never by timing.
 EditStats applyBlendedAdd(Volume& volume, const SdfField& brush, const CsgOp& op, double width);
+/// applyBlendedAdd in two steps (EditWriteBack); `brush` must outlive the write-back.
+EditWriteBack prepareBlendedAdd(const Volume& volume, const SdfField& brush, const CsgOp& op, double width);
 /// World units beyond the brush's bounds a blended add reads and changes.
 double blendReach(double width, double voxelSize);
 

@@ -12,12 +12,14 @@
 #include "vdb_hermite/VolumeIO.h"
 
 #include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <sys/stat.h>
 #include <chrono>
 #include <cmath>
@@ -690,8 +692,45 @@ double checkStrokeScript(const StrokeScript& script, double voxelSize, const Mat
     return surface;
 }
 
+namespace {
+
+/// The region a step reads, grown by two voxels (its write-back changes Hermite samples a voxel beside
+/// what it covers), where it is prepared apart from writing: reshaping and blended adds; nullopt for
+/// other steps.
+std::optional<WorldBounds> preparedRegion(const OpStep& step, double voxelSize)
+{
+    if (step.maskEdit || !step.field || (!step.reshape && !(step.blend > 0.0))) return std::nullopt;
+    WorldBounds r = step.reshape ? fieldBrushRegion(*step.field, *step.reshape, voxelSize) : step.field->bounds();
+    if (!r.bounded()) return std::nullopt;
+    const double grow = (step.reshape ? 0.0 : blendReach(step.blend, voxelSize)) + 2.0 * voxelSize;
+    r.min -= Vec3d(grow);
+    r.max += Vec3d(grow);
+    return r;
+}
+
+/// Whether an op's steps (a symmetry's copies) may be prepared side by side: each prepared apart from
+/// writing, and no step's region meets another's.
+bool preparedApart(const std::vector<OpStep>& steps, double voxelSize)
+{
+    if (steps.size() < 2) return false;
+    std::vector<WorldBounds> regions;
+    for (const OpStep& step : steps) {
+        const std::optional<WorldBounds> r = preparedRegion(step, voxelSize);
+        if (!r) return false;
+        for (const WorldBounds& other : regions) {
+            bool apart = false;
+            for (int a = 0; a < 3; ++a) apart = apart || r->max[a] < other.min[a] || other.max[a] < r->min[a];
+            if (!apart) return false;
+        }
+        regions.push_back(*r);
+    }
+    return true;
+}
+
+} // namespace
+
 std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& script,
-                                            const std::function<void(const ScriptOpReport&)>& onOp, StrokeStart* stroke)
+                                            const std::function<void(const ScriptOpReport&)>& onOp, StrokeStart* stroke, bool copiesSideBySide)
 {
     MaterialTable table = withScriptMaterials(volume.materials(), script);
     const std::vector<std::vector<OpStep>> steps = compileChecked(script, volume.voxelSize(), table);
@@ -714,20 +753,35 @@ std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& 
         report.mode = script.ops[i].mode;
         report.modeName = opModeName(script.ops[i]);
         const WorldBounds reach = opBounds(script.ops[i], volume.voxelSize());
-        for (const OpStep& step : steps[i]) {
-            if (step.maskEdit) {
-                applyMaskEdit(volume.mask(), step, volume.voxelSize());
-                continue;
+        if (copiesSideBySide && !volume.mask().any() && preparedApart(steps[i], volume.voxelSize())) {
+            // Each copy reads only its region, which no other copy writes: prepared on the cores together
+            // (the distance rebuilds that are most of a reshaping step), then written in order.
+            for (const OpStep& step : steps[i])
+                if (keepIn && step.reshape) keepIn->keep(volume, fieldBrushRegion(*step.field, *step.reshape, volume.voxelSize()));
+            std::vector<EditWriteBack> writeBacks(steps[i].size());
+            tbb::parallel_for(std::size_t(0), steps[i].size(), [&](std::size_t k) {
+                const OpStep& step = steps[i][k];
+                const Volume* began = continues && keepIn && step.reshape ? &keepIn->volume() : nullptr;
+                writeBacks[k] = step.reshape ? prepareFieldBrush(volume, *step.field, *step.reshape, began)
+                                             : prepareBlendedAdd(volume, *step.field, step.op, step.blend);
+            });
+            for (const EditWriteBack& writeBack : writeBacks) report.stats.append(writeBack(volume));
+        } else {
+            for (const OpStep& step : steps[i]) {
+                if (step.maskEdit) {
+                    applyMaskEdit(volume.mask(), step, volume.voxelSize());
+                    continue;
+                }
+                // The mask is respected by putting back what it keeps once the brush has run.
+                std::optional<MaskedVoxels> kept;
+                if (volume.mask().any()) kept.emplace(volume, reach);
+                if (keepIn && step.reshape) keepIn->keep(volume, fieldBrushRegion(*step.field, *step.reshape, volume.voxelSize()));
+                const Volume* began = continues && keepIn && step.reshape ? &keepIn->volume() : nullptr;
+                report.stats.append(step.reshape       ? applyFieldBrush(volume, *step.field, *step.reshape, began)
+                                    : step.blend > 0.0 ? applyBlendedAdd(volume, *step.field, step.op, step.blend)
+                                                       : applyCsg(volume, *step.field, step.op));
+                if (kept) kept->restore(volume);
             }
-            // The mask is respected by putting back what it keeps once the brush has run.
-            std::optional<MaskedVoxels> kept;
-            if (volume.mask().any()) kept.emplace(volume, reach);
-            if (keepIn && step.reshape) keepIn->keep(volume, fieldBrushRegion(*step.field, *step.reshape, volume.voxelSize()));
-            const Volume* began = continues && keepIn && step.reshape ? &keepIn->volume() : nullptr;
-            report.stats.append(step.reshape       ? applyFieldBrush(volume, *step.field, *step.reshape, began)
-                                : step.blend > 0.0 ? applyBlendedAdd(volume, *step.field, step.op, step.blend)
-                                                   : applyCsg(volume, *step.field, step.op));
-            if (kept) kept->restore(volume);
         }
         report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (onOp) onOp(report);

@@ -100,8 +100,11 @@ double checkStrokeScript(const StrokeScript& script, double voxelSize, const Mat
 /// together they move the surface at most distance x strength from where the stroke found it
 /// (applyFieldBrush's cap). `stroke`, when given, carries a stroke across calls (the editor sends a
 /// stroke op by op): each op's reach is kept in it, and an op that does not continue starts it afresh.
+/// The copies of a symmetric reshaping or blended op whose regions lie apart (two voxels or more, no
+/// mask) are prepared side by side, then written one after the other: the same result as one by one,
+/// which `copiesSideBySide` false keeps to.
 std::vector<ScriptOpReport> runStrokeScript(Volume& volume, const StrokeScript& script,
                                             const std::function<void(const ScriptOpReport&)>& onOp = {},
-                                            StrokeStart* stroke = nullptr);
+                                            StrokeStart* stroke = nullptr, bool copiesSideBySide = true);
 
 } // namespace vdbclay
