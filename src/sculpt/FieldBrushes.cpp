@@ -703,6 +703,15 @@ EditWriteBack prepareFieldBrush(const Volume& volume, const SdfField& brush, con
 
 double blendReach(double width, double voxelSize) { return width + 4.0 * voxelSize; }
 
+WorldBounds blendedAddRegion(WorldBounds brushBounds, double width, double voxelSize)
+{
+    if (!brushBounds.bounded()) return brushBounds;
+    const double reach = blendReach(width, voxelSize);
+    brushBounds.min -= Vec3d(reach);
+    brushBounds.max += Vec3d(reach);
+    return brushBounds;
+}
+
 namespace {
 
 /// Voxels of the old solid's depth a blended add reads: its fillet only adds, so only the lattice points
@@ -743,12 +752,12 @@ EditWriteBack prepareBlendedAdd(const Volume& volume, const SdfField& brush, con
     checkCsgLimits(volume.voxelSize(), volume.materials(), brush, op);
     if (!(width > 0.0) || !std::isfinite(width)) throw std::invalid_argument("a blend's width must be positive");
     const double h = volume.voxelSize(), band = blendReach(width, h);
-    const WorldBounds bounds = brush.bounds();
+    const WorldBounds region = blendedAddRegion(brush.bounds(), width, h);
     std::array<int32_t, 3> lo{}, dims{};
-    bool fits = bounds.bounded();
+    bool fits = region.bounded();
     for (int a = 0; a < 3 && fits; ++a) {
-        lo[std::size_t(a)] = int32_t(std::floor((bounds.min[a] - band) / h));
-        dims[std::size_t(a)] = int32_t(std::ceil((bounds.max[a] + band) / h)) - lo[std::size_t(a)] + 1;
+        lo[std::size_t(a)] = int32_t(std::floor(region.min[a] / h));
+        dims[std::size_t(a)] = int32_t(std::ceil(region.max[a] / h)) - lo[std::size_t(a)] + 1;
         fits = dims[std::size_t(a)] <= kMaxFieldBrushVoxels;
     }
     if (!fits) return exact;

@@ -105,5 +105,7 @@ EditStats applyBlendedAdd(Volume& volume, const SdfField& brush, const CsgOp& op
 EditWriteBack prepareBlendedAdd(const Volume& volume, const SdfField& brush, const CsgOp& op, double width);
 /// World units beyond the brush's bounds a blended add reads and changes.
 double blendReach(double width, double voxelSize);
+/// The box a blended add reads and changes: the brush's bounds grown by blendReach (unbounded stays so).
+WorldBounds blendedAddRegion(WorldBounds brushBounds, double width, double voxelSize);
 
 } // namespace vdbclay

@@ -505,10 +505,8 @@ WorldBounds opBounds(const ScriptOp& op, double voxelSize)
     WorldBounds one = op.tool ? PlacedTool(op.tool, op.placement).bounds() : op.brush.bounds();
     if (one.bounded() && op.field) {
         one = fieldBrushRegion(op.brush, *op.field, voxelSize);
-    } else if (one.bounded() && op.blend > 0.0) {
-        const double reach = blendReach(op.blend, voxelSize);
-        one.min -= Vec3d(reach);
-        one.max += Vec3d(reach);
+    } else if (op.blend > 0.0) {
+        one = blendedAddRegion(one, op.blend, voxelSize);
     }
     if (!one.bounded()) return one;
     WorldBounds b = one;
@@ -700,11 +698,10 @@ namespace {
 std::optional<WorldBounds> preparedRegion(const OpStep& step, double voxelSize)
 {
     if (step.maskEdit || !step.field || (!step.reshape && !(step.blend > 0.0))) return std::nullopt;
-    WorldBounds r = step.reshape ? fieldBrushRegion(*step.field, *step.reshape, voxelSize) : step.field->bounds();
-    if (!r.bounded()) return std::nullopt;
-    const double grow = (step.reshape ? 0.0 : blendReach(step.blend, voxelSize)) + 2.0 * voxelSize;
-    r.min -= Vec3d(grow);
-    r.max += Vec3d(grow);
+    if (!step.field->bounds().bounded()) return std::nullopt;
+    WorldBounds r = step.reshape ? fieldBrushRegion(*step.field, *step.reshape, voxelSize) : blendedAddRegion(step.field->bounds(), step.blend, voxelSize);
+    r.min -= Vec3d(2.0 * voxelSize);
+    r.max += Vec3d(2.0 * voxelSize);
     return r;
 }
 
