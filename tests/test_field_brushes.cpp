@@ -416,7 +416,8 @@ TEST_CASE("field brushes: a symmetric op's copies prepared side by side give exa
                                             R"("mode": "deflate", "distance": 1.5, "strength": 1)",
                                             R"("mode": "move", "offset": [0, 3, 1], "strength": 1)",
                                             R"("mode": "add", "blend": 2.5)"};
-    // On the surface, x from the mirror plane: 17 (the copies' regions lie apart) and 4 (they meet).
+    // On the surface, x from the mirror plane: 17 (the copies' regions lie apart, but for smooth's, which
+    // reaches twice its filter's radius further and goes one by one) and 4 (they meet).
     for (const auto& [x, y] : {std::pair<double, double>{17.0, 6.0}, {4.0, 17.5}})
         for (const std::string& mode : modes) {
             const std::string brush = R"("brush": {"shape": "sphere", "radius": 5}, "symmetry": {"mirror": ["x"], "center": [0.3, 0, 0]})";
