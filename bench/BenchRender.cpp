@@ -59,11 +59,11 @@ render::Camera cameraOf(const Viewer& v)
 }
 
 /// Frames and waits until the view is refined as far as the budget allows.
-FrameReport settle(StreamingScene& scene, const Viewer& viewer)
+FrameReport settle(StreamingScene& scene, const Viewer& viewer, const OccluderDepth* drawn = nullptr)
 {
     FrameReport r;
     for (int i = 0; i < 400; ++i) {
-        r = scene.frame(viewer);
+        r = scene.frame(viewer, drawn);
         if (r.settled && r.pending == 0) break;
         scene.waitForLoads();
     }
@@ -79,8 +79,13 @@ struct StampFigures {
 struct TerrainFigures {
     int extent = 0;
     uint64_t storeBytes = 0;
-    // Complete views at 1080p, 1 px of error, over several stations.
-    std::vector<double> viewTriangles;
+    // Complete views at 1080p, 1 px of error, over several stations: with the last frame's depth as
+    // occluders (drawn again until the selection holds), and without.
+    std::vector<double> viewTriangles, unoccludedViewTriangles, hiddenBricks;
+    struct LevelShare {
+        uint64_t bricks = 0, triangles = 0;
+    };
+    std::vector<LevelShare> perLevel; // of the complete view with the most triangles
     uint64_t maxChunks = 0, maxGpuBytes = 0;
     // At the last station: resident bytes (bricks and the shown bricks' meshes) per voxel^2 of resident
     // surface, and the meshes' share of them.
@@ -129,10 +134,13 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     render::StreamedSceneChunks chunks;
     // Fill costs on lavapipe grow with the pixels; the selection is the 1080p view's whatever the target.
     render::OffscreenTarget small(context, 480, 270);
+    // The complete views are drawn at 1080p: their depth, kept as tiles, hides bricks from the next selection.
+    render::OffscreenTarget full(context, kWidth, kHeight);
     // Frames of a view until every queued chunk is up (the upload budget spreads a view over frames).
-    const auto drawComplete = [&](const Viewer& v) {
-        render::FrameStats s = renderer.render({{cameraOf(v), &small, {}}});
-        while (renderer.uploadsWaiting() > 0) s = renderer.render({{cameraOf(v), &small, {}}});
+    const auto drawComplete = [&](const Viewer& v, render::OffscreenTarget& target) {
+        const render::RenderView view{cameraOf(v), &target, {}, true};
+        render::FrameStats s = renderer.render({view});
+        while (renderer.uploadsWaiting() > 0) s = renderer.render({view});
         return s;
     };
     const double clearance = 80.0, lookAhead = 200.0;
@@ -144,8 +152,30 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
         const Viewer v = viewerAt(extent, x, z, clearance, lookAhead);
         settle(scene, v);
         chunks.sync(scene, renderer);
-        const render::FrameStats s = drawComplete(v);
+        render::FrameStats s = drawComplete(v, full);
+        f.unoccludedViewTriangles.push_back(double(s.triangles));
+        // Then with the frame's depth as occluders, until the selection holds (a coarser brick drawn where
+        // finer ones were changes the depth a little).
+        FrameReport report;
+        for (int pass = 0; pass < 6; ++pass) {
+            const std::vector<BrickKey> before = scene.shownBricks();
+            const std::shared_ptr<const OccluderDepth> drawn = renderer.drawnDepth();
+            report = settle(scene, v, drawn.get());
+            chunks.sync(scene, renderer);
+            s = drawComplete(v, full);
+            if (scene.shownBricks() == before) break;
+        }
+        f.hiddenBricks.push_back(double(report.hidden));
         f.viewTriangles.push_back(double(s.triangles));
+        // Where the triangles of the view with the most lie, per level.
+        if (double(s.triangles) >= maximum(f.viewTriangles)) {
+            f.perLevel.assign(std::size_t(scene.levels()) + 1, {});
+            for (const BrickKey& key : scene.shownBricks())
+                if (const auto mesh = scene.meshBrick(key)) {
+                    ++f.perLevel[std::size_t(key.level)].bricks;
+                    f.perLevel[std::size_t(key.level)].triangles += mesh->mesh.triangleCount();
+                }
+        }
         f.maxChunks = std::max(f.maxChunks, s.chunksDrawn);
         f.maxGpuBytes = std::max(f.maxGpuBytes, s.gpuMemoryBytes);
         if (i == stations - 1) {
@@ -153,10 +183,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
             f.residentPerSurfaceVoxel = double(scene.residentBytes()) / double(std::max<uint64_t>(1, scene.residentActiveVoxels()));
             f.meshShare = double(scene.residentMeshBytes()) / double(std::max<uint64_t>(1, scene.residentBytes()));
         }
-        if (i == 0) {
-            render::OffscreenTarget full(context, kWidth, kHeight);
-            f.gpuMs1080 = renderer.render({{cameraOf(v), &full, {}}}).gpuMs;
-        }
+        if (i == 0) f.gpuMs1080 = renderer.render({{cameraOf(v), &full, {}}}).gpuMs;
     }
 
     // The flight: along x at 90 Hz of wall time (the loaders stream meanwhile), each frame selected,
@@ -166,9 +193,10 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     for (int frame = 0; frame < int(seconds * 90.0); ++frame) {
         const Viewer v = viewerAt(extent, extent * 0.15 + speed * frame / 90.0, extent * 0.5, clearance, lookAhead);
         FrameReport report;
-        const double select = timeMs([&] { report = scene.frame(v); });
+        const std::shared_ptr<const OccluderDepth> drawn = renderer.drawnDepth(); // the last frame's
+        const double select = timeMs([&] { report = scene.frame(v, drawn.get()); });
         const double mesh = timeMs([&] { chunks.sync(scene, renderer); });
-        const render::FrameStats s = renderer.render({{cameraOf(v), &small, {}}});
+        const render::FrameStats s = renderer.render({{cameraOf(v), &small, {}, true}});
         f.selectMs.push_back(select);
         f.recordMs.push_back(s.cpuMs);
         f.cpuMs.push_back(select + s.cpuMs);
@@ -183,7 +211,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
     const Viewer v = viewerAt(extent, extent * 0.5, extent * 0.5, clearance, lookAhead);
     settle(scene, v);
     chunks.sync(scene, renderer);
-    drawComplete(v);
+    drawComplete(v, small);
     const Volume resident = scene.residentLevel0();
     const double voxel = scene.voxelSize();
     const int32_t sx = int32_t((v.position[0] + lookAhead * 0.5) / voxel), sz = int32_t(v.position[2] / voxel);
@@ -264,6 +292,13 @@ int benchRender(bool json, bool quick, double memoryBudgetMb, const std::vector<
                             {"complete_view_triangles_max", maximum(f.viewTriangles)},
                             {"complete_view_triangles_mean", mean(f.viewTriangles)},
                             {"complete_view_chunks_max", f.maxChunks},
+                            {"complete_view_triangles_unoccluded_max", maximum(f.unoccludedViewTriangles)},
+                            {"complete_view_hidden_bricks_max", maximum(f.hiddenBricks)},
+                            {"complete_view_per_level", [&] {
+                                 nlohmann::json levels = nlohmann::json::array();
+                                 for (const auto& l : f.perLevel) levels.push_back({{"bricks", l.bricks}, {"triangles", l.triangles}});
+                                 return levels;
+                             }()},
                             {"gpu_memory_bytes_max", f.maxGpuBytes},
                             {"resident_bytes_per_surface_voxel", f.residentPerSurfaceVoxel},
                             {"resident_mesh_share", f.meshShare},
@@ -312,6 +347,16 @@ int benchRender(bool json, bool quick, double memoryBudgetMb, const std::vector<
         t.rows.push_back(r);
     };
     row("triangles of a complete view (max)", [](const TerrainFigures& f) { return fixed(maximum(f.viewTriangles) / 1e6, 2) + " M"; }, "<= 2 M");
+    row("  without occluders (the last frame's depth)", [](const TerrainFigures& f) { return fixed(maximum(f.unoccludedViewTriangles) / 1e6, 2) + " M"; }, "");
+    row("  bricks left coarse behind drawn surfaces (max)", [](const TerrainFigures& f) { return fixed(maximum(f.hiddenBricks), 0); }, "");
+    row("  per level: bricks / triangles (the view with the most)", [](const TerrainFigures& f) {
+        std::string out;
+        for (std::size_t k = 0; k < f.perLevel.size(); ++k)
+            if (f.perLevel[k].bricks)
+                out += (out.empty() ? "" : ", ") + std::to_string(k) + ": " + std::to_string(f.perLevel[k].bricks) + " / " +
+                       fixed(double(f.perLevel[k].triangles) / 1e6, 2) + " M";
+        return out;
+    }, "");
     row("chunks drawn (max) / GPU memory", [](const TerrainFigures& f) { return std::to_string(f.maxChunks) + " / " + megabytes(double(f.maxGpuBytes)); }, "");
     row("resident bytes per voxel^2 of surface (meshes' share)", [](const TerrainFigures& f) { return fixed(f.residentPerSurfaceVoxel, 1) + " (" + fixed(100.0 * f.meshShare, 0) + " %)"; }, "<= 25");
     row("CPU per frame p50 / p99 (select + record)", [](const TerrainFigures& f) { return fixed(percentile(f.cpuMs, 0.5), 2) + " / " + fixed(percentile(f.cpuMs, 0.99), 2) + " ms"; }, "p99 <= 2 ms");

@@ -3,6 +3,7 @@
 // picture: silhouettes against their analytic projection, colours against the material table, the
 // brush highlight against the brush's field, uploads and frees counted.
 #include "mesher/Mesher.h"
+#include "render/DrawnDepth.h"
 #include "render/Framing.h"
 #include "render/SceneChunks.h"
 #include "render/ScenePicture.h"
@@ -181,6 +182,187 @@ TEST_CASE("render: a sphere's silhouette matches its analytic projection within 
     INFO("clay: centre " << brightness(size / 2, size / 2) << ", near the rim " << brightness(rim, size / 2));
     CHECK(brightness(size / 2, size / 2) > brightness(rim, size / 2) + 60);
     CHECK(context->validationMessages() == 0);
+}
+
+TEST_CASE("render: a frame's depth tiles hold the farthest surface drawn in each, and hide a box behind it from the next selection", "[render][occlusion]")
+{
+    // The slab's +z face (z = 8, x and y within 40) seen from straight ahead of its right edge: the left
+    // half of the picture is the face, 52 along the view, the right half nothing.
+    auto context = validatedContext();
+    const Volume volume = slab();
+    Renderer renderer(*context);
+    renderer.setMaterials(volume.materials());
+    renderer.setChunk(1, meshVolume(volume, cmsOptions()));
+    const int width = 128, height = 72, tile = 8;
+    OffscreenTarget target(*context, width, height);
+    RenderView view;
+    view.target = &target;
+    view.camera.eye = {40.0, 0.0, 60.0};
+    view.camera.target = {40.0, 0.0, 0.0};
+    view.camera.fovYDegrees = 50.0;
+    view.camera.nearPlane = 1.0;
+    renderer.render({view});
+    const OccluderDepth depth = occluderDepthOf(target.depth(), width, height, view.camera, tile);
+    REQUIRE(depth.columns() == width / tile);
+    REQUIRE(depth.rows() == height / tile);
+    // Tiles wholly left of the edge's column hold the face's distance; wholly right of it, nothing.
+    const std::vector<float> pixels = target.depth();
+    int face = 0, empty = 0;
+    for (int r = 0; r < depth.rows(); ++r)
+        for (int c = 0; c < depth.columns(); ++c) {
+            // What the tile holds, read back through a box that fills it at the face's distance +- a hair.
+            const double tanY = std::tan(25.0 * M_PI / 180.0), tanX = tanY * width / height;
+            const double x0 = (2.0 * c / depth.columns() - 1.0) * tanX, x1 = (2.0 * (c + 1) / depth.columns() - 1.0) * tanX;
+            const double y0 = (1.0 - 2.0 * (r + 1) / depth.rows()) * tanY, y1 = (1.0 - 2.0 * r / depth.rows()) * tanY;
+            const auto boxAt = [&](double distance) {
+                // The tile's pyramid at `distance`, shrunk a little so that it stays inside the tile.
+                const double s = 0.98, cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
+                const double hx = 0.5 * (x1 - x0) * s, hy = 0.5 * (y1 - y0) * s;
+                return std::make_pair(std::array<double, 3>{40.0 + (cx - hx) * distance, (cy - hy) * distance, 60.0 - distance - 0.1},
+                                      std::array<double, 3>{40.0 + (cx + hx) * distance, (cy + hy) * distance, 60.0 - distance});
+            };
+            bool anyDrawn = false, allDrawn = true;
+            for (int y = r * tile; y < (r + 1) * tile; ++y)
+                for (int x = c * tile; x < (c + 1) * tile; ++x) {
+                    const bool drawn = pixels[std::size_t(y * width + x)] != kNothingDrawn;
+                    anyDrawn = anyDrawn || drawn;
+                    allDrawn = allDrawn && drawn;
+                }
+            const auto [nearLo, nearHi] = boxAt(51.5);
+            const auto [farLo, farHi] = boxAt(53.0);
+            if (allDrawn) {
+                ++face;
+                CHECK(!depth.hides(nearLo, nearHi)); // before the face
+                CHECK(depth.hides(farLo, farHi));    // behind it
+            } else if (!anyDrawn) {
+                ++empty;
+                CHECK(!depth.hides(farLo, farHi));
+            }
+        }
+    CHECK(face >= depth.columns() * depth.rows() * 2 / 5);
+    CHECK(empty >= depth.columns() * depth.rows() * 2 / 5);
+    // A box behind the slab where it is drawn is hidden; one beyond its edge, or partly in front, is not.
+    CHECK(depth.hides({10.0, -5.0, -20.0}, {20.0, 5.0, -10.0}));
+    CHECK(!depth.hides({45.0, -5.0, -20.0}, {55.0, 5.0, -10.0}));
+    CHECK(!depth.hides({10.0, -5.0, -20.0}, {20.0, 5.0, 10.0}));
+    CHECK_THROWS_AS(occluderDepthOf(pixels, width + 1, height, view.camera), std::invalid_argument);
+    CHECK_THROWS_AS(occluderDepthOf(pixels, width, height, view.camera, 0), std::invalid_argument);
+
+    // The device's reduction (a view that keeps its depth) gives the same tiles as the pixels read back,
+    // for a whole target and for a view in part of one (its tiles start at its viewport's corner).
+    CHECK(renderer.drawnDepth() == nullptr);
+    const auto sameTiles = [](const OccluderDepth& a, const OccluderDepth& b) {
+        REQUIRE(a.columns() == b.columns());
+        REQUIRE(a.rows() == b.rows());
+        int differing = 0;
+        for (int r = 0; r < a.rows(); ++r)
+            for (int c = 0; c < a.columns(); ++c) differing += a.farthest(c, r) != b.farthest(c, r);
+        CHECK(differing == 0);
+    };
+    view.keepDepth = true;
+    renderer.render({view});
+    REQUIRE(renderer.drawnDepth() != nullptr);
+    sameTiles(*renderer.drawnDepth(), occluderDepthOf(target.depth(), width, height, view.camera));
+    RenderView part = view;
+    part.viewport = {40, 16, 60, 44}; // not whole tiles: the last row and column are narrower
+    renderer.render({part});
+    const std::vector<float> all = target.depth();
+    std::vector<float> cropped;
+    for (int y = 16; y < 60; ++y)
+        for (int x = 40; x < 100; ++x) cropped.push_back(all[std::size_t(y * width + x)]);
+    sameTiles(*renderer.drawnDepth(), occluderDepthOf(cropped, 60, 44, part.camera));
+    CHECK(renderer.drawnDepth()->columns() == 8);
+    // A frame with no view keeping its depth leaves the last one.
+    const OccluderDepth* kept = renderer.drawnDepth().get();
+    renderer.render({view = RenderView{view.camera, &target, {}, false}});
+    CHECK(renderer.drawnDepth().get() == kept);
+    requireNoValidationMessages(*context);
+}
+
+TEST_CASE("render: a store drawn with its last frame's depth as occluders leaves what lies behind a wall coarse, and draws the same picture", "[render][occlusion]")
+{
+    // A wall over the left of the view (x <= 10, its face 92 from the eye) with a ball behind it, and a
+    // ball in sight beside it; fine enough a tolerance that every brick in sight is shown at level 0.
+    auto context = validatedContext();
+    TempDir dir;
+    Volume volume(1.0);
+    apply(volume, CsgMode::Add, box(Vec3d(105.0, 150.0, 4.0)), at(Vec3d(-95.0, 0.0, 4.0)));
+    apply(volume, CsgMode::Add, sphere(12.0), at(Vec3d(-40.0, 20.0, -90.0)));
+    apply(volume, CsgMode::Add, sphere(12.0), at(Vec3d(40.0, 20.0, -90.0)));
+    const std::string path = dir.file("walled.vdbclay");
+    writeStoreFile(volume, path);
+    {
+        SceneStore store = SceneStore::open(path, StoreAccess::ReadWrite);
+        buildStoreLod(store, 2);
+    }
+    StreamingOptions streaming;
+    streaming.memoryBudgetBytes = 256ull << 20;
+    streaming.pixelTolerance = 0.2;
+    StreamingScene scene(path, streaming);
+    const int size = 128;
+    Camera camera;
+    camera.eye = {0.0, 0.0, 100.0};
+    camera.target = {0.0, 0.0, 0.0};
+    camera.fovYDegrees = 45.0;
+    camera.nearPlane = 1.0;
+    Viewer viewer;
+    viewer.position = camera.eye;
+    viewer.target = camera.target;
+    viewer.fovDegrees = camera.fovYDegrees;
+    viewer.viewport = {size, size};
+    Renderer renderer(*context);
+    renderer.setMaterials(scene.materials());
+    ShadingOptions shading;
+    shading.ambientOcclusion = false; // occlusion near a brick's edge depends on what else is resident
+    renderer.setShading(shading);
+    StreamedSceneChunks chunks;
+    OffscreenTarget target(*context, size, size);
+    const RenderView view{camera, &target, {}, true};
+    const auto drawSettled = [&](const OccluderDepth* drawn) {
+        FrameReport report;
+        for (int i = 0; i < 50 && !(report.settled && report.pending == 0); ++i) {
+            report = scene.frame(viewer, drawn);
+            scene.waitForLoads();
+        }
+        chunks.sync(scene, renderer);
+        while (renderer.render({view}).chunksWaitingUpload > 0) {
+        }
+        return report;
+    };
+    const FrameReport open = drawSettled(nullptr);
+    const Image openPicture = target.colour();
+    const std::vector<BrickKey> openBricks = scene.shownBricks();
+    CHECK(open.hidden == 0);
+    for (const BrickKey& key : openBricks) CHECK(key.level == 0);
+    const std::shared_ptr<const OccluderDepth> drawn = renderer.drawnDepth();
+    REQUIRE(drawn);
+    const FrameReport walled = drawSettled(drawn.get());
+    CHECK(walled.hidden > 0);
+    const std::vector<BrickKey> walledBricks = scene.shownBricks();
+    CHECK(walledBricks.size() < openBricks.size());
+    // The ball behind the wall is shown coarse; the one in sight and the wall's face as before.
+    const auto levelAt = [&](const std::vector<BrickKey>& shown, const std::array<int32_t, 3>& voxel) {
+        for (const BrickKey& key : shown) {
+            const int32_t edge = int32_t(kBrickEdge) << key.level;
+            bool inside = true;
+            for (int a = 0; a < 3; ++a) inside = inside && voxel[std::size_t(a)] >= key.brick[std::size_t(a)] * edge && voxel[std::size_t(a)] < (key.brick[std::size_t(a)] + 1) * edge;
+            if (inside) return key.level;
+        }
+        return -1;
+    };
+    CHECK(levelAt(walledBricks, {-40, 20, -90}) > 0);
+    CHECK(levelAt(walledBricks, {40, 20, -90}) == 0);
+    CHECK(levelAt(walledBricks, {-40, 20, 8}) == 0);
+    const Image walledPicture = target.colour();
+    int differing = 0;
+    for (std::size_t i = 0; i < openPicture.rgba.size(); i += 4) {
+        int d = 0;
+        for (int c = 0; c < 3; ++c) d = std::max(d, std::abs(int(openPicture.rgba[i + c]) - int(walledPicture.rgba[i + c])));
+        differing += d > 2;
+    }
+    INFO("pixels differing: " << differing);
+    CHECK(differing <= size * size / 500);
+    requireNoValidationMessages(*context);
 }
 
 TEST_CASE("render: a painted region shows its material's colour, the rest the default's", "[render]")

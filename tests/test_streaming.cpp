@@ -3,6 +3,7 @@
 // SIGKILL at random moments.
 #include "mesher/MeshMetrics.h"
 #include "render/BrickMeshWorkers.h"
+#include "render/Renderer.h"
 #include "scene/SceneStore.h"
 #include "scene/StoreLod.h"
 #include "scene/StreamingScene.h"
@@ -26,10 +27,12 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <limits>
 #include <optional>
 #include <random>
 #include <set>
 #include <thread>
+#include <unordered_set>
 
 #include <fcntl.h>
 #include <sys/wait.h>
@@ -145,6 +148,186 @@ TEST_CASE("a view selects coarse bricks far away and fine ones close by, only in
             }
     }
     CHECK_THROWS_AS(selectBricks(lookingAt({1, 2, 3}, {1, 2, 3}), options, stored), std::invalid_argument);
+}
+
+namespace {
+
+/// The renderer's matrix for a viewer (what a frame drawn from it would have used).
+std::array<double, 16> drawnWith(const Viewer& v)
+{
+    render::Camera c;
+    c.eye = v.position;
+    c.target = v.target;
+    c.fovYDegrees = v.fovDegrees;
+    c.nearPlane = 0.5;
+    return render::viewProjectionExact(c, double(v.viewport[0]) / double(v.viewport[1]));
+}
+
+/// Whether a box lies behind every tile its projected corners' outline covers, read tile by tile.
+bool hiddenTileByTile(const std::array<double, 16>& m, int columns, int rows, const std::vector<float>& farthest,
+                      const std::array<double, 3>& lo, const std::array<double, 3>& hi)
+{
+    double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300, nearest = 1e300;
+    for (int c = 0; c < 8; ++c) {
+        const double p[3] = {(c & 1) ? hi[0] : lo[0], (c & 2) ? hi[1] : lo[1], (c & 4) ? hi[2] : lo[2]};
+        double clip[4];
+        for (int i = 0; i < 4; ++i) clip[i] = m[std::size_t(i)] * p[0] + m[std::size_t(4 + i)] * p[1] + m[std::size_t(8 + i)] * p[2] + m[std::size_t(12 + i)];
+        if (clip[3] <= 0.0) return false;
+        x0 = std::min(x0, clip[0] / clip[3]), x1 = std::max(x1, clip[0] / clip[3]);
+        y0 = std::min(y0, clip[1] / clip[3]), y1 = std::max(y1, clip[1] / clip[3]);
+        nearest = std::min(nearest, clip[3]);
+    }
+    if (x1 < -1.0 || x0 > 1.0 || y1 < -1.0 || y0 > 1.0) return false;
+    for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < columns; ++c) {
+            // The tile's span in NDC overlaps the outline.
+            const double tx0 = 2.0 * c / columns - 1.0, tx1 = 2.0 * (c + 1) / columns - 1.0;
+            const double ty0 = 2.0 * r / rows - 1.0, ty1 = 2.0 * (r + 1) / rows - 1.0;
+            if (tx1 < x0 || tx0 > x1 || ty1 < y0 || ty0 > y1) continue;
+            if (!(nearest > double(farthest[std::size_t(r * columns + c)]))) return false;
+        }
+    return true;
+}
+
+} // namespace
+
+TEST_CASE("occluder depth: a box is hidden only when it lies in the picture behind every tile it covers", "[streaming][occlusion]")
+{
+    // Looking down -z from the origin; a wall drawn 100 away over the whole picture but for a window.
+    const Viewer view = lookingAt({0, 0, 0}, {0, 0, -1});
+    const auto m = drawnWith(view);
+    const int columns = 48, rows = 27;
+    std::vector<float> wall(std::size_t(columns * rows), 100.0f);
+    // The window: tiles 30..33 x 5..7 (right of centre, near the top) see nothing.
+    for (int r = 5; r <= 7; ++r)
+        for (int c = 30; c <= 33; ++c) wall[std::size_t(r * columns + c)] = std::numeric_limits<float>::infinity();
+    const OccluderDepth depth(m, columns, rows, wall);
+    CHECK(depth.columns() == columns);
+    CHECK(depth.rows() == rows);
+    CHECK(depth.hides({-1, -1, -150}, {1, 1, -140}));    // behind the wall, in the middle
+    CHECK(!depth.hides({-1, -1, -90}, {1, 1, -80}));     // before it
+    CHECK(!depth.hides({-1, -1, -105}, {1, 1, -95}));    // through it
+    CHECK(depth.hides({-500, -1, -150}, {500, 1, -140}));  // reaching beyond the picture: by the part within
+    CHECK(!depth.hides({400, -1, -150}, {500, 1, -140}));  // wholly beyond it
+    CHECK(!depth.hides({-1, -1, 5}, {1, 1, 6}));         // behind the eye
+    CHECK(!depth.hides({-1, -1, -150}, {1, 1, 6}));      // reaching the eye's plane
+    CHECK(!OccluderDepth().hides({-1, -1, -150}, {1, 1, -140}));
+    // Where the window's tiles lie: a box behind them shows through it, one as far beside it does not.
+    const auto atTile = [&](int c, int r, double distance, double half) {
+        // The ray through the tile's centre at `distance` along the view (y up in the world, down in NDC).
+        const double tanY = std::tan(view.fovDegrees * M_PI / 360.0), tanX = tanY * 16.0 / 9.0;
+        const double nx = (c + 0.5) / columns * 2.0 - 1.0, ny = (r + 0.5) / rows * 2.0 - 1.0;
+        const std::array<double, 3> centre{nx * tanX * distance, -ny * tanY * distance, -distance};
+        return std::make_pair(std::array<double, 3>{centre[0] - half, centre[1] - half, centre[2] - half},
+                              std::array<double, 3>{centre[0] + half, centre[1] + half, centre[2] + half});
+    };
+    const auto [windowLo, windowHi] = atTile(31, 6, 300.0, 1.0);
+    CHECK(!depth.hides(windowLo, windowHi));
+    const auto [besideLo, besideHi] = atTile(20, 6, 300.0, 1.0);
+    CHECK(depth.hides(besideLo, besideHi));
+    // A large box over many tiles is read through the coarser levels: hidden only where every tile is.
+    CHECK(!depth.hides({-150, -80, -400}, {150, 80, -300}));
+    CHECK(depth.hides({-150, -100, -400}, {0, 20, -300}));
+    // Against a tile-by-tile reading on random depths and boxes: the coarser levels only ever hide less.
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::vector<float> random(wall.size());
+    for (float& d : random) d = u(rng) < 0.05 ? std::numeric_limits<float>::infinity() : float(50.0 + 100.0 * u(rng));
+    const OccluderDepth rough(m, columns, rows, random);
+    int hidden = 0, agreed = 0;
+    for (int i = 0; i < 2000; ++i) {
+        const int c = int(u(rng) * columns), r = int(u(rng) * rows);
+        const double distance = 60.0 + 200.0 * u(rng), half = 0.5 + 8.0 * u(rng) * u(rng);
+        const auto [lo, hi] = atTile(c, r, distance, half);
+        const bool byTiles = hiddenTileByTile(m, columns, rows, random, lo, hi);
+        const bool byLevels = rough.hides(lo, hi);
+        if (byLevels) CHECK(byTiles);
+        hidden += byLevels;
+        agreed += byLevels == byTiles;
+    }
+    INFO("hidden " << hidden << ", agreeing with the tiles " << agreed << " of 2000");
+    CHECK(hidden > 100);
+    CHECK(agreed > 1800);
+    CHECK_THROWS_AS(OccluderDepth(m, 0, rows, {}), std::invalid_argument);
+    CHECK_THROWS_AS(OccluderDepth(m, columns, rows, std::vector<float>(3, 1.0f)), std::invalid_argument);
+    std::vector<float> negative = wall;
+    negative[7] = -1.0f;
+    CHECK_THROWS_AS(OccluderDepth(m, columns, rows, negative), std::invalid_argument);
+    negative[7] = std::nanf("");
+    CHECK_THROWS_AS(OccluderDepth(m, columns, rows, negative), std::invalid_argument);
+}
+
+TEST_CASE("a view leaves bricks hidden behind the last frame's depth coarse, covers the same ground, and refines them when told to", "[streaming][occlusion]")
+{
+    std::vector<std::set<IndexCoord>> stored(5);
+    for (int x = 0; x < 32; ++x)
+        for (int z = 0; z < 32; ++z) stored[0].insert({x, 0, z});
+    for (int k = 1; k < 5; ++k)
+        for (const IndexCoord& b : stored[std::size_t(k - 1)]) stored[std::size_t(k)].insert(parentBrick(b));
+    const BrickPresence presence(stored);
+    SelectionOptions options;
+    options.levels = 4;
+    const Viewer view = lookingAt({100, 40, 100}, {1000, 20, 900});
+    const std::vector<SelectedBrick> open = selectBricks(view, options, presence);
+    // A wall drawn 600 along the view over the whole picture.
+    const std::array<double, 16> m = drawnWith(view);
+    const OccluderDepth wall(m, 64, 36, std::vector<float>(64 * 36, 600.0f));
+    options.occluders = &wall;
+    const std::vector<SelectedBrick> walled = selectBricks(view, options, presence);
+    // The level-0 bricks each selection covers, once each.
+    const auto covered = [&](const std::vector<SelectedBrick>& selection) {
+        std::multiset<IndexCoord> out;
+        for (const SelectedBrick& b : selection) {
+            const int scale = 1 << b.key.level;
+            for (int x = 0; x < scale; ++x)
+                for (int z = 0; z < scale; ++z) {
+                    const IndexCoord fine{b.key.brick[0] * scale + x, 0, b.key.brick[2] * scale + z};
+                    if (stored[0].count(fine)) out.insert(fine);
+                }
+        }
+        return out;
+    };
+    // No hole, nothing twice (a hidden brick may also cover children the frustum left out).
+    const auto openCover = covered(open), walledCover = covered(walled);
+    CHECK(std::set<IndexCoord>(openCover.begin(), openCover.end()).size() == openCover.size());
+    CHECK(std::set<IndexCoord>(walledCover.begin(), walledCover.end()).size() == walledCover.size());
+    CHECK(std::includes(walledCover.begin(), walledCover.end(), openCover.begin(), openCover.end()));
+    // Hidden bricks: coarser than before, wholly beyond the wall (grown by their voxel); the rest as before.
+    std::size_t hidden = 0;
+    const std::set<BrickKey> openKeys = [&] {
+        std::set<BrickKey> k;
+        for (const SelectedBrick& b : open) k.insert(b.key);
+        return k;
+    }();
+    for (const SelectedBrick& b : walled) {
+        if (!b.hidden) {
+            CHECK(openKeys.count(b.key));
+            continue;
+        }
+        ++hidden;
+        CHECK(!openKeys.count(b.key));
+        CHECK(b.key.level > 0);
+        CHECK(b.screenError == 0.0);
+        const double edge = 64.0 * double(1 << b.key.level), grow = double(1 << b.key.level);
+        const std::array<double, 3> lo{b.key.brick[0] * edge - grow, b.key.brick[1] * edge - grow, b.key.brick[2] * edge - grow};
+        const std::array<double, 3> hi{lo[0] + edge + 2 * grow, lo[1] + edge + 2 * grow, lo[2] + edge + 2 * grow};
+        CHECK(hiddenTileByTile(m, 64, 36, std::vector<float>(64 * 36, 600.0f), lo, hi));
+    }
+    CHECK(hidden > 0);
+    CHECK(walled.size() < open.size());
+    // An empty depth hides nothing.
+    const OccluderDepth none;
+    options.occluders = &none;
+    const std::vector<SelectedBrick> unhidden = selectBricks(view, options, presence);
+    REQUIRE(unhidden.size() == open.size());
+    for (std::size_t i = 0; i < open.size(); ++i) CHECK(unhidden[i].key == open[i].key);
+    // Bricks to refine whatever their error (above edited data) are refined even when hidden.
+    std::unordered_set<BrickKey, BrickKeyHash> always;
+    for (const SelectedBrick& b : walled)
+        if (b.hidden) always.insert(b.key);
+    options.occluders = &wall;
+    options.refineAlways = &always;
+    for (const SelectedBrick& b : selectBricks(view, options, presence)) CHECK(!always.count(b.key));
 }
 
 TEST_CASE("brick presence: children masks, ordered levels and additions equal a presence built afresh", "[streaming]")

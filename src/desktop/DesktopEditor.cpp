@@ -658,7 +658,9 @@ struct DesktopEditor::Impl {
         }
         const auto inputDone = Clock::now();
 
-        const FrameReport stream = worker.frame(now(), windowSize());
+        // Bricks behind what the last finished frame drew stay coarse (their detail cannot show).
+        const std::shared_ptr<const OccluderDepth> drawnDepth = renderer->drawnDepth();
+        const FrameReport stream = worker.frame(now(), windowSize(), drawnDepth.get());
         const SessionSnapshot done = worker.snapshot();
         for (const std::string& failure : worker.takeFailures()) {
             panels.status = failure;
@@ -719,6 +721,7 @@ struct DesktopEditor::Impl {
         const auto [lo, hi] = session.shownBox();
         render::fitNearPlane(view.camera, lo, hi);
         view.target = target;
+        view.keepDepth = true;
         lastStats = renderer->render({view});
         figures.uploadsWaiting = lastStats.chunksWaitingUpload;
         const auto drawn = Clock::now();

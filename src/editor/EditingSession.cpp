@@ -369,9 +369,9 @@ FrameReport EditingSession::frame(double time, const std::array<int, 2>& viewpor
     return report;
 }
 
-FrameReport EditingSession::streamView(const render::Camera& camera, const std::array<int, 2>& viewport)
+FrameReport EditingSession::streamView(const render::Camera& camera, const std::array<int, 2>& viewport, const OccluderDepth* drawn)
 {
-    return scene_->frame(viewerOf(camera, viewport));
+    return scene_->frame(viewerOf(camera, viewport), drawn);
 }
 
 void EditingSession::advanceFrame(double time, const std::array<int, 2>& viewport)

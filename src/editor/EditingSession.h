@@ -68,9 +68,10 @@ public:
     /// viewport and autosaves when due. Commands applied next belong to the next frame. The two halves,
     /// streamView then advanceFrame.
     FrameReport frame(double time, const std::array<int, 2>& viewport);
-    /// Streams for a view: the loaders' selection for `camera` at `viewport`. Touches the scene alone, so a
-    /// frame thread may call it while a SessionWorker applies commands.
-    FrameReport streamView(const render::Camera& camera, const std::array<int, 2>& viewport);
+    /// Streams for a view: the loaders' selection for `camera` at `viewport`, leaving coarse what `drawn`
+    /// (the renderer's last drawn depth, optional) hides. Touches the scene alone, so a frame thread may
+    /// call it while a SessionWorker applies commands.
+    FrameReport streamView(const render::Camera& camera, const std::array<int, 2>& viewport, const OccluderDepth* drawn = nullptr);
     /// The session's side of a frame: its clock, the last frame's figures, an autosave when due, the
     /// record's frame count.
     void advanceFrame(double time, const std::array<int, 2>& viewport);

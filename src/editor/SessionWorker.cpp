@@ -64,11 +64,14 @@ void SessionWorker::submit(const Command& command)
     wake_.notify_one();
 }
 
-FrameReport SessionWorker::frame(double time, const std::array<int, 2>& viewport) { return frame(time, viewport, camera_); }
-
-FrameReport SessionWorker::frame(double time, const std::array<int, 2>& viewport, const render::Camera& view)
+FrameReport SessionWorker::frame(double time, const std::array<int, 2>& viewport, const OccluderDepth* drawn)
 {
-    const FrameReport report = session_.streamView(view, viewport);
+    return frame(time, viewport, camera_, drawn);
+}
+
+FrameReport SessionWorker::frame(double time, const std::array<int, 2>& viewport, const render::Camera& view, const OccluderDepth* drawn)
+{
+    const FrameReport report = session_.streamView(view, viewport, drawn);
     {
         std::lock_guard<std::mutex> lock(mutex_);
         Task task;

@@ -60,11 +60,12 @@ public:
     /// Queues a command and returns. A camera or brush takes effect on the frame's side at once (a brush
     /// the session would refuse throws std::invalid_argument here, changing nothing).
     void submit(const Command& command);
-    /// The frame thread's frame: streams for the camera submitted last, then queues the session's side
-    /// of the frame (its clock, autosave when due), ordered with the commands.
-    FrameReport frame(double time, const std::array<int, 2>& viewport);
+    /// The frame thread's frame: streams for the camera submitted last (leaving coarse what `drawn`, the
+    /// renderer's last drawn depth, hides), then queues the session's side of the frame (its clock,
+    /// autosave when due), ordered with the commands.
+    FrameReport frame(double time, const std::array<int, 2>& viewport, const OccluderDepth* drawn = nullptr);
     /// The same, streaming for `view` instead (a headset's eyes move every frame: they are not commands).
-    FrameReport frame(double time, const std::array<int, 2>& viewport, const render::Camera& view);
+    FrameReport frame(double time, const std::array<int, 2>& viewport, const render::Camera& view, const OccluderDepth* drawn = nullptr);
 
     /// Turns merging of waiting stroke points on or off from now on (a window starting a replay).
     void setMergeStrokePoints(bool merge);

@@ -1,5 +1,7 @@
 #include "render/OffscreenTarget.h"
 
+#include "render/DrawnDepth.h"
+
 #include <cstring>
 #include <string>
 
@@ -76,7 +78,7 @@ VkFramebuffer createFramebuffer(VkDevice device, VkRenderPass pass, VkImageView 
 }
 
 OffscreenTarget::OffscreenTarget(const VulkanContext& context, int width, int height)
-    : context_(context), width_(width), height_(height)
+    : context_(context), width_(width), height_(height), depthSampled_(depthSampleable(context))
 {
     const int limit = int(context.properties().limits.maxImageDimension2D);
     if (width < 1 || height < 1 || width > limit || height > limit)
@@ -87,7 +89,8 @@ OffscreenTarget::OffscreenTarget(const VulkanContext& context, int width, int he
                     VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
                     colour_, colourMemory_, colourView_);
         createImage2D(context, width, height, kDepthFormat,
-                    VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                    VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+                        (depthSampled_ ? VK_IMAGE_USAGE_SAMPLED_BIT : 0),
                     VK_IMAGE_ASPECT_DEPTH_BIT, depth_, depthMemory_, depthView_);
         renderPass_ = createRenderPass(context.device(), kColourFormat, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
         framebuffer_ = createFramebuffer(context.device(), renderPass_, colourView_, depthView_, uint32_t(width), uint32_t(height));

@@ -45,7 +45,9 @@ public:
     VkRenderPass renderPass() const override { return renderPass_; }
     VkFramebuffer framebuffer() const override { return framebuffer_; }
     VkImage colourImage() const { return colour_; }
-    VkImage depthImage() const { return depth_; }
+    VkImage depthImage() const override { return depthSampled_ ? depth_ : VK_NULL_HANDLE; }
+    VkImageView depthView() const override { return depthSampled_ ? depthView_ : VK_NULL_HANDLE; }
+    VkImageLayout depthLayoutAfterPass() const override { return VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL; }
 
     /// Records the copy of the colour and depth images into host memory (after the render pass).
     void recordReadback(VkCommandBuffer cmd) const;
@@ -62,6 +64,7 @@ private:
 
     const VulkanContext& context_;
     int width_, height_;
+    bool depthSampled_; // made sampled (depthSampleable): RenderView::keepDepth reads it
     VkImage colour_ = VK_NULL_HANDLE, depth_ = VK_NULL_HANDLE;
     VkDeviceMemory colourMemory_ = VK_NULL_HANDLE, depthMemory_ = VK_NULL_HANDLE;
     VkImageView colourView_ = VK_NULL_HANDLE, depthView_ = VK_NULL_HANDLE;

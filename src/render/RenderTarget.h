@@ -29,6 +29,12 @@ public:
     /// Waited for on the device before the frame writes its pixels (a swapchain image, until the
     /// presentation engine lets go of it): the CPU records meanwhile. None by default.
     virtual VkSemaphore readySemaphore() const { return VK_NULL_HANDLE; }
+    /// The depth image its pass draws (made with VK_IMAGE_USAGE_SAMPLED_BIT), a view of it, and the
+    /// layout the target leaves it in after the pass: what RenderView::keepDepth reduces to tiles. None
+    /// by default (such a target's depth is not kept).
+    virtual VkImage depthImage() const { return VK_NULL_HANDLE; }
+    virtual VkImageView depthView() const { return VK_NULL_HANDLE; }
+    virtual VkImageLayout depthLayoutAfterPass() const { return VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL; }
 };
 
 } // namespace vdbclay::render

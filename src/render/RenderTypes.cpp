@@ -35,6 +35,11 @@ ViewMode parseViewMode(const std::string& name)
     throw std::invalid_argument("unknown view '" + printableText(name, 80) + "' (expected shaded, clay, lod, toughness or normals)");
 }
 
+double usableNearPlane(const Camera& camera)
+{
+    return camera.nearPlane > 0.0 && std::isfinite(camera.nearPlane) ? camera.nearPlane : 1e-3;
+}
+
 std::array<double, 3> usableUp(const Camera& camera)
 {
     std::array<double, 3> f{};

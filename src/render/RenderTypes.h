@@ -32,6 +32,9 @@ struct Camera {
     double tanHalfFovY() const;
 };
 
+/// The near plane the view uses: Camera::nearPlane, or 1e-3 where that is not a positive number.
+double usableNearPlane(const Camera& camera);
+
 /// The camera's up vector as the view uses it: `up` unless it is zero, not finite or along the view
 /// direction (a camera looking straight down with up +Y); then world +Y, or for a view along Y the Z
 /// axis that puts -Z at the top of a view looking down (as a plan is drawn). Not normalized.

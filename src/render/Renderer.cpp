@@ -1,5 +1,6 @@
 #include "render/Renderer.h"
 
+#include "render/DrawnDepth.h"
 #include "render/GpuMemory.h"
 #include "render/MaterialTextures.h"
 #include "render/OffscreenTarget.h"
@@ -60,7 +61,7 @@ glm::dmat4 viewProjectionMatrix(const Camera& c, double aspect)
     const glm::dvec3 eye(c.eye[0], c.eye[1], c.eye[2]), target(c.target[0], c.target[1], c.target[2]), up(u[0], u[1], u[2]);
     // Reversed depth with the far plane at infinity: depth = near / distance along the view, 1 at the near
     // plane and 0 far away, so float depth keeps its relative precision at every distance.
-    const double near = c.nearPlane > 0.0 && std::isfinite(c.nearPlane) ? c.nearPlane : 1e-3;
+    const double near = usableNearPlane(c);
     glm::dmat4 proj(0.0);
     if (c.asymmetric()) {
         // An eye's off-centre view: x / -z from tan(left) to tan(right) maps to -1 .. 1, y likewise (down).
@@ -118,6 +119,15 @@ std::array<float, 16> viewProjection(const Camera& camera, double aspect)
 {
     std::array<float, 16> out{};
     copyMatrix(out.data(), viewProjectionMatrix(camera, aspect));
+    return out;
+}
+
+std::array<double, 16> viewProjectionExact(const Camera& camera, double aspect)
+{
+    const glm::dmat4 m = viewProjectionMatrix(camera, aspect);
+    std::array<double, 16> out{};
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) out[std::size_t(c * 4 + r)] = m[c][r];
     return out;
 }
 
@@ -183,6 +193,8 @@ struct Renderer::Impl {
     std::optional<BrushOverlay> brush;
     uint64_t frameNumber = 0;
     double lastGpuMs = 0.0; // of the last frame finished
+    std::unique_ptr<DepthTileReducer> depthTiles; // made when a view first keeps its depth
+    std::shared_ptr<const OccluderDepth> drawnDepth;
 
     Impl(VulkanContext& c, const RendererOptions& o)
         : context(c), options(o), heap(c, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)
@@ -250,6 +262,7 @@ struct Renderer::Impl {
             if (slot.cmd) vkFreeCommandBuffers(device, context.commandPool(), 1, &slot.cmd);
         }
         if (descriptorPool) vkDestroyDescriptorPool(device, descriptorPool, nullptr);
+        depthTiles.reset();
         pipelines.reset();
         if (compatiblePass) vkDestroyRenderPass(device, compatiblePass, nullptr);
     }
@@ -406,6 +419,8 @@ struct Renderer::Impl {
             heap.free(a);
         }
         slot.freed.clear();
+        if (depthTiles)
+            if (auto tiles = depthTiles->take(index)) drawnDepth = std::move(tiles);
         if (queries && slot.timed) {
             uint64_t ticks[2] = {0, 0};
             if (vkGetQueryPoolResults(context.device(), queries, uint32_t(2 * index), 2, sizeof(ticks), ticks, sizeof(uint64_t),
@@ -568,6 +583,7 @@ struct Renderer::Impl {
                                                         VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT);
         std::size_t commandsUsed = 0;
         const std::size_t maxDrawsPerCall = std::max<uint32_t>(1, context.properties().limits.maxDrawIndirectCount);
+        bool depthKept = false; // a view's depth recorded for drawnDepth()
         // Views that share a target are drawn in one render pass, which clears the target once.
         std::vector<RenderTarget*> targets;
         for (const auto& v : views) {
@@ -659,6 +675,13 @@ struct Renderer::Impl {
             target->recordOverlay(cmd);
             vkCmdEndRenderPass(cmd);
             target->recordAfterPass(cmd);
+            for (const RenderView& v : views)
+                if (v.keepDepth && v.target == target && !depthKept) {
+                    if (!depthTiles) depthTiles = std::make_unique<DepthTileReducer>(context, kFramesInFlight);
+                    std::array<int, 4> vp = v.viewport;
+                    if (vp[2] <= 0 || vp[3] <= 0) vp = {0, 0, target->width(), target->height()};
+                    depthKept = depthTiles->record(cmd, current, *target, vp, v.camera);
+                }
         }
         if (queries) vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queries, firstQuery + 1);
         stats.cpuMs = msSince(start);
@@ -805,6 +828,8 @@ void Renderer::setShading(const ShadingOptions& shading) { impl_->shading = shad
 const ShadingOptions& Renderer::shading() const { return impl_->shading; }
 void Renderer::setBrush(const std::optional<BrushOverlay>& brush) { impl_->brush = brush; }
 FrameStats Renderer::render(const std::vector<RenderView>& views) { return impl_->render(views); }
+
+std::shared_ptr<const OccluderDepth> Renderer::drawnDepth() const { return impl_->drawnDepth; }
 
 std::vector<ChunkId> Renderer::takeEvicted()
 {

@@ -8,6 +8,10 @@
 #include "render/RenderTypes.h"
 #include "vdb_hermite/Materials.h"
 
+namespace vdbclay {
+class OccluderDepth;
+}
+
 #include <vulkan/vulkan.h>
 
 #include <array>
@@ -47,6 +51,10 @@ struct RenderView {
     Camera camera;
     RenderTarget* target = nullptr; // an OffscreenTarget, a window's swapchain image, a headset's eye
     std::array<int, 4> viewport{0, 0, 0, 0}; // x, y, width, height in pixels; zero size: the whole target
+    /// Its depth, reduced to tiles on the device, becomes Renderer::drawnDepth() once the frame is done:
+    /// the next selections' occluders. The first such view of a frame; targets without a sampled depth
+    /// keep none.
+    bool keepDepth = false;
 };
 
 /// What a chunk's vertices may carry beside the mesh (Renderer::setChunk): each null, or one value per vertex.
@@ -111,6 +119,11 @@ public:
 
     /// Uploads what changed, draws the views and, for offscreen targets, reads their pixels back.
     FrameStats render(const std::vector<RenderView>& views);
+    /// The depth of the last finished frame's view with RenderView::keepDepth, as occluders for the
+    /// next selections (StreamingScene::frame); nullptr before any. A frame presented is finished when a
+    /// later one reuses its slot (frames in flight): these tiles lag the view by a frame or two, which
+    /// the selection allows for (OccluderDepth).
+    std::shared_ptr<const OccluderDepth> drawnDepth() const;
     /// Chunks freed to keep within the GPU budget since the last call (their owner uploads them again
     /// when they are needed).
     std::vector<ChunkId> takeEvicted();
@@ -127,5 +140,7 @@ private:
 
 /// The view-projection matrix (column-major, depth 0..1, Y down as Vulkan's framebuffer) of a camera.
 std::array<float, 16> viewProjection(const Camera& camera, double aspect);
+/// The same in double precision (occlusion tests compare distances across a whole scene).
+std::array<double, 16> viewProjectionExact(const Camera& camera, double aspect);
 
 } // namespace vdbclay::render

@@ -1,5 +1,6 @@
 #include "render/SwapchainTarget.h"
 
+#include "render/DrawnDepth.h"
 #include "render/GpuMemory.h"
 #include "render/OffscreenTarget.h"
 
@@ -19,6 +20,8 @@ struct SwapchainTarget::Image : RenderTarget {
     int height() const override { return owner->height_; }
     VkRenderPass renderPass() const override { return owner->renderPass_; }
     VkFramebuffer framebuffer() const override { return framebufferHandle; }
+    VkImage depthImage() const override { return owner->depthSampled_ ? owner->depth_ : VK_NULL_HANDLE; }
+    VkImageView depthView() const override { return owner->depthSampled_ ? owner->depthView_ : VK_NULL_HANDLE; }
     void recordOverlay(VkCommandBuffer cmd) override
     {
         if (owner->overlay_) owner->overlay_(cmd);
@@ -26,7 +29,7 @@ struct SwapchainTarget::Image : RenderTarget {
 };
 
 SwapchainTarget::SwapchainTarget(const VulkanContext& context, VkSurfaceKHR surface, int width, int height)
-    : context_(context), surface_(surface)
+    : context_(context), surface_(surface), depthSampled_(depthSampleable(context))
 {
     VkBool32 supported = VK_FALSE;
     check(vkGetPhysicalDeviceSurfaceSupportKHR(context.physicalDevice(), context.queueFamily(), surface, &supported),
@@ -83,8 +86,10 @@ void SwapchainTarget::create(int width, int height)
     std::vector<VkImage> images(count);
     check(vkGetSwapchainImagesKHR(context_.device(), swapchain_, &count, images.data()), "vkGetSwapchainImagesKHR");
 
-    createImage2D(context_, int(extent.width), int(extent.height), kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
-                  VK_IMAGE_ASPECT_DEPTH_BIT, depth_, depthMemory_, depthView_);
+    // Sampled too: the renderer reduces the frame's depth to tiles, the next selection's occluders.
+    createImage2D(context_, int(extent.width), int(extent.height), kDepthFormat,
+                  VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | (depthSampled_ ? VK_IMAGE_USAGE_SAMPLED_BIT : 0), VK_IMAGE_ASPECT_DEPTH_BIT,
+                  depth_, depthMemory_, depthView_);
 
     for (VkImage image : images) {
         auto target = std::make_unique<Image>();

@@ -54,6 +54,7 @@ private:
     std::vector<VkSemaphore> acquireSemaphores_; // a ring, one more than the images: a semaphore is used
                                                  // again only once the frame that waited on it is done
     std::size_t nextAcquire_ = 0;
+    bool depthSampled_; // made sampled (depthSampleable): RenderView::keepDepth reads it
     VkImage depth_ = VK_NULL_HANDLE;
     VkDeviceMemory depthMemory_ = VK_NULL_HANDLE;
     VkImageView depthView_ = VK_NULL_HANDLE;

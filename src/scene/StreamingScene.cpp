@@ -1161,10 +1161,11 @@ StreamingScene::~StreamingScene()
     }
 }
 
-FrameReport StreamingScene::frame(const Viewer& viewer)
+FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* drawn)
 {
     Impl& s = *impl_;
     SelectionOptions selection;
+    selection.occluders = drawn;
     selection.pixelTolerance = s.options.pixelTolerance;
     selection.voxelSize = s.scene.voxelSize();
     selection.levels = s.levels;
@@ -1184,6 +1185,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer)
     ++s.frameNumber;
     FrameReport report;
     report.requested = selected.size();
+    report.hidden = uint64_t(std::count_if(selected.begin(), selected.end(), [](const SelectedBrick& b) { return b.hidden; }));
     // What the view needs, coarse first (ancestors stand in while the selection loads), as far as the
     // budget goes. Each needed brick is looked up once per pass: at 90 Hz this runs under the loaders'
     // lock for a few thousand bricks.

@@ -52,6 +52,7 @@ struct FrameReport {
     uint64_t evictions = 0;    // since the last frame
     uint64_t requested = 0;    // bricks the view asked for this frame
     uint64_t hits = 0;         // of those, resident already
+    uint64_t hidden = 0;       // of those, left coarse behind the last frame's depth (OccluderDepth)
     double hitRate() const { return requested ? double(hits) / double(requested) : 1.0; }
     double screenError = 0.0;  // pixels: the largest error among the bricks shown (resident or fallback)
     double targetError = 0.0;  // pixels: the largest error of the selection the view asked for
@@ -74,8 +75,9 @@ public:
     StreamingScene& operator=(const StreamingScene&) = delete;
 
     /// One frame: selects the bricks the view needs, queues the missing ones (coarse first), evicts
-    /// the least recently used bricks the view does not need when over budget, and reports.
-    FrameReport frame(const Viewer& viewer);
+    /// the least recently used bricks the view does not need when over budget, and reports. `drawn`
+    /// (optional): the last frame's depth; bricks it hides are not refined (SelectionOptions::occluders).
+    FrameReport frame(const Viewer& viewer, const OccluderDepth* drawn = nullptr);
     /// Waits until every queued load has finished (tests, and callers that want a complete view).
     void waitForLoads() const;
 

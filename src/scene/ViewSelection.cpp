@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -89,6 +90,68 @@ void validateViewer(const Viewer& v)
 double lodShownError(std::optional<double> dataError, double voxel)
 {
     return dataError ? std::min(voxel, *dataError + 0.25 * voxel) : voxel;
+}
+
+OccluderDepth::OccluderDepth(const std::array<double, 16>& viewProjection, int columns, int rows, std::vector<float> farthest)
+    : viewProjection_(viewProjection)
+{
+    if (columns <= 0 || rows <= 0) throw std::invalid_argument("an occluder depth needs at least one tile");
+    if (farthest.size() != std::size_t(columns) * std::size_t(rows))
+        throw std::invalid_argument("an occluder depth of " + std::to_string(columns) + " x " + std::to_string(rows) + " tiles holds " +
+                                    std::to_string(farthest.size()) + " distances");
+    for (const float d : farthest)
+        if (!(d >= 0.0f)) throw std::invalid_argument("an occluder depth's distances must be non-negative");
+    for (const double m : viewProjection)
+        if (!std::isfinite(m)) throw std::invalid_argument("an occluder depth's matrix must be finite");
+    levels_.push_back({columns, rows, std::move(farthest)});
+    // Coarser levels: the farthest of each 2 x 2, so that a box covering many tiles reads a few.
+    while (levels_.back().columns > 1 || levels_.back().rows > 1) {
+        const Level& fine = levels_.back();
+        Level coarse{(fine.columns + 1) / 2, (fine.rows + 1) / 2, {}};
+        coarse.farthest.resize(std::size_t(coarse.columns) * std::size_t(coarse.rows));
+        for (int r = 0; r < coarse.rows; ++r)
+            for (int c = 0; c < coarse.columns; ++c) {
+                float far = 0.0f;
+                for (int dr = 0; dr < 2; ++dr)
+                    for (int dc = 0; dc < 2; ++dc) {
+                        const int fr = std::min(2 * r + dr, fine.rows - 1), fc = std::min(2 * c + dc, fine.columns - 1);
+                        far = std::max(far, fine.farthest[std::size_t(fr) * std::size_t(fine.columns) + std::size_t(fc)]);
+                    }
+                coarse.farthest[std::size_t(r) * std::size_t(coarse.columns) + std::size_t(c)] = far;
+            }
+        levels_.push_back(std::move(coarse));
+    }
+}
+
+bool OccluderDepth::hides(const std::array<double, 3>& lo, const std::array<double, 3>& hi) const
+{
+    if (empty()) return false;
+    const std::array<double, 16>& m = viewProjection_; // element (row i, column j) at m[4 j + i]
+    double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0, nearest = x0;
+    for (int c = 0; c < 8; ++c) {
+        const double p[3] = {(c & 1) ? hi[0] : lo[0], (c & 2) ? hi[1] : lo[1], (c & 4) ? hi[2] : lo[2]};
+        double clip[4];
+        for (int i = 0; i < 4; ++i) clip[i] = m[std::size_t(i)] * p[0] + m[std::size_t(4 + i)] * p[1] + m[std::size_t(8 + i)] * p[2] + m[std::size_t(12 + i)];
+        // A corner at or behind the eye's plane: the box's outline on the picture is unbounded.
+        if (!(clip[3] > 0.0)) return false;
+        const double x = clip[0] / clip[3], y = clip[1] / clip[3];
+        x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+        nearest = std::min(nearest, clip[3]); // w is affine over the box: its least is at a corner
+    }
+    // Wholly beyond the picture: the frame knew nothing of what lies there. Partly beyond: judged by the
+    // part within (a view turned since sees the rest drawn coarse, and its next depth refines it).
+    if (!(x1 >= -1.0 && x0 <= 1.0 && y1 >= -1.0 && y0 <= 1.0)) return false;
+    const Level& base = levels_[0];
+    const auto tile = [](double ndc, int count) { return std::clamp(int(std::floor((ndc + 1.0) * 0.5 * count)), 0, count - 1); };
+    const int c0 = tile(x0, base.columns), c1 = tile(x1, base.columns), r0 = tile(y0, base.rows), r1 = tile(y1, base.rows);
+    // The finest level where the outline covers at most 64 tiles.
+    std::size_t k = 0;
+    while (k + 1 < levels_.size() && ((c1 >> k) - (c0 >> k) + 1) * ((r1 >> k) - (r0 >> k) + 1) > 64) ++k;
+    const Level& level = levels_[k];
+    float far = 0.0f;
+    for (int r = r0 >> k; r <= (r1 >> k); ++r)
+        for (int c = c0 >> k; c <= (c1 >> k); ++c) far = std::max(far, level.farthest[std::size_t(r) * std::size_t(level.columns) + std::size_t(c)]);
+    return nearest > double(far);
 }
 
 BrickPresence::BrickPresence(const std::vector<std::set<IndexCoord>>& stored)
@@ -190,7 +253,14 @@ std::vector<SelectedBrick> selectBricks(const Viewer& viewer, const SelectionOpt
         // The brick's error: what its data lies off level 0's where it is known (lodShownError), else its voxel.
         const double worldError = stored.shownError(key.level, key.brick).value_or(options.voxelSize * double(1 << key.level));
         const double error = distance > 0.0 ? worldError * pixelsPerRadian / distance : 1e30;
-        if (key.level > 0 && (error > options.pixelTolerance || (options.refineAlways && options.refineAlways->count(key)))) {
+        const bool refineAnyway = options.refineAlways && options.refineAlways->count(key);
+        bool hidden = false;
+        if (key.level > 0 && error > options.pixelTolerance && !refineAnyway && options.occluders) {
+            // Grown by the brick's voxel: what its drawn stand-in may lie off its surface.
+            const double grow = options.voxelSize * double(1 << key.level);
+            hidden = options.occluders->hides({lo[0] - grow, lo[1] - grow, lo[2] - grow}, {hi[0] + grow, hi[1] + grow, hi[2] + grow});
+        }
+        if (key.level > 0 && ((error > options.pixelTolerance && !hidden) || refineAnyway)) {
             const uint8_t children = stored.children(key.level, key.brick);
             if (children != 0) {
                 for (int c = 7; c >= 0; --c)
@@ -199,7 +269,7 @@ std::vector<SelectedBrick> selectBricks(const Viewer& viewer, const SelectionOpt
                 continue;
             }
         }
-        out.push_back({key, error, distance});
+        out.push_back({key, hidden ? 0.0 : error, distance, hidden});
     }
     std::stable_sort(out.begin(), out.end(), [](const SelectedBrick& a, const SelectedBrick& b) {
         if (a.key.level != b.key.level) return a.key.level > b.key.level;

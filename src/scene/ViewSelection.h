@@ -24,6 +24,40 @@ struct Viewer {
     std::array<int, 2> viewport{1920, 1080};       // pixels
 };
 
+/// What a drawn frame leaves for the next selections (occlusion culling from the last frame's depth, as
+/// GPU-driven renderers do): per tile of its picture, the farthest distance along the view at which a
+/// surface was drawn, infinity where none was. A brick whose box lies behind every tile it covers is
+/// hidden: its detail cannot show, so it is not refined. Hidden bricks are still shown at the level
+/// reached (never culled), so the view keeps no hole where the camera has moved since: what comes into
+/// sight is drawn coarse, its depth lands in the next frame's tiles, and the next selection refines it.
+class OccluderDepth {
+public:
+    OccluderDepth() = default;
+    /// `viewProjection`: the matrix the frame was drawn with (column-major, reversed depth with the far
+    /// plane at infinity, so clip w is the distance along the view); `farthest`: columns x rows tiles,
+    /// rows from the top of the picture (NDC y = -1), non-negative, +infinity where nothing was drawn.
+    /// Throws std::invalid_argument for an empty grid, a wrong count or a negative or NaN distance.
+    OccluderDepth(const std::array<double, 16>& viewProjection, int columns, int rows, std::vector<float> farthest);
+
+    bool empty() const { return levels_.empty(); }
+    int columns() const { return empty() ? 0 : levels_[0].columns; }
+    int rows() const { return empty() ? 0 : levels_[0].rows; }
+    /// A tile's farthest distance (column and row within the grid).
+    float farthest(int column, int row) const { return levels_[0].farthest[std::size_t(row) * std::size_t(levels_[0].columns) + std::size_t(column)]; }
+    /// Whether the box (world units) lies behind the farthest surface drawn over every tile of the
+    /// picture it covers. False for an empty grid, a box wholly beyond the picture and a box reaching the
+    /// eye's plane.
+    bool hides(const std::array<double, 3>& lo, const std::array<double, 3>& hi) const;
+
+private:
+    struct Level {
+        int columns = 0, rows = 0;
+        std::vector<float> farthest;
+    };
+    std::array<double, 16> viewProjection_{};
+    std::vector<Level> levels_; // the tiles, then the farthest of each 2x2 of the level before
+};
+
 struct SelectionOptions {
     double pixelTolerance = 1.0; // screen-space error a brick may show, in pixels
     double voxelSize = 1.0;      // level 0
@@ -31,6 +65,9 @@ struct SelectionOptions {
     /// Optional: coarse bricks refined whatever their error (those older than the edited level-0 data
     /// below them, so that an edit shows at once).
     const std::unordered_set<BrickKey, BrickKeyHash>* refineAlways = nullptr;
+    /// Optional: the last frame's depth. A brick it hides (grown by its voxel, what its drawn stand-in
+    /// may lie off its surface) is not refined; refineAlways still is.
+    const OccluderDepth* occluders = nullptr;
 };
 
 /// The error a view counts for a brick whose level has voxels of size `voxel`, in world units: its data
@@ -41,8 +78,9 @@ double lodShownError(std::optional<double> dataError, double voxel);
 
 struct SelectedBrick {
     BrickKey key;
-    double screenError = 0.0; // pixels, at its level
+    double screenError = 0.0; // pixels, at its level; 0 where the occluders hide it (no error shows)
     double distance = 0.0;    // world units, eye to the brick's nearest point
+    bool hidden = false;      // left unrefined: SelectionOptions::occluders hide it
 };
 
 /// The bricks that exist per level, as the selection asks about them: each level's bricks in order, and
