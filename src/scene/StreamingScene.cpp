@@ -175,6 +175,8 @@ struct StreamingScene::Impl {
     mutable std::mutex storeMutex;
     std::condition_variable wake, idle;
     std::unordered_map<BrickKey, Resident, BrickKeyHash> resident;
+    std::vector<uint64_t> residentPerLevel;         // of `resident`, per level
+    std::set<IndexCoord> dirty;             // the level-0 bricks of `resident` edited since their last save
     std::deque<BrickKey> queue;
     using BrickSet = std::unordered_set<BrickKey, BrickKeyHash>;
     BrickSet inFlight;
@@ -231,6 +233,7 @@ struct StreamingScene::Impl {
     Impl(const std::string& path, const StreamingOptions& o) : options(o), scene(SceneStore::open(path, o.access))
     {
         levels = scene.lodLevels();
+        residentPerLevel.assign(std::size_t(levels) + 1, 0);
         std::vector<std::set<IndexCoord>> stored(std::size_t(levels) + 1);
         uint64_t largest = 0;
         for (int k = 0; k <= levels; ++k) {
@@ -649,6 +652,7 @@ struct StreamingScene::Impl {
         dropMesh(it->first, it->second);
         residentBytes -= it->second.bytes;
         pendingClears.push_back(it->first);
+        --residentPerLevel[std::size_t(it->first.level)];
         resident.erase(it);
     }
 
@@ -695,6 +699,7 @@ struct StreamingScene::Impl {
         r.loadVersion = r.version;
         for (auto& c : r.sides) c.fill(r.version);
         resident[key] = std::move(r);
+        ++residentPerLevel[std::size_t(key.level)];
         residentBytes += bytes;
         bytesRead += bytesReadFromStore;
         ++loads;
@@ -711,24 +716,26 @@ struct StreamingScene::Impl {
     /// fit. Lock held.
     bool makeRoom(uint64_t needed)
     {
-        while (residentBytes + inFlightBytes + needed > options.memoryBudgetBytes) {
-            auto victim = resident.end();
-            for (auto it = resident.begin(); it != resident.end(); ++it) {
-                if (wanted.count(it->first) || pinned.count(it->first) || it->second.dirty) continue;
-                if (victim == resident.end() || it->second.lastUsed < victim->second.lastUsed) victim = it;
-            }
-            if (victim == resident.end()) return false;
-            evict(victim);
+        const auto fits = [&] { return residentBytes + inFlightBytes + needed <= options.memoryBudgetBytes; };
+        if (fits()) return true;
+        // Least recently used first, among the bricks that may go (one pass over the resident bricks,
+        // however many go: a budget-limited view evicts several a frame).
+        std::vector<std::pair<uint64_t, BrickKey>> candidates;
+        for (const auto& [key, r] : resident)
+            if (!r.dirty && !wanted.count(key) && !pinned.count(key)) candidates.emplace_back(r.lastUsed, key);
+        std::sort(candidates.begin(), candidates.end());
+        for (const auto& [used, key] : candidates) {
+            if (fits()) break;
+            evict(resident.find(key));
             ++evictions;
         }
-        return true;
+        return fits();
     }
 
     /// Whether dirty bricks take room makeRoom could give once they are saved. Lock held.
     bool dirtyInTheWay() const
     {
-        return std::any_of(resident.begin(), resident.end(),
-                           [&](const auto& entry) { return entry.second.dirty && !wanted.count(entry.first) && !pinned.count(entry.first); });
+        return std::any_of(dirty.begin(), dirty.end(), [&](const IndexCoord& b) { return !wanted.count({0, b}) && !pinned.count({0, b}); });
     }
 
     /// makeRoom, autosaving first (all the dirty bricks, so the store never holds half an edit) when dirty
@@ -967,6 +974,7 @@ struct StreamingScene::Impl {
         residentBytes = residentBytes - r.bytes + bytes;
         r.bytes = bytes;
         r.dirty = true;
+        dirty.insert(b);
         r.version = ++versions;
         for (int c = 0; c < kReachClasses; ++c) {
             std::array<bool, 3> nearLow{}, nearHigh{};
@@ -999,8 +1007,7 @@ struct StreamingScene::Impl {
     SaveBatch saveBatchLocked() const
     {
         SaveBatch batch;
-        for (const auto& [key, r] : resident)
-            if (r.dirty) batch.dirty.push_back(key);
+        for (const IndexCoord& b : dirty) batch.dirty.push_back({0, b});
         std::sort(batch.dirty.begin(), batch.dirty.end());
         batch.materials = materials;
         batch.mask = mask;
@@ -1044,6 +1051,7 @@ struct StreamingScene::Impl {
         for (const BrickKey& key : batch.dirty) {
             const auto it = resident.find(key);
             if (it != resident.end()) it->second.dirty = false;
+            dirty.erase(key.brick);
         }
         if (mask == batch.mask) maskDirty = false;
         lodBricksWritten += lod.bricksWritten();
@@ -1174,12 +1182,11 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
     // The levels above edited bricks are rebuilt when they are saved: until then the view shows level 0
     // there.
     std::unordered_set<BrickKey, BrickKeyHash> stale;
-    for (const auto& [key, r] : s.resident)
-        if (key.level == 0 && r.dirty)
-            for (BrickKey up = key; up.level < s.levels;) {
-                up = {up.level + 1, parentBrick(up.brick)};
-                if (!stale.insert(up).second) break;
-            }
+    for (const IndexCoord& b : s.dirty)
+        for (BrickKey up{0, b}; up.level < s.levels;) {
+            up = {up.level + 1, parentBrick(up.brick)};
+            if (!stale.insert(up).second) break;
+        }
     selection.refineAlways = &stale;
     const std::vector<SelectedBrick> selected = selectBricks(viewer, selection, s.present);
     ++s.frameNumber;
@@ -1284,7 +1291,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
     std::vector<LodBrick> cut;
     for (const BrickKey& k : s.shown) cut.push_back({k.level, k.brick});
     for (const BrickKey& k : unshown) cut.push_back({k.level, k.brick});
-    s.cut = std::make_shared<const LodCut>(cut);
+    if (cut != s.cut->bricks()) s.cut = std::make_shared<const LodCut>(cut); // its lookup set is rebuilt only when it changes
     // Meshes are kept for the shown bricks only: a brick that left the view is meshed again if it returns.
     for (auto it = s.meshed.begin(); it != s.meshed.end();) {
         const BrickKey key = *it++;
@@ -1292,8 +1299,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
     }
     report.settled = besidesResident &&
                      std::all_of(order.begin(), order.begin() + std::ptrdiff_t(accepted), [&](uint32_t n) { return isResident[n] != 0; });
-    report.residentPerLevel.assign(std::size_t(s.levels) + 1, 0);
-    for (const auto& [key, r] : s.resident) ++report.residentPerLevel[std::size_t(key.level)];
+    report.residentPerLevel = s.residentPerLevel;
     report.residentBytes = s.residentBytes;
     report.meshBytes = s.meshBytes;
     report.bytesRead = std::exchange(s.bytesRead, 0);
@@ -1529,9 +1535,7 @@ uint64_t StreamingScene::lodBricksWritten() const
 uint64_t StreamingScene::dirtyBricks() const
 {
     std::lock_guard<std::mutex> lock(impl_->mutex);
-    uint64_t n = 0;
-    for (const auto& [key, r] : impl_->resident) n += r.dirty;
-    return n;
+    return impl_->dirty.size();
 }
 
 uint64_t StreamingScene::committedEdits(const SceneStore& scene)
