@@ -211,6 +211,7 @@ TEST_CASE("occluder depth: a box is hidden only when it lies in the picture behi
     CHECK(!depth.hides({400, -1, -150}, {500, 1, -140}));  // wholly beyond it
     CHECK(!depth.hides({-1, -1, 5}, {1, 1, 6}));         // behind the eye
     CHECK(!depth.hides({-1, -1, -150}, {1, 1, 6}));      // reaching the eye's plane
+    CHECK(!depth.hides({-1, -1, -150}, {1, 1, -1e-12})); // a hair in front of it: corners far off the picture
     CHECK(!OccluderDepth().hides({-1, -1, -150}, {1, 1, -140}));
     // Where the window's tiles lie: a box behind them shows through it, one as far beside it does not.
     const auto atTile = [&](int c, int r, double distance, double half) {

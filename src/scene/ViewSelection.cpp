@@ -142,7 +142,8 @@ bool OccluderDepth::hides(const std::array<double, 3>& lo, const std::array<doub
     // part within (a view turned since sees the rest drawn coarse, and its next depth refines it).
     if (!(x1 >= -1.0 && x0 <= 1.0 && y1 >= -1.0 && y0 <= 1.0)) return false;
     const Level& base = levels_[0];
-    const auto tile = [](double ndc, int count) { return std::clamp(int(std::floor((ndc + 1.0) * 0.5 * count)), 0, count - 1); };
+    // Clamped before the conversion: a corner just in front of the eye's plane projects far off the picture.
+    const auto tile = [](double ndc, int count) { return std::min(int((std::clamp(ndc, -1.0, 1.0) + 1.0) * 0.5 * count), count - 1); };
     const int c0 = tile(x0, base.columns), c1 = tile(x1, base.columns), r0 = tile(y0, base.rows), r1 = tile(y1, base.rows);
     // The finest level where the outline covers at most 64 tiles.
     std::size_t k = 0;
