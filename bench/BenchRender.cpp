@@ -1,8 +1,9 @@
 // bench render: the renderer on streamed terrains. Per terrain extent (the 4096 one is bench stream's,
-// about 10^10 voxels of bounds): triangles of a complete 1080p view at 1 px of error, the CPU time per
-// frame of a 90 Hz flight for selection, culling and upload recording, upload bytes per frame, GPU time
-// on this machine's Vulkan device, and the time from an r=32 stamp to its chunks uploaded, beside
-// OpenVDB's volumeToMesh of the same bricks in the same run.
+// about 10^10 voxels of bounds): triangles of a complete 1080p view at 1 px of error (with the last
+// frame's depth as occluders, and without), the CPU time per frame of a 90 Hz flight for selection,
+// culling and upload recording, upload bytes per frame, GPU time on this machine's Vulkan device, and
+// the time from an r=32 stamp to its chunks uploaded, beside OpenVDB's volumeToMesh of the same bricks
+// in the same run.
 #include "BenchSuites.h"
 #include "BenchUtil.h"
 
