@@ -30,14 +30,15 @@ VkRenderPass createRenderPass(VkDevice device, VkFormat colourFormat, VkImageLay
     subpass.colorAttachmentCount = 1;
     subpass.pColorAttachments = &colourRef;
     subpass.pDepthStencilAttachment = &depthRef;
-    // Earlier frames' reads of the images (readback, presentation) and their writes (frames in flight
-    // share a depth image) finish before this pass writes them; this pass's writes finish before a
-    // readback copies them.
+    // Earlier frames' reads of the images (readback, presentation, the depth's reduction to tiles) and
+    // their writes (frames in flight share a depth image) finish before this pass writes them; this
+    // pass's writes finish before a readback copies them.
     VkSubpassDependency deps[2]{};
     deps[0].srcSubpass = VK_SUBPASS_EXTERNAL;
     deps[0].dstSubpass = 0;
     deps[0].srcStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT |
-                           VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT;
+                           VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT |
+                           VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT;
     deps[0].dstStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT |
                            VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT;
     deps[0].srcAccessMask = VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
