@@ -534,8 +534,8 @@ void SessionPanels::statsPanel(const SessionWorker& session, const FrameFigures&
         std::string perLevel;
         for (uint64_t n : f.stream.residentPerLevel) perLevel += std::to_string(n) + " ";
         ImGui::TextWrapped("bricks per level: %s", perLevel.empty() ? "-" : perLevel.c_str());
-        ImGui::TextWrapped("shown %llu, pending %llu, hit rate %.0f%%", (unsigned long long)f.bricksShown, (unsigned long long)f.stream.pending,
-                           100.0 * f.stream.hitRate());
+        ImGui::TextWrapped("shown %llu (%llu left coarse behind what was drawn), pending %llu, hit rate %.0f%%", (unsigned long long)f.bricksShown,
+                           (unsigned long long)f.stream.hidden, (unsigned long long)f.stream.pending, 100.0 * f.stream.hitRate());
         const bool nothingShown = f.bricksShown == 0;
         // A brick's error is its level's voxel projected at the brick's nearest point: at level 0 that is
         // the data itself, not a loss (and a brick around the eye would show it as hundreds of pixels).
