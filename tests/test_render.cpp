@@ -272,6 +272,32 @@ TEST_CASE("render: a frame's depth tiles hold the farthest surface drawn in each
         for (int x = 40; x < 100; ++x) cropped.push_back(all[std::size_t(y * width + x)]);
     sameTiles(*renderer.drawnDepth(), occluderDepthOf(cropped, 60, 44, part.camera));
     CHECK(renderer.drawnDepth()->columns() == 8);
+    // Two views of one frame keep their depths (a headset's eyes): the tiles are the first's, and a box is
+    // hidden only where both views hide it.
+    RenderView left = view, right = view;
+    left.keepDepth = right.keepDepth = true;
+    left.viewport = {0, 0, 64, 72};
+    right.viewport = {64, 0, 64, 72};
+    right.camera.eye = {0.0, 0.0, 60.0}; // the slab's face fills this one
+    right.camera.target = {0.0, 0.0, 0.0};
+    renderer.render({left, right});
+    const std::vector<float> pair = target.depth();
+    std::vector<float> leftPixels, rightPixels;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) (x < 64 ? leftPixels : rightPixels).push_back(pair[std::size_t(y * width + x)]);
+    const OccluderDepth leftDepth = occluderDepthOf(leftPixels, 64, 72, left.camera), rightDepth = occluderDepthOf(rightPixels, 64, 72, right.camera);
+    sameTiles(*renderer.drawnDepth(), leftDepth);
+    int boxes = 0, hiddenInBoth = 0;
+    for (double x = -30.0; x <= 70.0; x += 10.0)
+        for (double z : {-20.0, 30.0}) {
+            const std::array<double, 3> lo{x, -4.0, z}, hi{x + 6.0, 4.0, z + 6.0};
+            const bool both = leftDepth.hides(lo, hi) && rightDepth.hides(lo, hi);
+            CHECK(renderer.drawnDepth()->hides(lo, hi) == both);
+            ++boxes;
+            hiddenInBoth += both;
+        }
+    CHECK(hiddenInBoth > 0);
+    CHECK(hiddenInBoth < boxes);
     // A frame with no view keeping its depth leaves the last one.
     const OccluderDepth* kept = renderer.drawnDepth().get();
     renderer.render({view = RenderView{view.camera, &target, {}, false}});

@@ -226,6 +226,14 @@ TEST_CASE("occluder depth: a box is hidden only when it lies in the picture behi
     CHECK(!depth.hides(windowLo, windowHi));
     const auto [besideLo, besideHi] = atTile(20, 6, 300.0, 1.0);
     CHECK(depth.hides(besideLo, besideHi));
+    // Seen also from another view (a headset's other eye): hidden only where each view hides it.
+    OccluderDepth both = depth;
+    both.alsoSeenFrom(OccluderDepth(m, columns, rows, std::vector<float>(wall.size(), 100.0f)));
+    CHECK(both.hides(besideLo, besideHi));
+    CHECK(!both.hides(windowLo, windowHi));
+    OccluderDepth seenPast = depth;
+    seenPast.alsoSeenFrom(OccluderDepth(m, columns, rows, std::vector<float>(wall.size(), std::numeric_limits<float>::infinity())));
+    CHECK(!seenPast.hides(besideLo, besideHi));
     // A large box over many tiles is read through the coarser levels: hidden only where every tile is.
     CHECK(!depth.hides({-150, -80, -400}, {150, 80, -300}));
     CHECK(depth.hides({-150, -100, -400}, {0, 20, -300}));

@@ -60,12 +60,15 @@ bool depthSampleable(const VulkanContext& context)
 }
 
 struct DepthTileReducer::Slot {
-    VkDescriptorSet set = VK_NULL_HANDLE;
-    std::unique_ptr<HostBuffer> tiles;
-    bool recorded = false;
-    Camera camera;
-    std::array<int, 4> viewport{};
-    int columns = 0, rows = 0;
+    struct Reduction {
+        VkDescriptorSet set = VK_NULL_HANDLE;
+        std::unique_ptr<HostBuffer> tiles;
+        Camera camera;
+        std::array<int, 4> viewport{};
+        int columns = 0, rows = 0;
+    };
+    std::vector<Reduction> reductions; // sets allocated as views first ask for them
+    std::size_t recorded = 0;          // of `reductions`, since the last take
 };
 
 DepthTileReducer::DepthTileReducer(const VulkanContext& context, int slots) : context_(context)
@@ -102,21 +105,14 @@ DepthTileReducer::DepthTileReducer(const VulkanContext& context, int slots) : co
         const VkResult made = vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &pipelineInfo, nullptr, &pipeline_);
         vkDestroyShaderModule(device, module, nullptr);
         check(made, "vkCreateComputePipelines");
-        VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, uint32_t(slots)}, {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, uint32_t(slots)}};
+        const uint32_t sets = uint32_t(slots * kMaxKeptViews);
+        VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, sets}, {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, sets}};
         VkDescriptorPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-        poolInfo.maxSets = uint32_t(slots);
+        poolInfo.maxSets = sets;
         poolInfo.poolSizeCount = 2;
         poolInfo.pPoolSizes = sizes;
         check(vkCreateDescriptorPool(device, &poolInfo, nullptr, &pool_), "vkCreateDescriptorPool");
-        for (int i = 0; i < slots; ++i) {
-            auto slot = std::make_unique<Slot>();
-            VkDescriptorSetAllocateInfo alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
-            alloc.descriptorPool = pool_;
-            alloc.descriptorSetCount = 1;
-            alloc.pSetLayouts = &setLayout_;
-            check(vkAllocateDescriptorSets(device, &alloc, &slot->set), "vkAllocateDescriptorSets");
-            slots_.push_back(std::move(slot));
-        }
+        for (int i = 0; i < slots; ++i) slots_.push_back(std::make_unique<Slot>());
     } catch (...) {
         release();
         throw;
@@ -145,7 +141,18 @@ bool DepthTileReducer::record(VkCommandBuffer cmd, std::size_t index, const Rend
     const VkImage image = target.depthImage();
     const VkImageView view = target.depthView();
     if (!image || !view || viewport[2] <= 0 || viewport[3] <= 0) return false;
-    Slot& slot = *slots_.at(index);
+    Slot& frame = *slots_.at(index);
+    if (frame.recorded == frame.reductions.size()) {
+        if (frame.reductions.size() == std::size_t(kMaxKeptViews)) return false;
+        Slot::Reduction added;
+        VkDescriptorSetAllocateInfo alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+        alloc.descriptorPool = pool_;
+        alloc.descriptorSetCount = 1;
+        alloc.pSetLayouts = &setLayout_;
+        check(vkAllocateDescriptorSets(context_.device(), &alloc, &added.set), "vkAllocateDescriptorSets");
+        frame.reductions.push_back(std::move(added));
+    }
+    Slot::Reduction& slot = frame.reductions[frame.recorded];
     slot.columns = (viewport[2] + kDepthTile - 1) / kDepthTile;
     slot.rows = (viewport[3] + kDepthTile - 1) / kDepthTile;
     const VkDeviceSize bytes = VkDeviceSize(slot.columns) * VkDeviceSize(slot.rows) * sizeof(float);
@@ -183,15 +190,21 @@ bool DepthTileReducer::record(VkCommandBuffer cmd, std::size_t index, const Rend
     const RegionConstants region{{viewport[0], viewport[1], viewport[2], viewport[3]}, slot.columns};
     vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof region, &region);
     vkCmdDispatch(cmd, uint32_t(slot.columns), uint32_t(slot.rows), 1);
-    // The tiles to the host; and the next pass (any frame's: targets share depth images) writes the
-    // image only once the shader has read it.
+    // The tiles to the host; the image back in the layout the target leaves it in (a headset's runtime
+    // reads its depth images in that layout), written by a next pass only once the shader has read it.
     VkMemoryBarrier toHost{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
     toHost.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
     toHost.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    VkImageMemoryBarrier back = toRead;
+    back.srcAccessMask = VK_ACCESS_SHADER_READ_BIT;
+    back.dstAccessMask = 0;
+    back.oldLayout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+    back.newLayout = target.depthLayoutAfterPass();
     vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                         VK_PIPELINE_STAGE_HOST_BIT | VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT, 0, 1,
-                         &toHost, 0, nullptr, 0, nullptr);
-    slot.recorded = true;
+                         VK_PIPELINE_STAGE_HOST_BIT | VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT |
+                             VK_PIPELINE_STAGE_TRANSFER_BIT,
+                         0, 1, &toHost, 0, nullptr, 1, &back);
+    ++frame.recorded;
     slot.camera = camera;
     slot.viewport = viewport;
     return true;
@@ -199,13 +212,18 @@ bool DepthTileReducer::record(VkCommandBuffer cmd, std::size_t index, const Rend
 
 std::shared_ptr<const OccluderDepth> DepthTileReducer::take(std::size_t index)
 {
-    Slot& slot = *slots_.at(index);
-    if (!slot.recorded) return nullptr;
-    slot.recorded = false;
-    const auto* least = reinterpret_cast<const float*>(slot.tiles->data());
-    const std::size_t count = std::size_t(slot.columns) * std::size_t(slot.rows);
-    return std::make_shared<const OccluderDepth>(viewProjectionExact(slot.camera, double(slot.viewport[2]) / double(slot.viewport[3])),
-                                                 slot.columns, slot.rows, farthestOf(least, count, slot.camera));
+    Slot& frame = *slots_.at(index);
+    const auto depthOf = [](const Slot::Reduction& r) {
+        const auto* least = reinterpret_cast<const float*>(r.tiles->data());
+        const std::size_t count = std::size_t(r.columns) * std::size_t(r.rows);
+        return OccluderDepth(viewProjectionExact(r.camera, double(r.viewport[2]) / double(r.viewport[3])), r.columns, r.rows,
+                             farthestOf(least, count, r.camera));
+    };
+    if (frame.recorded == 0) return nullptr;
+    OccluderDepth depth = depthOf(frame.reductions[0]);
+    for (std::size_t i = 1; i < frame.recorded; ++i) depth.alsoSeenFrom(depthOf(frame.reductions[i]));
+    frame.recorded = 0;
+    return std::make_shared<const OccluderDepth>(std::move(depth));
 }
 
 } // namespace vdbclay::render

@@ -21,6 +21,8 @@ class VulkanContext;
 
 /// Pixels per side of a tile of the drawn depth.
 constexpr int kDepthTile = 8;
+/// Views of one frame whose depth is kept at most (a headset's eyes, and room to spare).
+constexpr int kMaxKeptViews = 4;
 
 /// Tiles of `tile` x `tile` pixels (the last row and column may be narrower) of a reversed depth image
 /// (OffscreenTarget::depth(): rows top to bottom, 0 where nothing was drawn) that `camera` drew at
@@ -43,11 +45,12 @@ public:
     DepthTileReducer& operator=(const DepthTileReducer&) = delete;
 
     /// Records the reduction of `target`'s depth within `viewport` (x, y, width, height) into `slot`,
-    /// which the device must be done with; `camera` drew the view. Records nothing and returns false
-    /// when the target's depth cannot be sampled.
+    /// which the device must be done with; `camera` drew the view. Up to kMaxKeptViews views a frame.
+    /// Records nothing and returns false when the target's depth cannot be sampled or the frame keeps
+    /// as many views already.
     bool record(VkCommandBuffer cmd, std::size_t slot, const RenderTarget& target, const std::array<int, 4>& viewport, const Camera& camera);
-    /// Once the commands `slot` was recorded into are done: its tiles, or nullptr when it recorded none
-    /// since the last take.
+    /// Once the commands `slot` was recorded into are done: its tiles (those of its first view, seen also
+    /// from the others: OccluderDepth::alsoSeenFrom), or nullptr when it recorded none since the last take.
     std::shared_ptr<const OccluderDepth> take(std::size_t slot);
 
 private:

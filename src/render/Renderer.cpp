@@ -583,7 +583,6 @@ struct Renderer::Impl {
                                                         VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT);
         std::size_t commandsUsed = 0;
         const std::size_t maxDrawsPerCall = std::max<uint32_t>(1, context.properties().limits.maxDrawIndirectCount);
-        bool depthKept = false; // a view's depth recorded for drawnDepth()
         // Views that share a target are drawn in one render pass, which clears the target once.
         std::vector<RenderTarget*> targets;
         for (const auto& v : views) {
@@ -676,11 +675,11 @@ struct Renderer::Impl {
             vkCmdEndRenderPass(cmd);
             target->recordAfterPass(cmd);
             for (const RenderView& v : views)
-                if (v.keepDepth && v.target == target && !depthKept) {
+                if (v.keepDepth && v.target == target) {
                     if (!depthTiles) depthTiles = std::make_unique<DepthTileReducer>(context, kFramesInFlight);
                     std::array<int, 4> vp = v.viewport;
                     if (vp[2] <= 0 || vp[3] <= 0) vp = {0, 0, target->width(), target->height()};
-                    depthKept = depthTiles->record(cmd, current, *target, vp, v.camera);
+                    depthTiles->record(cmd, current, *target, vp, v.camera);
                 }
         }
         if (queries) vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queries, firstQuery + 1);

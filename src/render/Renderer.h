@@ -52,8 +52,8 @@ struct RenderView {
     RenderTarget* target = nullptr; // an OffscreenTarget, a window's swapchain image, a headset's eye
     std::array<int, 4> viewport{0, 0, 0, 0}; // x, y, width, height in pixels; zero size: the whole target
     /// Its depth, reduced to tiles on the device, becomes Renderer::drawnDepth() once the frame is done:
-    /// the next selections' occluders. The first such view of a frame; targets without a sampled depth
-    /// keep none.
+    /// the next selections' occluders. Several such views of a frame (a headset's eyes) hide a brick
+    /// only when each of them does (kMaxKeptViews at most); targets without a sampled depth keep none.
     bool keepDepth = false;
 };
 

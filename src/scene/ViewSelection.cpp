@@ -125,6 +125,12 @@ OccluderDepth::OccluderDepth(const std::array<double, 16>& viewProjection, int c
 
 bool OccluderDepth::hides(const std::array<double, 3>& lo, const std::array<double, 3>& hi) const
 {
+    if (!hidesInThisView(lo, hi)) return false;
+    return std::all_of(alsoFrom_.begin(), alsoFrom_.end(), [&](const OccluderDepth& other) { return other.hides(lo, hi); });
+}
+
+bool OccluderDepth::hidesInThisView(const std::array<double, 3>& lo, const std::array<double, 3>& hi) const
+{
     if (empty()) return false;
     const std::array<double, 16>& m = viewProjection_; // element (row i, column j) at m[4 j + i]
     double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0, nearest = x0;

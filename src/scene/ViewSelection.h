@@ -45,17 +45,23 @@ public:
     /// A tile's farthest distance (column and row within the grid).
     float farthest(int column, int row) const { return levels_[0].farthest[std::size_t(row) * std::size_t(levels_[0].columns) + std::size_t(column)]; }
     /// Whether the box (world units) lies behind the farthest surface drawn over every tile of the
-    /// picture it covers. False for an empty grid, a box wholly beyond the picture and a box reaching the
-    /// eye's plane.
+    /// picture it covers (and of each view it is also seen from). False for an empty grid, a box wholly
+    /// beyond the picture and a box reaching the eye's plane.
     bool hides(const std::array<double, 3>& lo, const std::array<double, 3>& hi) const;
+    /// The same frame's depth drawn from another view (a headset's other eye): from now on a box is
+    /// hidden only when that view hides it too (a brick behind a pillar for one eye may show to the other).
+    void alsoSeenFrom(OccluderDepth other) { alsoFrom_.push_back(std::move(other)); }
 
 private:
+    bool hidesInThisView(const std::array<double, 3>& lo, const std::array<double, 3>& hi) const;
+
     struct Level {
         int columns = 0, rows = 0;
         std::vector<float> farthest;
     };
     std::array<double, 16> viewProjection_{};
     std::vector<Level> levels_; // the tiles, then the farthest of each 2x2 of the level before
+    std::vector<OccluderDepth> alsoFrom_;
 };
 
 struct SelectionOptions {

@@ -167,7 +167,8 @@ private:
         std::array<int, 2> viewport{0, 0};
         const int streamedHeight = std::max(16, int(std::lround(targets.front()->height() * comfort_.detail())));
         const render::Camera head = headCamera(views, world_, &viewport, streamedHeight);
-        figures_.stream = worker_.frame(std::chrono::duration<double>(begun - started_).count(), viewport, head);
+        const std::shared_ptr<const OccluderDepth> drawnDepth = renderer_.drawnDepth();
+        figures_.stream = worker_.frame(std::chrono::duration<double>(begun - started_).count(), viewport, head, drawnDepth.get());
         for (const std::string& failure : worker_.takeFailures()) std::cerr << "vdbclay: " << failure << "\n";
         figures_.meshesWaiting = chunks_.sync(session_.scene(), renderer_).waiting;
         for (const std::string& failure : chunks_.takeMeshFailures()) std::cerr << "vdbclay: " << failure << "\n";
@@ -313,6 +314,7 @@ private:
             render::fitNearPlane(v.camera, lo, hi);
             nearMetres = std::min(nearMetres, v.camera.nearPlane * world_.scale);
             v.target = targets[i];
+            v.keepDepth = true; // both eyes' depths: a brick is left coarse only when both hide it
             eyes_.push_back(v);
         }
         for (auto& v : eyes_) v.camera.nearPlane = nearMetres / world_.scale;

@@ -1,5 +1,6 @@
 #include "vr/XrHeadset.h"
 
+#include "render/DrawnDepth.h"
 #include "render/GpuMemory.h"
 #include "render/OffscreenTarget.h"
 
@@ -99,6 +100,8 @@ struct XrHeadset::Eye : render::RenderTarget {
     // A depth image of its own when depth is not submitted.
     VkImage ownDepth = VK_NULL_HANDLE;
     VkDeviceMemory ownDepthMemory = VK_NULL_HANDLE;
+    std::vector<VkImage> depthImages; // of the depth swapchain, or the own depth image
+    bool depthSampled = false;        // its depth images can be sampled (the renderer keeps their tiles)
     std::map<std::pair<uint32_t, uint32_t>, VkFramebuffer> framebuffers; // (colour, depth) image indices
     uint32_t colourIndex = 0, depthIndex = 0;
     bool acquired = false;
@@ -117,6 +120,16 @@ struct XrHeadset::Eye : render::RenderTarget {
     int width() const override { return w; }
     int height() const override { return h; }
     VkRenderPass renderPass() const override { return pass; }
+    VkImage depthImage() const override
+    {
+        const uint32_t i = depth ? depthIndex : 0;
+        return depthSampled && i < depthImages.size() ? depthImages[i] : VK_NULL_HANDLE;
+    }
+    VkImageView depthView() const override
+    {
+        const uint32_t i = depth ? depthIndex : 0;
+        return depthSampled && i < depthViews.size() ? depthViews[i] : VK_NULL_HANDLE;
+    }
     VkFramebuffer framebuffer() const override
     {
         auto it = framebuffers.find({colourIndex, depth ? depthIndex : 0});
@@ -137,6 +150,7 @@ struct XrHeadset::Eye : render::RenderTarget {
         for (VkImageView v : depthViews) vkDestroyImageView(device, v, nullptr);
         colourViews.clear();
         depthViews.clear();
+        depthImages.clear();
         if (ownDepth) vkDestroyImage(device, ownDepth, nullptr);
         if (ownDepthMemory) vkFreeMemory(device, ownDepthMemory, nullptr);
         ownDepth = VK_NULL_HANDLE;
@@ -356,16 +370,23 @@ void XrHeadset::createSwapchains()
         eyes_.push_back(std::move(eye));
         check(xrCreateSwapchain(session_, &info, &e->colour), "xrCreateSwapchain", instance_);
         for (VkImage image : swapchainImages(e->colour, instance_)) e->colourViews.push_back(render::createImageView(device, image, viewFormat_, VK_IMAGE_ASPECT_COLOR_BIT));
+        // Sampled too where the device can: the renderer reduces each eye's depth to tiles, the next
+        // selection's occluders.
+        e->depthSampled = render::depthSampleable(*vulkan_);
         if (depthSubmitted_) {
-            info.usageFlags = XR_SWAPCHAIN_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
+            info.usageFlags = XR_SWAPCHAIN_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | (e->depthSampled ? XR_SWAPCHAIN_USAGE_SAMPLED_BIT : 0);
             info.format = render::kDepthFormat;
             check(xrCreateSwapchain(session_, &info, &e->depth), "xrCreateSwapchain (depth)", instance_);
-            for (VkImage image : swapchainImages(e->depth, instance_))
+            for (VkImage image : swapchainImages(e->depth, instance_)) {
+                e->depthImages.push_back(image);
                 e->depthViews.push_back(render::createImageView(device, image, render::kDepthFormat, VK_IMAGE_ASPECT_DEPTH_BIT));
+            }
         } else {
             VkImageView view = VK_NULL_HANDLE;
-            render::createImage2D(*vulkan_, e->w, e->h, render::kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT,
-                                  e->ownDepth, e->ownDepthMemory, view);
+            render::createImage2D(*vulkan_, e->w, e->h, render::kDepthFormat,
+                                  VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | (e->depthSampled ? VK_IMAGE_USAGE_SAMPLED_BIT : 0),
+                                  VK_IMAGE_ASPECT_DEPTH_BIT, e->ownDepth, e->ownDepthMemory, view);
+            e->depthImages.push_back(e->ownDepth);
             e->depthViews.push_back(view);
         }
         e->makeFramebuffers();
