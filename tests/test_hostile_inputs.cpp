@@ -128,7 +128,9 @@ TEST_CASE("printable text: control characters and bytes that are not UTF-8 are e
     CHECK_FALSE(isPrintableName("bad\xff"));
     CHECK_FALSE(isPrintableName(std::string(300, 'a')));
     MaterialTable table;
-    CHECK_THROWS_AS(table.define(Material{"evil\x1b[2J"}), std::invalid_argument);
+    Material evil;
+    evil.name = "evil\x1b[2J";
+    CHECK_THROWS_AS(table.define(evil), std::invalid_argument);
     CHECK_THROWS_AS(MaterialTable::fromJson(R"([{"name": "a\u0007", "color": [1, 1, 1, 1], "toughness": 0.5}])"), std::runtime_error);
 }
 
