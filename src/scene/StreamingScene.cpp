@@ -137,7 +137,6 @@ struct StreamingScene::Impl {
     struct Resident {
         uint64_t bytes = 0;
         uint64_t lastUsed = 0;
-        bool dirty = false;
         uint64_t version = 0; // its content: any change
         // Per reach class (the reader's level above this one's) and direction (directionIndex): the
         // content a brick on that side reads (reachOfClass voxels next to it). Changes farther from
@@ -695,7 +694,7 @@ struct StreamingScene::Impl {
     void install(const BrickKey& key, DecodedRegion&& brick, uint64_t bytes, uint64_t bytesReadFromStore, std::unique_lock<std::mutex>& lock)
     {
         const std::vector<BrickKey> clears = std::exchange(pendingClears, {});
-        Resident r{bytes, frameNumber, false, ++versions, {}, nullptr, 0, 0, 0, 0};
+        Resident r{bytes, frameNumber, ++versions, {}, nullptr, 0, 0, 0, 0};
         r.loadVersion = r.version;
         for (auto& c : r.sides) c.fill(r.version);
         resident[key] = std::move(r);
@@ -722,7 +721,7 @@ struct StreamingScene::Impl {
         // however many go: a budget-limited view evicts several a frame).
         std::vector<std::pair<uint64_t, BrickKey>> candidates;
         for (const auto& [key, r] : resident)
-            if (!r.dirty && !wanted.count(key) && !pinned.count(key)) candidates.emplace_back(r.lastUsed, key);
+            if (!(key.level == 0 && dirty.count(key.brick)) && !wanted.count(key) && !pinned.count(key)) candidates.emplace_back(r.lastUsed, key);
         std::sort(candidates.begin(), candidates.end());
         for (const auto& [used, key] : candidates) {
             if (fits()) break;
@@ -973,7 +972,6 @@ struct StreamingScene::Impl {
         present.add(0, b);
         residentBytes = residentBytes - r.bytes + bytes;
         r.bytes = bytes;
-        r.dirty = true;
         dirty.insert(b);
         r.version = ++versions;
         for (int c = 0; c < kReachClasses; ++c) {
@@ -1007,8 +1005,7 @@ struct StreamingScene::Impl {
     SaveBatch saveBatchLocked() const
     {
         SaveBatch batch;
-        for (const IndexCoord& b : dirty) batch.dirty.push_back({0, b});
-        std::sort(batch.dirty.begin(), batch.dirty.end());
+        for (const IndexCoord& b : dirty) batch.dirty.push_back({0, b}); // in order: `dirty` is sorted
         batch.materials = materials;
         batch.mask = mask;
         batch.maskDirty = maskDirty;
@@ -1048,11 +1045,7 @@ struct StreamingScene::Impl {
     /// the mask too unless it changed meanwhile, and the coarse bricks it rewrote go. Lock held.
     uint64_t finishSaveLocked(const SaveBatch& batch, const LodRefresh& lod)
     {
-        for (const BrickKey& key : batch.dirty) {
-            const auto it = resident.find(key);
-            if (it != resident.end()) it->second.dirty = false;
-            dirty.erase(key.brick);
-        }
+        for (const BrickKey& key : batch.dirty) dirty.erase(key.brick);
         if (mask == batch.mask) maskDirty = false;
         lodBricksWritten += lod.bricksWritten();
         forgetCoarseBricks(lod);
