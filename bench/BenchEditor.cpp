@@ -101,8 +101,9 @@ std::pair<double, double> openvdbStampAndRemesh(const StreamingScene& scene, con
         const auto m = scene.meshBrick(key);
         if (!m) continue;
         const uint32_t base = uint32_t(points.size());
-        for (const auto& p : m->mesh.positions) points.emplace_back(float(p[0] / voxel), float(p[1] / voxel), float(p[2] / voxel));
-        for (const auto& t : m->mesh.triangles) triangles.emplace_back(t[0] + base, t[1] + base, t[2] + base);
+        const Mesh mesh = m->mesh.decoded();
+        for (const auto& p : mesh.positions) points.emplace_back(float(p[0] / voxel), float(p[1] / voxel), float(p[2] / voxel));
+        for (const auto& t : mesh.triangles) triangles.emplace_back(t[0] + base, t[1] + base, t[2] + base);
     }
     if (triangles.empty()) return {0.0, 0.0};
     const auto transform = openvdb::math::Transform::createLinearTransform(1.0);

@@ -260,7 +260,7 @@ TerrainFigures measureTerrain(render::VulkanContext& context, int extent, bool q
         if (std::fabs(cx - sx * voxel) > 32 + 48 || std::fabs(cz - sz * voxel) > 32 + 48) continue;
         const auto m = scene.meshBrick(key);
         if (!m) continue;
-        appendMesh(changed, m->mesh);
+        appendMesh(changed, m->mesh.decoded());
     }
     f.openvdbMeshMs = openvdbRemeshMs(changed, voxel);
     return f;

@@ -948,14 +948,14 @@ TEST_CASE("render: a store streamed under a small budget draws what the .vdb dra
 
     // The meshes of the shown bricks before the edit, to count the ones it changes.
     std::map<BrickKey, Mesh> meshesBefore;
-    for (const BrickKey& key : scene.shownBricks()) meshesBefore[key] = scene.meshBrick(key)->mesh;
+    for (const BrickKey& key : scene.shownBricks()) meshesBefore[key] = scene.meshBrick(key)->mesh.decoded();
     const StrokeScript stamp = parseStrokeScript(R"({"ops": [{"mode": "add", "brush": {"shape": "sphere", "radius": 3}, "at": [43, 25, 50]}]})");
     const StreamingScene::EditReport edit = scene.sculpt(stamp);
     REQUIRE(edit.bricksChanged >= 1);
     scene.frame(viewer);
     uint64_t meshesChanged = 0;
     for (const BrickKey& key : scene.shownBricks()) {
-        const Mesh now = scene.meshBrick(key)->mesh;
+        const Mesh now = scene.meshBrick(key)->mesh.decoded();
         const Mesh& was = meshesBefore.at(key);
         meshesChanged += now.positions != was.positions || now.triangles != was.triangles || now.materials != was.materials;
     }

@@ -70,7 +70,7 @@ TriangleSoup shownSculpture(const EditingSession& session, const std::optional<W
     for (const BrickKey& key : scene.shownBricks()) {
         const std::shared_ptr<const StreamingScene::BrickMesh> brick = scene.meshBrick(key);
         if (!brick) continue; // evicted since the frame showed it
-        const Mesh& m = brick->mesh;
+        const Mesh m = brick->mesh.decoded();
         const uint32_t offset = uint32_t(all.positions.size());
         all.positions.insert(all.positions.end(), m.positions.begin(), m.positions.end());
         for (std::size_t t = 0; t < m.triangles.size(); ++t) {

@@ -782,6 +782,11 @@ PackedChunk packChunk(const Mesh& mesh, int level, const VertexShading& shading)
     return p;
 }
 
+PackedChunk packChunk(const QuantizedMesh& mesh, int level, const VertexShading& shading)
+{
+    return packChunk(mesh.decoded(), level, shading);
+}
+
 Renderer::Renderer(VulkanContext& context, const RendererOptions& options)
     : impl_(std::make_unique<Impl>(context, options))
 {

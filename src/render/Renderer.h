@@ -5,6 +5,7 @@
 #pragma once
 
 #include "mesher/Mesh.h"
+#include "mesher/QuantizedMesh.h"
 #include "render/RenderTypes.h"
 #include "vdb_hermite/Materials.h"
 
@@ -76,6 +77,8 @@ struct PackedChunk {
 /// Packs a mesh as Renderer::setChunk draws it. Throws std::invalid_argument for a triangle naming a
 /// vertex the mesh lacks.
 PackedChunk packChunk(const Mesh& mesh, int level = 0, const VertexShading& shading = VertexShading());
+/// The same for a mesh as a scene keeps it (decoded first).
+PackedChunk packChunk(const QuantizedMesh& mesh, int level = 0, const VertexShading& shading = VertexShading());
 
 class Renderer {
 public:

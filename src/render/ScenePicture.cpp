@@ -130,7 +130,7 @@ Picture renderStore(VulkanContext& context, const std::string& path, const Pictu
         // view as `render` of a .vdb frames it), then the view is streamed again from there.
         std::vector<std::array<float, 3>> outline;
         for (const BrickKey& key : scene.shownBricks())
-            if (const auto mesh = scene.meshBrick(key)) appendOutline(mesh->mesh.positions, outline);
+            if (const auto mesh = scene.meshBrick(key)) appendOutline(mesh->mesh.decoded().positions, outline);
         if (!outline.empty()) {
             camera = framingCamera(outline, lo, hi, double(request.width) / double(request.height));
             fitNearPlane(camera, lo, hi);

@@ -472,6 +472,7 @@ struct StreamingScene::Impl {
         auto out = std::make_shared<BrickMesh>();
         const LodBrick brick{key.level, key.brick};
         const Volume& volume = *levelsOf[std::size_t(key.level)];
+        Mesh made;
         if (in.inPieces) {
             out->pieces = remeshPieces(in, levelsOf);
             // Each piece's occlusion (low byte) and blend (the three above) welded along as one value.
@@ -486,7 +487,7 @@ struct StreamingScene::Impl {
                 shadingOf.push_back(&shading[i]);
             }
             std::vector<uint32_t> welded;
-            out->mesh = weldChunks(chunks, shadingOf, &welded);
+            made = weldChunks(chunks, shadingOf, &welded);
             out->occlusion.resize(welded.size());
             out->blend.resize(welded.size());
             for (std::size_t v = 0; v < welded.size(); ++v) {
@@ -494,19 +495,20 @@ struct StreamingScene::Impl {
                 out->blend[v] = welded[v] >> 8;
             }
             const TransitionMesh& transitions = *out->pieces->transitions;
-            appendMesh(out->mesh, transitions.mesh);
+            appendMesh(made, transitions.mesh);
             out->occlusion.insert(out->occlusion.end(), transitions.occlusion.begin(), transitions.occlusion.end());
             out->blend.insert(out->blend.end(), transitions.blend.begin(), transitions.blend.end());
         } else {
             // A brick outside the last frame's cut (asked for directly) is meshed alone at its level.
-            out->mesh = meshLodBrick(levelsOf, in.cut->shows(brick) ? *in.cut : LodCut({brick}), brick, options.meshing);
-            out->occlusion = vertexOcclusion(volume, out->mesh);
-            out->blend = vertexMaterialBlend(volume, out->mesh);
+            made = meshLodBrick(levelsOf, in.cut->shows(brick) ? *in.cut : LodCut({brick}), brick, options.meshing);
+            out->occlusion = vertexOcclusion(volume, made);
+            out->blend = vertexMaterialBlend(volume, made);
         }
-        out->masked = maskedVertices(in.mask, out->mesh, scene.voxelSize());
+        out->masked = maskedVertices(in.mask, made, scene.voxelSize());
+        out->mesh = QuantizedMesh(made, scene.voxelSize() / kMeshLatticePerVoxel);
         out->version = in.version;
         out->content = in.content;
-        out->hash = contentHash(out->mesh);
+        out->hash = out->mesh.contentHash();
         for (uint8_t o : out->occlusion) out->hash = (out->hash ^ o) * 1099511628211ull;
         for (uint8_t m : out->masked) out->hash = (out->hash ^ m) * 1099511628211ull;
         for (uint32_t b : out->blend) out->hash = (out->hash ^ b) * 1099511628211ull;

@@ -7,6 +7,7 @@
 #include "scene/SceneStore.h"
 #include "scene/ViewSelection.h"
 #include "mesher/Mesher.h"
+#include "mesher/QuantizedMesh.h"
 #include "sculpt/StrokeScript.h"
 
 #include <cstdint>
@@ -180,8 +181,11 @@ public:
     /// never writes the store); a mesh the budget cannot hold even so is not kept. Const as a cache is:
     /// what the scene holds changes, not what it shows.
     struct BrickMeshPieces;
+    /// Kept meshes' positions lie on a lattice of this many steps per level-0 voxel, the same for every
+    /// brick and level (no crack opens where bricks meet): within 1/128 voxel of what the mesher made.
+    static constexpr int kMeshLatticePerVoxel = 64;
     struct BrickMesh {
-        Mesh mesh;
+        QuantizedMesh mesh; // positions on the kMeshLatticePerVoxel lattice
         std::vector<uint8_t> occlusion; // per vertex (vertexOcclusion)
         std::vector<uint8_t> masked;    // per vertex, 1 where the mask keeps its voxel; empty: none masked
         std::vector<uint32_t> blend;    // per vertex (vertexMaterialBlend): the material beside its own, and its share
