@@ -1173,7 +1173,9 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
     selection.voxelSize = s.scene.voxelSize();
     selection.levels = s.levels;
     // Under the lock: edits add to `present`.
+    const auto asked = std::chrono::steady_clock::now();
     std::unique_lock<std::mutex> lock(s.mutex);
+    const double lockWaitMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - asked).count();
     // The levels above edited bricks are rebuilt when they are saved: until then the view shows level 0
     // there.
     std::unordered_set<BrickKey, BrickKeyHash> stale;
@@ -1186,6 +1188,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
     const std::vector<SelectedBrick> selected = selectBricks(viewer, selection, s.present);
     ++s.frameNumber;
     FrameReport report;
+    report.lockWaitMs = lockWaitMs;
     report.requested = selected.size();
     report.hidden = uint64_t(std::count_if(selected.begin(), selected.end(), [](const SelectedBrick& b) { return b.hidden; }));
     // What the view needs, coarse first (ancestors stand in while the selection loads), as far as the

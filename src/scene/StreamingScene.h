@@ -63,6 +63,7 @@ struct FrameReport {
     bool settled = false;        // every brick the budget admitted is resident: refined as far as it goes
     uint64_t pending = 0;        // loads still queued or running
     uint64_t damagedBricks = 0;  // bricks the store could not give (damaged records), so far
+    double lockWaitMs = 0.0;     // what the frame waited for the scene's lock (loaders, edits and saves hold it)
 };
 
 class StreamingScene {
