@@ -12,6 +12,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <cstdint>
 #include <random>
 #include <set>
 #include <tuple>
@@ -163,11 +164,14 @@ TEST_CASE("lod mesh: checkerboards of levels 0-1 and 0-3 are closed 2-manifolds"
     }
 }
 
-TEST_CASE("lod mesh: random cuts of random scenes are closed 2-manifolds", "[lod]")
+namespace {
+
+/// Four random cuts of each of the random scenes [first, last] of seed 77 mesh into closed 2-manifolds.
+void checkRandomCuts(uint64_t first, uint64_t last)
 {
     TempDir dir;
-    std::mt19937_64 rng(1234);
-    for (uint64_t index = 0; index < 16; ++index) {
+    std::mt19937_64 rng(1234 + first);
+    for (uint64_t index = first; index <= last; ++index) {
         const RandomScene scene = randomScene(77, index);
         Volume volume(scene.voxelSize);
         runStrokeScript(volume, parseStrokeScript(scene.script));
@@ -180,6 +184,58 @@ TEST_CASE("lod mesh: random cuts of random scenes are closed 2-manifolds", "[lod
             requireClosed(meshCut(levels, shown), volume.voxelSize(), shown, false);
         }
     }
+}
+
+} // namespace
+
+// In halves: under the sanitizers each takes minutes.
+TEST_CASE("lod mesh: random cuts of random scenes 0-7 are closed 2-manifolds", "[lod]") { checkRandomCuts(0, 7); }
+TEST_CASE("lod mesh: random cuts of random scenes 8-15 are closed 2-manifolds", "[lod]") { checkRandomCuts(8, 15); }
+
+TEST_CASE("lod cut: a brick is shown exactly when the cut lists it, near the packed table's reach and beyond it", "[lod]")
+{
+    // The cut answers from a packed table while every brick fits 19 bits a coordinate, else from its set:
+    // both must answer as the list does, for the bricks around each listed one and far ones.
+    constexpr int32_t reach = 1 << 18;
+    std::mt19937 rng(17);
+    for (int trial = 0; trial < 30; ++trial) {
+        const bool beyond = trial % 3 == 2; // one brick past the table's reach: the set answers
+        std::vector<LodBrick> bricks;
+        std::set<std::tuple<int, int32_t, int32_t, int32_t>> listed;
+        const int32_t centres[] = {0, -5, reach - 2, -reach + 1};
+        for (int i = 0; i < 200; ++i) {
+            const int32_t c = centres[rng() % 4];
+            const LodBrick b{int(rng() % 5), {c + int32_t(rng() % 5) - 2, c + int32_t(rng() % 5) - 2, int32_t(rng() % 7) - 3}};
+            bool fits = true;
+            for (const int32_t v : b.brick) fits = fits && v >= -reach && v < reach;
+            if (!fits) continue;
+            if (listed.insert({b.level, b.brick[0], b.brick[1], b.brick[2]}).second) bricks.push_back(b);
+        }
+        if (beyond) {
+            const LodBrick far{1, {reach, 0, -reach - 1}};
+            bricks.push_back(far);
+            listed.insert({far.level, far.brick[0], far.brick[1], far.brick[2]});
+        }
+        bricks.push_back(bricks.front()); // listed twice: still one brick
+        const LodCut cut(bricks);
+        std::size_t shown = 0, asked = 0;
+        for (const LodBrick& b : bricks)
+            for (int level = b.level - 1; level <= b.level + 1; ++level)
+                for (int d = 0; d < 27; ++d) {
+                    const LodBrick q{level, {b.brick[0] + d % 3 - 1, b.brick[1] + (d / 3) % 3 - 1, b.brick[2] + d / 9 - 1}};
+                    const bool expected = listed.count({q.level, q.brick[0], q.brick[1], q.brick[2]}) > 0;
+                    INFO("trial " << trial << ": brick " << q.level << " " << q.brick[0] << "," << q.brick[1] << "," << q.brick[2]);
+                    REQUIRE(cut.shows(q) == expected);
+                    shown += expected;
+                    ++asked;
+                }
+        CHECK(shown > 0);
+        CHECK(shown < asked);
+        for (const LodBrick& far : {LodBrick{63, {0, 0, 0}}, LodBrick{0, {INT32_MIN, 0, 0}}, LodBrick{2, {0, INT32_MAX, 0}}})
+            CHECK_FALSE(cut.shows(far));
+    }
+    CHECK_FALSE(LodCut().shows({0, {0, 0, 0}}));
+    CHECK(LodCut(std::vector<LodBrick>{{3, {reach - 1, reach - 1, -reach}}}).shows({3, {reach - 1, reach - 1, -reach}}));
 }
 
 TEST_CASE("lod cut: the bricks touching a box, looked up around it, are exactly those a pass over the cut finds", "[lod]")

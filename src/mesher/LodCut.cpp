@@ -18,6 +18,26 @@ LodCut::LodCut(const std::vector<LodBrick>& shown) : shown_(shown.begin(), shown
         coarsest_ = std::max(coarsest_, b.level);
     }
     if (shown.empty()) finest_ = 0;
+    std::vector<uint64_t> keys;
+    keys.reserve(shown.size());
+    for (const LodBrick& b : shown) {
+        uint64_t key;
+        if (!pack(b, key)) return; // shown_ alone answers
+        keys.push_back(key);
+    }
+    if (keys.empty()) return;
+    int bits = 1;
+    while ((std::size_t(1) << bits) < 2 * keys.size()) ++bits;
+    slots_.assign(std::size_t(1) << bits, kNoSlot);
+    slotShift_ = 64 - bits;
+    for (const uint64_t key : keys)
+        for (uint64_t i = (key * 0x9E3779B97F4A7C15ull) >> slotShift_;; i = (i + 1) & (slots_.size() - 1)) {
+            if (slots_[i] == key) break; // listed twice
+            if (slots_[i] == kNoSlot) {
+                slots_[i] = key;
+                break;
+            }
+        }
 }
 
 int LodCut::finestHolding(const Point& lo, const Point& hi, int maxLevel) const
@@ -112,7 +132,7 @@ void LodCut::forEachTouching(const Point& lo, const Point& hi, const std::functi
             for (int64_t y = r[1][0]; y <= r[1][1]; ++y)
                 for (int64_t z = r[2][0]; z <= r[2][1]; ++z) {
                     const LodBrick b{level, {int32_t(x), int32_t(y), int32_t(z)}};
-                    if (shown_.count(b)) fn(b);
+                    if (shows(b)) fn(b);
                 }
     }
 }

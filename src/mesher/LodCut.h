@@ -41,7 +41,16 @@ public:
     LodCut() = default;
     explicit LodCut(const std::vector<LodBrick>& shown);
 
-    bool shows(const LodBrick& b) const { return shown_.count(b) > 0; }
+    bool shows(const LodBrick& b) const
+    {
+        if (slots_.empty()) return shown_.count(b) > 0;
+        uint64_t key;
+        if (!pack(b, key)) return false; // every brick of the cut packs
+        for (uint64_t i = (key * 0x9E3779B97F4A7C15ull) >> slotShift_;; i = (i + 1) & (slots_.size() - 1)) {
+            if (slots_[i] == key) return true;
+            if (slots_[i] == kNoSlot) return false;
+        }
+    }
     const std::vector<LodBrick>& bricks() const { return list_; }
     int finestLevel() const { return finest_; }
     int coarsestLevel() const { return coarsest_; }
@@ -85,7 +94,28 @@ public:
 
 private:
     static int64_t brickSpan(int level) { return int64_t(kLodBrickVoxels) << level; }
+    /// A brick as one word (level in 6 bits, each coordinate in 19), where it fits.
+    static bool pack(const LodBrick& b, uint64_t& key)
+    {
+        constexpr int32_t kReach = 1 << 18;
+        if (b.level < 0 || b.level >= 63) return false;
+        key = uint64_t(b.level) << 57;
+        for (int a = 0; a < 3; ++a) {
+            const int32_t c = b.brick[std::size_t(a)];
+            if (c < -kReach || c >= kReach) return false;
+            key |= uint64_t(c + kReach) << (19 * a);
+        }
+        return true;
+    }
+    static constexpr uint64_t kNoSlot = ~uint64_t(0);
+
     std::unordered_set<LodBrick, LodBrickHash> shown_;
+    // The same bricks packed in an open-addressed table (linear probing, at most half full): meshing asks
+    // whether a brick is shown for every transition face and corner, several times per level, and a
+    // node-based set's division and pointer chase made that a tenth of meshing a view. Empty when a
+    // brick of the cut does not pack (then shown_ answers).
+    std::vector<uint64_t> slots_;
+    int slotShift_ = 64;
     std::vector<LodBrick> list_;
     int finest_ = 0, coarsest_ = -1;
 };
