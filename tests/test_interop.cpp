@@ -300,7 +300,10 @@ TEST_CASE("grids that share a name are each picked by their typed name and give 
     LevelSetImportOptions first;
     first.grid = "surface[0]";
     first.iso = 0.5;
-    CHECK(sameContent(importLevelSet(dir.file("dup.vdb"), first), importLevelSet(dir.file("fog.vdb"), LevelSetImportOptions{"surface", 0.5})));
+    LevelSetImportOptions fogSurface;
+    fogSurface.grid = "surface";
+    fogSurface.iso = 0.5;
+    CHECK(sameContent(importLevelSet(dir.file("dup.vdb"), first), importLevelSet(dir.file("fog.vdb"), fogSurface)));
     // The shared name alone is ambiguous: refused, naming both typed names.
     LevelSetImportOptions shared;
     shared.grid = "surface";
@@ -490,7 +493,9 @@ TEST_CASE("export-levelset writes standard grids: a level set with the right sig
 {
     TempDir dir;
     Volume v(0.5);
-    const MaterialId red = v.materials().define(Material{"red"});
+    Material redMaterial;
+    redMaterial.name = "red";
+    const MaterialId red = v.materials().define(redMaterial);
     const double radius = 8.0;
     apply(v, CsgMode::Add, sphere(radius), at({0.0, 0.0, 0.0}), 1);
     apply(v, CsgMode::Paint, box({10.0, 10.0, 10.0}), at({10.0, 0.0, 0.0}), red); // x >= 0 is red

@@ -339,7 +339,7 @@ TEST_CASE("a view leaves bricks hidden behind the last frame's depth coarse, cov
     for (const SelectedBrick& b : selectBricks(view, options, presence)) CHECK(!always.count(b.key));
 }
 
-TEST_CASE("brick presence: children masks, ordered levels and additions equal a presence built afresh", "[streaming]")
+TEST_CASE("brick presence: children and neighbour masks, ordered levels and additions equal a presence built afresh", "[streaming]")
 {
     constexpr int kLevels = 4;
     std::mt19937 rng(20261206);
@@ -361,7 +361,12 @@ TEST_CASE("brick presence: children masks, ordered levels and additions equal a 
                     if (stored[std::size_t(k - 1)].count({2 * b[0] + (c & 1), 2 * b[1] + ((c >> 1) & 1), 2 * b[2] + ((c >> 2) & 1)}))
                         expected = uint8_t(expected | (1u << c));
                 CHECK(int(p.children(k, b)) == int(expected));
+                uint32_t around = 0;
+                for (int d = 0; d < 27; ++d)
+                    if (d != 13 && stored[std::size_t(k)].count({b[0] + d % 3 - 1, b[1] + (d / 3) % 3 - 1, b[2] + d / 9 - 1})) around |= 1u << d;
+                CHECK(p.neighbours(k, b) == around);
             }
+            CHECK(p.neighbours(k, {1000, 0, 0}) == 0u);
         }
     };
     std::vector<std::set<IndexCoord>> stored(kLevels + 1);

@@ -10,7 +10,7 @@ int64_t floorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) 
 
 } // namespace
 
-LodCut::LodCut(const std::vector<LodBrick>& shown) : shown_(shown.begin(), shown.end()), list_(shown)
+LodCut::LodCut(const std::vector<LodBrick>& shown) : list_(shown)
 {
     finest_ = 1 << 30;
     for (const LodBrick& b : shown) {
@@ -22,7 +22,10 @@ LodCut::LodCut(const std::vector<LodBrick>& shown) : shown_(shown.begin(), shown
     keys.reserve(shown.size());
     for (const LodBrick& b : shown) {
         uint64_t key;
-        if (!pack(b, key)) return; // shown_ alone answers
+        if (!pack(b, key)) {
+            shown_.insert(shown.begin(), shown.end()); // it alone answers
+            return;
+        }
         keys.push_back(key);
     }
     if (keys.empty()) return;

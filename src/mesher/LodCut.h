@@ -109,12 +109,12 @@ private:
     }
     static constexpr uint64_t kNoSlot = ~uint64_t(0);
 
-    std::unordered_set<LodBrick, LodBrickHash> shown_;
-    // The same bricks packed in an open-addressed table (linear probing, at most half full): meshing asks
+    // The bricks packed in an open-addressed table (linear probing, at most half full): meshing asks
     // whether a brick is shown for every transition face and corner, several times per level, and a
-    // node-based set's division and pointer chase made that a tenth of meshing a view. Empty when a
-    // brick of the cut does not pack (then shown_ answers).
+    // node-based set's division and pointer chase made that a tenth of meshing a view (and building it,
+    // a tenth of a frame's selection). Empty when a brick of the cut does not pack: then shown_ answers.
     std::vector<uint64_t> slots_;
+    std::unordered_set<LodBrick, LodBrickHash> shown_;
     int slotShift_ = 64;
     std::vector<LodBrick> list_;
     int finest_ = 0, coarsest_ = -1;

@@ -1226,9 +1226,10 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
             s.besides.clear();
             std::unordered_set<BrickKey, BrickKeyHash> listed(needed.begin(), needed.end());
             for (const BrickKey& key : s.besidesOf)
-                for (int d = 0; d < 27; ++d) {
+                for (uint32_t around = s.present.neighbours(key.level, key.brick); around != 0; around &= around - 1) {
+                    const int d = __builtin_ctz(around);
                     const BrickKey n{key.level, {key.brick[0] + d % 3 - 1, key.brick[1] + (d / 3) % 3 - 1, key.brick[2] + d / 9 - 1}};
-                    if (d != 13 && s.present.contains(n.level, n.brick) && listed.insert(n).second) s.besides.push_back(n);
+                    if (listed.insert(n).second) s.besides.push_back(n);
                 }
         }
     } else {

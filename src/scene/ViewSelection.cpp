@@ -169,6 +169,11 @@ BrickPresence::BrickPresence(const std::vector<std::set<IndexCoord>>& stored)
         level.sorted.assign(stored[k].begin(), stored[k].end());
         level.bricks.reserve(stored[k].size());
         for (const IndexCoord& b : stored[k]) level.bricks.emplace(b, Entry{});
+        for (const IndexCoord& b : stored[k]) {
+            Entry& own = level.bricks.at(b);
+            for (int d = 0; d < 27; ++d)
+                if (d != 13 && level.bricks.count({b[0] + d % 3 - 1, b[1] + (d / 3) % 3 - 1, b[2] + d / 9 - 1})) own.neighbours |= 1u << d;
+        }
     }
     for (std::size_t k = 1; k < stored.size(); ++k)
         for (const IndexCoord& b : stored[k - 1]) {
@@ -181,6 +186,25 @@ BrickPresence::BrickPresence(const std::vector<std::set<IndexCoord>>& stored)
 bool BrickPresence::contains(int level, const IndexCoord& brick) const
 {
     return level >= 0 && level < levelCount() && levels_[std::size_t(level)].bricks.count(brick) > 0;
+}
+
+void BrickPresence::linkNeighbours(Level& level, const IndexCoord& brick)
+{
+    Entry& own = level.bricks.at(brick);
+    for (int d = 0; d < 27; ++d) {
+        if (d == 13) continue;
+        const auto n = level.bricks.find({brick[0] + d % 3 - 1, brick[1] + (d / 3) % 3 - 1, brick[2] + d / 9 - 1});
+        if (n == level.bricks.end()) continue;
+        own.neighbours |= 1u << d;
+        n->second.neighbours |= 1u << (26 - d); // seen from there, the offset is the opposite one
+    }
+}
+
+uint32_t BrickPresence::neighbours(int level, const IndexCoord& brick) const
+{
+    if (level < 0 || level >= levelCount()) return 0;
+    const auto it = levels_[std::size_t(level)].bricks.find(brick);
+    return it == levels_[std::size_t(level)].bricks.end() ? 0u : it->second.neighbours;
 }
 
 uint8_t BrickPresence::children(int level, const IndexCoord& brick) const
@@ -215,7 +239,10 @@ bool BrickPresence::add(int level, const IndexCoord& brick)
     };
     Level& own = levels_[std::size_t(level)];
     const bool added = own.bricks.emplace(brick, Entry{}).second;
-    if (added) insertSorted(own.sorted, brick);
+    if (added) {
+        insertSorted(own.sorted, brick);
+        linkNeighbours(own, brick);
+    }
     // Up the ancestors until one was there already (its own ancestors are then there too).
     IndexCoord b = brick;
     for (int k = level; k + 1 < levelCount(); ++k) {
@@ -225,6 +252,7 @@ bool BrickPresence::add(int level, const IndexCoord& brick)
         it->second.children |= uint8_t(1u << ((b[0] & 1) + 2 * (b[1] & 1) + 4 * (b[2] & 1)));
         if (!inserted) break;
         insertSorted(above.sorted, up);
+        linkNeighbours(above, up);
         b = up;
     }
     return added;

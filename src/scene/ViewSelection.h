@@ -105,6 +105,10 @@ public:
     bool contains(int level, const IndexCoord& brick) const;
     /// The children of a brick that exist (bit x + 2y + 4z); 0 when it has none or does not exist.
     uint8_t children(int level, const IndexCoord& brick) const;
+    /// The bricks of its own level around a brick that exist: bit (dx + 1) + 3 (dy + 1) + 9 (dz + 1) for
+    /// the one at offset (dx, dy, dz) in {-1, 0, 1}^3 (bit 13, the brick itself, clear); 0 when it does
+    /// not exist. One lookup where asking contains() of each neighbour takes 26.
+    uint32_t neighbours(int level, const IndexCoord& brick) const;
     /// Adds a brick of `level` and every missing ancestor up to the top level; returns whether it was new.
     bool add(int level, const IndexCoord& brick);
     /// The error a view counts for a brick (lodShownError, world units), where one was set.
@@ -123,12 +127,15 @@ private:
     };
     struct Entry {
         uint8_t children = 0; // bit x + 2y + 4z
+        uint32_t neighbours = 0; // as neighbours() gives them
         float shownError = -1.0f; // world units; negative: none
     };
     struct Level {
         std::vector<IndexCoord> sorted;
         std::unordered_map<IndexCoord, Entry, CoordHash> bricks;
     };
+    /// Enters a brick new to `level` in its neighbours' masks and theirs in its own.
+    void linkNeighbours(Level& level, const IndexCoord& brick);
     std::vector<Level> levels_;
 };
 
