@@ -183,7 +183,8 @@ public:
     /// what the scene holds changes, not what it shows.
     struct BrickMeshPieces;
     /// Kept meshes' positions lie on a lattice of this many steps per level-0 voxel, the same for every
-    /// brick and level (no crack opens where bricks meet): within 1/128 voxel of what the mesher made.
+    /// brick and level (a position two bricks compute alike decodes alike in both): within 1/128 voxel
+    /// of what the mesher made.
     static constexpr int kMeshLatticePerVoxel = 64;
     struct BrickMesh {
         QuantizedMesh mesh; // positions on the kMeshLatticePerVoxel lattice
