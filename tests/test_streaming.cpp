@@ -363,7 +363,7 @@ TEST_CASE("brick presence: children and neighbour masks, ordered levels and addi
                 CHECK(int(p.children(k, b)) == int(expected));
                 uint32_t around = 0;
                 for (int d = 0; d < 27; ++d)
-                    if (d != 13 && stored[std::size_t(k)].count({b[0] + d % 3 - 1, b[1] + (d / 3) % 3 - 1, b[2] + d / 9 - 1})) around |= 1u << d;
+                    if (d != 13 && stored[std::size_t(k)].count(neighbourBrick(b, d))) around |= 1u << d;
                 CHECK(p.neighbours(k, b) == around);
             }
             CHECK(p.neighbours(k, {1000, 0, 0}) == 0u);

@@ -24,14 +24,13 @@ template <typename T> uint64_t capacityBytes(const std::vector<T>& v) { return v
 
 } // namespace
 
-QuantizedMesh::QuantizedMesh(const Mesh& mesh, double step)
-    : step_(step), vertexCount_(mesh.positions.size()), triangleCount_(mesh.triangles.size())
+QuantizedMesh::QuantizedMesh(const Mesh& mesh, double step) : step_(step)
 {
     if (!(step > 0.0) || !std::isfinite(step)) throw std::invalid_argument("QuantizedMesh: the lattice step must be positive");
-    const std::size_t n = vertexCount_;
+    const std::size_t n = mesh.positions.size(), triangles = mesh.triangles.size();
     if (!mesh.normals.empty() && mesh.normals.size() != n) throw std::invalid_argument("QuantizedMesh: one normal per vertex");
     if (!mesh.materials.empty() && mesh.materials.size() != n) throw std::invalid_argument("QuantizedMesh: one material per vertex");
-    if (!mesh.triangleMaterials.empty() && mesh.triangleMaterials.size() != triangleCount_)
+    if (!mesh.triangleMaterials.empty() && mesh.triangleMaterials.size() != triangles)
         throw std::invalid_argument("QuantizedMesh: one material per triangle");
 
     // Lattice coordinates of every position; the lattice is the world's, so a shared position rounds alike.
@@ -64,8 +63,8 @@ QuantizedMesh::QuantizedMesh(const Mesh& mesh, double step)
     materials_ = mesh.materials;
 
     const bool narrow = n <= std::size_t(std::numeric_limits<uint16_t>::max()) + 1;
-    if (narrow) narrowCorners_.reserve(triangleCount_ * 3);
-    else wideCorners_.reserve(triangleCount_ * 3);
+    if (narrow) narrowCorners_.reserve(triangles * 3);
+    else wideCorners_.reserve(triangles * 3);
     for (const auto& t : mesh.triangles)
         for (const uint32_t corner : t) {
             if (corner >= n)
@@ -98,13 +97,13 @@ std::array<uint32_t, 3> QuantizedMesh::triangle(std::size_t t) const
 Mesh QuantizedMesh::decoded() const
 {
     Mesh m;
-    m.positions.resize(vertexCount_);
-    for (std::size_t v = 0; v < vertexCount_; ++v) m.positions[v] = position(v);
+    m.positions.resize(vertexCount());
+    for (std::size_t v = 0; v < m.positions.size(); ++v) m.positions[v] = position(v);
     m.normals.resize(normals_.size());
     for (std::size_t v = 0; v < normals_.size(); ++v) m.normals[v] = normal(v);
     m.materials = materials_;
-    m.triangles.resize(triangleCount_);
-    for (std::size_t t = 0; t < triangleCount_; ++t) m.triangles[t] = triangle(t);
+    m.triangles.resize(triangleCount());
+    for (std::size_t t = 0; t < m.triangles.size(); ++t) m.triangles[t] = triangle(t);
     m.triangleMaterials = triangleMaterials_;
     return m;
 }
@@ -132,8 +131,7 @@ uint64_t QuantizedMesh::contentHash() const
 
 bool QuantizedMesh::operator==(const QuantizedMesh& o) const
 {
-    return step_ == o.step_ && base_ == o.base_ && vertexCount_ == o.vertexCount_ && triangleCount_ == o.triangleCount_ &&
-           narrowPositions_ == o.narrowPositions_ && widePositions_ == o.widePositions_ && normals_ == o.normals_ &&
+    return step_ == o.step_ && base_ == o.base_ && narrowPositions_ == o.narrowPositions_ && widePositions_ == o.widePositions_ && normals_ == o.normals_ &&
            materials_ == o.materials_ && narrowCorners_ == o.narrowCorners_ && wideCorners_ == o.wideCorners_ &&
            triangleMaterials_ == o.triangleMaterials_;
 }

@@ -20,8 +20,8 @@ public:
     /// must name vertices of the mesh (std::invalid_argument otherwise).
     QuantizedMesh(const Mesh& mesh, double step);
 
-    std::size_t vertexCount() const { return vertexCount_; }
-    std::size_t triangleCount() const { return triangleCount_; }
+    std::size_t vertexCount() const { return (narrowPositions_.size() + widePositions_.size()) / 3; }
+    std::size_t triangleCount() const { return (narrowCorners_.size() + wideCorners_.size()) / 3; }
     bool hasNormals() const { return !normals_.empty(); }
     bool hasMaterials() const { return !materials_.empty(); }
     double step() const { return step_; }
@@ -48,7 +48,6 @@ public:
 private:
     double step_ = 1.0;
     std::array<int64_t, 3> base_{0, 0, 0}; // the lowest lattice corner, in steps
-    std::size_t vertexCount_ = 0, triangleCount_ = 0;
     // Positions in steps above base_, x y z per vertex: 16 bits when the mesh spans fewer than 2^16 steps.
     std::vector<uint16_t> narrowPositions_;
     std::vector<uint32_t> widePositions_;

@@ -679,7 +679,7 @@ struct StreamingScene::Impl {
         const uint64_t stamp = ++versions;
         for (int d = 0; d < 27; ++d) {
             if (d == 13) continue;
-            const IndexCoord beside{key.brick[0] + d % 3 - 1, key.brick[1] + (d / 3) % 3 - 1, key.brick[2] + d / 9 - 1};
+            const IndexCoord beside = neighbourBrick(key.brick, d);
             const auto it = resident.find({key.level, beside});
             if (it != resident.end()) it->second.besideMoved = stamp;
         }
@@ -1228,7 +1228,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
             for (const BrickKey& key : s.besidesOf)
                 for (uint32_t around = s.present.neighbours(key.level, key.brick); around != 0; around &= around - 1) {
                     const int d = __builtin_ctz(around);
-                    const BrickKey n{key.level, {key.brick[0] + d % 3 - 1, key.brick[1] + (d / 3) % 3 - 1, key.brick[2] + d / 9 - 1}};
+                    const BrickKey n{key.level, neighbourBrick(key.brick, d)};
                     if (listed.insert(n).second) s.besides.push_back(n);
                 }
         }

@@ -168,11 +168,9 @@ BrickPresence::BrickPresence(const std::vector<std::set<IndexCoord>>& stored)
         Level& level = levels_[k];
         level.sorted.assign(stored[k].begin(), stored[k].end());
         level.bricks.reserve(stored[k].size());
-        for (const IndexCoord& b : stored[k]) level.bricks.emplace(b, Entry{});
         for (const IndexCoord& b : stored[k]) {
-            Entry& own = level.bricks.at(b);
-            for (int d = 0; d < 27; ++d)
-                if (d != 13 && level.bricks.count({b[0] + d % 3 - 1, b[1] + (d / 3) % 3 - 1, b[2] + d / 9 - 1})) own.neighbours |= 1u << d;
+            level.bricks.emplace(b, Entry{});
+            linkNeighbours(level, b);
         }
     }
     for (std::size_t k = 1; k < stored.size(); ++k)
@@ -193,7 +191,7 @@ void BrickPresence::linkNeighbours(Level& level, const IndexCoord& brick)
     Entry& own = level.bricks.at(brick);
     for (int d = 0; d < 27; ++d) {
         if (d == 13) continue;
-        const auto n = level.bricks.find({brick[0] + d % 3 - 1, brick[1] + (d / 3) % 3 - 1, brick[2] + d / 9 - 1});
+        const auto n = level.bricks.find(neighbourBrick(brick, d));
         if (n == level.bricks.end()) continue;
         own.neighbours |= 1u << d;
         n->second.neighbours |= 1u << (26 - d); // seen from there, the offset is the opposite one

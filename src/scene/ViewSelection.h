@@ -93,6 +93,13 @@ struct SelectedBrick {
 /// per brick the mask of its children one level down (bit x + 2y + 4z of the child's place in it), so a
 /// brick is split with one lookup. Bricks are only ever added: an edit makes a new level-0 brick, an LOD
 /// update the coarse bricks above it.
+/// The brick at offset (d % 3 - 1, d / 3 % 3 - 1, d / 9 - 1) from `brick`, d in [0, 27): the order of
+/// BrickPresence::neighbours' bits.
+inline IndexCoord neighbourBrick(const IndexCoord& brick, int d)
+{
+    return {brick[0] + d % 3 - 1, brick[1] + (d / 3) % 3 - 1, brick[2] + d / 9 - 1};
+}
+
 class BrickPresence {
 public:
     BrickPresence() = default;
