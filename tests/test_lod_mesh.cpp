@@ -3,6 +3,7 @@
 // §5: no cracks, no skirts, no patching), and a cut of level 0 alone meshes exactly as the whole volume.
 #include "mesher/LodMesh.h"
 #include "mesher/MeshMetrics.h"
+#include "mesher/MeshQuality.h"
 #include "scene/SceneStore.h"
 #include "scene/StoreLod.h"
 #include "sculpt/StrokeScript.h"
@@ -12,6 +13,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <cstdint>
 #include <random>
 #include <set>
@@ -276,4 +278,58 @@ TEST_CASE("lod cut: the bricks touching a box, looked up around it, are exactly 
             CHECK(found == expected);
         }
     }
+}
+
+TEST_CASE("lod mesh: coarse levels keep rippled cells whole within the plane tolerance: fewer triangles, the same surface within it, closed beside level 0", "[lod][plane]")
+{
+    // A coarse level's 8-bit densities leave ripples a fraction of a voxel high on smooth surfaces,
+    // whose normals tilt past the subdivision angle: with the plane tolerance (half a voxel of the
+    // level) their cells stay whole where the crossings lie that close to one plane.
+    TempDir dir;
+    const Volume volume = wideScene();
+    const Levels levels = levelsOf(volume, 2, dir);
+    const auto atLevel = [&](int level) { return cutOf(levels, [&](const LodBrick& b) { return b.level > level; }); };
+    const auto meshWith = [&](const std::vector<LodBrick>& shown, double tolerance) {
+        MeshOptions o = cms();
+        o.coarseLevelPlaneTolerance = tolerance;
+        const LodCut cut(shown);
+        Mesh all;
+        for (const LodBrick& b : shown) appendMesh(all, meshLodBrick(levels.pointers(), cut, b, o));
+        return all;
+    };
+    for (int level = 1; level <= 2; ++level) {
+        const std::vector<LodBrick> shown = atLevel(level);
+        const Mesh exact = meshWith(shown, 0.0), merged = meshWith(shown, 0.5);
+        INFO("level " << level << ": " << exact.triangleCount() << " triangles by the normals alone, " << merged.triangleCount()
+                      << " with the plane tolerance");
+        requireClosed(merged, volume.voxelSize(), shown);
+        CHECK(merged.triangleCount() * 10 < exact.triangleCount() * 9);
+        // Both meshes read the same crossings: they part by at most the tolerance, half a voxel of the
+        // level, and what a wider cell's polygon spans of a surface curving under it.
+        const double voxel = volume.voxelSize() * double(1 << level);
+        const MeshQuality q = measureAgainstMesh(merged, exact, SurfaceSampling{0.5 * voxel});
+        INFO("two-sided distance " << q.maxDistance / voxel << " voxels of the level, mean " << q.meanDistance / voxel);
+        CHECK(q.maxDistance < 1.0 * voxel);
+        CHECK(q.meanDistance < 0.15 * voxel);
+    }
+    // Beside level 0 (the transition cells stay voxel cells): closed.
+    for (int parity = 0; parity < 2; ++parity) {
+        const auto shown = cutOf(levels, [&](const LodBrick& b) { return b.level > 1 || ((b.brick[0] + b.brick[1] + b.brick[2]) & 1) == parity; });
+        requireClosed(meshWith(shown, 0.5), volume.voxelSize(), shown);
+    }
+}
+
+TEST_CASE("mesh options: plane tolerances outside 0 .. 8 voxels are refused", "[lod][plane]")
+{
+    for (const double bad : {-0.1, 8.5, std::nan("")}) {
+        MeshOptions o = cms();
+        o.planeTolerance = bad;
+        CHECK_THROWS_AS(validateMeshOptions(o), std::invalid_argument);
+        o = cms();
+        o.coarseLevelPlaneTolerance = bad;
+        CHECK_THROWS_AS(validateMeshOptions(o), std::invalid_argument);
+    }
+    MeshOptions o = cms();
+    o.planeTolerance = 8.0;
+    CHECK_NOTHROW(validateMeshOptions(o));
 }

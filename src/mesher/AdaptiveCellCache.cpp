@@ -40,6 +40,7 @@ void subdivideLeaves(const HermiteTree& tree, const std::vector<const HermiteLea
                 criteria.maxCellSize = std::min(criteria.maxCellSize, options.leafMaxCellWidth({o.x(), o.y(), o.z()}));
             }
             criteria.cosHalfSpread = cosHalfSpread;
+            criteria.planeTolerance = options.planeTolerance;
             store(i, subdivideLeaf(read.grid, read.hood, criteria));
         }
     });

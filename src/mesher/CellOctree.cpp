@@ -297,6 +297,38 @@ public:
         return true;
     }
 
+    /// Whether the crossings of the cell of `width` at leaf-local `b` lie within `tolerance` voxels of
+    /// the plane through their centroid across `normalSum` (their normals' sum), with every normal
+    /// within a right angle of it.
+    bool liesNearPlane(const int b[3], int width, const double normalSum[3], double tolerance) const
+    {
+        const double length = std::sqrt(normalSum[0] * normalSum[0] + normalSum[1] * normalSum[1] + normalSum[2] * normalSum[2]);
+        if (length == 0.0) return false;
+        const double n[3] = {normalSum[0] / length, normalSum[1] / length, normalSum[2] / length};
+        // A voxel edge lies in the cell when it starts inside the cell along its axis and lies within
+        // the cell's closed box across it.
+        const auto inCell = [&](const Crossing& x) {
+            for (int a = 0; a < 3; ++a) {
+                const int t = x.at[a];
+                if (t < b[a] || t > b[a] + width || (a == x.axis && t == b[a] + width)) return false;
+            }
+            return true;
+        };
+        double centre = 0.0;
+        int count = 0;
+        for (const Crossing* x = crossings_; x != crossings_ + crossingCount_; ++x) {
+            if (!inCell(*x)) continue;
+            if (x->normal[0] * n[0] + x->normal[1] * n[1] + x->normal[2] * n[2] <= 0.0) return false;
+            centre += heightOf(*x, n);
+            ++count;
+        }
+        if (count == 0) return false;
+        centre /= count;
+        for (const Crossing* x = crossings_; x != crossings_ + crossingCount_; ++x)
+            if (inCell(*x) && std::fabs(heightOf(*x, n) - centre) > tolerance) return false;
+        return true;
+    }
+
 private:
     struct Crossing {
         float normal[3];
@@ -306,6 +338,14 @@ private:
         uint8_t cells[4]; // the two-voxel cells holding the voxel edge
         uint8_t cellCount;
     };
+
+    /// A crossing's position along `n`.
+    static double heightOf(const Crossing& x, const double n[3])
+    {
+        double h = x.offset * n[x.axis];
+        for (int a = 0; a < 3; ++a) h += double(x.at[a]) * n[a];
+        return h;
+    }
 
     /// Transposes a 9 x 9 bit matrix: row(r) gives bit c of row r, put(c, bits) takes bit r of column c.
     template<typename Row, typename Put>
@@ -411,7 +451,8 @@ LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, c
                         }
                     }
                     if (cone.cosSpread >= criteria.cosHalfSpread ||
-                        (level == 1 && lattice.holdsOneSharpEdge(x, y, z, criteria.cosHalfSpread)))
+                        (level == 1 && lattice.holdsOneSharpEdge(x, y, z, criteria.cosHalfSpread)) ||
+                        (criteria.planeTolerance > 0.0 && lattice.liesNearPlane(b, width, cone.sum, criteria.planeTolerance)))
                         whole[level] |= uint64_t(1) << bit;
                 }
         if (!whole[level]) break;

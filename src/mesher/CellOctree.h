@@ -13,6 +13,8 @@ struct SubdivisionCriteria {
     int maxCellSize = 8;        // 1, 2, 4 or 8 voxels
     double cosHalfSpread = 1.0; // a cell splits when a crossing normal lies further than half the
                                 // spread angle from the cell's mean normal
+    double planeTolerance = 0.0; // voxels; > 0: a cell whose normals spread wider stays whole when
+                                 // its crossings lie this close to one plane (see subdivideLeaf)
 };
 
 /// The cells of one leaf, aligned to their width. A cell wider than a voxel covers whole two-voxel
@@ -36,7 +38,10 @@ struct LeafCellSizes {
 ///  - its crossings' normals lie within half the criteria's angle of their mean (bounded from its
 ///    children's cones above two voxels, so a cell may split where an exact test would not), or, for
 ///    a two-voxel cell, they form two such groups whose planes meet in a line through the cell: one
-///    straight sharp edge, which the cell's vertex reproduces.
+///    straight sharp edge, which the cell's vertex reproduces; or, with a plane tolerance, its
+///    crossings lie within that distance of the plane through their centroid across their mean
+///    normal and their normals within a right angle of it (a height field over that plane: ripples
+///    that tilt the normals without moving the surface, as coarse levels of detail carry).
 LeafCellSizes subdivideLeaf(const CornerGrid& grid, const Neighbourhood& hood, const SubdivisionCriteria& criteria);
 
 /// The cell widths around one leaf: its own cells and those of its six face neighbours, which is

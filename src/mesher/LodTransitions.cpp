@@ -363,6 +363,7 @@ std::vector<MeshChunk> meshLodBrickChunks(const std::vector<const Volume*>& leve
     o.lodCut = &cut;
     o.lodLevel = level;
     o.lodBrickMin = brickMin(brick);
+    if (level > 0) o.planeTolerance = std::max(o.planeTolerance, options.coarseLevelPlaneTolerance);
     const int widest = options.maxCellWidth;
     o.leafMaxCellWidth = [&cut, level, widest](const std::array<int32_t, 3>& origin) { return cut.leafMaxCellWidth(level, origin, widest); };
     return meshRegionChunks(*levels[std::size_t(level)], o.lodBrickMin, kLodBrickVoxels, o, onlyLeaves);

@@ -30,6 +30,14 @@ struct MeshOptions {
     int maxCellWidth = 8;
     /// CMS: a cell wider than one voxel is split while its crossings' normals span more than this angle.
     double subdivisionAngleDegrees = 15.0;
+    /// CMS, voxels: a cell wider than one voxel whose normals spread wider than that angle still stays
+    /// whole when its crossings lie within this distance of one plane and its normals within a right
+    /// angle of that plane's (a height field over it). 0: the normals alone decide.
+    double planeTolerance = 0.0;
+    /// CMS, voxels of the level: the plane tolerance meshLodBrick uses for levels above 0. Their
+    /// densities are resampled to 8 bits, which leaves ripples a fraction of a voxel high whose
+    /// normals tilt by tens of degrees: under the normals alone their cells hardly ever merge.
+    double coarseLevelPlaneTolerance = 0.5;
     /// CMS, optional: a cap on the cell width per leaf (given its origin; rounded down to 1, 2, 4 or 8),
     /// for meshing regions at different depths; the mesh stays watertight across them.
     /// Called from several threads at once, so it must be thread-safe.
