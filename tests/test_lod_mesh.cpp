@@ -6,6 +6,8 @@
 #include "mesher/MeshQuality.h"
 #include "scene/SceneStore.h"
 #include "scene/StoreLod.h"
+#include "scene/StreamingScene.h"
+#include "scene/Synthesize.h"
 #include "sculpt/StrokeScript.h"
 #include "selftest/RandomScene.h"
 #include "support/Sculpt.h"
@@ -316,6 +318,50 @@ TEST_CASE("lod mesh: coarse levels keep rippled cells whole within the plane tol
     for (int parity = 0; parity < 2; ++parity) {
         const auto shown = cutOf(levels, [&](const LodBrick& b) { return b.level > 1 || ((b.brick[0] + b.brick[1] + b.brick[2]) & 1) == parity; });
         requireClosed(meshWith(shown, 0.5), volume.voxelSize(), shown);
+    }
+}
+
+TEST_CASE("lod mesh: a terrain meshed as a streaming scene meshes it (a quarter voxel's plane tolerance at level 0, half a voxel above) takes fewer triangles for the same surface", "[lod][plane]")
+{
+    // Noise-displaced ground with tunnels: its curved stretches make cells split at 15 degrees although
+    // their crossings lie within a fraction of a voxel of one plane.
+    TempDir dir;
+    SynthOptions synth;
+    synth.kind = SynthKind::Terrain;
+    synth.extent = 128;
+    synth.seed = 5;
+    const std::string path = dir.file("terrain.vdbclay");
+    synthesizeStore(synth, path);
+    SceneStore store = SceneStore::open(path, StoreAccess::ReadWrite);
+    buildStoreLod(store, 1);
+    const Volume level0 = store.loadLevel(0), level1 = store.loadLevel(1);
+    const std::vector<const Volume*> volumes{&level0, &level1};
+    const StreamingOptions streaming;
+    REQUIRE(streaming.meshing.planeTolerance == 0.25);
+    REQUIRE(streaming.meshing.coarseLevelPlaneTolerance == 0.5);
+    for (int level = 0; level <= 1; ++level) {
+        std::vector<LodBrick> shown;
+        store.bricks().scan(level, [&](const BrickKey& key, const BrickSummary&) { shown.push_back({level, key.brick}); });
+        REQUIRE(!shown.empty());
+        const LodCut cut(shown);
+        const auto meshWith = [&](const MeshOptions& o) {
+            Mesh all;
+            for (const LodBrick& b : shown) appendMesh(all, meshLodBrick(volumes, cut, b, o));
+            return all;
+        };
+        MeshOptions plain = streaming.meshing;
+        plain.planeTolerance = plain.coarseLevelPlaneTolerance = 0.0;
+        const Mesh exact = meshWith(plain), merged = meshWith(streaming.meshing);
+        INFO("level " << level << ": " << exact.triangleCount() << " triangles by the normals alone, " << merged.triangleCount()
+                      << " with the plane tolerance");
+        requireClosed(merged, level0.voxelSize(), shown);
+        CHECK(merged.triangleCount() * 10 < exact.triangleCount() * 8);
+        const double voxel = level0.voxelSize() * double(1 << level);
+        const double tolerance = level == 0 ? streaming.meshing.planeTolerance : streaming.meshing.coarseLevelPlaneTolerance;
+        const MeshQuality q = measureAgainstMesh(merged, exact, SurfaceSampling{0.5 * voxel});
+        INFO("two-sided distance " << q.maxDistance / voxel << " voxels of the level, mean " << q.meanDistance / voxel);
+        CHECK(q.maxDistance < 2.0 * tolerance * voxel);
+        CHECK(q.meanDistance < 0.25 * tolerance * voxel);
     }
 }
 

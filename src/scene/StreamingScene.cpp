@@ -249,7 +249,7 @@ struct StreamingScene::Impl {
         for (int k = 1; k <= levels; ++k) {
             const double voxel = scene.voxelSize() * double(1 << k);
             scene.bricks().scanLodErrors(k, [&](const IndexCoord& b, double error) {
-                if (present.contains(k, b)) present.setShownError(k, b, lodShownError(error, voxel));
+                if (present.contains(k, b)) present.setShownError(k, b, lodShownError(error, voxel, options.meshing.coarseLevelPlaneTolerance));
             });
         }
         if (options.memoryBudgetBytes < largest)
@@ -1078,7 +1078,7 @@ struct StreamingScene::Impl {
     {
         for (const auto& [key, error] : lod.errors) {
             present.add(key.level, key.brick);
-            present.setShownError(key.level, key.brick, error ? std::optional<double>(lodShownError(*error, scene.voxelSize() * double(1 << key.level))) : std::nullopt);
+            present.setShownError(key.level, key.brick, error ? std::optional<double>(lodShownError(*error, scene.voxelSize() * double(1 << key.level), options.meshing.coarseLevelPlaneTolerance)) : std::nullopt);
         }
         for (std::size_t i = 0; i < lod.changedBricks.size(); ++i)
             for (const IndexCoord& b : lod.changedBricks[i]) {

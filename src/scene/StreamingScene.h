@@ -36,10 +36,13 @@ struct StreamingOptions {
     double pixelTolerance = 1.0;
     int loaderThreads = 2;
     StoreAccess access = StoreAccess::ReadOnly; // ReadWrite to edit and autosave
-    /// How meshBrick() meshes the shown bricks (CMS, adaptive by default).
+    /// How meshBrick() meshes the shown bricks: adaptive CMS whose cells also stay whole where their
+    /// crossings lie within a quarter voxel of a plane (what cells split at 15 degrees already cut off a
+    /// curved surface: no coarser, and far fewer triangles on a terrain), half a voxel on coarse levels.
     MeshOptions meshing = [] {
         MeshOptions o;
         o.kind = MesherKind::CubicalMarchingSquares;
+        o.planeTolerance = 0.25;
         return o;
     }();
 };

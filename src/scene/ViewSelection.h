@@ -77,10 +77,11 @@ struct SelectionOptions {
 };
 
 /// The error a view counts for a brick whose level has voxels of size `voxel`, in world units: its data
-/// error (StoreLod.h) plus a quarter voxel, what adaptive CMS cells may cut off a smooth surface (cells up
-/// to 8 voxels wide, split at a 15-degree normal spread, leave a sagitta of about 0.26 voxel), and never
-/// more than the voxel itself: the bound a brick without a data error is shown by.
-double lodShownError(std::optional<double> dataError, double voxel);
+/// error (StoreLod.h) plus what its mesh's cells may cut off the surface, and never more than the voxel
+/// itself: the bound a brick without a data error is shown by. The cells' share is the larger of a
+/// quarter voxel (adaptive CMS cells up to 8 voxels wide, split at a 15-degree normal spread, leave a
+/// sagitta of about 0.26 voxel) and `planeTolerance` (MeshOptions::coarseLevelPlaneTolerance), voxels.
+double lodShownError(std::optional<double> dataError, double voxel, double planeTolerance);
 
 struct SelectedBrick {
     BrickKey key;
