@@ -116,6 +116,7 @@ struct MeshCommandOptions {
     std::string mesher = "cms";
     std::optional<double> angleDegrees;            // CMS only; MeshOptions' default when absent
     std::optional<double> subdivisionAngleDegrees; // adaptive CMS only
+    std::optional<double> planeTolerance;          // adaptive CMS only, voxels
     bool uniform = false;
     std::optional<int> lod;
     bool json = false;

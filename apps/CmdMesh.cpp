@@ -39,6 +39,11 @@ CLI::App* addMeshCommand(CLI::App& parent, MeshCommandOptions& o)
                     "Adaptive CMS: a cell wider than one voxel is split while its normals span more than this "
                     "angle (default " + formatNumber(defaults.subdivisionAngleDegrees) + ")")
         ->type_name("DEG");
+    cmd->add_option("--plane-tolerance", o.planeTolerance,
+                    "Adaptive CMS: a cell whose normals span wider still stays whole where its crossings lie within "
+                    "this many voxels of one plane (default 0: the angle alone decides; streaming scenes use 0.25, "
+                    "coarse levels 0.5)")
+        ->type_name("VOXELS");
     cmd->add_flag("--uniform", o.uniform,
                   "CMS: mesh every voxel cell instead of adaptive cells (up to 8 voxels wide on flat surface)");
     cmd->add_option("--lod", o.lod,
@@ -70,11 +75,13 @@ int runMesh(const MeshCommandOptions& o)
     }
     const bool cms = options.kind == MesherKind::CubicalMarchingSquares;
     // Options that would have no effect are refused rather than silently ignored.
-    if (!cms && (o.angleDegrees || o.subdivisionAngleDegrees || o.uniform))
-        throw UsageError("--angle, --adapt-angle and --uniform apply to --mesher cms only");
-    if (o.uniform && o.subdivisionAngleDegrees) throw UsageError("--adapt-angle applies to adaptive cells, not --uniform");
+    if (!cms && (o.angleDegrees || o.subdivisionAngleDegrees || o.planeTolerance || o.uniform))
+        throw UsageError("--angle, --adapt-angle, --plane-tolerance and --uniform apply to --mesher cms only");
+    if (o.uniform && (o.subdivisionAngleDegrees || o.planeTolerance))
+        throw UsageError("--adapt-angle and --plane-tolerance apply to adaptive cells, not --uniform");
     options.sharpAngleDegrees = o.angleDegrees.value_or(options.sharpAngleDegrees);
     options.subdivisionAngleDegrees = o.subdivisionAngleDegrees.value_or(options.subdivisionAngleDegrees);
+    options.planeTolerance = o.planeTolerance.value_or(options.planeTolerance);
     options.maxCellWidth = o.uniform ? 1 : 8;
     try {
         validateMeshOptions(options);

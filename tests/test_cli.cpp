@@ -119,6 +119,17 @@ TEST_CASE("cli: mesh --json reports a watertight mesh and writes it", "[cli]")
     CHECK(uniform["triangles"].get<std::size_t>() == meshVolume(loadVolume(dir.file("box.vdb")), cms).triangleCount());
     CHECK(uniform["triangles"].get<std::size_t>() > 2 * adaptive["triangles"].get<std::size_t>());
     CHECK(runCli(dir, "mesh vol.vdb -o bad.ply --adapt-angle 180").exitCode == 2);
+    // A plane tolerance keeps more cells whole on a curved surface, exactly as the option meshes.
+    const json tolerant = parseJsonOutput(runCli(dir, "mesh vol.vdb -o tolerant.glb --plane-tolerance 0.25 --json"));
+    MeshOptions tolerantCms;
+    tolerantCms.kind = MesherKind::CubicalMarchingSquares;
+    tolerantCms.planeTolerance = 0.25;
+    CHECK(tolerant["triangles"].get<std::size_t>() == meshVolume(loadVolume(dir.file("vol.vdb")), tolerantCms).triangleCount());
+    CHECK(tolerant["triangles"].get<std::size_t>() < obj["triangles"].get<std::size_t>());
+    CHECK(tolerant["watertight"] == true);
+    CHECK(runCli(dir, "mesh vol.vdb -o bad.ply --plane-tolerance -1").exitCode == 2);
+    CHECK(runCli(dir, "mesh vol.vdb -o bad.ply --uniform --plane-tolerance 0.25").exitCode == 2);
+    CHECK(runCli(dir, "mesh vol.vdb -o bad.ply --mesher mc --plane-tolerance 0.25").exitCode == 2);
 
     // The OBJ holds that many vertices and faces.
     const auto objBytes = readBytes(dir.file("vol.obj"));
