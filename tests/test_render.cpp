@@ -13,6 +13,7 @@
 #include "sculpt/StrokeScript.h"
 #include "render/ImageFile.h"
 #include "render/OffscreenTarget.h"
+#include "render/Pipelines.h"
 #include "render/Renderer.h"
 #include "render/Thumbnail.h"
 #include "render/VulkanContext.h"
@@ -24,6 +25,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <random>
 #include <thread>
 #include <cmath>
 #include <cstdlib>
@@ -1624,4 +1626,53 @@ TEST_CASE("render: a window's pictures load on a worker: procedural until ready,
     CHECK_FALSE(renderer.picturesReady());
     CHECK(centreIsRed());
     requireNoValidationMessages(*context);
+}
+
+TEST_CASE("octahedral vertex normals fold back as mesh.vert unfolds them, within 1e-4 radian", "[mesh][normals]")
+{
+    // mesh.vert's unfoldNormal, step for step.
+    const auto unfold = [](const std::array<int16_t, 2>& e) {
+        double n[3] = {std::max(e[0] / 32767.0, -1.0), std::max(e[1] / 32767.0, -1.0), 0.0};
+        n[2] = 1.0 - std::fabs(n[0]) - std::fabs(n[1]);
+        const double t = std::max(-n[2], 0.0);
+        n[0] += n[0] >= 0.0 ? -t : t;
+        n[1] += n[1] >= 0.0 ? -t : t;
+        const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        return std::array<double, 3>{n[0] / length, n[1] / length, n[2] / length};
+    };
+    std::vector<std::array<float, 3>> normals;
+    // The axes, the octahedron's edges and the folds' diagonals, then random directions.
+    for (int a = 0; a < 3; ++a)
+        for (const float s : {-1.0f, 1.0f}) {
+            std::array<float, 3> n{0.0f, 0.0f, 0.0f};
+            n[std::size_t(a)] = s;
+            normals.push_back(n);
+            std::array<float, 3> edge{0.7071068f, 0.7071068f, 0.7071068f};
+            edge[std::size_t(a)] = 0.0f;
+            edge[std::size_t((a + 1) % 3)] *= s;
+            normals.push_back(edge);
+        }
+    std::mt19937 rng(8);
+    std::normal_distribution<float> g;
+    for (int i = 0; i < 20000; ++i) {
+        std::array<float, 3> n{g(rng), g(rng), g(rng)};
+        const float length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (length < 1e-6f) continue;
+        for (float& c : n) c /= length;
+        normals.push_back(n);
+    }
+    double worst = 0.0;
+    for (const auto& n : normals) {
+        const std::array<double, 3> b = unfold(render::octahedralNormal(n));
+        // The angle from its sine and cosine: acos alone loses it near 0 (a float normal's length is 1
+        // to within 1e-7, which acos turns into 5e-4 radian).
+        const double cross[3] = {b[1] * n[2] - b[2] * n[1], b[2] * n[0] - b[0] * n[2], b[0] * n[1] - b[1] * n[0]};
+        const double sine = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+        worst = std::max(worst, std::atan2(sine, b[0] * n[0] + b[1] * n[1] + b[2] * n[2]));
+    }
+    INFO("worst angle " << worst << " radian");
+    CHECK(worst < 1e-4);
+    // A mesh without normals draws them as +z, not as an undefined direction.
+    const std::array<double, 3> none = unfold(render::octahedralNormal({0.0f, 0.0f, 0.0f}));
+    CHECK(none[2] == 1.0);
 }

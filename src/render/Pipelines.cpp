@@ -1,6 +1,8 @@
 #include "render/Pipelines.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -21,9 +23,22 @@ const uint32_t kBrushFrag[] =
 #include "shaders/brush.frag.inc"
     ;
 
-
-
 } // namespace
+
+std::array<int16_t, 2> octahedralNormal(const std::array<float, 3>& n)
+{
+    const float sum = std::fabs(n[0]) + std::fabs(n[1]) + std::fabs(n[2]);
+    if (!(sum > 0.0f)) return {0, 0};
+    float u = n[0] / sum, v = n[1] / sum;
+    if (n[2] < 0.0f) {
+        // The lower half folds over the square's diagonals.
+        const float fu = (1.0f - std::fabs(v)) * (u >= 0.0f ? 1.0f : -1.0f);
+        const float fv = (1.0f - std::fabs(u)) * (v >= 0.0f ? 1.0f : -1.0f);
+        u = fu, v = fv;
+    }
+    const auto snorm = [](float x) { return int16_t(std::lround(std::clamp(x, -1.0f, 1.0f) * 32767.0f)); };
+    return {snorm(u), snorm(v)};
+}
 
 VkPipeline createPipeline(VkDevice device, VkRenderPass pass, VkPipelineLayout layout, const PipelineShape& shape)
 {
@@ -35,7 +50,7 @@ VkPipeline createPipeline(VkDevice device, VkRenderPass pass, VkPipelineLayout l
     VkVertexInputBindingDescription binding{0, sizeof(GpuVertex), VK_VERTEX_INPUT_RATE_VERTEX};
     VkVertexInputAttributeDescription attributes[4] = {
         {0, 0, VK_FORMAT_R32G32B32_SFLOAT, uint32_t(offsetof(GpuVertex, position))},
-        {1, 0, VK_FORMAT_R32G32B32_SFLOAT, uint32_t(offsetof(GpuVertex, normal))},
+        {1, 0, VK_FORMAT_R16G16_SNORM, uint32_t(offsetof(GpuVertex, normal))},
         {2, 0, VK_FORMAT_R32_UINT, uint32_t(offsetof(GpuVertex, packed))},
         {3, 0, VK_FORMAT_R32_UINT, uint32_t(offsetof(GpuVertex, blend))},
     };

@@ -4,17 +4,25 @@
 
 #include "render/VulkanContext.h"
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
 
 namespace vdbclay::render {
 
 /// A vertex as the GPU reads it: position, normal, material (16 bits) | level (8) | occlusion (8).
 struct GpuVertex {
     float position[3];
-    float normal[3];
+    int16_t normal[2]; // octahedral, as snorm16 (octahedralNormal)
     uint32_t packed;
     uint32_t blend; // MaterialBlend | 1 << 31, or 0: no blend
 };
+static_assert(sizeof(GpuVertex) == 24, "the vertex input's strides and offsets");
+
+/// A unit normal folded onto the octahedron and unfolded into the square [-1, 1]^2, as the snorm16 pair
+/// the vertex shader folds back (mesh.vert): within 1e-4 radian of the direction. A zero normal (a mesh
+/// without normals) becomes +z.
+std::array<int16_t, 2> octahedralNormal(const std::array<float, 3>& n);
 
 /// What a graphics pipeline draws with: triangles (or their edges), one colour attachment and reversed
 /// depth, viewport and scissor set at draw time.

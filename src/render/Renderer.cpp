@@ -17,6 +17,7 @@
 #include <cstring>
 #include <future>
 #include <map>
+#include <numeric>
 #include <optional>
 #include <set>
 #include <stdexcept>
@@ -211,7 +212,7 @@ struct Renderer::Impl {
             vkGetBufferMemoryRequirements(device, buffer, &chunkRequirements);
             vkDestroyBuffer(device, buffer, nullptr);
             // Chunks start on a vertex (their indices are offset by whole vertices).
-            chunkRequirements.alignment = std::max<VkDeviceSize>(chunkRequirements.alignment, sizeof(GpuVertex));
+            chunkRequirements.alignment = std::lcm<VkDeviceSize>(chunkRequirements.alignment, sizeof(GpuVertex));
         }
         const VkDeviceSize align = std::max<VkDeviceSize>(c.properties().limits.minUniformBufferOffsetAlignment, 16);
         uniformStride = (sizeof(ViewUniforms) + align - 1) / align * align;
@@ -738,10 +739,12 @@ PackedChunk packChunk(const Mesh& mesh, int level, const VertexShading& shading)
         GpuVertex& v = vertices[i];
         for (int a = 0; a < 3; ++a) {
             v.position[a] = mesh.positions[i][std::size_t(a)];
-            v.normal[a] = i < mesh.normals.size() ? mesh.normals[i][std::size_t(a)] : 0.0f;
             p.lo[std::size_t(a)] = std::min(p.lo[std::size_t(a)], v.position[a]);
             p.hi[std::size_t(a)] = std::max(p.hi[std::size_t(a)], v.position[a]);
         }
+        const std::array<int16_t, 2> normal = octahedralNormal(i < mesh.normals.size() ? mesh.normals[i] : std::array<float, 3>{});
+        v.normal[0] = normal[0];
+        v.normal[1] = normal[1];
         const uint32_t material = i < mesh.materials.size() ? mesh.materials[i] : 1u;
         const uint32_t open = shading.occlusion && i < shading.occlusion->size() ? (*shading.occlusion)[i] : 255u;
         const uint32_t maskBit = shading.masked && i < shading.masked->size() && (*shading.masked)[i] ? 1u << 23 : 0u;
