@@ -8,6 +8,7 @@
 #include "scene/Synthesize.h"
 #include "sculpt/StrokeScript.h"
 #include "support/CliRun.h"
+#include "support/TerrainStore.h"
 #include "support/TestUtil.h"
 #include "vdb_hermite/PrintableText.h"
 #include "vdb_hermite/VolumeIO.h"
@@ -44,15 +45,7 @@ std::string makeBall(const TempDir& dir, double radius = 20.0, const std::string
 /// A terrain store of 256 voxels with its levels of detail.
 std::string makeTerrain(const TempDir& dir, const std::string& name = "t.vdbclay")
 {
-    SynthOptions o;
-    o.kind = SynthKind::Terrain;
-    o.extent = 256;
-    o.seed = 11;
-    const std::string path = dir.file(name);
-    synthesizeStore(o, path);
-    SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
-    buildStoreLod(scene, 3);
-    return path;
+    return terrainStore(dir, name, 256, 11, 3);
 }
 
 Command brushCommand(const std::string& mode, double radius, const nlohmann::json& symmetry = nullptr)

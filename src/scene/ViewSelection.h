@@ -90,10 +90,6 @@ struct SelectedBrick {
     bool hidden = false;      // left unrefined: SelectionOptions::occluders hide it
 };
 
-/// The bricks that exist per level, as the selection asks about them: each level's bricks in order, and
-/// per brick the mask of its children one level down (bit x + 2y + 4z of the child's place in it), so a
-/// brick is split with one lookup. Bricks are only ever added: an edit makes a new level-0 brick, an LOD
-/// update the coarse bricks above it.
 /// The brick at offset (d % 3 - 1, d / 3 % 3 - 1, d / 9 - 1) from `brick`, d in [0, 27): the order of
 /// BrickPresence::neighbours' bits.
 inline IndexCoord neighbourBrick(const IndexCoord& brick, int d)
@@ -101,6 +97,10 @@ inline IndexCoord neighbourBrick(const IndexCoord& brick, int d)
     return {brick[0] + d % 3 - 1, brick[1] + (d / 3) % 3 - 1, brick[2] + d / 9 - 1};
 }
 
+/// The bricks that exist per level, as the selection asks about them: each level's bricks in order, and
+/// per brick the mask of its children one level down (bit x + 2y + 4z of the child's place in it), so a
+/// brick is split with one lookup. Bricks are only ever added: an edit makes a new level-0 brick, an LOD
+/// update the coarse bricks above it.
 class BrickPresence {
 public:
     BrickPresence() = default;
