@@ -2,6 +2,7 @@
 
 #include "mesher/LodCut.h"
 #include "mesher/LodMesh.h"
+#include "mesher/MeshSimplify.h"
 #include "mesher/VertexMask.h"
 #include "mesher/VertexMaterialBlend.h"
 #include "mesher/VertexOcclusion.h"
@@ -123,6 +124,62 @@ std::vector<IndexCoord> leavesReadingSide(const IndexCoord& brickMin, int direct
     return out;
 }
 
+/// How far a coarse brick's mesh may lie from its cells' surface, voxels of its level (lodShownError).
+double coarseTolerance(const MeshOptions& meshing) { return meshing.coarseLevelPlaneTolerance + meshing.coarseLevelSimplifyTolerance; }
+
+/// The bricks to draw for a selection: see StreamingScene::shownBricks. `unshown` receives the other
+/// children of the bricks split into their children (empty ones, or out of view): with the shown ones
+/// they make the cut the meshes are made for (LodCut).
+std::vector<BrickKey> shownCut(const ViewNeeds& needs, const std::vector<char>& isResident, std::vector<BrickKey>& unshown)
+{
+    unshown.clear();
+    const std::size_t n = needs.bricks.size();
+    std::vector<std::vector<uint32_t>> children(n);
+    std::vector<char> selected(n, 0);
+    for (uint32_t s : needs.selected) selected[s] = 1;
+    for (uint32_t i = 0; i < n; ++i)
+        if (needs.parent[i] != ViewNeeds::kNone) children[needs.parent[i]].push_back(i);
+    // Whether a node's region can be drawn completely, from itself or its descendants: finer levels first.
+    std::vector<uint32_t> byLevel(n);
+    for (uint32_t i = 0; i < n; ++i) byLevel[i] = i;
+    std::sort(byLevel.begin(), byLevel.end(), [&](uint32_t a, uint32_t b) { return needs.bricks[a].level < needs.bricks[b].level; });
+    std::vector<char> coverable(n, 0);
+    for (uint32_t i : byLevel) {
+        bool split = !children[i].empty();
+        for (uint32_t c : children[i]) split = split && coverable[c];
+        coverable[i] = isResident[i] || split;
+    }
+    std::vector<BrickKey> out;
+    std::vector<uint32_t> stack;
+    for (uint32_t i = 0; i < n; ++i)
+        if (needs.parent[i] == ViewNeeds::kNone) stack.push_back(i);
+    while (!stack.empty()) {
+        const uint32_t i = stack.back();
+        stack.pop_back();
+        if (selected[i]) {
+            if (isResident[i]) out.push_back(needs.bricks[i]);
+            continue;
+        }
+        bool split = !children[i].empty();
+        for (uint32_t c : children[i]) split = split && coverable[c];
+        if (!split && isResident[i]) {
+            out.push_back(needs.bricks[i]);
+            continue;
+        }
+        for (uint32_t c : children[i]) stack.push_back(c);
+        const BrickKey& parent = needs.bricks[i];
+        for (int c = 0; c < 8; ++c) {
+            const BrickKey child{parent.level - 1, {2 * parent.brick[0] + (c & 1), 2 * parent.brick[1] + ((c >> 1) & 1),
+                                                    2 * parent.brick[2] + ((c >> 2) & 1)}};
+            if (std::none_of(children[i].begin(), children[i].end(), [&](uint32_t k) { return needs.bricks[k] == child; }))
+                unshown.push_back(child);
+        }
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+
 } // namespace
 
 struct StreamingScene::BrickMeshPieces {
@@ -213,8 +270,7 @@ struct StreamingScene::Impl {
     std::deque<std::pair<uint64_t, BlockChange>> leafLog;
     uint64_t leafLogSeq = 0, leafLogFloor = 0;
     std::vector<BrickKey> shown;
-    // The bricks beside the last selection that its meshes read (frame()), and the selection they are of.
-    std::vector<BrickKey> besidesOf, besides;
+    std::vector<BrickKey> besidesOf, besides; // updateBesides
     std::shared_ptr<const LodCut> cut = std::make_shared<LodCut>(); // the shown bricks and the rest of the split bricks' children
     MaterialTable materials; // the scene's, with what edits defined since the last autosave
     VoxelMask mask;          // as edits left it; maskDirty until autosaved
@@ -249,7 +305,7 @@ struct StreamingScene::Impl {
         for (int k = 1; k <= levels; ++k) {
             const double voxel = scene.voxelSize() * double(1 << k);
             scene.bricks().scanLodErrors(k, [&](const IndexCoord& b, double error) {
-                if (present.contains(k, b)) present.setShownError(k, b, lodShownError(error, voxel, options.meshing.coarseLevelPlaneTolerance));
+                if (present.contains(k, b)) present.setShownError(k, b, lodShownError(error, voxel, coarseTolerance(options.meshing)));
             });
         }
         if (options.memoryBudgetBytes < largest)
@@ -322,6 +378,87 @@ struct StreamingScene::Impl {
             v += r->second.sides[std::size_t(reachClass)][std::size_t(directionIndex(towards))] * 0xC2B2AE3D27D4EB4Full;
         });
         return v;
+    }
+
+    /// The bricks beside a view's cut whose points its meshes read (on the shown bricks' faces, a leaf
+    /// beyond) where no brick the view may show holds their region: needed too, so that those meshes read
+    /// the surface there, not the empty space of a brick not loaded (which capped a level-0 brick under
+    /// a level-1 one with a false lid, open at its edges), and do not change with what happens to be
+    /// resident beside them. Most needed first; kept while the bricks the view may show stay the same.
+    /// Lock held.
+    void updateBesides(const ViewNeeds& needs, const std::vector<uint32_t>& order, const std::vector<char>& mayShow)
+    {
+        std::vector<BrickKey> keys;
+        for (const uint32_t n : order)
+            if (mayShow[n]) keys.push_back(needs.bricks[n]);
+        if (keys == besidesOf) return;
+        std::vector<BrickKey> notShown;
+        const std::vector<BrickKey> cutShown = shownCut(needs, mayShow, notShown);
+        const std::unordered_set<BrickKey, BrickKeyHash> inCut(cutShown.begin(), cutShown.end());
+        std::unordered_set<BrickKey, BrickKeyHash> listed(keys.begin(), keys.end());
+        besides.clear();
+        for (const BrickKey& key : keys) {
+            if (!inCut.count(key)) continue;
+            for (uint32_t around = present.neighbours(key.level, key.brick); around != 0; around &= around - 1) {
+                const BrickKey beside{key.level, neighbourBrick(key.brick, __builtin_ctz(around))};
+                if (listed.insert(beside).second) besides.push_back(beside);
+            }
+        }
+        besidesOf = std::move(keys);
+    }
+
+    /// How many of a view's needed bricks, in `order`, the budget holds together with the bricks
+    /// beside the cut they make (what the cut's meshes read where a coarser brick shows the region
+    /// beside them): a brick accepted pays for its neighbours of its level not accepted, until all its
+    /// needed children are accepted (it is split then, and no longer read from); a neighbour accepted
+    /// later pays only for its mesh. So a budget-limited view refines only as far as its meshes can be
+    /// whole. Lock held.
+    std::size_t bricksFittingWithBesides(const ViewNeeds& needs, const std::vector<uint32_t>& order) const
+    {
+        const auto brickBytes = [&](const BrickKey& key) {
+            const auto it = resident.find(key);
+            return it != resident.end() ? it->second.bytes : estimateOf(key);
+        };
+        const std::size_t n = needs.bricks.size();
+        std::vector<uint32_t> childrenLeft(n, 0);
+        for (std::size_t i = 0; i < n; ++i)
+            if (needs.parent[i] != ViewNeeds::kNone) ++childrenLeft[needs.parent[i]];
+        std::unordered_set<BrickKey, BrickKeyHash> accepted;
+        std::unordered_map<BrickKey, uint32_t, BrickKeyHash> readers; // besides: how many accepted bricks read each
+        uint64_t cost = 0;
+        const auto forEachBeside = [&](const BrickKey& key, const auto& fn) {
+            for (uint32_t around = present.neighbours(key.level, key.brick); around != 0; around &= around - 1) {
+                const BrickKey beside{key.level, neighbourBrick(key.brick, __builtin_ctz(around))};
+                if (!accepted.count(beside)) fn(beside);
+            }
+        };
+        std::size_t count = 0;
+        for (; count < order.size(); ++count) {
+            const uint32_t i = order[count];
+            const BrickKey& key = needs.bricks[i];
+            const auto it = resident.find(key);
+            uint64_t bytes = budgetedBytes(key, it != resident.end() ? &it->second : nullptr);
+            const auto wasBeside = readers.find(key);
+            if (wasBeside != readers.end()) bytes -= brickBytes(key);
+            forEachBeside(key, [&](const BrickKey& beside) {
+                if (!readers.count(beside)) bytes += brickBytes(beside);
+            });
+            if (cost + bytes > options.memoryBudgetBytes) break;
+            cost += bytes;
+            if (wasBeside != readers.end()) readers.erase(wasBeside);
+            accepted.insert(key);
+            forEachBeside(key, [&](const BrickKey& beside) { ++readers[beside]; });
+            // A parent whose needed children are all accepted is split: its besides are read no more.
+            const uint32_t parent = needs.parent[i];
+            if (parent == ViewNeeds::kNone || --childrenLeft[parent] > 0) continue;
+            forEachBeside(needs.bricks[parent], [&](const BrickKey& beside) {
+                const auto r = readers.find(beside);
+                if (r == readers.end() || --r->second > 0) return;
+                cost -= brickBytes(beside);
+                readers.erase(r);
+            });
+        }
+        return count;
     }
 
     /// What a resident brick's mesh reads of the loads around it, per side (MeshReadVersions). Lock held.
@@ -463,6 +600,16 @@ struct StreamingScene::Impl {
         return true;
     }
 
+    /// A coarse brick's mesh simplified within its level's tolerance (MeshOptions::
+    /// coarseLevelSimplifyTolerance); whether it was. `kept`: as simplifyMesh's.
+    bool simplifyCoarse(Mesh& mesh, int level, std::vector<uint32_t>* kept) const
+    {
+        const double tolerance = options.meshing.coarseLevelSimplifyTolerance;
+        if (level == 0 || !(tolerance > 0.0)) return false;
+        simplifyMesh(mesh, tolerance * scene.voxelSize() * double(1 << level), kept);
+        return true;
+    }
+
     /// The mesh of a resident brick made from `in` and the level trees (`trees` held, shared or not).
     std::shared_ptr<const BrickMesh> makeMesh(const MeshInputs& in) const
     {
@@ -498,9 +645,21 @@ struct StreamingScene::Impl {
             appendMesh(made, transitions.mesh);
             out->occlusion.insert(out->occlusion.end(), transitions.occlusion.begin(), transitions.occlusion.end());
             out->blend.insert(out->blend.end(), transitions.blend.begin(), transitions.blend.end());
+            std::vector<uint32_t> kept;
+            if (simplifyCoarse(made, key.level, &kept)) {
+                std::vector<uint8_t> occlusion(kept.size());
+                std::vector<uint32_t> blend(kept.size());
+                for (std::size_t v = 0; v < kept.size(); ++v) {
+                    occlusion[v] = out->occlusion[kept[v]];
+                    blend[v] = out->blend[kept[v]];
+                }
+                out->occlusion = std::move(occlusion);
+                out->blend = std::move(blend);
+            }
         } else {
             // A brick outside the last frame's cut (asked for directly) is meshed alone at its level.
             made = meshLodBrick(levelsOf, in.cut->shows(brick) ? *in.cut : LodCut({brick}), brick, options.meshing);
+            simplifyCoarse(made, key.level, nullptr);
             out->occlusion = vertexOcclusion(volume, made);
             out->blend = vertexMaterialBlend(volume, made);
         }
@@ -1078,7 +1237,7 @@ struct StreamingScene::Impl {
     {
         for (const auto& [key, error] : lod.errors) {
             present.add(key.level, key.brick);
-            present.setShownError(key.level, key.brick, error ? std::optional<double>(lodShownError(*error, scene.voxelSize() * double(1 << key.level), options.meshing.coarseLevelPlaneTolerance)) : std::nullopt);
+            present.setShownError(key.level, key.brick, error ? std::optional<double>(lodShownError(*error, scene.voxelSize() * double(1 << key.level), coarseTolerance(options.meshing))) : std::nullopt);
         }
         for (std::size_t i = 0; i < lod.changedBricks.size(); ++i)
             for (const IndexCoord& b : lod.changedBricks[i]) {
@@ -1093,61 +1252,6 @@ struct StreamingScene::Impl {
     }
 };
 
-namespace {
-
-/// The bricks to draw for a selection: see StreamingScene::shownBricks. `unshown` receives the other
-/// children of the bricks split into their children (empty ones, or out of view): with the shown ones
-/// they make the cut the meshes are made for (LodCut).
-std::vector<BrickKey> shownCut(const ViewNeeds& needs, const std::vector<char>& isResident, std::vector<BrickKey>& unshown)
-{
-    unshown.clear();
-    const std::size_t n = needs.bricks.size();
-    std::vector<std::vector<uint32_t>> children(n);
-    std::vector<char> selected(n, 0);
-    for (uint32_t s : needs.selected) selected[s] = 1;
-    for (uint32_t i = 0; i < n; ++i)
-        if (needs.parent[i] != ViewNeeds::kNone) children[needs.parent[i]].push_back(i);
-    // Whether a node's region can be drawn completely, from itself or its descendants: finer levels first.
-    std::vector<uint32_t> byLevel(n);
-    for (uint32_t i = 0; i < n; ++i) byLevel[i] = i;
-    std::sort(byLevel.begin(), byLevel.end(), [&](uint32_t a, uint32_t b) { return needs.bricks[a].level < needs.bricks[b].level; });
-    std::vector<char> coverable(n, 0);
-    for (uint32_t i : byLevel) {
-        bool split = !children[i].empty();
-        for (uint32_t c : children[i]) split = split && coverable[c];
-        coverable[i] = isResident[i] || split;
-    }
-    std::vector<BrickKey> out;
-    std::vector<uint32_t> stack;
-    for (uint32_t i = 0; i < n; ++i)
-        if (needs.parent[i] == ViewNeeds::kNone) stack.push_back(i);
-    while (!stack.empty()) {
-        const uint32_t i = stack.back();
-        stack.pop_back();
-        if (selected[i]) {
-            if (isResident[i]) out.push_back(needs.bricks[i]);
-            continue;
-        }
-        bool split = !children[i].empty();
-        for (uint32_t c : children[i]) split = split && coverable[c];
-        if (!split && isResident[i]) {
-            out.push_back(needs.bricks[i]);
-            continue;
-        }
-        for (uint32_t c : children[i]) stack.push_back(c);
-        const BrickKey& parent = needs.bricks[i];
-        for (int c = 0; c < 8; ++c) {
-            const BrickKey child{parent.level - 1, {2 * parent.brick[0] + (c & 1), 2 * parent.brick[1] + ((c >> 1) & 1),
-                                                    2 * parent.brick[2] + ((c >> 2) & 1)}};
-            if (std::none_of(children[i].begin(), children[i].end(), [&](uint32_t k) { return needs.bricks[k] == child; }))
-                unshown.push_back(child);
-        }
-    }
-    std::sort(out.begin(), out.end());
-    return out;
-}
-
-} // namespace
 
 StreamingScene::StreamingScene(const std::string& path, const StreamingOptions& options)
     : impl_(std::make_unique<Impl>(path, options))
@@ -1196,48 +1300,45 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
     // lock for a few thousand bricks.
     const ViewNeeds needs = viewNeeds(selected, s.levels);
     const std::vector<BrickKey>& needed = needs.bricks;
-    const std::vector<uint32_t>& order = needs.order;
+    // Where edits are shown at level 0 (the bricks under stale ancestors) first: an edit shows however
+    // little of the rest of the view the budget holds.
+    std::vector<uint32_t> order = needs.order;
+    if (!stale.empty())
+        std::stable_partition(order.begin(), order.end(), [&](uint32_t n) {
+            const uint32_t parent = needs.parent[n];
+            return stale.count(needed[n]) || (parent != ViewNeeds::kNone && stale.count(needed[parent]));
+        });
+    const uint64_t budget = s.options.memoryBudgetBytes;
     uint64_t cost = 0;
     // Whether the budget still holds a brick (with its mesh where it is to be shown); marks it used.
     const auto admit = [&](const BrickKey& key, bool meshed) {
         const auto it = s.resident.find(key);
         const Impl::Resident* r = it != s.resident.end() ? &it->second : nullptr;
         const uint64_t bytes = meshed ? s.budgetedBytes(key, r) : r ? r->bytes : s.estimateOf(key);
-        if (cost + bytes > s.options.memoryBudgetBytes) {
-            report.budgetLimited = true;
-            return false;
-        }
+        if (cost + bytes > budget) return false;
         cost += bytes;
         if (it != s.resident.end()) it->second.lastUsed = s.frameNumber;
         return true;
     };
-    std::size_t accepted = 0;
-    while (accepted < order.size() && admit(needed[order[accepted]], true)) ++accepted;
-    // The bricks beside the selection whose points its meshes read (on the selected bricks' faces, a leaf
-    // beyond) where a coarser brick shows their region: needed too, after all the view shows, so that
-    // those meshes read the surface there, not the empty space of a brick not loaded (which capped a
-    // level-0 brick under a level-1 one with a false lid, open at its edges).
-    if (accepted == order.size()) {
-        std::vector<BrickKey> keys;
-        keys.reserve(selected.size());
-        for (const SelectedBrick& b : selected) keys.push_back(b.key);
-        if (keys != s.besidesOf) {
-            s.besidesOf = std::move(keys);
-            s.besides.clear();
-            std::unordered_set<BrickKey, BrickKeyHash> listed(needed.begin(), needed.end());
-            for (const BrickKey& key : s.besidesOf)
-                for (uint32_t around = s.present.neighbours(key.level, key.brick); around != 0; around &= around - 1) {
-                    const int d = __builtin_ctz(around);
-                    const BrickKey n{key.level, neighbourBrick(key.brick, d)};
-                    if (listed.insert(n).second) s.besides.push_back(n);
-                }
-        }
-    } else {
-        s.besidesOf.clear();
-        s.besides.clear();
-    }
-    std::size_t besidesAccepted = 0; // read, never shown: no mesh to budget
-    while (besidesAccepted < s.besides.size() && admit(s.besides[besidesAccepted], false)) ++besidesAccepted;
+    // The bricks the view may show: those it accepted, and edited bricks (they stay until saved). A brick
+    // left resident from an earlier view is not drawn: its besides may be missing.
+    std::size_t accepted = 0, besidesAccepted = 0;
+    std::vector<char> mayShow(needed.size(), 0);
+    const auto acceptFirst = [&](std::size_t count) {
+        cost = 0;
+        accepted = 0;
+        while (accepted < count && admit(needed[order[accepted]], true)) ++accepted;
+        std::fill(mayShow.begin(), mayShow.end(), 0);
+        for (std::size_t i = 0; i < accepted; ++i) mayShow[order[i]] = 1;
+        for (std::size_t i = 0; i < needed.size(); ++i)
+            if (needed[i].level == 0 && s.dirty.count(needed[i].brick)) mayShow[i] = 1;
+        s.updateBesides(needs, order, mayShow);
+        besidesAccepted = 0; // read, never shown: no mesh to budget
+        while (besidesAccepted < s.besides.size() && admit(s.besides[besidesAccepted], false)) ++besidesAccepted;
+    };
+    acceptFirst(order.size());
+    report.budgetLimited = accepted < order.size() || besidesAccepted < s.besides.size();
+    if (report.budgetLimited) acceptFirst(s.bricksFittingWithBesides(needs, order));
     s.wanted.clear();
     for (std::size_t i = 0; i < accepted; ++i) s.wanted.insert(needed[order[i]]);
     s.wanted.insert(s.besides.begin(), s.besides.begin() + std::ptrdiff_t(besidesAccepted));
@@ -1247,6 +1348,8 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
     // Looked up after makeRoom: an autosave it ran may have dropped rewritten coarse bricks.
     std::vector<char> isResident(needed.size());
     for (std::size_t i = 0; i < needed.size(); ++i) isResident[i] = s.resident.count(needed[i]) > 0;
+    std::vector<char> showable(needed.size());
+    for (std::size_t i = 0; i < needed.size(); ++i) showable[i] = isResident[i] && mayShow[i];
     s.queue.clear();
     for (std::size_t i = 0; i < accepted; ++i) {
         const BrickKey& key = needed[order[i]];
@@ -1261,8 +1364,8 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
     }
     s.wake.notify_all();
 
-    // What the view shows now: each selected brick at its own level if resident, else its finest
-    // resident ancestor.
+    // What the view shows now: each selected brick at its own level if it may be shown, else its
+    // finest ancestor that may.
     report.coarseComplete = true;
     report.complete = true;
     for (std::size_t i = 0; i < selected.size(); ++i) {
@@ -1270,7 +1373,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
         report.targetError = std::max(report.targetError, b.screenError);
         int shown = -1;
         for (uint32_t n = needs.selected[i]; n != ViewNeeds::kNone; n = needs.parent[n])
-            if (isResident[n]) {
+            if (showable[n]) {
                 shown = needed[n].level;
                 break;
             }
@@ -1284,7 +1387,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
         report.screenError = std::max(report.screenError, b.screenError * double(1 << (shown - b.key.level)));
     }
     std::vector<BrickKey> unshown;
-    s.shown = shownCut(needs, isResident, unshown);
+    s.shown = shownCut(needs, showable, unshown);
     // What is shown stays until the next frame: making room for a mesh must not punch holes in the view.
     s.wanted.insert(s.shown.begin(), s.shown.end());
     std::vector<LodBrick> cut;
@@ -1296,7 +1399,8 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
         const BrickKey key = *it++;
         if (!std::binary_search(s.shown.begin(), s.shown.end(), key)) s.dropMesh(key, s.resident.at(key));
     }
-    report.settled = besidesResident &&
+    // Besides that did not fit are not settled: the next frame leaves more room for them.
+    report.settled = besidesResident && besidesAccepted == s.besides.size() &&
                      std::all_of(order.begin(), order.begin() + std::ptrdiff_t(accepted), [&](uint32_t n) { return isResident[n] != 0; });
     report.residentPerLevel = s.residentPerLevel;
     report.residentBytes = s.residentBytes;
