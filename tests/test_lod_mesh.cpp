@@ -2,6 +2,7 @@
 // meets a finer one. The combined mesh of any mix of levels is a closed, oriented 2-manifold (seed 000
 // §5: no cracks, no skirts, no patching), and a cut of level 0 alone meshes exactly as the whole volume.
 #include "mesher/LodMesh.h"
+#include "mesher/MeshSimplify.h"
 #include "mesher/MeshMetrics.h"
 #include "mesher/MeshQuality.h"
 #include "scene/SceneStore.h"
@@ -100,6 +101,20 @@ Mesh meshCut(const std::vector<const Volume*>& levels, const std::vector<LodBric
 Mesh meshCut(const Levels& levels, const std::vector<LodBrick>& shown, const MeshOptions& options = cms())
 {
     return meshCut(levels.pointers(), shown, options);
+}
+
+/// meshCut with each coarse brick's mesh simplified as streaming scenes do (`tolerance` voxels of its level).
+Mesh meshCutSimplified(const std::vector<const Volume*>& levels, const std::vector<LodBrick>& shown, const MeshOptions& options,
+                       double tolerance)
+{
+    const LodCut cut(shown);
+    Mesh all;
+    for (const LodBrick& b : shown) {
+        Mesh m = meshLodBrick(levels, cut, b, options);
+        if (b.level > 0) simplifyMesh(m, tolerance * levels[std::size_t(b.level)]->voxelSize());
+        appendMesh(all, m);
+    }
+    return all;
 }
 
 std::string describe(const std::vector<LodBrick>& shown)
@@ -358,7 +373,35 @@ TEST_CASE("lod mesh: a terrain meshed as a streaming scene meshes it (a quarter 
     }
 }
 
-TEST_CASE("mesh options: plane tolerances outside 0 .. 8 voxels are refused", "[lod][plane]")
+TEST_CASE("lod mesh: coarse bricks simplified within a tolerance take fewer triangles, stay within it and closed beside each other and level 0", "[lod][simplify]")
+{
+    // Streaming scenes simplify coarse bricks' meshes (MeshOptions::coarseLevelSimplifyTolerance) brick by
+    // brick, keeping each mesh's open edges: the bricks still meet, at every level and beside level 0.
+    TempDir dir;
+    const Volume terrain = SceneStore::open(terrainStore(dir, "terrain.vdbclay", 128, 5, 2), StoreAccess::ReadOnly).loadLevel(0);
+    const Levels levels = levelsOf(terrain, 2, dir);
+    const MeshOptions streaming = StreamingOptions().meshing;
+    const double tolerance = streaming.coarseLevelSimplifyTolerance;
+    REQUIRE(tolerance == 0.25);
+    for (int level = 1; level <= 2; ++level) {
+        const auto shown = cutOf(levels, [&](const LodBrick& b) { return b.level > level; });
+        const Mesh lattice = meshCut(levels, shown, streaming), simplified = meshCutSimplified(levels.pointers(), shown, streaming, tolerance);
+        INFO("level " << level << ": " << lattice.triangleCount() << " triangles on the lattice, " << simplified.triangleCount() << " simplified");
+        requireClosed(simplified, terrain.voxelSize(), shown);
+        CHECK(double(simplified.triangleCount()) < 0.8 * double(lattice.triangleCount()));
+        const double levelVoxel = terrain.voxelSize() * double(1 << level);
+        const MeshQuality q = measureAgainstMesh(simplified, lattice, SurfaceSampling{0.25 * levelVoxel});
+        INFO("two-sided distance " << q.maxDistance / levelVoxel << " voxels of the level, mean " << q.meanDistance / levelVoxel);
+        CHECK(q.maxDistance <= tolerance * levelVoxel);
+    }
+    // Level 1 beside level 0 in checkerboards: closed.
+    for (int parity = 0; parity < 2; ++parity) {
+        const auto shown = cutOf(levels, [&](const LodBrick& b) { return b.level > 1 || ((b.brick[0] + b.brick[1] + b.brick[2]) & 1) == parity; });
+        requireClosed(meshCutSimplified(levels.pointers(), shown, streaming, tolerance), terrain.voxelSize(), shown);
+    }
+}
+
+TEST_CASE("mesh options: plane and simplification tolerances outside 0 .. 8 voxels are refused", "[lod][plane]")
 {
     for (const double bad : {-0.1, 8.5, std::nan("")}) {
         MeshOptions o = cms();
@@ -366,6 +409,9 @@ TEST_CASE("mesh options: plane tolerances outside 0 .. 8 voxels are refused", "[
         CHECK_THROWS_AS(validateMeshOptions(o), std::invalid_argument);
         o = cms();
         o.coarseLevelPlaneTolerance = bad;
+        CHECK_THROWS_AS(validateMeshOptions(o), std::invalid_argument);
+        o = cms();
+        o.coarseLevelSimplifyTolerance = bad;
         CHECK_THROWS_AS(validateMeshOptions(o), std::invalid_argument);
     }
     MeshOptions o = cms();

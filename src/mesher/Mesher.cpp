@@ -35,6 +35,8 @@ void validateMeshOptions(const MeshOptions& options)
     if (!(options.planeTolerance >= 0.0 && options.planeTolerance <= kLeafDim) ||
         !(options.coarseLevelPlaneTolerance >= 0.0 && options.coarseLevelPlaneTolerance <= kLeafDim))
         throw std::invalid_argument("a plane tolerance must lie between 0 and 8 voxels");
+    if (!(options.coarseLevelSimplifyTolerance >= 0.0 && options.coarseLevelSimplifyTolerance <= kLeafDim))
+        throw std::invalid_argument("a simplification tolerance must lie between 0 and 8 voxels");
     const int w = options.maxCellWidth;
     if (w != 1 && w != 2 && w != 4 && w != kLeafDim)
         throw std::invalid_argument("the widest cell must be 1, 2, 4 or 8 voxels");

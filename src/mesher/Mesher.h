@@ -38,6 +38,10 @@ struct MeshOptions {
     /// densities are resampled to 8 bits, which leaves ripples a fraction of a voxel high whose
     /// normals tilt by tens of degrees: under the normals alone their cells hardly ever merge.
     double coarseLevelPlaneTolerance = 0.5;
+    /// CMS, voxels of the level: how far streaming scenes let a coarse brick's mesh be simplified from
+    /// its lattice mesh (simplifyMesh: every plane a kept vertex absorbs within it; its open edges, where
+    /// it meets the bricks beside it, kept). Counted in the brick's error, with the plane tolerance.
+    double coarseLevelSimplifyTolerance = 0.25;
     /// CMS, optional: a cap on the cell width per leaf (given its origin; rounded down to 1, 2, 4 or 8),
     /// for meshing regions at different depths; the mesh stays watertight across them.
     /// Called from several threads at once, so it must be thread-safe.

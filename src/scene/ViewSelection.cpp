@@ -87,9 +87,9 @@ void validateViewer(const Viewer& v)
     if (v.viewport[0] <= 0 || v.viewport[1] <= 0) throw std::invalid_argument("the viewport must have a positive size");
 }
 
-double lodShownError(std::optional<double> dataError, double voxel, double planeTolerance)
+double lodShownError(std::optional<double> dataError, double voxel, double meshTolerance)
 {
-    return dataError ? std::min(voxel, *dataError + std::max(0.25, planeTolerance) * voxel) : voxel;
+    return dataError ? std::min(voxel, *dataError + std::max(0.25, meshTolerance) * voxel) : voxel;
 }
 
 OccluderDepth::OccluderDepth(const std::array<double, 16>& viewProjection, int columns, int rows, std::vector<float> farthest)

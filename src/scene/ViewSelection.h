@@ -80,8 +80,9 @@ struct SelectionOptions {
 /// error (StoreLod.h) plus what its mesh's cells may cut off the surface, and never more than the voxel
 /// itself: the bound a brick without a data error is shown by. The cells' share is the larger of a
 /// quarter voxel (adaptive CMS cells up to 8 voxels wide, split at a 15-degree normal spread, leave a
-/// sagitta of about 0.26 voxel) and `planeTolerance` (MeshOptions::coarseLevelPlaneTolerance), voxels.
-double lodShownError(std::optional<double> dataError, double voxel, double planeTolerance);
+/// sagitta of about 0.26 voxel) and `meshTolerance`, voxels: how far a coarse brick's mesh may lie from
+/// its cells' (MeshOptions::coarseLevelPlaneTolerance plus coarseLevelSimplifyTolerance).
+double lodShownError(std::optional<double> dataError, double voxel, double meshTolerance);
 
 struct SelectedBrick {
     BrickKey key;
