@@ -1399,8 +1399,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
         const BrickKey key = *it++;
         if (!std::binary_search(s.shown.begin(), s.shown.end(), key)) s.dropMesh(key, s.resident.at(key));
     }
-    // Besides that did not fit are not settled: the next frame leaves more room for them.
-    report.settled = besidesResident && besidesAccepted == s.besides.size() &&
+    report.settled = besidesResident &&
                      std::all_of(order.begin(), order.begin() + std::ptrdiff_t(accepted), [&](uint32_t n) { return isResident[n] != 0; });
     report.residentPerLevel = s.residentPerLevel;
     report.residentBytes = s.residentBytes;
