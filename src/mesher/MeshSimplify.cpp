@@ -47,7 +47,7 @@ double dot(const Point& a, const Point& b) { return a[0] * b[0] + a[1] * b[1] + 
 struct Collapse {
     double cost;
     uint32_t from, onto;
-    uint64_t version; // `from`'s when queued
+    uint64_t entry; // `from`'s entry number: only its latest entry counts
     bool operator>(const Collapse& o) const { return cost > o.cost; }
 };
 
@@ -65,7 +65,9 @@ public:
         quadrics_.resize(n);
         alive_.assign(n, 1);
         locked_.assign(n, 0);
-        version_.assign(n, 0);
+        entry_.assign(n, 0);
+        queued_.assign(n, 0);
+        stale_.assign(n, 0);
         triangleAlive_.assign(m, 1);
         const bool perTriangleMaterial = mesh.triangleMaterials.size() == m;
         const bool perVertexMaterial = mesh.materials.size() == n;
@@ -114,14 +116,13 @@ public:
         while (!queue_.empty()) {
             const Collapse c = queue_.top();
             queue_.pop();
-            if (!alive_[c.from] || c.version != version_[c.from]) continue;
+            if (!alive_[c.from] || c.entry != entry_[c.from]) continue;
+            queued_[c.from] = 0;
+            // A vertex whose neighbourhood changed since its entry: its cost then was a lower bound (the
+            // quadrics only grow), so its best collapse is found again now that it is due.
             double cost = 0.0;
-            if (!alive_[c.onto] || !allowed(c.from, c.onto, cost)) {
+            if (stale_[c.from] || !alive_[c.onto] || !allowed(c.from, c.onto, cost)) {
                 queueBest(c.from);
-                continue;
-            }
-            if (cost > c.cost * (1.0 + 1e-9) + 1e-18) { // the target absorbed more since: queued again at its cost
-                queue_.push({cost, c.from, c.onto, c.version});
                 continue;
             }
             report.largestError = std::max(report.largestError, std::sqrt(std::max(cost, 0.0)));
@@ -133,10 +134,10 @@ public:
     }
 
 private:
-    /// The vertices sharing a live triangle with v, sorted.
-    std::vector<uint32_t> neighbours(uint32_t v) const
+    /// The vertices sharing a live triangle with v, sorted, into `out`.
+    void neighbours(uint32_t v, std::vector<uint32_t>& out) const
     {
-        std::vector<uint32_t> out;
+        out.clear();
         for (uint32_t t : around_[v]) {
             if (!triangleAlive_[t]) continue;
             for (uint32_t w : mesh_.triangles[t])
@@ -144,33 +145,47 @@ private:
         }
         std::sort(out.begin(), out.end());
         out.erase(std::unique(out.begin(), out.end()), out.end());
-        return out;
     }
 
-    /// Whether `from` may collapse onto `onto` (see simplifyMesh), and at what cost.
-    bool allowed(uint32_t from, uint32_t onto, double& cost) const
+    /// Whether `from` may collapse onto `onto` (see simplifyMesh), and at what cost. `around`: from's
+    /// neighbours, where the caller has them.
+    bool allowed(uint32_t from, uint32_t onto, double& cost, const std::vector<uint32_t>* around = nullptr)
     {
         if (locked_[from]) return false;
-        cost = (quadrics_[from] + quadrics_[onto]).at(points_[onto]);
-        if (cost > maxSquared_) return false;
+        cost = costOf(from, onto);
+        return cost <= maxSquared_ && keepsShape(from, onto, around);
+    }
+
+    double costOf(uint32_t from, uint32_t onto) const { return (quadrics_[from] + quadrics_[onto]).at(points_[onto]); }
+
+    /// Whether collapsing `from` onto `onto` keeps the mesh a manifold of small fans whose triangles keep
+    /// their side and some area.
+    bool keepsShape(uint32_t from, uint32_t onto, const std::vector<uint32_t>* around)
+    {
         // The link condition: the vertices both neighbour are exactly the third corners of the two
         // triangles on the edge.
-        const std::vector<uint32_t> a = neighbours(from), b = neighbours(onto);
-        std::vector<uint32_t> common;
-        std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(common));
-        std::vector<uint32_t> opposite;
+        if (!around) {
+            neighbours(from, fromAround_);
+            around = &fromAround_;
+        }
+        const std::vector<uint32_t>& a = *around;
+        neighbours(onto, ontoAround_);
+        const std::vector<uint32_t>& b = ontoAround_;
+        common_.clear();
+        std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(common_));
+        opposite_.clear();
         for (uint32_t t : around_[from]) {
             if (!triangleAlive_[t]) continue;
             const auto& tri = mesh_.triangles[t];
             if (tri[0] != onto && tri[1] != onto && tri[2] != onto) continue;
             for (uint32_t w : tri)
-                if (w != from && w != onto) opposite.push_back(w);
+                if (w != from && w != onto) opposite_.push_back(w);
         }
-        std::sort(opposite.begin(), opposite.end());
-        if (opposite.size() != 2 || common != opposite) return false;
+        std::sort(opposite_.begin(), opposite_.end());
+        if (opposite_.size() != 2 || common_ != opposite_) return false;
         // Fans stay small: a vertex that took every collapse of a flat stretch would make slivers (and
         // make each later step as slow as its fan is wide).
-        if (a.size() + b.size() - common.size() - 2 > kMostNeighbours) return false;
+        if (a.size() + b.size() - common_.size() - 2 > kMostNeighbours) return false;
         // The triangles that stay keep their side and some area.
         for (uint32_t t : around_[from]) {
             if (!triangleAlive_[t]) continue;
@@ -187,19 +202,27 @@ private:
         return true;
     }
 
+    /// Queues v's cheapest allowed collapse, if it has one (its earlier entries no longer count).
     void queueBest(uint32_t v)
     {
+        ++entry_[v];
+        stale_[v] = 0;
+        queued_[v] = 0;
         if (!alive_[v] || locked_[v]) return;
-        double best = 0.0;
-        int64_t onto = -1;
-        for (uint32_t w : neighbours(v)) {
-            double cost = 0.0;
-            if (allowed(v, w, cost) && (onto < 0 || cost < best)) {
-                best = cost;
-                onto = w;
-            }
+        neighbours(v, vertexAround_);
+        // The cheapest first; the shape checked only until one keeps it.
+        candidates_.clear();
+        for (uint32_t w : vertexAround_) {
+            const double cost = costOf(v, w);
+            if (cost <= maxSquared_) candidates_.push_back({cost, w});
         }
-        if (onto >= 0) queue_.push({best, v, uint32_t(onto), version_[v]});
+        std::sort(candidates_.begin(), candidates_.end());
+        for (const auto& [cost, w] : candidates_)
+            if (keepsShape(v, w, &vertexAround_)) {
+                queue_.push({cost, v, w, entry_[v]});
+                queued_[v] = 1;
+                return;
+            }
     }
 
     void collapse(uint32_t from, uint32_t onto)
@@ -223,12 +246,13 @@ private:
         around_[from].clear();
         alive_[from] = 0;
         quadrics_[onto] = quadrics_[onto] + quadrics_[from];
-        // What the collapse changed: the candidates of the kept vertex and of those around it.
-        ++version_[onto];
+        // What the collapse changed: the candidates of the kept vertex, found now, and of those around it,
+        // found again when their entries come up (those without one, now).
         queueBest(onto);
-        for (uint32_t w : neighbours(onto)) {
-            ++version_[w];
-            queueBest(w);
+        neighbours(onto, changed_);
+        for (uint32_t w : changed_) {
+            if (queued_[w]) stale_[w] = 1;
+            else queueBest(w);
         }
     }
 
@@ -267,7 +291,11 @@ private:
     std::vector<std::vector<uint32_t>> around_; // per vertex: its triangles (some collapsed)
     std::vector<Quadric> quadrics_;
     std::vector<char> alive_, locked_, triangleAlive_;
-    std::vector<uint64_t> version_;
+    std::vector<uint64_t> entry_; // per vertex: its latest queue entry's number
+    std::vector<char> queued_;    // per vertex: whether its latest entry is in the queue
+    std::vector<char> stale_;     // per vertex: its neighbourhood changed since its entry
+    std::vector<uint32_t> vertexAround_, fromAround_, ontoAround_, common_, opposite_, changed_; // scratch
+    std::vector<std::pair<double, uint32_t>> candidates_;
     std::priority_queue<Collapse, std::vector<Collapse>, std::greater<Collapse>> queue_;
 };
 
