@@ -66,6 +66,8 @@ public:
         alive_.assign(n, 1);
         locked_.assign(n, 0);
         entry_.assign(n, 0);
+        ring_.resize(n);
+        ringValid_.assign(n, 0);
         queued_.assign(n, 0);
         stale_.assign(n, 0);
         triangleAlive_.assign(m, 1);
@@ -134,9 +136,11 @@ public:
     }
 
 private:
-    /// The vertices sharing a live triangle with v, sorted, into `out`.
-    void neighbours(uint32_t v, std::vector<uint32_t>& out) const
+    /// The vertices sharing a live triangle with v, sorted: kept until a collapse changes them.
+    const std::vector<uint32_t>& ring(uint32_t v)
     {
+        std::vector<uint32_t>& out = ring_[v];
+        if (ringValid_[v]) return out;
         out.clear();
         for (uint32_t t : around_[v]) {
             if (!triangleAlive_[t]) continue;
@@ -145,32 +149,28 @@ private:
         }
         std::sort(out.begin(), out.end());
         out.erase(std::unique(out.begin(), out.end()), out.end());
+        ringValid_[v] = 1;
+        return out;
     }
 
-    /// Whether `from` may collapse onto `onto` (see simplifyMesh), and at what cost. `around`: from's
-    /// neighbours, where the caller has them.
-    bool allowed(uint32_t from, uint32_t onto, double& cost, const std::vector<uint32_t>* around = nullptr)
+    /// Whether `from` may collapse onto `onto` (see simplifyMesh), and at what cost.
+    bool allowed(uint32_t from, uint32_t onto, double& cost)
     {
         if (locked_[from]) return false;
         cost = costOf(from, onto);
-        return cost <= maxSquared_ && keepsShape(from, onto, around);
+        return cost <= maxSquared_ && keepsShape(from, onto);
     }
 
     double costOf(uint32_t from, uint32_t onto) const { return (quadrics_[from] + quadrics_[onto]).at(points_[onto]); }
 
     /// Whether collapsing `from` onto `onto` keeps the mesh a manifold of small fans whose triangles keep
     /// their side and some area.
-    bool keepsShape(uint32_t from, uint32_t onto, const std::vector<uint32_t>* around)
+    bool keepsShape(uint32_t from, uint32_t onto)
     {
         // The link condition: the vertices both neighbour are exactly the third corners of the two
         // triangles on the edge.
-        if (!around) {
-            neighbours(from, fromAround_);
-            around = &fromAround_;
-        }
-        const std::vector<uint32_t>& a = *around;
-        neighbours(onto, ontoAround_);
-        const std::vector<uint32_t>& b = ontoAround_;
+        const std::vector<uint32_t>& a = ring(from);
+        const std::vector<uint32_t>& b = ring(onto);
         common_.clear();
         std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(common_));
         opposite_.clear();
@@ -209,16 +209,15 @@ private:
         stale_[v] = 0;
         queued_[v] = 0;
         if (!alive_[v] || locked_[v]) return;
-        neighbours(v, vertexAround_);
         // The cheapest first; the shape checked only until one keeps it.
         candidates_.clear();
-        for (uint32_t w : vertexAround_) {
+        for (uint32_t w : ring(v)) {
             const double cost = costOf(v, w);
             if (cost <= maxSquared_) candidates_.push_back({cost, w});
         }
         std::sort(candidates_.begin(), candidates_.end());
         for (const auto& [cost, w] : candidates_)
-            if (keepsShape(v, w, &vertexAround_)) {
+            if (keepsShape(v, w)) {
                 queue_.push({cost, v, w, entry_[v]});
                 queued_[v] = 1;
                 return;
@@ -227,6 +226,9 @@ private:
 
     void collapse(uint32_t from, uint32_t onto)
     {
+        // The rings that change: those of `from`'s neighbours (it leaves them, `onto` joins) and `onto`'s.
+        for (uint32_t w : ring(from)) ringValid_[w] = 0;
+        ringValid_[onto] = 0;
         std::vector<uint32_t> kept;
         for (uint32_t t : around_[onto])
             if (triangleAlive_[t]) kept.push_back(t);
@@ -249,7 +251,7 @@ private:
         // What the collapse changed: the candidates of the kept vertex, found now, and of those around it,
         // found again when their entries come up (those without one, now).
         queueBest(onto);
-        neighbours(onto, changed_);
+        changed_ = ring(onto);
         for (uint32_t w : changed_) {
             if (queued_[w]) stale_[w] = 1;
             else queueBest(w);
@@ -294,7 +296,9 @@ private:
     std::vector<uint64_t> entry_; // per vertex: its latest queue entry's number
     std::vector<char> queued_;    // per vertex: whether its latest entry is in the queue
     std::vector<char> stale_;     // per vertex: its neighbourhood changed since its entry
-    std::vector<uint32_t> vertexAround_, fromAround_, ontoAround_, common_, opposite_, changed_; // scratch
+    std::vector<std::vector<uint32_t>> ring_; // per vertex: ring(v) when ringValid_
+    std::vector<char> ringValid_;
+    std::vector<uint32_t> common_, opposite_, changed_; // scratch
     std::vector<std::pair<double, uint32_t>> candidates_;
     std::priority_queue<Collapse, std::vector<Collapse>, std::greater<Collapse>> queue_;
 };
