@@ -2,7 +2,6 @@
 // meets a finer one. The combined mesh of any mix of levels is a closed, oriented 2-manifold (seed 000
 // §5: no cracks, no skirts, no patching), and a cut of level 0 alone meshes exactly as the whole volume.
 #include "mesher/LodMesh.h"
-#include "mesher/MeshSimplify.h"
 #include "mesher/MeshMetrics.h"
 #include "mesher/MeshQuality.h"
 #include "scene/SceneStore.h"
@@ -103,15 +102,14 @@ Mesh meshCut(const Levels& levels, const std::vector<LodBrick>& shown, const Mes
     return meshCut(levels.pointers(), shown, options);
 }
 
-/// meshCut with each coarse brick's mesh simplified as streaming scenes do (`tolerance` voxels of its level).
-Mesh meshCutSimplified(const std::vector<const Volume*>& levels, const std::vector<LodBrick>& shown, const MeshOptions& options,
-                       double tolerance)
+/// meshCut with each coarse brick's mesh simplified as streaming scenes do (simplifyLodBrickMesh).
+Mesh meshCutSimplified(const std::vector<const Volume*>& levels, const std::vector<LodBrick>& shown, const MeshOptions& options)
 {
     const LodCut cut(shown);
     Mesh all;
     for (const LodBrick& b : shown) {
         Mesh m = meshLodBrick(levels, cut, b, options);
-        if (b.level > 0) simplifyMesh(m, tolerance * levels[std::size_t(b.level)]->voxelSize());
+        simplifyLodBrickMesh(m, b.level, levels[std::size_t(b.level)]->voxelSize(), options);
         appendMesh(all, m);
     }
     return all;
@@ -385,7 +383,7 @@ TEST_CASE("lod mesh: coarse bricks simplified within a tolerance take fewer tria
     REQUIRE(tolerance == 0.25);
     for (int level = 1; level <= 2; ++level) {
         const auto shown = cutOf(levels, [&](const LodBrick& b) { return b.level > level; });
-        const Mesh lattice = meshCut(levels, shown, streaming), simplified = meshCutSimplified(levels.pointers(), shown, streaming, tolerance);
+        const Mesh lattice = meshCut(levels, shown, streaming), simplified = meshCutSimplified(levels.pointers(), shown, streaming);
         INFO("level " << level << ": " << lattice.triangleCount() << " triangles on the lattice, " << simplified.triangleCount() << " simplified");
         requireClosed(simplified, terrain.voxelSize(), shown);
         CHECK(double(simplified.triangleCount()) < 0.8 * double(lattice.triangleCount()));
@@ -397,7 +395,7 @@ TEST_CASE("lod mesh: coarse bricks simplified within a tolerance take fewer tria
     // Level 1 beside level 0 in checkerboards: closed.
     for (int parity = 0; parity < 2; ++parity) {
         const auto shown = cutOf(levels, [&](const LodBrick& b) { return b.level > 1 || ((b.brick[0] + b.brick[1] + b.brick[2]) & 1) == parity; });
-        requireClosed(meshCutSimplified(levels.pointers(), shown, streaming, tolerance), terrain.voxelSize(), shown);
+        requireClosed(meshCutSimplified(levels.pointers(), shown, streaming), terrain.voxelSize(), shown);
     }
 }
 

@@ -5,6 +5,9 @@
 #include "mesher/Mesher.h"
 #include "wavelet/LodPyramid.h"
 
+#include <cstdint>
+#include <vector>
+
 namespace vdbclay {
 
 /// The mesh of level `level` of `pyramid` (built from `fine`), in world units: level 0 is the fine
@@ -27,6 +30,12 @@ Mesh meshLodBrick(const std::vector<const Volume*>& levels, const LodCut& cut, c
 std::vector<MeshChunk> meshLodBrickChunks(const std::vector<const Volume*>& levels, const LodCut& cut, const LodBrick& brick,
                                           const MeshOptions& options,
                                           const std::vector<std::array<int32_t, 3>>* onlyLeaves = nullptr);
+/// A coarse brick's mesh simplified as streaming scenes show it: within
+/// `options.coarseLevelSimplifyTolerance` voxels of its level (`levelVoxel` wide), by simplifyMesh, which
+/// keeps its open edges, so the cut's bricks still meet. Level 0 and a zero tolerance leave it as it is.
+/// Returns whether it simplified; `kept`: as simplifyMesh's.
+bool simplifyLodBrickMesh(Mesh& mesh, int level, double levelVoxel, const MeshOptions& options, std::vector<uint32_t>* kept = nullptr);
+
 /// A transition cell's closed box on the level-0 lattice.
 struct TransitionCellBox {
     LodCut::Point lo, hi;

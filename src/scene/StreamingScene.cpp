@@ -2,7 +2,6 @@
 
 #include "mesher/LodCut.h"
 #include "mesher/LodMesh.h"
-#include "mesher/MeshSimplify.h"
 #include "mesher/VertexMask.h"
 #include "mesher/VertexMaterialBlend.h"
 #include "mesher/VertexOcclusion.h"
@@ -600,16 +599,6 @@ struct StreamingScene::Impl {
         return true;
     }
 
-    /// A coarse brick's mesh simplified within its level's tolerance (MeshOptions::
-    /// coarseLevelSimplifyTolerance); whether it was. `kept`: as simplifyMesh's.
-    bool simplifyCoarse(Mesh& mesh, int level, std::vector<uint32_t>* kept) const
-    {
-        const double tolerance = options.meshing.coarseLevelSimplifyTolerance;
-        if (level == 0 || !(tolerance > 0.0)) return false;
-        simplifyMesh(mesh, tolerance * scene.voxelSize() * double(1 << level), kept);
-        return true;
-    }
-
     /// The mesh of a resident brick made from `in` and the level trees (`trees` held, shared or not).
     std::shared_ptr<const BrickMesh> makeMesh(const MeshInputs& in) const
     {
@@ -646,7 +635,7 @@ struct StreamingScene::Impl {
             out->occlusion.insert(out->occlusion.end(), transitions.occlusion.begin(), transitions.occlusion.end());
             out->blend.insert(out->blend.end(), transitions.blend.begin(), transitions.blend.end());
             std::vector<uint32_t> kept;
-            if (simplifyCoarse(made, key.level, &kept)) {
+            if (simplifyLodBrickMesh(made, key.level, volume.voxelSize(), options.meshing, &kept)) {
                 std::vector<uint8_t> occlusion(kept.size());
                 std::vector<uint32_t> blend(kept.size());
                 for (std::size_t v = 0; v < kept.size(); ++v) {
@@ -659,7 +648,7 @@ struct StreamingScene::Impl {
         } else {
             // A brick outside the last frame's cut (asked for directly) is meshed alone at its level.
             made = meshLodBrick(levelsOf, in.cut->shows(brick) ? *in.cut : LodCut({brick}), brick, options.meshing);
-            simplifyCoarse(made, key.level, nullptr);
+            simplifyLodBrickMesh(made, key.level, volume.voxelSize(), options.meshing);
             out->occlusion = vertexOcclusion(volume, made);
             out->blend = vertexMaterialBlend(volume, made);
         }
