@@ -1,6 +1,7 @@
 // Meshing a level-of-detail cut: each brick on its own level's lattice, transition cells where a brick
 // meets a finer one. The combined mesh of any mix of levels is a closed, oriented 2-manifold (seed 000
 // §5: no cracks, no skirts, no patching), and a cut of level 0 alone meshes exactly as the whole volume.
+#include "mesher/LodBrickTable.h"
 #include "mesher/LodMesh.h"
 #include "mesher/MeshMetrics.h"
 #include "mesher/MeshQuality.h"
@@ -17,6 +18,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <map>
 #include <random>
 #include <set>
 #include <tuple>
@@ -258,6 +260,55 @@ TEST_CASE("lod cut: a brick is shown exactly when the cut lists it, near the pac
     }
     CHECK_FALSE(LodCut().shows({0, {0, 0, 0}}));
     CHECK(LodCut(std::vector<LodBrick>{{3, {reach - 1, reach - 1, -reach}}}).shows({3, {reach - 1, reach - 1, -reach}}));
+}
+
+TEST_CASE("lod brick map: inserts and look-ups agree with a node-based map, packed keys or not", "[lod]")
+{
+    // Seeded random bricks near the origin (packed, many repeats: growth under collisions) and beyond the
+    // packing's reach of +-2^18 (the fallback), levels 0-63 (63 does not pack), against std::map.
+    constexpr int32_t reach = 1 << 18;
+    for (const uint32_t seed : {1u, 2u, 3u}) {
+        std::mt19937 rng(seed);
+        LodBrickMap<uint32_t> map(seed == 1 ? 1 : 100);
+        std::map<std::tuple<int, int32_t, int32_t, int32_t>, uint32_t> expected;
+        const auto randomBrick = [&]() -> std::pair<int, std::array<int32_t, 3>> {
+            std::uniform_int_distribution<int> level(0, 63), kind(0, 9), near(-6, 6), far(reach - 2, reach + 2);
+            std::array<int32_t, 3> b{};
+            for (int32_t& c : b) {
+                const int k = kind(rng);
+                c = k == 0 ? far(rng) : k == 1 ? -far(rng) : k == 2 ? INT32_MIN : k == 3 ? INT32_MAX : near(rng);
+            }
+            return {level(rng) % (kind(rng) == 0 ? 64 : 4), b};
+        };
+        for (int step = 0; step < 20000; ++step) {
+            const auto [level, brick] = randomBrick();
+            const auto key = std::make_tuple(level, brick[0], brick[1], brick[2]);
+            if (step % 3 == 0) {
+                const uint32_t* found = map.find(level, brick);
+                const auto it = expected.find(key);
+                REQUIRE((found != nullptr) == (it != expected.end()));
+                if (found) REQUIRE(*found == it->second);
+                continue;
+            }
+            const auto [value, inserted] = map.insert(level, brick);
+            const auto [it, wasNew] = expected.try_emplace(key, 0u);
+            REQUIRE(inserted == wasNew);
+            REQUIRE(*value == it->second);
+            *value = it->second = uint32_t(step);
+        }
+        REQUIRE(expected.size() > 1000);
+        for (const auto& [key, value] : expected) {
+            const uint32_t* found = map.find(std::get<0>(key), {std::get<1>(key), std::get<2>(key), std::get<3>(key)});
+            REQUIRE(found != nullptr);
+            REQUIRE(*found == value);
+        }
+    }
+    uint64_t packed = 0;
+    CHECK(packLodBrick(62, {reach - 1, -reach, 0}, packed));
+    CHECK(packed != ~uint64_t(0));
+    CHECK_FALSE(packLodBrick(63, {0, 0, 0}, packed));
+    CHECK_FALSE(packLodBrick(0, {reach, 0, 0}, packed));
+    CHECK_FALSE(packLodBrick(-1, {0, 0, 0}, packed));
 }
 
 TEST_CASE("lod cut: the bricks touching a box, looked up around it, are exactly those a pass over the cut finds", "[lod]")

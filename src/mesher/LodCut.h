@@ -7,6 +7,8 @@
 // Light header: no OpenVDB.
 #pragma once
 
+#include "mesher/LodBrickTable.h"
+
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -95,18 +97,7 @@ public:
 private:
     static int64_t brickSpan(int level) { return int64_t(kLodBrickVoxels) << level; }
     /// A brick as one word (level in 6 bits, each coordinate in 19), where it fits.
-    static bool pack(const LodBrick& b, uint64_t& key)
-    {
-        constexpr int32_t kReach = 1 << 18;
-        if (b.level < 0 || b.level >= 63) return false;
-        key = uint64_t(b.level) << 57;
-        for (int a = 0; a < 3; ++a) {
-            const int32_t c = b.brick[std::size_t(a)];
-            if (c < -kReach || c >= kReach) return false;
-            key |= uint64_t(c + kReach) << (19 * a);
-        }
-        return true;
-    }
+    static bool pack(const LodBrick& b, uint64_t& key) { return packLodBrick(b.level, b.brick, key); }
     static constexpr uint64_t kNoSlot = ~uint64_t(0);
 
     // The bricks packed in an open-addressed table (linear probing, at most half full): meshing asks

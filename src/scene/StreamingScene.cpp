@@ -1,5 +1,6 @@
 #include "scene/StreamingScene.h"
 
+#include "mesher/LodBrickTable.h"
 #include "mesher/LodCut.h"
 #include "mesher/LodMesh.h"
 #include "mesher/VertexMask.h"
@@ -126,28 +127,50 @@ std::vector<IndexCoord> leavesReadingSide(const IndexCoord& brickMin, int direct
 /// How far a coarse brick's mesh may lie from its cells' surface, voxels of its level (lodShownError).
 double coarseTolerance(const MeshOptions& meshing) { return meshing.coarseLevelPlaneTolerance + meshing.coarseLevelSimplifyTolerance; }
 
+/// The needed bricks as a tree: each one's children as a range of one list, and an order that visits
+/// finer levels first. Made once a frame: the cut is walked up to three times a frame (besides of what
+/// the budget holds, with and without the budget, and what is shown) over a few thousand bricks.
+struct NeedsTree {
+    std::vector<uint32_t> childStart; // children of i: children[childStart[i] .. childStart[i + 1])
+    std::vector<uint32_t> children;
+    std::vector<uint32_t> finerFirst;
+    std::vector<char> selected;
+
+    explicit NeedsTree(const ViewNeeds& needs)
+    {
+        const std::size_t n = needs.bricks.size();
+        childStart.assign(n + 1, 0);
+        for (std::size_t i = 0; i < n; ++i)
+            if (needs.parent[i] != ViewNeeds::kNone) ++childStart[needs.parent[i] + 1];
+        for (std::size_t i = 0; i < n; ++i) childStart[i + 1] += childStart[i];
+        children.resize(childStart[n]);
+        std::vector<uint32_t> next(childStart.begin(), childStart.end() - 1);
+        for (uint32_t i = 0; i < n; ++i)
+            if (needs.parent[i] != ViewNeeds::kNone) children[next[needs.parent[i]]++] = i;
+        finerFirst.resize(n);
+        for (uint32_t i = 0; i < n; ++i) finerFirst[i] = i;
+        std::stable_sort(finerFirst.begin(), finerFirst.end(), [&](uint32_t a, uint32_t b) { return needs.bricks[a].level < needs.bricks[b].level; });
+        selected.assign(n, 0);
+        for (uint32_t s : needs.selected) selected[s] = 1;
+    }
+    const uint32_t* childrenBegin(uint32_t i) const { return children.data() + childStart[i]; }
+    const uint32_t* childrenEnd(uint32_t i) const { return children.data() + childStart[i + 1]; }
+};
+
 /// The bricks to draw for a selection: see StreamingScene::shownBricks. `unshown` receives the other
 /// children of the bricks split into their children (empty ones, or out of view): with the shown ones
 /// they make the cut the meshes are made for (LodCut).
-std::vector<BrickKey> shownCut(const ViewNeeds& needs, const std::vector<char>& isResident, std::vector<BrickKey>& unshown)
+std::vector<BrickKey> shownCut(const ViewNeeds& needs, const NeedsTree& tree, const std::vector<char>& isResident, std::vector<BrickKey>& unshown)
 {
     unshown.clear();
     const std::size_t n = needs.bricks.size();
-    std::vector<std::vector<uint32_t>> children(n);
-    std::vector<char> selected(n, 0);
-    for (uint32_t s : needs.selected) selected[s] = 1;
-    for (uint32_t i = 0; i < n; ++i)
-        if (needs.parent[i] != ViewNeeds::kNone) children[needs.parent[i]].push_back(i);
     // Whether a node's region can be drawn completely, from itself or its descendants: finer levels first.
-    std::vector<uint32_t> byLevel(n);
-    for (uint32_t i = 0; i < n; ++i) byLevel[i] = i;
-    std::sort(byLevel.begin(), byLevel.end(), [&](uint32_t a, uint32_t b) { return needs.bricks[a].level < needs.bricks[b].level; });
     std::vector<char> coverable(n, 0);
-    for (uint32_t i : byLevel) {
-        bool split = !children[i].empty();
-        for (uint32_t c : children[i]) split = split && coverable[c];
-        coverable[i] = isResident[i] || split;
-    }
+    const auto splits = [&](uint32_t i) {
+        return tree.childrenBegin(i) != tree.childrenEnd(i) &&
+               std::all_of(tree.childrenBegin(i), tree.childrenEnd(i), [&](uint32_t c) { return coverable[c] != 0; });
+    };
+    for (uint32_t i : tree.finerFirst) coverable[i] = isResident[i] || splits(i);
     std::vector<BrickKey> out;
     std::vector<uint32_t> stack;
     for (uint32_t i = 0; i < n; ++i)
@@ -155,22 +178,20 @@ std::vector<BrickKey> shownCut(const ViewNeeds& needs, const std::vector<char>& 
     while (!stack.empty()) {
         const uint32_t i = stack.back();
         stack.pop_back();
-        if (selected[i]) {
+        if (tree.selected[i]) {
             if (isResident[i]) out.push_back(needs.bricks[i]);
             continue;
         }
-        bool split = !children[i].empty();
-        for (uint32_t c : children[i]) split = split && coverable[c];
-        if (!split && isResident[i]) {
+        if (!splits(i) && isResident[i]) {
             out.push_back(needs.bricks[i]);
             continue;
         }
-        for (uint32_t c : children[i]) stack.push_back(c);
+        stack.insert(stack.end(), tree.childrenBegin(i), tree.childrenEnd(i));
         const BrickKey& parent = needs.bricks[i];
         for (int c = 0; c < 8; ++c) {
             const BrickKey child{parent.level - 1, {2 * parent.brick[0] + (c & 1), 2 * parent.brick[1] + ((c >> 1) & 1),
                                                     2 * parent.brick[2] + ((c >> 2) & 1)}};
-            if (std::none_of(children[i].begin(), children[i].end(), [&](uint32_t k) { return needs.bricks[k] == child; }))
+            if (std::none_of(tree.childrenBegin(i), tree.childrenEnd(i), [&](uint32_t k) { return needs.bricks[k] == child; }))
                 unshown.push_back(child);
         }
     }
@@ -385,22 +406,22 @@ struct StreamingScene::Impl {
     /// a level-1 one with a false lid, open at its edges), and do not change with what happens to be
     /// resident beside them. Most needed first; kept while the bricks the view may show stay the same.
     /// Lock held.
-    void updateBesides(const ViewNeeds& needs, const std::vector<uint32_t>& order, const std::vector<char>& mayShow)
+    void updateBesides(const ViewNeeds& needs, const NeedsTree& tree, const std::vector<uint32_t>& order, const std::vector<char>& mayShow)
     {
         std::vector<BrickKey> keys;
         for (const uint32_t n : order)
             if (mayShow[n]) keys.push_back(needs.bricks[n]);
         if (keys == besidesOf) return;
         std::vector<BrickKey> notShown;
-        const std::vector<BrickKey> cutShown = shownCut(needs, mayShow, notShown);
-        const std::unordered_set<BrickKey, BrickKeyHash> inCut(cutShown.begin(), cutShown.end());
-        std::unordered_set<BrickKey, BrickKeyHash> listed(keys.begin(), keys.end());
+        const std::vector<BrickKey> cutShown = shownCut(needs, tree, mayShow, notShown); // sorted
+        LodBrickMap<char> listed(4 * keys.size());
+        for (const BrickKey& key : keys) listed.insert(key.level, key.brick);
         besides.clear();
         for (const BrickKey& key : keys) {
-            if (!inCut.count(key)) continue;
+            if (!std::binary_search(cutShown.begin(), cutShown.end(), key)) continue;
             for (uint32_t around = present.neighbours(key.level, key.brick); around != 0; around &= around - 1) {
                 const BrickKey beside{key.level, neighbourBrick(key.brick, __builtin_ctz(around))};
-                if (listed.insert(beside).second) besides.push_back(beside);
+                if (listed.insert(beside.level, beside.brick).second) besides.push_back(beside);
             }
         }
         besidesOf = std::move(keys);
@@ -422,13 +443,19 @@ struct StreamingScene::Impl {
         std::vector<uint32_t> childrenLeft(n, 0);
         for (std::size_t i = 0; i < n; ++i)
             if (needs.parent[i] != ViewNeeds::kNone) ++childrenLeft[needs.parent[i]];
-        std::unordered_set<BrickKey, BrickKeyHash> accepted;
-        std::unordered_map<BrickKey, uint32_t, BrickKeyHash> readers; // besides: how many accepted bricks read each
+        // Per brick met: whether it is accepted, and how many accepted bricks read it beside them.
+        struct Standing {
+            bool accepted = false;
+            uint32_t readers = 0;
+        };
+        LodBrickMap<Standing> standing(4 * n);
+        const auto standingOf = [&](const BrickKey& key) { return standing.insert(key.level, key.brick).first; };
         uint64_t cost = 0;
         const auto forEachBeside = [&](const BrickKey& key, const auto& fn) {
             for (uint32_t around = present.neighbours(key.level, key.brick); around != 0; around &= around - 1) {
                 const BrickKey beside{key.level, neighbourBrick(key.brick, __builtin_ctz(around))};
-                if (!accepted.count(beside)) fn(beside);
+                Standing* st = standingOf(beside);
+                if (!st->accepted) fn(beside, *st);
             }
         };
         std::size_t count = 0;
@@ -437,24 +464,23 @@ struct StreamingScene::Impl {
             const BrickKey& key = needs.bricks[i];
             const auto it = resident.find(key);
             uint64_t bytes = budgetedBytes(key, it != resident.end() ? &it->second : nullptr);
-            const auto wasBeside = readers.find(key);
-            if (wasBeside != readers.end()) bytes -= brickBytes(key);
-            forEachBeside(key, [&](const BrickKey& beside) {
-                if (!readers.count(beside)) bytes += brickBytes(beside);
+            Standing* own = standingOf(key);
+            if (own->readers > 0) bytes -= brickBytes(key);
+            forEachBeside(key, [&](const BrickKey& beside, const Standing& st) {
+                if (st.readers == 0) bytes += brickBytes(beside);
             });
             if (cost + bytes > options.memoryBudgetBytes) break;
             cost += bytes;
-            if (wasBeside != readers.end()) readers.erase(wasBeside);
-            accepted.insert(key);
-            forEachBeside(key, [&](const BrickKey& beside) { ++readers[beside]; });
+            own = standingOf(key); // the table may have grown
+            own->readers = 0;
+            own->accepted = true;
+            forEachBeside(key, [&](const BrickKey&, Standing& st) { ++st.readers; });
             // A parent whose needed children are all accepted is split: its besides are read no more.
             const uint32_t parent = needs.parent[i];
             if (parent == ViewNeeds::kNone || --childrenLeft[parent] > 0) continue;
-            forEachBeside(needs.bricks[parent], [&](const BrickKey& beside) {
-                const auto r = readers.find(beside);
-                if (r == readers.end() || --r->second > 0) return;
+            forEachBeside(needs.bricks[parent], [&](const BrickKey& beside, Standing& st) {
+                if (st.readers == 0 || --st.readers > 0) return;
                 cost -= brickBytes(beside);
-                readers.erase(r);
             });
         }
         return count;
@@ -1257,6 +1283,7 @@ StreamingScene::~StreamingScene()
     }
 }
 
+
 FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* drawn)
 {
     Impl& s = *impl_;
@@ -1289,6 +1316,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
     // lock for a few thousand bricks.
     const ViewNeeds needs = viewNeeds(selected, s.levels);
     const std::vector<BrickKey>& needed = needs.bricks;
+    const NeedsTree tree(needs);
     // Where edits are shown at level 0 (the bricks under stale ancestors) first: an edit shows however
     // little of the rest of the view the budget holds.
     std::vector<uint32_t> order = needs.order;
@@ -1313,21 +1341,23 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
     // left resident from an earlier view is not drawn: its besides may be missing.
     std::size_t accepted = 0, besidesAccepted = 0;
     std::vector<char> mayShow(needed.size(), 0);
-    const auto acceptFirst = [&](std::size_t count) {
+    // Returns false, without finding the besides, where `orLess` and the budget did not hold `count`.
+    const auto acceptFirst = [&](std::size_t count, bool orLess) {
         cost = 0;
         accepted = 0;
         while (accepted < count && admit(needed[order[accepted]], true)) ++accepted;
+        if (accepted < count && !orLess) return false;
         std::fill(mayShow.begin(), mayShow.end(), 0);
         for (std::size_t i = 0; i < accepted; ++i) mayShow[order[i]] = 1;
         for (std::size_t i = 0; i < needed.size(); ++i)
             if (needed[i].level == 0 && s.dirty.count(needed[i].brick)) mayShow[i] = 1;
-        s.updateBesides(needs, order, mayShow);
+        s.updateBesides(needs, tree, order, mayShow);
         besidesAccepted = 0; // read, never shown: no mesh to budget
         while (besidesAccepted < s.besides.size() && admit(s.besides[besidesAccepted], false)) ++besidesAccepted;
+        return besidesAccepted == s.besides.size();
     };
-    acceptFirst(order.size());
-    report.budgetLimited = accepted < order.size() || besidesAccepted < s.besides.size();
-    if (report.budgetLimited) acceptFirst(s.bricksFittingWithBesides(needs, order));
+    report.budgetLimited = !acceptFirst(order.size(), false);
+    if (report.budgetLimited) acceptFirst(s.bricksFittingWithBesides(needs, order), true);
     s.wanted.clear();
     for (std::size_t i = 0; i < accepted; ++i) s.wanted.insert(needed[order[i]]);
     s.wanted.insert(s.besides.begin(), s.besides.begin() + std::ptrdiff_t(besidesAccepted));
@@ -1376,7 +1406,7 @@ FrameReport StreamingScene::frame(const Viewer& viewer, const OccluderDepth* dra
         report.screenError = std::max(report.screenError, b.screenError * double(1 << (shown - b.key.level)));
     }
     std::vector<BrickKey> unshown;
-    s.shown = shownCut(needs, showable, unshown);
+    s.shown = shownCut(needs, tree, showable, unshown);
     // What is shown stays until the next frame: making room for a mesh must not punch holes in the view.
     s.wanted.insert(s.shown.begin(), s.shown.end());
     std::vector<LodBrick> cut;
