@@ -6,6 +6,7 @@
 // Light header: no OpenVDB.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -75,6 +76,14 @@ public:
         values_[i] = Value{};
         ++used_;
         return {&values_[i], true};
+    }
+
+    /// Forgets every brick, keeping the table's size (a set refilled every frame allocates nothing).
+    void clear()
+    {
+        std::fill(keys_.begin(), keys_.end(), kEmpty);
+        used_ = 0;
+        unpacked_.clear();
     }
 
 private:

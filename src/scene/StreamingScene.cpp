@@ -127,6 +127,22 @@ std::vector<IndexCoord> leavesReadingSide(const IndexCoord& brickMin, int direct
 /// How far a coarse brick's mesh may lie from its cells' surface, voxels of its level (lodShownError).
 double coarseTolerance(const MeshOptions& meshing) { return meshing.coarseLevelPlaneTolerance + meshing.coarseLevelSimplifyTolerance; }
 
+/// A set of bricks refilled every frame: its table stays allocated between frames.
+class BrickKeySet {
+public:
+    void insert(const BrickKey& key) { map_.insert(key.level, key.brick); }
+    template <class It>
+    void insert(It first, It last)
+    {
+        for (; first != last; ++first) insert(*first);
+    }
+    bool count(const BrickKey& key) const { return map_.contains(key.level, key.brick); }
+    void clear() { map_.clear(); }
+
+private:
+    LodBrickMap<char> map_;
+};
+
 /// The needed bricks as a tree: each one's children as a range of one list, and an order that visits
 /// finer levels first. Made once a frame: the cut is walked up to three times a frame (besides of what
 /// the budget holds, with and without the budget, and what is shown) over a few thousand bricks.
@@ -258,7 +274,7 @@ struct StreamingScene::Impl {
     BrickSet inFlight;
     BrickSet staleInFlight; // loads an autosave's LOD update overtook: discarded on arrival
     BrickSet damaged;       // bricks the store could not give: shown by their ancestors, not loaded again
-    BrickSet wanted;        // the current frame's accepted selection and fallbacks
+    BrickKeySet wanted;     // the current frame's accepted selection and fallbacks
     BrickSet pinned;        // level-0 bricks an edit is working on outside the lock: never evicted
     // The last edit's volume and bricks, equal to level 0 there (only edits change resident level-0
     // bricks, one at a time; a brick evicted clean loads again as it was): the next edit copies only

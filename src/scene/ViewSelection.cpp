@@ -167,66 +167,66 @@ BrickPresence::BrickPresence(const std::vector<std::set<IndexCoord>>& stored)
     for (std::size_t k = 0; k < stored.size(); ++k) {
         Level& level = levels_[k];
         level.sorted.assign(stored[k].begin(), stored[k].end());
-        level.bricks.reserve(stored[k].size());
+        level.bricks = LodBrickMap<Entry>(stored[k].size());
         for (const IndexCoord& b : stored[k]) {
-            level.bricks.emplace(b, Entry{});
+            level.insert(b);
             linkNeighbours(level, b);
         }
     }
     for (std::size_t k = 1; k < stored.size(); ++k)
         for (const IndexCoord& b : stored[k - 1]) {
-            const auto parent = levels_[k].bricks.find(parentBrick(b));
-            if (parent == levels_[k].bricks.end()) throw std::invalid_argument("a stored brick's parent is not stored");
-            parent->second.children |= uint8_t(1u << ((b[0] & 1) + 2 * (b[1] & 1) + 4 * (b[2] & 1)));
+            Entry* parent = levels_[k].find(parentBrick(b));
+            if (!parent) throw std::invalid_argument("a stored brick's parent is not stored");
+            parent->children |= uint8_t(1u << ((b[0] & 1) + 2 * (b[1] & 1) + 4 * (b[2] & 1)));
         }
 }
 
 bool BrickPresence::contains(int level, const IndexCoord& brick) const
 {
-    return level >= 0 && level < levelCount() && levels_[std::size_t(level)].bricks.count(brick) > 0;
+    return level >= 0 && level < levelCount() && levels_[std::size_t(level)].find(brick) != nullptr;
 }
 
 void BrickPresence::linkNeighbours(Level& level, const IndexCoord& brick)
 {
-    Entry& own = level.bricks.at(brick);
+    Entry& own = *level.find(brick);
     for (int d = 0; d < 27; ++d) {
         if (d == 13) continue;
-        const auto n = level.bricks.find(neighbourBrick(brick, d));
-        if (n == level.bricks.end()) continue;
+        Entry* n = level.find(neighbourBrick(brick, d));
+        if (!n) continue;
         own.neighbours |= 1u << d;
-        n->second.neighbours |= 1u << (26 - d); // seen from there, the offset is the opposite one
+        n->neighbours |= 1u << (26 - d); // seen from there, the offset is the opposite one
     }
 }
 
 uint32_t BrickPresence::neighbours(int level, const IndexCoord& brick) const
 {
     if (level < 0 || level >= levelCount()) return 0;
-    const auto it = levels_[std::size_t(level)].bricks.find(brick);
-    return it == levels_[std::size_t(level)].bricks.end() ? 0u : it->second.neighbours;
+    const Entry* e = levels_[std::size_t(level)].find(brick);
+    return e ? e->neighbours : 0u;
 }
 
 uint8_t BrickPresence::children(int level, const IndexCoord& brick) const
 {
     if (level <= 0 || level >= levelCount()) return 0;
-    const auto it = levels_[std::size_t(level)].bricks.find(brick);
-    return it == levels_[std::size_t(level)].bricks.end() ? uint8_t(0) : it->second.children;
+    const Entry* e = levels_[std::size_t(level)].find(brick);
+    return e ? e->children : uint8_t(0);
 }
 
 std::optional<double> BrickPresence::shownError(int level, const IndexCoord& brick) const
 {
     if (level < 0 || level >= levelCount()) return std::nullopt;
-    const auto it = levels_[std::size_t(level)].bricks.find(brick);
-    if (it == levels_[std::size_t(level)].bricks.end() || it->second.shownError < 0.0f) return std::nullopt;
-    return double(it->second.shownError);
+    const Entry* e = levels_[std::size_t(level)].find(brick);
+    if (!e || e->shownError < 0.0f) return std::nullopt;
+    return double(e->shownError);
 }
 
 void BrickPresence::setShownError(int level, const IndexCoord& brick, std::optional<double> error)
 {
     if (error && !(*error >= 0.0 && std::isfinite(*error))) throw std::invalid_argument("a brick's error must be a length");
     if (level < 0 || level >= levelCount()) throw std::invalid_argument("a brick's level is outside the presence's levels");
-    const auto it = levels_[std::size_t(level)].bricks.find(brick);
-    if (it == levels_[std::size_t(level)].bricks.end()) throw std::invalid_argument("an error for a brick that is not there");
-    it->second.shownError = error ? float(*error) : -1.0f;
+    Entry* e = levels_[std::size_t(level)].find(brick);
+    if (!e) throw std::invalid_argument("an error for a brick that is not there");
+    e->shownError = error ? float(*error) : -1.0f;
 }
 
 bool BrickPresence::add(int level, const IndexCoord& brick)
@@ -236,7 +236,7 @@ bool BrickPresence::add(int level, const IndexCoord& brick)
         sorted.insert(std::lower_bound(sorted.begin(), sorted.end(), b), b);
     };
     Level& own = levels_[std::size_t(level)];
-    const bool added = own.bricks.emplace(brick, Entry{}).second;
+    const bool added = own.insert(brick).second;
     if (added) {
         insertSorted(own.sorted, brick);
         linkNeighbours(own, brick);
@@ -246,8 +246,8 @@ bool BrickPresence::add(int level, const IndexCoord& brick)
     for (int k = level; k + 1 < levelCount(); ++k) {
         const IndexCoord up = parentBrick(b);
         Level& above = levels_[std::size_t(k + 1)];
-        const auto [it, inserted] = above.bricks.emplace(up, Entry{});
-        it->second.children |= uint8_t(1u << ((b[0] & 1) + 2 * (b[1] & 1) + 4 * (b[2] & 1)));
+        const auto [entry, inserted] = above.insert(up);
+        entry->children |= uint8_t(1u << ((b[0] & 1) + 2 * (b[1] & 1) + 4 * (b[2] & 1)));
         if (!inserted) break;
         insertSorted(above.sorted, up);
         linkNeighbours(above, up);
@@ -316,17 +316,17 @@ ViewNeeds viewNeeds(const std::vector<SelectedBrick>& selected, int levels)
     // A brick's chain of ancestors ends where it meets one already listed, whose own chain is listed.
     ViewNeeds needs;
     needs.selected.assign(selected.size(), ViewNeeds::kNone);
-    std::unordered_map<BrickKey, uint32_t, BrickKeyHash> indexOf;
-    indexOf.reserve(2 * selected.size());
+    LodBrickMap<uint32_t> indexOf(2 * selected.size());
     for (std::size_t i = 0; i < selected.size(); ++i) {
         uint32_t child = ViewNeeds::kNone;
         for (BrickKey key = selected[i].key; key.level <= levels; key = {key.level + 1, parentBrick(key.brick)}) {
-            const auto [it, inserted] = indexOf.try_emplace(key, uint32_t(needs.bricks.size()));
-            (child == ViewNeeds::kNone ? needs.selected[i] : needs.parent[child]) = it->second;
+            const auto [index, inserted] = indexOf.insert(key.level, key.brick);
+            if (inserted) *index = uint32_t(needs.bricks.size());
+            (child == ViewNeeds::kNone ? needs.selected[i] : needs.parent[child]) = *index;
             if (!inserted) break;
             needs.bricks.push_back(key);
             needs.parent.push_back(ViewNeeds::kNone);
-            child = it->second;
+            child = *index;
         }
     }
     needs.order.resize(needs.bricks.size());

@@ -4,6 +4,7 @@
 // projected at its distance. Pure geometry: no store access, no threads.
 #pragma once
 
+#include "mesher/LodBrickTable.h"
 #include "scene/BrickStore.h"
 
 #include <array>
@@ -126,14 +127,6 @@ public:
     void setShownError(int level, const IndexCoord& brick, std::optional<double> error);
 
 private:
-    struct CoordHash {
-        std::size_t operator()(const IndexCoord& c) const
-        {
-            uint64_t h = 0x9E3779B97F4A7C15ull;
-            for (const int32_t v : c) h = (h ^ uint32_t(v)) * 0x100000001B3ull + (h >> 29);
-            return std::size_t(h ^ (h >> 32));
-        }
-    };
     struct Entry {
         uint8_t children = 0; // bit x + 2y + 4z
         uint32_t neighbours = 0; // as neighbours() gives them
@@ -141,7 +134,10 @@ private:
     };
     struct Level {
         std::vector<IndexCoord> sorted;
-        std::unordered_map<IndexCoord, Entry, CoordHash> bricks;
+        LodBrickMap<Entry> bricks; // keyed by the brick alone (level 0 in the map's keys)
+        Entry* find(const IndexCoord& brick) { return bricks.find(0, brick); }
+        const Entry* find(const IndexCoord& brick) const { return bricks.find(0, brick); }
+        std::pair<Entry*, bool> insert(const IndexCoord& brick) { return bricks.insert(0, brick); }
     };
     /// Enters a brick new to `level` in its neighbours' masks and theirs in its own.
     void linkNeighbours(Level& level, const IndexCoord& brick);
