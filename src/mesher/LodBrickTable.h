@@ -10,6 +10,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -36,6 +37,8 @@ inline bool packLodBrick(int level, const std::array<int32_t, 3>& brick, uint64_
 /// Keys that do not pack go to a node-based map beside the table.
 template <class Value>
 class LodBrickMap {
+    static_assert(!std::is_same_v<Value, bool>, "values live in a std::vector: use char for flags");
+
 public:
     explicit LodBrickMap(std::size_t expected = 16)
     {
@@ -45,7 +48,7 @@ public:
     }
 
     /// The value of a brick, or null.
-    Value* find(int level, const std::array<int32_t, 3>& brick)
+    const Value* find(int level, const std::array<int32_t, 3>& brick) const
     {
         uint64_t key;
         if (!packLodBrick(level, brick, key)) {
@@ -55,7 +58,10 @@ public:
         const std::size_t i = slotOf(key);
         return keys_[i] == key ? &values_[i] : nullptr;
     }
-    const Value* find(int level, const std::array<int32_t, 3>& brick) const { return const_cast<LodBrickMap*>(this)->find(level, brick); }
+    Value* find(int level, const std::array<int32_t, 3>& brick)
+    {
+        return const_cast<Value*>(static_cast<const LodBrickMap&>(*this).find(level, brick));
+    }
     bool contains(int level, const std::array<int32_t, 3>& brick) const { return find(level, brick) != nullptr; }
 
     /// The value of a brick, value-initialized when it was not there; second: whether it was inserted.

@@ -18,29 +18,8 @@ LodCut::LodCut(const std::vector<LodBrick>& shown) : list_(shown)
         coarsest_ = std::max(coarsest_, b.level);
     }
     if (shown.empty()) finest_ = 0;
-    std::vector<uint64_t> keys;
-    keys.reserve(shown.size());
-    for (const LodBrick& b : shown) {
-        uint64_t key;
-        if (!pack(b, key)) {
-            shown_.insert(shown.begin(), shown.end()); // it alone answers
-            return;
-        }
-        keys.push_back(key);
-    }
-    if (keys.empty()) return;
-    int bits = 1;
-    while ((std::size_t(1) << bits) < 2 * keys.size()) ++bits;
-    slots_.assign(std::size_t(1) << bits, kNoSlot);
-    slotShift_ = 64 - bits;
-    for (const uint64_t key : keys)
-        for (uint64_t i = (key * 0x9E3779B97F4A7C15ull) >> slotShift_;; i = (i + 1) & (slots_.size() - 1)) {
-            if (slots_[i] == key) break; // listed twice
-            if (slots_[i] == kNoSlot) {
-                slots_[i] = key;
-                break;
-            }
-        }
+    shown_ = LodBrickMap<char>(shown.size());
+    for (const LodBrick& b : shown) shown_.insert(b.level, b.brick);
 }
 
 int LodCut::finestHolding(const Point& lo, const Point& hi, int maxLevel) const

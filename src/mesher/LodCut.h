@@ -43,16 +43,7 @@ public:
     LodCut() = default;
     explicit LodCut(const std::vector<LodBrick>& shown);
 
-    bool shows(const LodBrick& b) const
-    {
-        if (slots_.empty()) return shown_.count(b) > 0;
-        uint64_t key;
-        if (!pack(b, key)) return false; // every brick of the cut packs
-        for (uint64_t i = (key * 0x9E3779B97F4A7C15ull) >> slotShift_;; i = (i + 1) & (slots_.size() - 1)) {
-            if (slots_[i] == key) return true;
-            if (slots_[i] == kNoSlot) return false;
-        }
-    }
+    bool shows(const LodBrick& b) const { return shown_.contains(b.level, b.brick); }
     const std::vector<LodBrick>& bricks() const { return list_; }
     int finestLevel() const { return finest_; }
     int coarsestLevel() const { return coarsest_; }
@@ -96,17 +87,9 @@ public:
 
 private:
     static int64_t brickSpan(int level) { return int64_t(kLodBrickVoxels) << level; }
-    /// A brick as one word (level in 6 bits, each coordinate in 19), where it fits.
-    static bool pack(const LodBrick& b, uint64_t& key) { return packLodBrick(b.level, b.brick, key); }
-    static constexpr uint64_t kNoSlot = ~uint64_t(0);
-
-    // The bricks packed in an open-addressed table (linear probing, at most half full): meshing asks
-    // whether a brick is shown for every transition face and corner, several times per level, and a
-    // node-based set's division and pointer chase made that a tenth of meshing a view (and building it,
-    // a tenth of a frame's selection). Empty when a brick of the cut does not pack: then shown_ answers.
-    std::vector<uint64_t> slots_;
-    std::unordered_set<LodBrick, LodBrickHash> shown_;
-    int slotShift_ = 64;
+    // Meshing asks whether a brick is shown for every transition face and corner, several times per
+    // level: a node-based set's division and pointer chase made that a tenth of meshing a view.
+    LodBrickMap<char> shown_;
     std::vector<LodBrick> list_;
     int finest_ = 0, coarsest_ = -1;
 };
