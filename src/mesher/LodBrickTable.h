@@ -17,6 +17,22 @@
 
 namespace vdbclay {
 
+/// A brick of the cut: level k, covering level-0 points [64 * 2^k * brick, 64 * 2^k * (brick + 1)].
+struct LodBrick {
+    int level = 0;
+    std::array<int32_t, 3> brick{0, 0, 0};
+    friend bool operator==(const LodBrick& a, const LodBrick& b) { return a.level == b.level && a.brick == b.brick; }
+};
+
+struct LodBrickHash {
+    std::size_t operator()(const LodBrick& b) const
+    {
+        uint64_t h = uint64_t(uint32_t(b.level)) * 0x9E3779B97F4A7C15ull;
+        for (const int32_t c : b.brick) h = (h ^ uint32_t(c)) * 0x100000001B3ull + (h >> 29);
+        return std::size_t(h ^ (h >> 32));
+    }
+};
+
 /// Packs level and brick index into one 64-bit key (19 bits a coordinate, the level above them);
 /// false where they do not fit (a brick index beyond +-2^18, a level outside [0, 63)). A key is never
 /// all ones.
@@ -52,7 +68,7 @@ public:
     {
         uint64_t key;
         if (!packLodBrick(level, brick, key)) {
-            const auto it = unpacked_.find(unpackedKey(level, brick));
+            const auto it = unpacked_.find(LodBrick{level, brick});
             return it == unpacked_.end() ? nullptr : &it->second;
         }
         const std::size_t i = slotOf(key);
@@ -69,7 +85,7 @@ public:
     {
         uint64_t key;
         if (!packLodBrick(level, brick, key)) {
-            const auto [it, inserted] = unpacked_.try_emplace(unpackedKey(level, brick));
+            const auto [it, inserted] = unpacked_.try_emplace(LodBrick{level, brick});
             return {&it->second, inserted};
         }
         std::size_t i = slotOf(key);
@@ -94,16 +110,6 @@ public:
 
 private:
     static constexpr uint64_t kEmpty = ~uint64_t(0);
-    struct UnpackedHash {
-        std::size_t operator()(const std::pair<int, std::array<int32_t, 3>>& k) const
-        {
-            uint64_t h = uint64_t(uint32_t(k.first)) * 0x9E3779B97F4A7C15ull;
-            for (const int32_t c : k.second) h = (h ^ uint32_t(c)) * 0x100000001B3ull + (h >> 29);
-            return std::size_t(h ^ (h >> 32));
-        }
-    };
-    static std::pair<int, std::array<int32_t, 3>> unpackedKey(int level, const std::array<int32_t, 3>& brick) { return {level, brick}; }
-
     /// The slot holding `key`, or the empty one where it would go (linear probing).
     std::size_t slotOf(uint64_t key) const
     {
@@ -132,7 +138,7 @@ private:
     std::vector<Value> values_;
     std::size_t used_ = 0;
     int shift_ = 60;
-    std::unordered_map<std::pair<int, std::array<int32_t, 3>>, Value, UnpackedHash> unpacked_;
+    std::unordered_map<LodBrick, Value, LodBrickHash> unpacked_;
 };
 
 } // namespace vdbclay

@@ -13,26 +13,9 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
-#include <unordered_set>
 #include <vector>
 
 namespace vdbclay {
-
-/// A brick of the cut: level k, covering level-0 points [64 * 2^k * brick, 64 * 2^k * (brick + 1)].
-struct LodBrick {
-    int level = 0;
-    std::array<int32_t, 3> brick{0, 0, 0};
-    friend bool operator==(const LodBrick& a, const LodBrick& b) { return a.level == b.level && a.brick == b.brick; }
-};
-
-struct LodBrickHash {
-    std::size_t operator()(const LodBrick& b) const
-    {
-        uint64_t h = uint64_t(uint32_t(b.level)) * 0x9E3779B97F4A7C15ull;
-        for (const int32_t c : b.brick) h = (h ^ uint32_t(c)) * 0x100000001B3ull + (h >> 29);
-        return std::size_t(h ^ (h >> 32));
-    }
-};
 
 constexpr int32_t kLodBrickVoxels = 64;
 
